@@ -1,0 +1,70 @@
+"""Error types of auv-hinf.
+
+Every error subclasses a builtin so that callers can catch ``ValueError`` or
+``RuntimeError`` without importing this module. Messages name the quantity,
+what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+
+class AuvHinfError(Exception):
+    """Base class of every error raised on purpose by auv-hinf."""
+
+
+class ParameterError(AuvHinfError, ValueError):
+    """A physical parameter is non-finite, negative, or otherwise invalid."""
+
+
+class FormationError(AuvHinfError, ValueError):
+    """A formation request is invalid (fewer than two vehicles, bad shapes)."""
+
+
+class EnvelopeError(AuvHinfError, ValueError):
+    """An operating envelope is empty, reversed or non-finite."""
+
+
+class DesignError(AuvHinfError, ValueError):
+    """A gain-design request is outside the domain of the formula asked for."""
+
+
+class ConfigError(AuvHinfError, ValueError):
+    """A configuration file or preset name is invalid."""
+
+
+class SolverError(AuvHinfError, RuntimeError):
+    """A numerical solver did not return a verified optimal answer."""
+
+
+def require_finite(name: str, value: Any) -> float:
+    """Return ``value`` as a float, or raise if it is not a finite real number.
+
+    Parameters
+    ----------
+    name : str
+        Name of the quantity, used in the error message.
+    value : Any
+        The value to check.
+
+    Returns
+    -------
+    float
+        The value converted to float.
+
+    Raises
+    ------
+    ParameterError
+        If the value is not a real number or is NaN or infinite.
+    """
+    if isinstance(value, bool):
+        raise ParameterError(f"{name} must be a finite real number, got {value!r}")
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a finite real number, got {value!r}") from None
+    if not math.isfinite(out):
+        raise ParameterError(f"{name} must be finite, got {out!r}")
+    return out
