@@ -1,0 +1,170 @@
+"""From an envelope to a small-gain certificate of Theorem 1 and 2."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from .config import FormationConfig
+from .crosscheck import CrosscheckReport, crosscheck
+from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop, theorem1_conditions
+from .envelope import envelope_lambda
+from .exceptions import DesignError
+from .sweep import SigmaBounds, sigma_bounds
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """Result of :func:`certify`.
+
+    Attributes
+    ----------
+    config : FormationConfig
+    lam : float
+        Constant lambda (1/s).
+    sigma : SigmaBounds
+        Vehicle-coordinate bounds, used by the small-gain test (PAPER-NOTES item 7).
+    sigma_jacobi : SigmaBounds
+        Jacobi-coordinate bounds, reported for comparison.
+    gamma : float
+        ``1/sigma.upper`` unless overridden.
+    designs : dict
+        ``GainDesign`` per method, or ``None`` where the method is infeasible.
+    alpha_used : float or None
+        Gain of the configured method (1/s).
+    small_gain_margin : float or None
+        ``(alpha - lam) - sigma.upper`` (1/s): the guaranteed decay rate of the velocity
+        error; must be > 0.
+    position_loop_hinf : float or None
+        Theorem 2 loop norm ``1/(alpha - lam)`` (s) for ``k1``.
+    crosscheck : CrosscheckReport
+    certified : bool
+    reasons : tuple of str
+        Why it is not certified (empty when certified).
+    """
+
+    config: FormationConfig
+    lam: float
+    sigma: SigmaBounds
+    sigma_jacobi: SigmaBounds
+    gamma: float
+    theorem1: dict[str, Any]
+    designs: dict[str, GainDesign | None]
+    alpha_used: float | None
+    small_gain_margin: float | None
+    position_loop_hinf: float | None
+    crosscheck: CrosscheckReport
+    certified: bool
+    reasons: tuple[str, ...] = field(default_factory=tuple)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary (the ``auv-hinf certify --json`` layout)."""
+        return {
+            "preset": self.config.name,
+            "n": self.config.n,
+            "lambda": self.lam,
+            "sigma": {
+                "upper": self.sigma.upper, "lower": self.sigma.lower, "coords": "vehicle",
+                "method": self.sigma.method, "witness": self.sigma.witness,
+            },
+            "sigma_jacobi": {
+                "upper": self.sigma_jacobi.upper, "lower": self.sigma_jacobi.lower,
+                "method": self.sigma_jacobi.method, "jacobi": self.config.jacobi,
+            },
+            "certificate_coords": "vehicle",
+            "gamma": self.gamma,
+            "method": self.config.method,
+            "alpha": {
+                **{m: (None if d is None else d.alpha) for m, d in self.designs.items()},
+                "used": self.alpha_used,
+            },
+            "paper_flags": [] if self.designs.get("paper") is None else list(self.designs["paper"].flags),  # type: ignore[union-attr]
+            "theorem1": self.theorem1,
+            "small_gain_margin": self.small_gain_margin,
+            "k1": self.config.k1,
+            "position_loop_hinf": self.position_loop_hinf,
+            "crosscheck_ok": self.crosscheck.ok,
+            "crosscheck_max_rel_diff": self.crosscheck.max_rel_diff,
+            "certified": self.certified,
+            "reasons": list(self.reasons),
+            "envelope": self.config.envelope.to_dict(),
+            "vehicle": self.config.vehicle.to_dict(),
+        }
+
+    def summary(self) -> str:
+        """Readable table."""
+        def fmt(x: float | None) -> str:
+            return "n/a" if x is None else f"{x:.6g}"
+
+        lines = [
+            f"auv-hinf certificate: {self.config.name} (N={self.config.n}, {self.config.vehicle.name})",
+            f"  lambda (envelope)         {fmt(self.lam)} 1/s",
+            f"  sigma vehicle  [lo, up]   [{fmt(self.sigma.lower)}, {fmt(self.sigma.upper)}]  <- used",
+            f"  sigma Jacobi   [lo, up]   [{fmt(self.sigma_jacobi.lower)}, {fmt(self.sigma_jacobi.upper)}]",
+            f"  gamma = 1/sigma           {fmt(self.gamma)}  (min {fmt(self.theorem1['gamma_min'])})",
+        ]
+        for m, d in self.designs.items():
+            mark = " <- used" if m == self.config.method else ""
+            lines.append(f"  alpha[{m:<11}]        {fmt(None if d is None else d.alpha)}{mark}")
+            if d is not None:
+                lines.extend(f"      ! {f}" for f in d.flags)
+        lines += [
+            f"  small-gain margin         {fmt(self.small_gain_margin)} 1/s",
+            f"  position loop ||T||       {fmt(self.position_loop_hinf)} (k1={self.config.k1:g})",
+            f"  cross-check               {'ok' if self.crosscheck.ok else 'DISAGREES'} (max rel {self.crosscheck.max_rel_diff:.2g})",
+            f"  CERTIFIED: {'yes' if self.certified else 'no'}",
+        ]
+        lines.extend(f"    - {r}" for r in self.reasons)
+        return "\n".join(lines)
+
+
+def certify(config: FormationConfig, *, jacobi_samples: int = 5000) -> Certificate:
+    """Certify the configured design over its envelope.
+
+    Steps: constant lambda over the envelope; certified vehicle-coordinate sigma (and
+    Jacobi bounds for the record); ``gamma = 1/sigma_upper``; Theorem 1 conditions; the
+    three alphas; small-gain margin ``(alpha - lam) - sigma_upper > 0``; cross-checks; the
+    Theorem 2 loop norm.
+    """
+    lam = config.lam if config.lam is not None else envelope_lambda(config.vehicle, config.envelope)
+    transform = config.transform
+    sig = sigma_bounds(config.vehicle, config.envelope, lam, n=config.n)
+    sig_j = sigma_bounds(
+        config.vehicle, config.envelope, lam, coords="jacobi", transform=transform, samples=jacobi_samples
+    )
+    gamma = config.gamma if config.gamma is not None else 1.0 / sig.upper
+    cond = theorem1_conditions(lam, gamma)
+    reasons: list[str] = []
+    designs: dict[str, GainDesign | None] = {}
+    for m in GAIN_METHODS:
+        try:
+            designs[m] = design_alpha(lam, gamma, m)  # type: ignore[arg-type]
+        except DesignError as exc:
+            designs[m] = None
+            if m == config.method:
+                reasons.append(str(exc))
+    used = designs.get(config.method)
+    alpha = None if used is None else used.alpha
+    margin = pos = None
+    if alpha is not None:
+        margin = (alpha - lam) - sig.upper
+        if margin <= 0:
+            reasons.append(
+                f"small-gain margin (alpha - lambda) - sigma_upper = {margin:.4g} <= 0: "
+                "||T||_inf * sigma must be < 1 strictly (set design.gamma below 1/sigma)"
+            )
+        if alpha > lam:
+            pos = position_loop(lam, alpha, config.k1).hinf
+    if config.method != "minimal" and not cond.all_ok:
+        if cond.singular_case:
+            reasons.append("Theorem 1 singular case |lambda| = 1/gamma - gamma")
+        if not cond.lam_negative:
+            reasons.append(f"lambda = {lam:.4g} is not negative")
+    report = crosscheck(lam, gamma, config.n, config.k1)
+    if not report.ok:
+        reasons.append(f"cross-check disagrees (max rel diff {report.max_rel_diff:.3g})")
+    return Certificate(
+        config=config, lam=lam, sigma=sig, sigma_jacobi=sig_j, gamma=gamma, theorem1=cond.to_dict(),
+        designs=designs, alpha_used=alpha, small_gain_margin=margin, position_loop_hinf=pos,
+        crosscheck=report, certified=not reasons, reasons=tuple(reasons),
+    )

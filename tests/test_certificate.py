@@ -1,0 +1,110 @@
+"""Certificates, config files and the CLI."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from auv_hinf.certificate import certify
+from auv_hinf.cli import main
+from auv_hinf.config import load_config, preset_config
+from auv_hinf.envelope import Envelope
+
+
+@pytest.mark.parametrize("name", ["paper-triangle", "paper-hexagon"])
+def test_presets_certify(name):
+    c = certify(preset_config(name))
+    assert c.certified, c.reasons
+    assert c.lam == pytest.approx(-2.1)  # -(70 + 100*3.5)/200
+    assert c.small_gain_margin == pytest.approx(c.alpha_used - c.lam - c.sigma.upper)
+    assert c.small_gain_margin > 0
+    assert c.sigma_jacobi.upper >= c.sigma.upper
+    assert c.position_loop_hinf == pytest.approx(1 / (c.alpha_used - c.lam))
+
+
+def test_bad_design_not_certified_with_reasons():
+    cfg = preset_config("paper-triangle")
+    bad = replace(cfg, envelope=Envelope(u=(0, 0.1), v=(-0.1, 0.1), r=(-20, 20)), method="paper")
+    c = certify(bad)
+    assert not c.certified
+    assert any("below the Theorem 1 bound" in r for r in c.reasons)
+
+
+def test_minimal_with_gamma_equal_inverse_sigma_is_strictly_zero_margin():
+    cfg = replace(preset_config("paper-triangle"), envelope=Envelope(u=(0, 0.5), v=(-1, 1), r=(-3, 3)), method="minimal")
+    c = certify(cfg)
+    assert c.small_gain_margin == pytest.approx(0.0, abs=1e-9)
+    assert not c.certified and any("small-gain margin" in r for r in c.reasons)
+
+
+def test_cli_certify_json(capsys, tmp_path):
+    code = main(["certify", "--preset", "paper-triangle", "--json", "--out", str(tmp_path)])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["certified"] is True
+    for key in ("preset", "n", "lambda", "sigma", "sigma_jacobi", "gamma", "method", "alpha", "theorem1",
+                "small_gain_margin", "position_loop_hinf", "crosscheck_ok"):
+        assert key in data
+    assert data["sigma"]["coords"] == "vehicle"
+    assert (tmp_path / "certificate.json").exists() and (tmp_path / "sigma_heatmap.png").exists()
+
+
+def test_cli_design_json(capsys):
+    code = main(["design", "--lam", "-1.2", "--gamma", "2.86", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["crosscheck_ok"]
+    assert data["alpha"]["care"] == pytest.approx(0.330965, abs=1e-6)
+    assert data["alpha"]["lmi"] == pytest.approx(data["alpha"]["stabilizing"], rel=1e-5)
+    assert data["closed_loop_hinf"]["exact"] == pytest.approx(0.653183, abs=1e-6)
+
+
+def test_cli_design_below_gamma_min_flags_infeasible(capsys):
+    assert main(["design", "--lam", "-1.2", "--gamma", "0.3", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["alpha"]["paper"] is None and data["alpha"]["stabilizing"] is None
+    assert any("infeasible" in f for f in data["paper_flags"])
+    assert data["alpha"]["minimal"] == pytest.approx(1 / 0.3 - 1.2)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["design", "--lam", "1", "--gamma", "1"], ["design", "--lam", "-1", "--gamma", "nan"],
+     ["design", "--lam", "-1.2", "--gamma", "0"], ["design", "--lam", "x", "--gamma", "1"],
+     ["certify", "--preset", "nope"], ["design", "--lam", "-1", "--gamma", "1", "--n", "1"]],
+)
+def test_cli_bad_input_exit_2(argv, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("auv-hinf: error:") and "Traceback" not in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    "text, pattern",
+    [("[formation]\nn = 1\n", "n must be >= 2"),
+     ("[vehicle]\nm11 = -5\n", "missing keys"),
+     ("[envelope]\nu = [3, 1]\n", "envelope u is empty"),
+     ("[design]\nmethod = 'fast'\n", "design.method"),
+     ("[design]\nk1 = 'a'\n", "design.k1 has the wrong type"),
+     ("[formation\n", "invalid TOML"),
+     ("[extra]\n", "unknown table")],
+)
+def test_bad_toml(tmp_path, text, pattern, capsys):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(ValueError, match=pattern):
+        load_config(f)
+    assert main(["certify", "--config", str(f)]) == 2
+
+
+def test_toml_round_trip(tmp_path):
+    f = tmp_path / "remus.toml"
+    f.write_text(
+        "[vehicle]\npreset = 'remus100'\n[formation]\nn = 4\njacobi = 'orthonormal'\npolygon_radius = 8.0\n"
+        "[envelope]\nu = [0.5, 2.0]\nv = [-0.3, 0.3]\nr = [-0.3, 0.3]\n[design]\nk1 = 0.3\n"
+    )
+    cfg = load_config(f)
+    assert cfg.n == 4 and cfg.jacobi == "orthonormal" and cfg.k1 == 0.3
+    c = certify(cfg)
+    assert c.crosscheck.ok
+    assert main(["certify", "--config", str(f)]) in (0, 1)
