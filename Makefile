@@ -23,7 +23,8 @@ demo: $(STAMP)
 	@echo "plots and JSON written under $(OUT)/"
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest tests --nbmake notebooks
+	$(BIN)/python -m mypy src
+	MPLBACKEND=Agg $(BIN)/python -m pytest tests src/auv_hinf/design.py --doctest-modules --nbmake notebooks
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python benchmarks/run_all.py

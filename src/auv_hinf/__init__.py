@@ -4,6 +4,21 @@ Implements and extends Yang & Zhang, *Robust Control of Horizontal Formation Dyn
 for Autonomous Underwater Vehicles*. See the README for a tour.
 """
 
+from .certificate import Certificate, certify
+from .config import FormationConfig, load_config, preset_config
+from .control_law import FormationController, SineTrajectory, heading_gains
+from .crosscheck import CrosscheckReport, crosscheck, hinf_norm, lmi_hinf_norm, position_block, velocity_block
+from .design import (
+    GainDesign,
+    Theorem1Conditions,
+    alpha_minimal,
+    alpha_paper,
+    alpha_stabilizing,
+    design_alpha,
+    position_loop,
+    theorem1_conditions,
+)
+from .envelope import Envelope, envelope_lambda
 from .exceptions import (
     AuvHinfError,
     ConfigError,
@@ -21,6 +36,8 @@ from .formation import (
     regular_polygon,
     shape_from_offsets,
 )
+from .simulation import Scenario, SimulationResult, simulate
+from .sweep import SigmaBounds, sigma_bounds, sigma_grid, sigma_max_2x2
 from .vehicle import (
     VehicleParams,
     body_block,
@@ -35,6 +52,37 @@ from .vehicle import (
 __version__ = "0.1.0"
 
 __all__ = [
+    "Certificate",
+    "CrosscheckReport",
+    "Envelope",
+    "FormationConfig",
+    "FormationController",
+    "GainDesign",
+    "Scenario",
+    "SigmaBounds",
+    "SimulationResult",
+    "SineTrajectory",
+    "Theorem1Conditions",
+    "alpha_minimal",
+    "alpha_paper",
+    "alpha_stabilizing",
+    "certify",
+    "crosscheck",
+    "design_alpha",
+    "envelope_lambda",
+    "heading_gains",
+    "hinf_norm",
+    "lmi_hinf_norm",
+    "load_config",
+    "position_block",
+    "position_loop",
+    "preset_config",
+    "sigma_bounds",
+    "sigma_grid",
+    "sigma_max_2x2",
+    "simulate",
+    "theorem1_conditions",
+    "velocity_block",
     "AuvHinfError",
     "ConfigError",
     "DesignError",

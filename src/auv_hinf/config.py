@@ -156,7 +156,7 @@ def config_from_dict(data: dict[str, Any], name: str = "config") -> FormationCon
         form = data.get("formation", {})
         n = _get(form, "n", int, "formation", 3)
         jacobi = _get(form, "jacobi", str, "formation", "paper")
-        transform = JacobiTransform(n, jacobi)  # type: ignore[arg-type]
+        transform = JacobiTransform(n, jacobi)
         if "shape" in form:
             rho = np.asarray(_get(form, "shape", list, "formation"), dtype=float)
             if rho.shape != (n - 1, 2):

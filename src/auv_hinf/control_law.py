@@ -14,9 +14,8 @@ from numpy.typing import NDArray
 
 from .exceptions import DesignError, require_finite
 from .formation import JacobiTransform
-from .vehicle import VehicleParams, inertial_block, rotation
+from .vehicle import FloatArray, VehicleParams, inertial_block, rotation
 
-FloatArray = NDArray[np.float64]
 OrientationLaw = Literal["corrected", "printed"]
 
 

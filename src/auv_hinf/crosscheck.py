@@ -55,9 +55,9 @@ from .design import (
     position_loop,
     theorem1_conditions,
 )
+from .vehicle import FloatArray
 from .exceptions import DesignError, SolverError, require_finite
 
-FloatArray = NDArray[np.float64]
 
 #: Riccati solvers agree with the closed form to round-off of a 2N-dimensional QZ/Schur.
 ARE_RTOL = 1e-9
@@ -276,6 +276,7 @@ def lmi_stabilizing_alpha(lam: float, gamma: float, n: int) -> LmiResult:
     ell = cp.Variable((size, size), symmetric=True)
     top = 2.0 * lam * ell + eye
     sign: float
+    objective: cp.Minimize | cp.Maximize
     if abs(c) <= GAMMA_SINGULAR_TOL:
         mat = top
         sign = 1.0  # mat <= 0
@@ -324,11 +325,11 @@ def lmi_hinf_norm(sys: ct.StateSpace) -> LmiResult:
     problem = cp.Problem(cp.Minimize(g), [sym << 0, p >> LMI_MARGIN * np.eye(nx)])
     solves = _solve(problem, "bounded-real-lemma analysis LMI")
     max_eig = _verify_nsd(np.asarray(sym.value, dtype=float), "bounded-real-lemma analysis LMI")
-    return LmiResult(value=float(g.value), status=problem.status, solves=solves, max_eig=max_eig)
+    return LmiResult(value=float(np.asarray(g.value)), status=problem.status, solves=solves, max_eig=max_eig)
 
 
 @lru_cache(maxsize=32)
-def _brl_closed_loop_problem(size: int) -> tuple[cp.Problem, cp.Parameter, cp.Parameter, cp.Expression]:
+def _brl_closed_loop_problem(size: int) -> tuple[cp.Problem, cp.Parameter, cp.Variable, cp.Expression]:
     """Parametrised BRL analysis of ``x' = -beta x + w, z = x``: minimise the bound t.
 
     ``beta = alpha - lam``; the LMI is the three-block bounded-real form
@@ -367,7 +368,7 @@ def lmi_minimal_alpha(lam: float, gamma: float, n: int) -> LmiResult:
         beta.value = alpha - lam_f
         solves += _solve(problem, "BRL synthesis LMI")
         max_eig = _verify_nsd(np.asarray(sym.value, dtype=float), "BRL synthesis LMI")
-        return float(t.value)
+        return float(np.asarray(t.value))
 
     lo = max(0.0, lam_f) + 1e-12
     if lam_f < 0 and norm(0.0) <= g:

@@ -16,9 +16,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import FormationError, require_finite
-from .vehicle import VehicleParams, inertial_block, input_matrix
+from .vehicle import FloatArray, VehicleParams, inertial_block, input_matrix
 
-FloatArray = NDArray[np.float64]
 JacobiKind = Literal["paper", "orthonormal"]
 
 

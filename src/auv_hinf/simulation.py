@@ -13,9 +13,8 @@ from scipy.integrate import solve_ivp
 from .control_law import FormationController
 from .envelope import Envelope
 from .exceptions import ParameterError, SolverError
-from .vehicle import VehicleParams, rhs
+from .vehicle import FloatArray, VehicleParams, rhs
 
-FloatArray = NDArray[np.float64]
 
 #: Integration tolerances: shape errors of 1e-3 m on formations of 10-30 m need a
 #: relative accuracy well below 1e-5; 1e-8 / 1e-8 keeps the integration error negligible.

@@ -33,9 +33,8 @@ from tqdm.auto import tqdm
 from .envelope import Envelope, abs_range
 from .exceptions import EnvelopeError, FormationError
 from .formation import JacobiTransform, block_diag_stack
-from .vehicle import VehicleParams, body_block, inertial_block
+from .vehicle import FloatArray, VehicleParams, body_block, inertial_block
 
-FloatArray = NDArray[np.float64]
 Coords = Literal["vehicle", "jacobi"]
 
 #: Relative allowance for round-off in the closed-form 2x2 norm (a few ulps, generous).
