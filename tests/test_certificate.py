@@ -108,3 +108,14 @@ def test_toml_round_trip(tmp_path):
     c = certify(cfg)
     assert c.crosscheck.ok
     assert main(["certify", "--config", str(f)]) in (0, 1)
+
+
+def test_large_fleet_certifies_quickly():
+    """Cross-check size and Jacobi search are capped, so N = 40 certifies without a 80x80 LMI compile."""
+    from auv_hinf.certificate import CROSSCHECK_MAX_N
+    from auv_hinf.config import config_from_dict
+
+    cfg = config_from_dict({"formation": {"n": 40, "polygon_radius": 60.0}})
+    c = certify(cfg)
+    assert c.certified and c.crosscheck.n == CROSSCHECK_MAX_N
+    assert c.sigma_jacobi.upper == pytest.approx(cfg.transform.cond * c.sigma.upper, rel=1e-9)

@@ -101,3 +101,18 @@ def test_zero_damping_vehicle_lambda_zero():
     p = VehicleParams(10, 20, 5, 0, 0, 0, 0, 0, 0)
     env = Envelope(u=(0, 1), v=(0, 1), r=(0, 1))
     assert envelope_lambda(p, env) == 0.0
+
+
+@pytest.mark.parametrize("kind", ["paper", "orthonormal"])
+def test_jacobi_branch_and_bound_is_sound(kind):
+    """The refined Jacobi bound is certified: >= a dense random search, <= the cond bound."""
+    p = paper2011()
+    env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
+    t = JacobiTransform(3, kind)
+    veh = sigma_bounds(p, env, -1.35)
+    coarse = sigma_bounds(p, env, -1.35, coords="jacobi", transform=t, samples=20000, seed=3)
+    fine = sigma_bounds(p, env, -1.35, coords="jacobi", transform=t, samples=200, refine_jacobi=True, budget=800_000)
+    assert "branch-and-bound" in fine.method
+    assert fine.upper >= coarse.lower and fine.upper >= fine.lower
+    assert fine.upper < t.cond * veh.upper
+    assert sigma_at_witness(p, fine, t) == pytest.approx(fine.lower, rel=1e-10)

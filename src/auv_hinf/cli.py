@@ -66,6 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
         c.add_argument("--out", type=Path, help="directory for JSON and PNG outputs")
         if name == "certify":
             c.add_argument("--method", choices=["paper", "stabilizing", "minimal"], help="gain method")
+            c.add_argument("--refine-jacobi", action="store_true",
+                           help="tighten the Jacobi sigma bound by branch-and-bound (N <= 3, ~25 s)")
     return parser
 
 
@@ -101,7 +103,7 @@ def _cmd_certify(args: argparse.Namespace) -> int:
     cfg = preset_config(args.preset) if args.preset else load_config(args.config)
     if args.method:
         cfg = cfg.with_method(args.method)
-    cert = certify(cfg)
+    cert = certify(cfg, refine_jacobi=args.refine_jacobi)
     data = cert.to_dict()
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
