@@ -156,6 +156,12 @@ class RiccatiResult:
     residual: float
 
 
+def _require_real_solution(lam: float, gamma: float) -> None:
+    cond = theorem1_conditions(lam, gamma)
+    if not cond.gamma_ok:
+        raise DesignError(f"gamma={gamma:.6g} below 1/sqrt(lambda^2+2)={cond.gamma_min:.6g}: (37) has no real solution")
+
+
 def riccati_alpha(lam: float, gamma: float, n: int, *, solver: Solver = "control") -> RiccatiResult:
     """Solve eq. (37) for ``L`` (``2n x 2n``) with ``control`` or ``scipy``.
 
@@ -169,9 +175,7 @@ def riccati_alpha(lam: float, gamma: float, n: int, *, solver: Solver = "control
         Number of vehicles; the problem has size ``2n``.
     solver : {"control", "scipy"}
     """
-    cond = theorem1_conditions(lam, gamma)
-    if not cond.gamma_ok:
-        raise DesignError(f"gamma={gamma:.6g} below 1/sqrt(lambda^2+2)={cond.gamma_min:.6g}: (37) has no real solution")
+    _require_real_solution(lam, gamma)
     size = 2 * _check_n(n)
     a = lam * np.eye(size)
     eye = np.eye(size)
@@ -267,9 +271,7 @@ def lmi_stabilizing_alpha(lam: float, gamma: float, n: int) -> LmiResult:
 
     In each case the optimum is the root with ``lam + c alpha = -s``, the stabilising one.
     """
-    cond = theorem1_conditions(lam, gamma)
-    if not cond.gamma_ok:
-        raise DesignError(f"gamma={gamma:.6g} below 1/sqrt(lambda^2+2)={cond.gamma_min:.6g}: no solution")
+    _require_real_solution(lam, gamma)
     size = 2 * _check_n(n)
     eye = np.eye(size)
     c = 1.0 / (gamma * gamma) - 2.0

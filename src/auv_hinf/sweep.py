@@ -77,6 +77,16 @@ def _signed(value: float, interval: tuple[float, float]) -> float:
     return value if interval[0] <= value <= interval[1] else -value
 
 
+def _witness(envelope: Envelope, psi: ArrayLike, a: ArrayLike, b: ArrayLike, r: ArrayLike) -> dict[str, list[float]]:
+    """Witness dictionary from per-vehicle headings and vertex values of ``|u|, |v|, r``."""
+    return {
+        "u": [_signed(float(x), envelope.u) for x in np.ravel(a)],
+        "v": [_signed(float(x), envelope.v) for x in np.ravel(b)],
+        "r": [float(x) for x in np.ravel(r)],
+        "psi": [float(x) for x in np.ravel(psi)],
+    }
+
+
 @dataclass(frozen=True)
 class SigmaBounds:
     """Bounds on ``sigma = sup ||A_Delta||_2`` over an envelope.
@@ -219,13 +229,7 @@ def sigma_bounds(
             done += m
             bar.update(m)
     assert best_x is not None
-    psi_w, a_w, b_w, r_w = best_x
-    witness = {
-        "u": [_signed(float(x), envelope.u) for x in a_w],
-        "v": [_signed(float(x), envelope.v) for x in b_w],
-        "r": [float(x) for x in r_w],
-        "psi": [float(x) for x in psi_w],
-    }
+    witness = _witness(envelope, *best_x)
     upper = transform.cond * veh.upper * (1.0 + ROUNDOFF_RTOL)
     method = f"cond(Phi) * sigma_vehicle (cond = {transform.cond:.4g}); lower from {samples} random vertex configurations"
     full_circle = envelope.psi[1] - envelope.psi[0] >= 2.0 * np.pi
@@ -239,13 +243,7 @@ def sigma_bounds(
                       f"({bnb.levels} levels, {bnb.evaluations} evaluations); cond(Phi) bound {transform.cond * veh.upper:.4g}")
         if bnb.lower > best:
             best = bnb.lower
-            psi_w, a_w, b_w, r_w = bnb.witness
-            witness = {
-                "u": [_signed(float(x), envelope.u) for x in a_w],
-                "v": [_signed(float(x), envelope.v) for x in b_w],
-                "r": [float(x) for x in r_w],
-                "psi": [float(x) for x in psi_w],
-            }
+            witness = _witness(envelope, *bnb.witness)
     return SigmaBounds(
         upper=max(upper, best), lower=best, coords="jacobi", method=method, witness=witness, lam=float(lam),
     )
