@@ -71,6 +71,7 @@ class Certificate:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary (the ``auv-hinf certify --json`` layout)."""
+        paper = self.designs.get("paper")
         return {
             "preset": self.config.name,
             "n": self.config.n,
@@ -90,7 +91,7 @@ class Certificate:
                 **{m: (None if d is None else d.alpha) for m, d in self.designs.items()},
                 "used": self.alpha_used,
             },
-            "paper_flags": [] if self.designs.get("paper") is None else list(self.designs["paper"].flags),  # type: ignore[union-attr]
+            "paper_flags": [] if paper is None else list(paper.flags),
             "theorem1": self.theorem1,
             "small_gain_margin": self.small_gain_margin,
             "k1": self.config.k1,

@@ -61,7 +61,7 @@ def heading_gains(params: VehicleParams, poles: tuple[float, float] = (-1.0, -1.
     a = np.array([[0.0, 1.0], [0.0, -params.d33_lin / params.m33]])
     b = np.array([[0.0], [1.0]])
     k = np.asarray(ct.place(a, b, list(poles))).ravel()
-    return float(k[0]), float(k[1] + 0.0)
+    return float(k[0]), float(k[1])
 
 
 def heading_reference(qd: FloatArray, qdd: FloatArray, qddd: FloatArray) -> tuple[float, float, float]:

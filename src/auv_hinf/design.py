@@ -25,7 +25,7 @@ Three designs are offered:
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any, Literal, get_args
 
 from .exceptions import DesignError, require_finite
@@ -43,6 +43,10 @@ GAMMA_MIN_RTOL = 1e-12
 #: Relative tolerance under which ``|lam| == 1/gamma - gamma`` counts as the singular case
 #: of Theorem 1 (the matrix ``A_lam + (1/gamma^2 - 1) L`` is then singular).
 SINGULAR_CASE_RTOL = 1e-9
+
+#: Residual of eq. (37) below which a gain counts as a root (round-off of a quadratic in
+#: O(1) numbers).
+ROOT_RESIDUAL_TOL = 1e-12
 
 #: Relative slack allowed when testing ``||T||_inf <= gamma`` (round-off only).
 NORM_BOUND_RTOL = 1e-12
@@ -321,11 +325,12 @@ def alpha_minimal(lam: float, gamma: float) -> GainDesign:
     0.0
     """
     lam_f, g = _check_lam_gamma(lam, gamma, need_negative_lam=False)
-    alpha = max(0.0, 1.0 / g + lam_f)
-    flags = [] if abs(alpha * alpha * (1.0 / (g * g) - 2.0) + 2 * lam_f * alpha + 1.0) < 1e-12 else [
-        "not-a-root-of-37: the minimal gain drops the paper's K = -L choice, so eq. (37) is not solved"
-    ]
-    return _evaluate("minimal", lam_f, g, alpha, flags)
+    result = _evaluate("minimal", lam_f, g, max(0.0, 1.0 / g + lam_f), [])
+    if abs(result.are_residual) < ROOT_RESIDUAL_TOL:
+        return result
+    return replace(result, flags=(
+        "not-a-root-of-37: the minimal gain drops the paper's K = -L choice, so eq. (37) is not solved",
+    ))
 
 
 def design_alpha(lam: float, gamma: float, method: GainMethod) -> GainDesign:

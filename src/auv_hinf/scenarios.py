@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from .certificate import certify
@@ -75,4 +73,4 @@ def paper_scenario(name: str = "paper-triangle", **kwargs: object) -> Scenario:
     return scenario_from_config(preset_config(name), **kwargs)  # type: ignore[arg-type]
 
 
-__all__ = ["PAPER_TRIANGLE_INITIAL", "default_initial", "paper_scenario", "scenario_from_config", "replace"]
+__all__ = ["PAPER_TRIANGLE_INITIAL", "default_initial", "paper_scenario", "scenario_from_config"]
