@@ -23,14 +23,14 @@ demo: $(STAMP)
 	@echo "plots and JSON written under $(OUT)/"
 
 test: $(STAMP)
-	$(BIN)/python -m mypy src
-	MPLBACKEND=Agg $(BIN)/python -m pytest tests src/auv_hinf/design.py --doctest-modules --nbmake notebooks
+	$(BIN)/python -m mypy auv_hinf
+	MPLBACKEND=Agg $(BIN)/python -m pytest tests auv_hinf/design.py --doctest-modules --nbmake notebooks
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python benchmarks/run_all.py
 
 typecheck: $(STAMP)
-	$(BIN)/python -m mypy src
+	$(BIN)/python -m mypy auv_hinf
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache

@@ -16,12 +16,13 @@ from typing import Callable
 
 import numpy as np
 
-from auv_hinf.crosscheck import lmi_stabilizing_alpha, riccati_alpha
+from auv_hinf.lmi import lmi_stabilizing_alpha
+from auv_hinf.riccati import riccati_alpha
 from auv_hinf.design import alpha_stabilizing
 from auv_hinf.config import config_from_dict
 from auv_hinf.scenarios import paper_scenario, scenario_from_config
 from auv_hinf.simulation import Scenario, closed_loop_rhs, ground_velocity, simulate
-from auv_hinf.sweep import sigma_max_2x2
+from auv_hinf.sigma import sigma_max_2x2
 from auv_hinf.vehicle import paper2011, rhs
 
 LAM, GAMMA = -1.2, 2.86

@@ -7,17 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from auv_hinf.crosscheck import (
-    ARE_RTOL,
-    LMI_RTOL,
-    NORM_RTOL,
-    crosscheck,
-    hinf_norm,
-    lmi_hinf_norm,
-    position_block,
-    riccati_alpha,
-    velocity_block,
-)
+from auv_hinf.crosscheck import crosscheck
+from auv_hinf.lmi import LMI_RTOL, lmi_hinf_norm
+from auv_hinf.loops import NORM_RTOL, hinf_norm, position_block, velocity_block
+from auv_hinf.riccati import ARE_RTOL, riccati_alpha
 from auv_hinf.design import alpha_stabilizing, gamma_min
 
 INV_SQRT2 = 2 ** -0.5

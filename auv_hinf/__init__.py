@@ -7,7 +7,9 @@ for Autonomous Underwater Vehicles*. See the README for a tour.
 from .certificate import Certificate, certify
 from .config import FormationConfig, load_config, preset_config
 from .control_law import FormationController, SineTrajectory, heading_gains
-from .crosscheck import CrosscheckReport, crosscheck, hinf_norm, lmi_hinf_norm, position_block, velocity_block
+from .crosscheck import CrosscheckReport, crosscheck
+from .lmi import lmi_hinf_norm
+from .loops import hinf_norm, position_block, velocity_block
 from .design import (
     GainDesign,
     Theorem1Conditions,
@@ -37,7 +39,7 @@ from .formation import (
     shape_from_offsets,
 )
 from .simulation import Scenario, SimulationResult, simulate
-from .sweep import SigmaBounds, sigma_bounds, sigma_grid, sigma_max_2x2
+from .sigma import SigmaBounds, jacobi_sigma_bounds, sigma_grid, sigma_max_2x2, vehicle_sigma
 from .vehicle import (
     VehicleParams,
     body_block,
@@ -77,7 +79,8 @@ __all__ = [
     "position_block",
     "position_loop",
     "preset_config",
-    "sigma_bounds",
+    "jacobi_sigma_bounds",
+    "vehicle_sigma",
     "sigma_grid",
     "sigma_max_2x2",
     "simulate",

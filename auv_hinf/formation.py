@@ -10,16 +10,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Literal, get_args
+from typing import get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._typing import JacobiKind
 from .exceptions import FormationError, require_finite
-from .vehicle import FloatArray, VehicleParams, inertial_block, input_matrix
-
-JacobiKind = Literal["paper", "orthonormal"]
-
+from ._typing import FloatArray
+from .vehicle import VehicleParams, inertial_block, input_matrix
 
 @dataclass(frozen=True)
 class JacobiTransform:

@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from .sweep import sigma_grid
+from .sigma import sigma_grid
 
 if TYPE_CHECKING:
     from .certificate import Certificate

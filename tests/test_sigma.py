@@ -7,7 +7,7 @@ import pytest
 
 from auv_hinf.envelope import Envelope, abs_range, envelope_lambda
 from auv_hinf.formation import JacobiTransform
-from auv_hinf.sweep import sigma_at_witness, sigma_bounds, sigma_grid, sigma_max_2x2
+from auv_hinf.sigma import jacobi_sigma_bounds, sigma_at_witness, sigma_grid, sigma_max_2x2, vehicle_sigma
 from auv_hinf.vehicle import VehicleParams, body_block, paper2011
 
 
@@ -28,7 +28,7 @@ def test_upper_bound_is_sound_against_dense_sampling(vehicle, seed):
     rng = np.random.default_rng(seed)
     env = random_envelope(rng)
     lam = envelope_lambda(vehicle, env)
-    b = sigma_bounds(vehicle, env, lam, n=3)
+    b = vehicle_sigma(vehicle, env, lam, 3)
     u = rng.uniform(*env.u, 200_000)
     v = rng.uniform(*env.v, 200_000)
     r = rng.uniform(*env.r, 200_000)
@@ -45,7 +45,7 @@ def test_straddling_zero():
     assert abs_range(-1.0, 2.0) == (0.0, 2.0)
     lam = envelope_lambda(p, env)
     assert lam == pytest.approx(-(70 + 200) / 200)
-    b = sigma_bounds(p, env, lam)
+    b = vehicle_sigma(p, env, lam)
     expected = max(
         sigma_max_2x2(body_block(p, uu, vv, rr) - lam * np.eye(2))
         for uu in (0.0, 2.0) for vv in (0.0, 0.5) for rr in (-0.3, 0.3)
@@ -60,8 +60,8 @@ def test_jacobi_bounds(kind):
     p = paper2011()
     env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
     t = JacobiTransform(3, kind)
-    veh = sigma_bounds(p, env, -1.35, n=3)
-    jac = sigma_bounds(p, env, -1.35, coords="jacobi", transform=t, samples=3000)
+    veh = vehicle_sigma(p, env, -1.35, 3)
+    jac = jacobi_sigma_bounds(p, env, -1.35, t, samples=3000)
     assert jac.lower <= jac.upper <= t.cond * veh.upper * (1 + 1e-9)
     assert jac.lower >= veh.lower * (1 - 1e-9) or kind == "orthonormal"
     assert sigma_at_witness(p, jac, t) == pytest.approx(jac.lower, rel=1e-10)
@@ -71,8 +71,8 @@ def test_paper_notes_item6_jacobi_exceeds_vehicle():
     """With the unnormalised Phi a search finds sigma ~1.5 where the vehicle value is 1.09."""
     p = paper2011()
     env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
-    veh = sigma_bounds(p, env, -1.35)
-    jac = sigma_bounds(p, env, -1.35, coords="jacobi", transform=JacobiTransform(3), samples=20000)
+    veh = vehicle_sigma(p, env, -1.35)
+    jac = jacobi_sigma_bounds(p, env, -1.35, JacobiTransform(3), samples=20000)
     assert veh.upper == pytest.approx(1.09, abs=0.01)
     assert jac.lower > 1.4
 
@@ -83,7 +83,7 @@ def test_grid_matches_bound():
     lam = envelope_lambda(p, env)
     g = sigma_grid(p, lam, np.linspace(0, 3.5, 50), np.linspace(-0.5, 0.5, 41), other=1.0)
     assert g.shape == (41, 50)
-    assert g.max() <= sigma_bounds(p, env, lam).upper
+    assert g.max() <= vehicle_sigma(p, env, lam).upper
 
 
 @pytest.mark.parametrize(
@@ -109,9 +109,9 @@ def test_jacobi_branch_and_bound_is_sound(kind):
     p = paper2011()
     env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
     t = JacobiTransform(3, kind)
-    veh = sigma_bounds(p, env, -1.35)
-    coarse = sigma_bounds(p, env, -1.35, coords="jacobi", transform=t, samples=20000, seed=3)
-    fine = sigma_bounds(p, env, -1.35, coords="jacobi", transform=t, samples=200, refine_jacobi=True, budget=800_000)
+    veh = vehicle_sigma(p, env, -1.35)
+    coarse = jacobi_sigma_bounds(p, env, -1.35, t, samples=20000, seed=3)
+    fine = jacobi_sigma_bounds(p, env, -1.35, t, samples=200, refine_jacobi=True, budget=800_000)
     assert "branch-and-bound" in fine.method
     assert fine.upper >= coarse.lower and fine.upper >= fine.lower
     assert fine.upper < t.cond * veh.upper

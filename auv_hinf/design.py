@@ -26,12 +26,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
-from typing import Any, Literal, get_args
+from typing import Any
+
+from ._typing import GAIN_METHODS, GainMethod
 
 from .exceptions import DesignError, require_finite
 
-GainMethod = Literal["paper", "stabilizing", "minimal"]
-GAIN_METHODS: tuple[str, ...] = get_args(GainMethod)
 
 #: ``|1/gamma^2 - 2|`` at or below this is treated as ``gamma = 1/sqrt(2)``. It is about
 #: ten ulps of 2, so only the exact value up to round-off takes the singular branch.
@@ -50,6 +50,11 @@ ROOT_RESIDUAL_TOL = 1e-12
 
 #: Relative slack allowed when testing ``||T||_inf <= gamma`` (round-off only).
 NORM_BOUND_RTOL = 1e-12
+
+
+def riccati_c(gamma: float) -> float:
+    """Coefficient ``c = 1/gamma^2 - 2`` of the scalar Riccati equation (37) (s^-2 scaled)."""
+    return 1.0 / (gamma * gamma) - 2.0
 
 
 def gamma_min(lam: float) -> float:
@@ -136,7 +141,7 @@ def theorem1_conditions(lam: float, gamma: float) -> Theorem1Conditions:
     lam_f, g = _check_lam_gamma(lam, gamma, need_negative_lam=False)
     gmin = gamma_min(lam_f)
     singular_margin = abs(lam_f) - (1.0 / g - g)
-    c = 1.0 / (g * g) - 2.0
+    c = riccati_c(g)
     regime = "at" if abs(c) <= GAMMA_SINGULAR_TOL else ("below" if c > 0 else "above")
     return Theorem1Conditions(
         lam=lam_f,
@@ -198,7 +203,7 @@ class GainDesign:
 
 
 def _evaluate(method: str, lam: float, g: float, alpha: float, flags: list[str]) -> GainDesign:
-    c = 1.0 / (g * g) - 2.0
+    c = riccati_c(g)
     residual = c * alpha * alpha + 2.0 * lam * alpha + 1.0
     hinf = 1.0 / (alpha - lam) if alpha > lam else math.inf
     return GainDesign(
@@ -254,7 +259,7 @@ def alpha_paper(lam: float, gamma: float) -> GainDesign:
     lam_f, g = _check_lam_gamma(lam, gamma, need_negative_lam=True)
     cond = theorem1_conditions(lam_f, g)
     _require_real_roots(cond, "alpha_paper")
-    c = 1.0 / (g * g) - 2.0
+    c = riccati_c(g)
     s = _discriminant_sqrt(lam_f, c)
     flags: list[str] = []
     if cond.regime == "at":
@@ -298,7 +303,7 @@ def alpha_stabilizing(lam: float, gamma: float) -> GainDesign:
     lam_f, g = _check_lam_gamma(lam, gamma, need_negative_lam=True)
     cond = theorem1_conditions(lam_f, g)
     _require_real_roots(cond, "alpha_stabilizing")
-    c = 1.0 / (g * g) - 2.0
+    c = riccati_c(g)
     alpha = 1.0 / (-lam_f + _discriminant_sqrt(lam_f, c))
     flags: list[str] = []
     if lam_f + (1.0 / (g * g) - 1.0) * alpha >= 0:

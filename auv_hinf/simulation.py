@@ -13,7 +13,8 @@ from scipy.integrate import solve_ivp
 from .control_law import FormationController
 from .envelope import Envelope
 from .exceptions import ParameterError, SolverError
-from .vehicle import FloatArray, VehicleParams, rhs
+from ._typing import FloatArray
+from .vehicle import VehicleParams, rhs
 
 
 #: Integration tolerances: shape errors of 1e-3 m on formations of 10-30 m need a

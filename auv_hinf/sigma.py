@@ -40,6 +40,8 @@ import itertools
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ._typing import FloatArray
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from tqdm.auto import tqdm
@@ -47,9 +49,7 @@ from tqdm.auto import tqdm
 from .envelope import Envelope, abs_range
 from .exceptions import EnvelopeError, FormationError
 from .formation import JacobiTransform, block_diag_stack
-from .vehicle import FloatArray, VehicleParams, body_block, inertial_block
-
-Coords = Literal["vehicle", "jacobi"]
+from .vehicle import VehicleParams, body_block, inertial_block
 
 #: Relative allowance for round-off in the closed-form 2x2 norm (a few ulps, generous).
 ROUNDOFF_RTOL = 1e-12
@@ -157,58 +157,67 @@ def jacobi_sigma(
     return np.linalg.svd(a, compute_uv=False)[..., 0]
 
 
-def sigma_bounds(
-    params: VehicleParams,
-    envelope: Envelope,
-    lam: float,
-    *,
-    coords: Coords = "vehicle",
-    transform: JacobiTransform | None = None,
-    n: int | None = None,
-    samples: int = 20_000,
-    seed: int = 0,
-    progress: bool = False,
-    refine_jacobi: bool = False,
-    budget: int = BNB_BUDGET,
-) -> SigmaBounds:
-    """Certified upper and witnessed lower bounds on ``||A_Delta||`` over ``envelope``.
+def vehicle_sigma(params: VehicleParams, envelope: Envelope, lam: float, n: int = 1) -> SigmaBounds:
+    """Exact vehicle-coordinate sigma: the largest ``||B - lam I||`` over the 8 box vertices.
 
     Parameters
     ----------
     params : VehicleParams
         Vehicle parameters (all vehicles alike).
     envelope : Envelope
-        Ranges of u, v (m/s), r (rad/s), psi (rad).
+        Ranges of u, v (m/s) and r (rad/s); the norm does not depend on psi.
     lam : float
         Constant lambda of the decomposition (1/s).
-    coords : {"vehicle", "jacobi"}
-        Coordinates in which the norm is taken. ``"jacobi"`` needs ``transform``.
-    transform : JacobiTransform, optional
-        Jacobi transform for ``coords="jacobi"``.
-    n : int, optional
-        Number of vehicles for the witness (defaults to ``transform.n`` or 1).
-    samples : int
-        Random configurations for the Jacobi lower bound.
-    seed : int
-        Seed of the Jacobi search (``numpy.random.default_rng``).
-    progress : bool
-        Show a tqdm bar for the Jacobi search.
-    refine_jacobi : bool
-        Run :func:`jacobi_branch_and_bound` (N <= :data:`BNB_MAX_N`, full heading circle)
-        to tighten the Jacobi upper bound; about 25 s at N = 3 with the default budget.
-    budget : int
-        Evaluation budget of the branch-and-bound.
+    n : int
+        Number of vehicles in the witness (each gets the same vertex).
+
+    Returns
+    -------
+    SigmaBounds
+        ``upper`` certified (vertex value plus :data:`ROUNDOFF_RTOL`), ``lower`` the vertex value.
     """
     if not np.isfinite(lam):
         raise EnvelopeError(f"lambda must be finite, got {lam!r}")
-    nveh = n if n is not None else (transform.n if transform is not None else 1)
-    veh = _vehicle_bounds(params, envelope, float(lam), nveh)
-    if coords == "vehicle":
-        return veh
-    if coords != "jacobi":
-        raise EnvelopeError(f"coords must be 'vehicle' or 'jacobi', got {coords!r}")
-    if transform is None:
-        raise FormationError("coords='jacobi' needs a JacobiTransform")
+    return _vehicle_bounds(params, envelope, float(lam), n)
+
+
+def jacobi_sigma_bounds(
+    params: VehicleParams,
+    envelope: Envelope,
+    lam: float,
+    transform: JacobiTransform,
+    *,
+    samples: int = 20_000,
+    seed: int = 0,
+    progress: bool = False,
+    refine_jacobi: bool = False,
+    budget: int = BNB_BUDGET,
+) -> SigmaBounds:
+    """Certified upper and witnessed lower bounds on the Jacobi-coordinate ``||A_Delta||``.
+
+    The upper bound is ``cond(Phi) * sigma_vehicle`` (or the branch-and-bound value when
+    ``refine_jacobi`` and it is smaller); the lower bound is the best of ``samples`` random
+    vertex configurations with uniform headings, returned as a witness.
+
+    Parameters
+    ----------
+    params, envelope, lam
+        As in :func:`vehicle_sigma`.
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles.
+    samples : int
+        Random configurations for the lower bound.
+    seed : int
+        Seed of the search (``numpy.random.default_rng``).
+    progress : bool
+        Show a tqdm bar.
+    refine_jacobi : bool
+        Run :func:`jacobi_branch_and_bound` (N <= :data:`BNB_MAX_N`, full heading circle).
+    budget : int
+        Evaluation budget of the branch-and-bound.
+    """
+    veh = vehicle_sigma(params, envelope, lam, transform.n)
+    lam = float(lam)
     nv = transform.n
     rng = np.random.default_rng(seed)
     a_rng, b_rng = abs_range(*envelope.u), abs_range(*envelope.v)
@@ -250,7 +259,9 @@ def sigma_bounds(
 
 
 @dataclass(frozen=True)
-class _BnbResult:
+class JacobiBnbResult:
+    """Result of :func:`jacobi_branch_and_bound`: certified ``upper``, witnessed ``lower`` (1/s)."""
+
     upper: float
     lower: float
     witness: tuple[FloatArray, FloatArray, FloatArray, FloatArray]
@@ -262,7 +273,7 @@ def jacobi_branch_and_bound(
     params: VehicleParams, envelope: Envelope, lam: float, transform: JacobiTransform,
     sigma_vehicle: float, *, tol: float = 1e-3, initial_cells: int = 16, budget: int = BNB_BUDGET,
     progress: bool = False,
-) -> _BnbResult:
+) -> JacobiBnbResult:
     """Certified Lipschitz branch-and-bound of the Jacobi sigma over relative headings.
 
     See the module docstring for the argument. ``tol`` is relative to the best value.
@@ -311,7 +322,7 @@ def jacobi_branch_and_bound(
             offsets = np.array(list(itertools.product((-h, h), repeat=d)))
             centres = (centres[keep][:, None, :] + offsets[None]).reshape(-1, d)
     assert best_w is not None
-    return _BnbResult(upper=upper * (1.0 + ROUNDOFF_RTOL), lower=best, witness=best_w, levels=levels,
+    return JacobiBnbResult(upper=upper * (1.0 + ROUNDOFF_RTOL), lower=best, witness=best_w, levels=levels,
                       evaluations=evaluations)
 
 

@@ -10,7 +10,7 @@ from .crosscheck import CrosscheckReport, crosscheck
 from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop, theorem1_conditions
 from .envelope import envelope_lambda
 from .exceptions import DesignError
-from .sweep import SigmaBounds, sigma_bounds
+from .sigma import SigmaBounds, jacobi_sigma_bounds, vehicle_sigma
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
 #: ``A_lam = lam I`` every 2x2 channel is identical, so a larger problem checks nothing
@@ -143,11 +143,11 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     """
     lam = config.lam if config.lam is not None else envelope_lambda(config.vehicle, config.envelope)
     transform = config.transform
-    sig = sigma_bounds(config.vehicle, config.envelope, lam, n=config.n)
+    sig = vehicle_sigma(config.vehicle, config.envelope, lam, config.n)
     if config.n > JACOBI_SEARCH_MAX_N:
         jacobi_samples = min(jacobi_samples, LARGE_FLEET_JACOBI_SAMPLES)
-    sig_j = sigma_bounds(
-        config.vehicle, config.envelope, lam, coords="jacobi", transform=transform, samples=jacobi_samples,
+    sig_j = jacobi_sigma_bounds(
+        config.vehicle, config.envelope, lam, transform, samples=jacobi_samples,
         refine_jacobi=refine_jacobi, progress=refine_jacobi,
     )
     gamma = config.gamma if config.gamma is not None else 1.0 / sig.upper
@@ -156,7 +156,7 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     designs: dict[str, GainDesign | None] = {}
     for m in GAIN_METHODS:
         try:
-            designs[m] = design_alpha(lam, gamma, m)  # type: ignore[arg-type]
+            designs[m] = design_alpha(lam, gamma, m)
         except DesignError as exc:
             designs[m] = None
             if m == config.method:

@@ -68,3 +68,18 @@ def require_finite(name: str, value: Any) -> float:
     if not math.isfinite(out):
         raise ParameterError(f"{name} must be finite, got {out!r}")
     return out
+
+
+def require_fleet_size(n: Any, minimum: int = 2) -> int:
+    """Return ``n`` as an int, or raise if it is not an integer number of vehicles >= ``minimum``.
+
+    Raises
+    ------
+    FormationError
+        If ``n`` is a bool, not an integer, or below ``minimum``.
+    """
+    import numpy as np
+
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < minimum:
+        raise FormationError(f"number of vehicles n must be an integer >= {minimum}, got {n!r}")
+    return int(n)

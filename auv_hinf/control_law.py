@@ -6,18 +6,17 @@ All functions are vectorised over the N vehicles; no Python loop runs per vehicl
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import Protocol
 
 import control as ct
 import numpy as np
 from numpy.typing import NDArray
 
+from ._typing import OrientationLaw
 from .exceptions import DesignError, require_finite
 from .formation import JacobiTransform
-from .vehicle import FloatArray, VehicleParams, inertial_block, rotation
-
-OrientationLaw = Literal["corrected", "printed"]
-
+from ._typing import FloatArray
+from .vehicle import VehicleParams, inertial_block, rotation
 
 class Trajectory(Protocol):
     """Desired formation-centre trajectory ``q_cd(t)`` (inertial frame, m)."""

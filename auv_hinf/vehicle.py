@@ -26,12 +26,11 @@ from typing import Any, Callable
 
 import control as ct
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from ._typing import FloatArray
 
 from .exceptions import ParameterError, require_finite
-
-#: Float arrays of any precision (numpy's ufuncs return ``floating[Any]``).
-FloatArray = NDArray[np.floating[Any]]
 
 _MASS_FIELDS = ("m11", "m22", "m33")
 _DAMPING_FIELDS = ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")

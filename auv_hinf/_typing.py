@@ -1,0 +1,25 @@
+"""Shared array alias and the ``Literal`` option types of the public API."""
+
+from __future__ import annotations
+
+from typing import Any, Literal, get_args
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Float arrays of any precision (numpy's ufuncs return ``floating[Any]``).
+FloatArray = NDArray[np.floating[Any]]
+
+#: Theorem 1 gain designs.
+GainMethod = Literal["paper", "stabilizing", "minimal"]
+GAIN_METHODS: tuple[GainMethod, ...] = get_args(GainMethod)
+
+#: Scalings of the Jacobi transform.
+JacobiKind = Literal["paper", "orthonormal"]
+JACOBI_KINDS: tuple[JacobiKind, ...] = get_args(JacobiKind)
+
+#: Heading law: the corrected eq. (28) or the printed one.
+OrientationLaw = Literal["corrected", "printed"]
+
+#: Riccati solver back ends.
+RiccatiSolver = Literal["control", "scipy"]
