@@ -5,32 +5,50 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
+DOCS_OUT := docs/_build/html
 
-.PHONY: demo test bench typecheck clean
+# Figures are written to files: no display is needed anywhere (notebooks, docs, CLI).
+export MPLBACKEND := Agg
+
+.PHONY: demo test lint typecheck pytest docs bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -e '.[test,slycot]'
 	touch $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/auv-hinf certify --preset paper-triangle --out $(OUT)/certificate; \
+	$(BIN)/auv-hinf certify --preset paper-triangle --out $(OUT)/certificate; \
 	  status=$$?; if [ $$status -gt 1 ]; then exit $$status; fi
-	MPLBACKEND=Agg $(BIN)/auv-hinf simulate --preset paper-triangle --out $(OUT)/simulation
+	$(BIN)/auv-hinf simulate --preset paper-triangle --out $(OUT)/simulation
 	@echo "plots and JSON written under $(OUT)/"
 
-test: $(STAMP)
-	$(BIN)/python -m mypy auv_hinf
-	MPLBACKEND=Agg $(BIN)/python -m pytest tests auv_hinf/design.py --doctest-modules --nbmake notebooks
+# Lint and format check, strict typing, the tests with coverage, the doctests, the
+# notebooks (nbmake executes them), then the documentation with warnings as errors.
+test: lint typecheck pytest docs
 
-bench: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python benchmarks/run_all.py
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 
 typecheck: $(STAMP)
 	$(BIN)/python -m mypy auv_hinf
 
+pytest: $(STAMP)
+	$(BIN)/python -m pytest tests auv_hinf --doctest-modules --nbmake notebooks \
+	  --cov=auv_hinf --cov-report=term:skip-covered
+
+# Notebooks are rendered as stored (no outputs, no execution); see docs/conf.py.
+docs: $(STAMP)
+	$(BIN)/python -m sphinx -W --keep-going -b html -q docs $(DOCS_OUT)
+	@echo "documentation written to $(DOCS_OUT)/index.html"
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/run_all.py
+
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache .hypothesis .coverage \
+	  docs/_build docs/api/generated docs/notebooks

@@ -10,6 +10,8 @@ from .crosscheck import CrosscheckReport, crosscheck
 from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop, theorem1_conditions
 from .envelope import envelope_lambda
 from .exceptions import DesignError
+from .control_law import heading_gains
+from .plan import ClosedLoopSummary, Gains, closed_loop_summary
 from .sigma import SigmaBounds, jacobi_sigma_bounds, vehicle_sigma
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
@@ -23,6 +25,16 @@ CROSSCHECK_MAX_N = 6
 #: unaffected, only the witnessed lower bound gets coarser.
 JACOBI_SEARCH_MAX_N = 12
 LARGE_FLEET_JACOBI_SAMPLES = 4
+
+#: The small-gain margin ``(alpha - lam) - sigma_upper`` (1/s) must exceed
+#: ``MARGIN_RTOL * (|lam| + sigma_upper)`` to certify: the margin is a difference of
+#: quantities of that size, each known to ~1e-15 relative, so 1e-9 of the scale is far above
+#: round-off and far below any margin a design would rely on. A margin at or below it is
+#: "not certified (marginal)", decided by this rule and never by rounding. In particular
+#: method "minimal" with the default gamma = 1/sigma_upper and alpha = 1/gamma + lam > 0 has
+#: margin 0 in exact arithmetic (alpha - lam = 1/gamma = sigma_upper) and is always reported
+#: marginal; when the clamp alpha = 0 is active the margin is |lam| - sigma_upper, a real one.
+MARGIN_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -45,14 +57,19 @@ class Certificate:
     alpha_used : float or None
         Gain of the configured method (1/s).
     small_gain_margin : float or None
-        ``(alpha - lam) - sigma.upper`` (1/s): the guaranteed decay rate of the velocity
-        error; must be > 0.
+        ``(alpha - lam) - sigma.upper`` (1/s): the small-gain margin, must be > 0. It is the
+        decay rate of the velocity loop alone (``k1 = 0``), not of the full loop: see
+        ``closed_loop.decay_rate``.
     position_loop_hinf : float or None
         Theorem 2 loop norm ``1/(alpha - lam)`` (s) for ``k1``.
     crosscheck : CrosscheckReport
     certified : bool
+        The small-gain test, the cross-checks *and* the closed-loop certificate all pass.
     reasons : tuple of str
         Why it is not certified (empty when certified).
+    closed_loop : ClosedLoopSummary or None
+        Decay rate, start region, thrust and start coverage of the full error loop along the
+        configured mission (``None`` when the small-gain test already fails).
     """
 
     config: FormationConfig
@@ -68,6 +85,7 @@ class Certificate:
     crosscheck: CrosscheckReport
     certified: bool
     reasons: tuple[str, ...] = field(default_factory=tuple)
+    closed_loop: ClosedLoopSummary | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary (the ``auv-hinf certify --json`` layout)."""
@@ -103,6 +121,7 @@ class Certificate:
             "reasons": list(self.reasons),
             "envelope": self.config.envelope.to_dict(),
             "vehicle": self.config.vehicle.to_dict(),
+            "closed_loop": None if self.closed_loop is None else self.closed_loop.to_dict(),
         }
 
     def summary(self) -> str:
@@ -126,8 +145,9 @@ class Certificate:
             f"  small-gain margin         {fmt(self.small_gain_margin)} 1/s",
             f"  position loop ||T||       {fmt(self.position_loop_hinf)} (k1={self.config.k1:g})",
             f"  cross-check               {'ok' if self.crosscheck.ok else 'DISAGREES'} (max rel {self.crosscheck.max_rel_diff:.2g})",
-            f"  CERTIFIED: {'yes' if self.certified else 'no'}",
         ]
+        lines += _closed_loop_lines(self.closed_loop)
+        lines += [f"  CERTIFIED: {'yes' if self.certified else 'no'}"]
         lines.extend(f"    - {r}" for r in self.reasons)
         return "\n".join(lines)
 
@@ -141,6 +161,8 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     Theorem 2 loop norm. ``refine_jacobi`` tightens the reported Jacobi bound by
     branch-and-bound (slow; the certificate itself uses vehicle coordinates).
     """
+    if config.method not in GAIN_METHODS:
+        raise DesignError(f"gain method must be one of {GAIN_METHODS}, got {config.method!r}")
     lam = config.lam if config.lam is not None else envelope_lambda(config.vehicle, config.envelope)
     transform = config.transform
     sig = vehicle_sigma(config.vehicle, config.envelope, lam, config.n)
@@ -166,10 +188,18 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     margin = pos = None
     if alpha is not None:
         margin = (alpha - lam) - sig.upper
-        if margin <= 0:
+        margin_tol = MARGIN_RTOL * (abs(lam) + sig.upper)
+        if config.method == "minimal" and config.gamma is None and alpha > 0:
             reasons.append(
-                f"small-gain margin (alpha - lambda) - sigma_upper = {margin:.4g} <= 0: "
-                "||T||_inf * sigma must be < 1 strictly (set design.gamma below 1/sigma)"
+                f"not certified (marginal): method 'minimal' with gamma = 1/sigma_upper has "
+                f"small-gain margin 0 by construction (computed {margin:.4g} 1/s); set "
+                "design.gamma below 1/sigma"
+            )
+        elif margin <= margin_tol:
+            reasons.append(
+                f"not certified (marginal): small-gain margin (alpha - lambda) - sigma_upper = "
+                f"{margin:.4g} 1/s <= tolerance {margin_tol:.3g} 1/s: ||T||_inf * sigma must be < 1 "
+                "strictly (set design.gamma below 1/sigma)"
             )
         if alpha > lam:
             pos = position_loop(lam, alpha, config.k1).hinf
@@ -181,8 +211,34 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     report = crosscheck(lam, gamma, min(config.n, CROSSCHECK_MAX_N), config.k1)
     if not report.ok:
         reasons.append(f"cross-check disagrees (max rel diff {report.max_rel_diff:.3g})")
+    loop = None
+    if not reasons and alpha is not None:
+        gains = Gains(lam, sig.upper, gamma, alpha, config.k1,
+                      heading_gains(config.vehicle, (config.heading_poles[0], config.heading_poles[1])))
+        loop = closed_loop_summary(config, gains)
+        reasons.extend(loop.reasons)
     return Certificate(
         config=config, lam=lam, sigma=sig, sigma_jacobi=sig_j, gamma=gamma, theorem1=cond.to_dict(),
         designs=designs, alpha_used=alpha, small_gain_margin=margin, position_loop_hinf=pos,
-        crosscheck=report, certified=not reasons, reasons=tuple(reasons),
+        crosscheck=report, certified=not reasons, reasons=tuple(reasons), closed_loop=loop,
     )
+
+
+def _closed_loop_lines(loop: ClosedLoopSummary | None) -> list[str]:
+    """Summary lines of the closed-loop certificate (4-6 significant digits, with units)."""
+    if loop is None or loop.certificate is None:
+        return ["  closed loop               not certified"]
+    c = loop.certificate
+    r = c.region.region
+    out = [
+        f"  closed-loop decay rate    {c.rate:.4g} 1/s (position {c.position.rate:.4g}, heading {c.heading.rate:.4g})",
+        f"  start region (all at once) |e| <= {r.position:.4g} m, |e'| <= {r.velocity:.4g} m/s, "
+        f"|e_psi| <= {r.heading:.4g} rad, |e_r| <= {r.yaw_rate:.4g} rad/s",
+        f"  thrust over the region    |tau_x| <= {c.thrust.force_x:.5g} N, |tau_y| <= {c.thrust.force_y:.5g} N, "
+        f"|tau_psi| <= {c.thrust.moment:.5g} N m",
+    ]
+    s = loop.shaped
+    if s is not None:
+        how = f"blend {s.blend_time:g} s, turn {s.turn_time:g} s" if s.blend_time is not None else "no blend needed"
+        out.append(f"  shaped start              {'covered' if s.covered else 'NOT covered'} ({how})")
+    return out

@@ -1,7 +1,9 @@
 """Command-line interface ``auv-hinf``.
 
-Exit codes: 0 success (consistent / certified / simulated), 1 a negative verdict
-(cross-check disagrees, not certified), 2 bad input (one line on stderr, no traceback).
+Exit codes: 0 success (consistent / certified / simulated / written); 1 a negative verdict
+(cross-check disagrees, not certified, no gain) or a solver or internal failure; 2 bad input
+(arguments, configuration, unusable ``--out``). Every failure is reported as one line per
+problem on stderr and never as a traceback, unless ``--debug`` is given, which re-raises.
 """
 
 from __future__ import annotations
@@ -10,24 +12,91 @@ import argparse
 import json
 import math
 import sys
+import tempfile
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from . import __version__
-from .exceptions import AuvHinfError, SolverError
+from ._typing import GAIN_METHODS
+from .exceptions import AuvHinfError, DesignError, SolverError
+from .presets import PRESETS
 
 EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
+PROG = "auv-hinf"
+#: Largest ``design --n``: the full-size LMI cross-check grows as (2N)^2 (25 s at N = 20).
+DESIGN_MAX_N = 20
+
+
+class _UsageError(Exception):
+    """Bad command-line arguments (exit 2)."""
+
+
+class _BadInput(Exception):
+    """Bad input detected by the CLI itself, e.g. an unwritable ``--out`` (exit 2)."""
+
+
+class _Negative(Exception):
+    """A negative verdict that is not a certificate, e.g. no gain to simulate with (exit 1)."""
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one line and exit code 2."""
+    """argparse that reports usage errors as one exception (one line, exit code 2)."""
 
     def error(self, message: str) -> Any:
         raise _UsageError(message)
 
 
-class _UsageError(Exception):
-    pass
+def _number(kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf) -> Callable[[str], float]:
+    """argparse type: a finite int or float in ``[lo, hi]``, negative and scientific forms included."""
+
+    def parse(text: str) -> float:
+        try:
+            value = kind(text)
+        except ValueError:
+            what = "an integer" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:g}], got {text!r}")
+        return value
+
+    return parse
+
+
+#: Options taking a number; their values may look like options (``-1e-3``), see :func:`_join_numbers`.
+_NUMERIC_OPTIONS: set[str] = set()
+
+
+def _numeric(p: argparse.ArgumentParser, flag: str, kind: type[int] | type[float], *bounds: float, **kw: Any) -> None:
+    _NUMERIC_OPTIONS.add(flag)
+    p.add_argument(flag, type=_number(kind, *bounds), **kw)
+
+
+def _join_numbers(argv: Sequence[str]) -> list[str]:
+    """Write ``--lam -1e-3`` as ``--lam=-1e-3``.
+
+    argparse reads a token that starts with ``-`` as an option unless it matches its
+    negative-number pattern, which misses scientific notation (``-1e-3``) and ``-inf``.
+    The ``--opt=value`` form is always read as a value, so numeric options get it.
+    """
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok in _NUMERIC_OPTIONS and i + 1 < len(argv) and argv[i + 1].startswith("-"):
+            try:
+                float(argv[i + 1])
+            except ValueError:
+                pass
+            else:
+                out.append(f"{tok}={argv[i + 1]}")
+                i += 2
+                continue
+        out.append(tok)
+        i += 1
+    return out
 
 
 def _json_safe(obj: Any) -> Any:
@@ -41,33 +110,67 @@ def _json_safe(obj: Any) -> Any:
 
 
 def _dump(obj: Any) -> str:
-    return json.dumps(_json_safe(obj), indent=2, sort_keys=False)
+    return json.dumps(_json_safe(obj), indent=2)
+
+
+def _prepare_out(path: Path | None) -> None:
+    """Create ``--out`` and check that it is writable, before any computation."""
+    if path is None:
+        return
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as exc:
+        raise _BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
+
+
+def _load(args: argparse.Namespace) -> Any:
+    from .config import load_config, preset_config
+
+    return preset_config(args.preset) if args.preset else load_config(args.config)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``auv-hinf`` argument parser."""
-    parser = _Parser(prog="auv-hinf", description="Certified H-infinity formation control for AUV fleets")
-    parser.add_argument("--version", action="version", version=f"auv-hinf {__version__}")
+    parser = _Parser(prog=PROG, description="Certified H-infinity formation control for AUV fleets", allow_abbrev=False)
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    parser.add_argument("--debug", action="store_true", help="re-raise errors with their traceback")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
 
-    d = sub.add_parser("design", help="Theorem 1 gains three ways, cross-checked four ways")
-    d.add_argument("--lam", type=float, required=True, help="nominal lambda < 0 (1/s)")
-    d.add_argument("--gamma", type=float, required=True, help="H-infinity bound gamma > 0")
-    d.add_argument("--n", type=int, default=3, help="number of vehicles (full-size problems), default 3")
-    d.add_argument("--k1", type=float, default=0.2, help="Theorem 2 position gain (1/s^2), default 0.2")
+    d = sub.add_parser("design", help="Theorem 1 gains three ways, cross-checked four ways", allow_abbrev=False)
+    _numeric(d, "--lam", float, required=True, help="nominal lambda < 0 (1/s)")
+    _numeric(d, "--gamma", float, required=True, help="H-infinity bound gamma > 0")
+    _numeric(d, "--n", int, 2, DESIGN_MAX_N, default=3, help=f"number of vehicles, 2..{DESIGN_MAX_N} (default 3)")
+    _numeric(d, "--k1", float, default=0.2, help="Theorem 2 position gain (1/s^2), default 0.2")
     d.add_argument("--json", action="store_true", help="print one JSON object")
 
     for name, text in (("certify", "certify a formation design"), ("simulate", "simulate a scenario")):
-        c = sub.add_parser(name, help=text)
+        c = sub.add_parser(name, help=text, allow_abbrev=False)
         src = c.add_mutually_exclusive_group(required=True)
-        src.add_argument("--preset", help="built-in preset (paper-triangle, paper-hexagon)")
+        src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
         src.add_argument("--config", type=Path, help="TOML configuration file")
         c.add_argument("--json", action="store_true", help="print one JSON object")
-        c.add_argument("--out", type=Path, help="directory for JSON and PNG outputs")
+        c.add_argument("--out", type=Path, help="directory for JSON and PNG outputs (created)")
+        if name == "simulate":
+            c.add_argument("--start", choices=("shaped", "paper"),
+                           help="shaped: the reference blends from the actual start (default); paper: raw reference")
+            _numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
         if name == "certify":
-            c.add_argument("--method", choices=["paper", "stabilizing", "minimal"], help="gain method")
-            c.add_argument("--refine-jacobi", action="store_true",
-                           help="tighten the Jacobi sigma bound by branch-and-bound (N <= 3, ~25 s)")
+            c.add_argument("--method", choices=GAIN_METHODS, help="gain method")
+            c.add_argument(
+                "--refine-jacobi",
+                action="store_true",
+                help="tighten the Jacobi sigma bound by branch-and-bound (N <= 3, ~25 s)",
+            )
+
+    sub.add_parser("schema", help="print the JSON Schema of the TOML configuration", allow_abbrev=False)
+    i = sub.add_parser("init", help="write an annotated starting configuration", allow_abbrev=False)
+    i.add_argument("--out", type=Path, help="file to write (default: print to stdout)")
+    i.add_argument("--preset", choices=PRESETS, default=PRESETS[0], help=f"starting point (default {PRESETS[0]})")
+    i.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+    for p in (d, *(sub.choices[k] for k in ("certify", "simulate", "schema", "init"))):
+        p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     return parser
 
 
@@ -78,55 +181,65 @@ def _cmd_design(args: argparse.Namespace) -> int:
     data = report.to_dict()
     if args.json:
         print(_dump(data))
-    else:
-        a = data["alpha"]
-        print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g}, n = {report.n}")
-        print(f"gamma_min = {report.conditions['gamma_min']:.6g}  regime: {report.conditions['regime']} 1/sqrt2")
-        for key in ("paper", "stabilizing", "minimal", "care", "scipy_care", "lmi", "lmi_minimal"):
-            val = a[key]
-            print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g}"))
-        for flag in report.paper_flags:
-            print(f"  paper: {flag}")
-        h = data["closed_loop_hinf"]
-        print(f"||T||_inf exact {h['exact']}, python-control {h['python_control']}, LMI {h['lmi']}")
-        print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
-        for c in report.checks:
-            if not c.ok:
-                print(f"  FAIL {c.name}: {c.value!r} vs {c.reference!r} (rel {c.rel_diff:.3g} > {c.tol:g})")
-    return EXIT_OK if report.ok else EXIT_NEGATIVE
+        return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
+    a = data["alpha"]
+    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g}, n = {report.n}")
+    print(f"gamma_min = {report.conditions['gamma_min']:.6g}  regime: {report.conditions['regime']} 1/sqrt2")
+    for key in ("paper", "stabilizing", "minimal", "care", "scipy_care", "lmi", "lmi_minimal"):
+        val = a.get(key)
+        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g}"))
+    for flag in report.paper_flags:
+        print(f"  paper: {flag}")
+    h = data["closed_loop_hinf"]
+    print(f"||T||_inf exact {h['exact']}, python-control {h['python_control']}, LMI {h['lmi']}")
+    print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
+    for c in report.checks:
+        if not c.ok:
+            print(f"  FAIL {c.name}: {c.value!r} vs {c.reference!r} (rel {c.rel_diff:.3g} > {c.tol:g})")
+    return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
+
+
+def _verdict(ok: bool, reason: str) -> int:
+    """Exit code of a verdict; a negative one also gets its reason as one line on stderr."""
+    if ok:
+        return EXIT_OK
+    print(f"{PROG}: not certified: {' '.join(reason.split())}", file=sys.stderr)
+    return EXIT_NEGATIVE
 
 
 def _cmd_certify(args: argparse.Namespace) -> int:
     from .certificate import certify
-    from .config import load_config, preset_config
 
-    cfg = preset_config(args.preset) if args.preset else load_config(args.config)
+    _prepare_out(args.out)
+    cfg = _load(args)
     if args.method:
         cfg = cfg.with_method(args.method)
     cert = certify(cfg, refine_jacobi=args.refine_jacobi)
     data = cert.to_dict()
     if args.out:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "certificate.json").write_text(_dump(data))
         from .plots import save_sigma_heatmap
 
+        (args.out / "certificate.json").write_text(_dump(data))
         save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
     print(_dump(data) if args.json else cert.summary())
-    return EXIT_OK if cert.certified else EXIT_NEGATIVE
+    return _verdict(cert.certified, "; ".join(cert.reasons) or "no reason given")
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .config import load_config, preset_config
-    from .scenarios import scenario_from_config
+    from .plan import plan_run, run_report
     from .simulation import simulate
 
-    cfg = preset_config(args.preset) if args.preset else load_config(args.config)
-    result = simulate(scenario_from_config(cfg))
-    summary = result.summary()
+    _prepare_out(args.out)
+    cfg = _load(args)
+    try:
+        plan = plan_run(cfg, start=args.start, horizon=args.horizon)
+    except DesignError as exc:
+        raise _Negative(f"no gain to simulate with: {exc}") from None
+    result = simulate(plan.scenario)
+    summary = run_report(plan, result)
     if args.out:
         from .plots import save_simulation_plots
 
-        args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "summary.json").write_text(_dump(summary))
         result.save_npz(args.out / "trajectory.npz")
         save_simulation_plots(result, args.out)
@@ -134,29 +247,118 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(_dump(summary))
     else:
         for key, val in summary.items():
-            print(f"{key:>24}: {val}")
+            print(f"{key:>24}: {_short(val)}")
+    if plan.certificate is None:
+        return _verdict(False, "; ".join(plan.notes))
+    if not summary["stayed_in_envelope"]:
+        why = f"left the certified envelope at t = {summary['first_exit_time']:.4g} s"
+        if not plan.covered:
+            why += f" (the certificate does not cover this run: {'; '.join(plan.notes)})"
+        return _verdict(False, why)
     return EXIT_OK
 
 
+def _short(value: Any) -> str:
+    """A value printed with 4-6 significant digits (floats inside dicts and lists too)."""
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_short(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    return str(value)
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from .schema import json_schema
+
+    print(json.dumps(json_schema(), indent=2))
+    return EXIT_OK
+
+
+def _cmd_init(args: argparse.Namespace) -> int:
+    from .presets import annotated_toml, preset_config
+
+    out: Path | None = args.out
+    if out is not None and out.exists() and not args.force:
+        raise _BadInput(f"{str(out)!r} exists; use --force to overwrite it")
+    text = annotated_toml(preset_config(args.preset))
+    if out is None:
+        print(text, end="")
+        return EXIT_OK
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise _BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
+    print(f"wrote {out} (from preset {args.preset}); check it with: {PROG} certify --config {out}")
+    return EXIT_OK
+
+
+_COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "design": _cmd_design,
+    "certify": _cmd_certify,
+    "simulate": _cmd_simulate,
+    "schema": _cmd_schema,
+    "init": _cmd_init,
+}
+
+
+def _report(kind: str, exc: BaseException) -> None:
+    """Print ``exc`` as one line per problem on stderr."""
+    lines = [line for line in str(exc).splitlines() if line.strip()] or [type(exc).__name__]
+    for line in lines:
+        print(f"{PROG}: {kind}: {line}", file=sys.stderr)
+
+
+def _classify(exc: BaseException) -> tuple[int, str]:
+    """Exit code and label of an exception that reached the boundary."""
+    if isinstance(exc, (_UsageError, _BadInput)):
+        return EXIT_BAD_INPUT, "error"
+    if isinstance(exc, _Negative):
+        return EXIT_NEGATIVE, "not certified"
+    if isinstance(exc, SolverError) or type(exc).__name__ == "SolverError":
+        return EXIT_NEGATIVE, "solver failure"
+    if isinstance(exc, AuvHinfError) and isinstance(exc, ValueError):
+        return EXIT_BAD_INPUT, "error"  # parameter, formation, envelope, design or config input
+    if isinstance(exc, OSError):
+        return EXIT_BAD_INPUT, "error"
+    return EXIT_NEGATIVE, "internal error"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the exit code instead of calling ``sys.exit``."""
+    """Entry point; returns the exit code instead of calling ``sys.exit``.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name (default ``sys.argv[1:]``).
+    """
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args_list
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(_join_numbers(args_list))
+        except SystemExit as exc:  # --help and --version
+            return exc.code if isinstance(exc.code, int) else EXIT_OK
         if args.command is None:
             parser.print_help()
             return EXIT_OK
-        handler = {"design": _cmd_design, "certify": _cmd_certify, "simulate": _cmd_simulate}[args.command]
-        return handler(args)
-    except _UsageError as exc:
-        print(f"auv-hinf: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except SolverError as exc:
-        print(f"auv-hinf: solver failure: {exc}", file=sys.stderr)
-        return EXIT_NEGATIVE
-    except (AuvHinfError, ValueError, OSError) as exc:
-        print(f"auv-hinf: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _COMMANDS[args.command](args)
+    except Exception as exc:  # the one error boundary: every failure becomes an exit code
+        code, kind = _classify(exc)
+        if debug and not isinstance(exc, _UsageError):
+            raise
+        if kind == "internal error":
+            first = (str(exc).splitlines() or [""])[0]
+            print(
+                f"{PROG}: internal error: {type(exc).__name__}: {first} (rerun with --debug for the traceback)",
+                file=sys.stderr,
+            )
+        else:
+            _report(kind, exc)
+        return code
 
 
 if __name__ == "__main__":

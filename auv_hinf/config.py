@@ -1,40 +1,31 @@
-"""Design configuration: TOML files and built-in presets, validated with clear messages.
+"""Design configurations: frozen runtime objects, validated from TOML files or from Python.
 
-TOML layout (every table optional except where noted)::
-
-    [vehicle]            # preset = "paper2011" | "remus100", or the nine parameters
-    preset = "paper2011"
-    [formation]
-    n = 3
-    jacobi = "paper"     # or "orthonormal"
-    shape = [[0, 10], [20, 0]]        # N-1 Jacobi vectors (m), or
-    # polygon_radius = 15.0           # a regular polygon of that radius
-    [envelope]
-    u = [0, 3.5]
-    v = [-1, 1]
-    r = [-0.5, 0.5]
-    [design]
-    method = "stabilizing"   # paper | stabilizing | minimal
-    # gamma = 0.5            # default 1/sigma_upper
-    # lambda = -2.1          # default: most negative over the envelope
-    k1 = 0.5
+The TOML format is defined by the strict pydantic models of :mod:`auv_hinf.schema`
+(``auv-hinf schema`` prints it as JSON Schema). The objects below are frozen dataclasses
+that validate themselves with the same models at construction, so a bad value raises
+:class:`~auv_hinf.exceptions.ConfigError` whether it comes from a file or from Python.
+The built-in presets live in :mod:`auv_hinf.presets`.
 """
 
 from __future__ import annotations
 
-import math
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
-import numpy as np
-
-from .design import GAIN_METHODS
-from .envelope import Envelope
+from ._typing import GainMethod, JacobiKind
+from .envelope import PAPER_ENVELOPE, Envelope
 from .exceptions import AuvHinfError, ConfigError
-from .formation import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
-from .vehicle import VehicleParams, preset
+from .formation import JacobiTransform
+from .schema import (
+    DesignTable,
+    FormationTable,
+)
+from .settings import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
+from .validation import parse_config, plain_data, set_fields, validate_table
+from .vehicle import PRESETS as VEHICLE_PRESETS
+from .vehicle import VehicleParams
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -44,7 +35,7 @@ else:  # pragma: no cover
 
 @dataclass(frozen=True)
 class FormationConfig:
-    """Everything needed to certify (and simulate) one formation design.
+    """Everything needed to certify and simulate one formation design.
 
     Attributes
     ----------
@@ -52,159 +43,236 @@ class FormationConfig:
         Preset name or file stem.
     vehicle : VehicleParams
     n : int
-        Number of vehicles.
-    jacobi : str
-        ``"paper"`` or ``"orthonormal"``.
+        Number of vehicles (>= 2).
+    jacobi : {"paper", "orthonormal"}
     shape : tuple
-        Desired Jacobi shape vectors ``rho_d`` (N-1 pairs, m) in the ``jacobi`` convention.
+        Desired Jacobi shape vectors ``rho_d`` (N-1 pairs, m) in the ``jacobi`` convention;
+        no two vehicles may share a desired position.
     envelope : Envelope
-    method : str
+    method : {"paper", "stabilizing", "minimal"}
         Gain method used by the certificate.
     gamma : float or None
-        Override of ``1/sigma_upper``.
+        Override of ``1/sigma_upper`` (s, > 0).
     lam : float or None
-        Override of the envelope lambda (1/s).
+        Override of the envelope lambda (1/s, < 0).
     k1 : float
-        Theorem 2 position gain (1/s^2).
+        Theorem 2 position gain (1/s^2, > 0).
+    heading_poles : tuple of float
+        Two distinct negative poles of the heading loop (1/s).
+    reference, simulation, uncertainty, disturbance
+        The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
+
+    Raises
+    ------
+    ConfigError
+        At construction, for any invalid field: e.g. ``len(shape) != n - 1``, coincident
+        vehicles, or ``simulation.initial`` without one row per vehicle.
     """
 
     name: str
     vehicle: VehicleParams
     n: int
-    jacobi: str
+    jacobi: JacobiKind
     shape: tuple[tuple[float, float], ...]
     envelope: Envelope
-    method: str = "stabilizing"
+    method: GainMethod = "stabilizing"
     gamma: float | None = None
     lam: float | None = None
     k1: float = 0.5
+    heading_poles: tuple[float, float] = (-1.0, -1.5)
+    reference: ReferenceConfig = field(default_factory=ReferenceConfig)
+    simulation: SimulationConfig = field(default_factory=SimulationConfig)
+    uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
+    disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
+
+    def __post_init__(self) -> None:
+        for key, kind in (
+            ("name", str),
+            ("vehicle", VehicleParams),
+            ("envelope", Envelope),
+            ("reference", ReferenceConfig),
+            ("simulation", SimulationConfig),
+            ("uncertainty", UncertaintyConfig),
+            ("disturbance", DisturbanceConfig),
+        ):
+            if not isinstance(getattr(self, key), kind):
+                raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
+        form = validate_table(
+            FormationTable, plain_data({"n": self.n, "jacobi": self.jacobi, "shape": self.shape}), ("formation",)
+        )
+        design = {
+            "method": self.method,
+            "k1": self.k1,
+            "heading_poles": self.heading_poles,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+        }
+        des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
+        init = self.simulation.initial
+        if init is not None and len(init) != form.n:
+            raise ConfigError(f"simulation.initial must have one row per vehicle ({form.n}), got {len(init)}")
+        set_fields(
+            self,
+            n=form.n,
+            shape=form.jacobi_shape(),
+            gamma=des.gamma,
+            lam=des.lam,
+            k1=des.k1,
+            heading_poles=(des.heading_poles[0], des.heading_poles[1]),
+        )
 
     @property
     def transform(self) -> JacobiTransform:
         """The Jacobi transform of this configuration."""
-        return JacobiTransform(self.n, self.jacobi)  # type: ignore[arg-type]
+        return JacobiTransform(self.n, self.jacobi)
 
-    def with_method(self, method: str) -> "FormationConfig":
-        """Copy with another gain method."""
-        if method not in GAIN_METHODS:
-            raise ConfigError(f"design.method must be one of {GAIN_METHODS}, got {method!r}")
-        return replace(self, method=method)
+    def with_method(self, method: str) -> FormationConfig:
+        """Copy with another gain method (validated)."""
+        return replace(self, method=cast(GainMethod, method))
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dictionary."""
+        """Full JSON-safe dictionary (absent options are ``None``)."""
         return {
-            "name": self.name, "vehicle": self.vehicle.to_dict(), "n": self.n, "jacobi": self.jacobi,
-            "shape": [list(s) for s in self.shape], "envelope": self.envelope.to_dict(),
-            "method": self.method, "gamma": self.gamma, "lambda": self.lam, "k1": self.k1,
+            "name": self.name,
+            "vehicle": self.vehicle.to_dict(),
+            "n": self.n,
+            "jacobi": self.jacobi,
+            "shape": [list(s) for s in self.shape],
+            "envelope": self.envelope.to_dict(),
+            "method": self.method,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+            "k1": self.k1,
+            "heading_poles": list(self.heading_poles),
+            "reference": self.reference.to_dict(),
+            "simulation": self.simulation.to_dict(),
+            "uncertainty": self.uncertainty.to_dict(),
+            "disturbance": self.disturbance.to_dict(),
         }
 
-
-PAPER_ENVELOPE = Envelope(u=(0.0, 3.5), v=(-1.0, 1.0), r=(-0.5, 0.5))
-HEXAGON_RADIUS = 15.0  # m: the paper gives no size for Fig. 3; chosen here and documented
-
-
-def _hexagon_shape() -> tuple[tuple[float, float], ...]:
-    t = JacobiTransform(6, "paper")
-    rho = shape_from_offsets(regular_polygon(6, HEXAGON_RADIUS), t)
-    return tuple((float(a), float(b)) for a, b in rho)
-
-
-def preset_config(name: str) -> FormationConfig:
-    """Built-in configurations: ``paper-triangle`` and ``paper-hexagon``."""
-    from .vehicle import paper2011
-
-    if name == "paper-triangle":
-        return FormationConfig(
-            name=name, vehicle=paper2011(), n=3, jacobi="paper",
-            shape=((0.0, 10.0), (20.0, 0.0)), envelope=PAPER_ENVELOPE,
+    def to_toml_dict(self) -> dict[str, Any]:
+        """The configuration as TOML tables (no ``None``): ``config_from_dict`` of it reproduces it."""
+        vehicle: dict[str, Any] = next(
+            ({"preset": key} for key, make in VEHICLE_PRESETS.items() if make() == self.vehicle),
+            {k: v for k, v in self.vehicle.to_dict().items()},
         )
-    if name == "paper-hexagon":
-        return FormationConfig(
-            name=name, vehicle=paper2011(), n=6, jacobi="paper", shape=_hexagon_shape(),
-            envelope=PAPER_ENVELOPE,
-        )
-    raise ConfigError(f"unknown preset {name!r}; expected 'paper-triangle' or 'paper-hexagon'")
+        design = {
+            "method": self.method,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+            "k1": self.k1,
+            "heading_poles": list(self.heading_poles),
+        }
+        sim = {k: v for k, v in self.simulation.to_dict().items() if v not in (None, {})}
+        out = {
+            "name": self.name,
+            "vehicle": vehicle,
+            "formation": {"n": self.n, "jacobi": self.jacobi, "shape": [list(s) for s in self.shape]},
+            "envelope": self.envelope.to_dict(),
+            "design": {k: v for k, v in design.items() if v is not None},
+            "reference": self.reference.to_dict(),
+            "simulation": sim,
+            "uncertainty": self.uncertainty.to_dict(),
+            "disturbance": self.disturbance.to_dict(),
+        }
+        return {k: v for k, v in out.items() if v != {}}
 
 
-def _get(table: dict[str, Any], key: str, kind: type | tuple[type, ...], where: str, default: Any = None) -> Any:
-    if key not in table:
-        return default
-    val = table[key]
-    if isinstance(val, bool) or not isinstance(val, kind):
-        raise ConfigError(f"{where}.{key} has the wrong type: got {val!r}")
-    if isinstance(val, float) and not math.isfinite(val):
-        raise ConfigError(f"{where}.{key} must be finite, got {val!r}")
-    return val
+def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
+    """Build and validate a :class:`FormationConfig` from parsed TOML (a dict of tables).
 
+    ``name`` is used unless the document has a top-level ``name``.
 
-def config_from_dict(data: dict[str, Any], name: str = "config") -> FormationConfig:
-    """Build and validate a :class:`FormationConfig` from parsed TOML."""
-    known = {"vehicle", "formation", "envelope", "design", "simulation"}
-    unknown = set(data) - known
-    if unknown:
-        raise ConfigError(f"unknown table(s) {sorted(unknown)}; expected some of {sorted(known)}")
+    Raises
+    ------
+    ConfigError
+        With one line per problem, each naming its TOML path.
+    """
+    cf = parse_config(data)
+    label = cf.name or name
     try:
-        veh = data.get("vehicle", {"preset": "paper2011"})
-        if "preset" in veh:
-            vehicle = preset(_get(veh, "preset", str, "vehicle"))
-        else:
-            fields = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
-            missing = [f for f in fields if f not in veh]
-            if missing:
-                raise ConfigError(f"vehicle: missing keys {missing} (or give vehicle.preset)")
-            vehicle = VehicleParams(**{f: veh[f] for f in fields}, name=name)
-        form = data.get("formation", {})
-        n = _get(form, "n", int, "formation", 3)
-        jacobi = _get(form, "jacobi", str, "formation", "paper")
-        transform = JacobiTransform(n, jacobi)
-        if "shape" in form:
-            rho = np.asarray(_get(form, "shape", list, "formation"), dtype=float)
-            if rho.shape != (n - 1, 2):
-                raise ConfigError(f"formation.shape must be {n - 1} pairs [x, y], got shape {rho.shape}")
-        else:
-            radius = _get(form, "polygon_radius", (int, float), "formation", 15.0)
-            rho = shape_from_offsets(regular_polygon(n, float(radius)), transform)
-        if not np.all(np.isfinite(rho)):
-            raise ConfigError("formation.shape must be finite")
-        offsets_from_shape(rho, transform)
-        env = data.get("envelope", {})
-        envelope = Envelope(
-            u=env.get("u", PAPER_ENVELOPE.u), v=env.get("v", PAPER_ENVELOPE.v),
-            r=env.get("r", PAPER_ENVELOPE.r), psi=env.get("psi", PAPER_ENVELOPE.psi),
-        )
-        des = data.get("design", {})
-        method = _get(des, "method", str, "design", "stabilizing")
-        if method not in GAIN_METHODS:
-            raise ConfigError(f"design.method must be one of {GAIN_METHODS}, got {method!r}")
-        gamma = _get(des, "gamma", (int, float), "design")
-        if gamma is not None and gamma <= 0:
-            raise ConfigError(f"design.gamma must be > 0, got {gamma!r}")
-        lam = _get(des, "lambda", (int, float), "design")
-        if lam is not None and lam >= 0:
-            raise ConfigError(f"design.lambda must be < 0, got {lam!r}")
-        k1 = _get(des, "k1", (int, float), "design", 0.5)
-        if k1 <= 0:
-            raise ConfigError(f"design.k1 must be > 0, got {k1!r}")
-    except ConfigError:
-        raise
+        vehicle = cf.vehicle.to_params(label)
     except AuvHinfError as exc:
-        raise ConfigError(str(exc)) from None
+        raise ConfigError(f"vehicle: {exc}") from None
+    sim = cf.simulation
     return FormationConfig(
-        name=name, vehicle=vehicle, n=n, jacobi=jacobi,
-        shape=tuple((float(a), float(b)) for a, b in rho), envelope=envelope, method=method,
-        gamma=None if gamma is None else float(gamma), lam=None if lam is None else float(lam), k1=float(k1),
+        name=label,
+        vehicle=vehicle,
+        n=cf.formation.n,
+        jacobi=cf.formation.jacobi,
+        shape=cf.formation.jacobi_shape(),
+        envelope=Envelope(**cf.envelope.model_dump()),
+        method=cf.design.method,
+        gamma=cf.design.gamma,
+        lam=cf.design.lam,
+        k1=cf.design.k1,
+        heading_poles=(cf.design.heading_poles[0], cf.design.heading_poles[1]),
+        reference=ReferenceConfig(cf.reference.kind, tuple(cf.reference.model_dump(exclude={"kind"}).items())),
+        simulation=SimulationConfig(
+            horizon=sim.horizon,
+            start=sim.start,
+            initial=None if sim.initial is None else tuple(map(tuple, sim.initial)),
+            current=(sim.current[0], sim.current[1]),
+            thrust_limit=None
+            if sim.thrust_limit is None
+            else (sim.thrust_limit[0], sim.thrust_limit[1], sim.thrust_limit[2]),
+            blend_time=sim.blend_time,
+            plant=tuple((k, v) for k, v in sim.plant.model_dump().items() if v is not None),
+        ),
+        uncertainty=UncertaintyConfig(tuple((k, (v[0], v[1])) for k, v in cf.uncertainty.model_dump().items() if v)),
+        disturbance=DisturbanceConfig(cf.disturbance.current_speed, cf.disturbance.current_rate),
     )
 
 
 def load_config(path: str | Path) -> FormationConfig:
-    """Read and validate a TOML configuration file."""
+    """Read and validate a TOML configuration file (the name defaults to the file stem).
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read, is not TOML, or fails validation; every line of the
+        message starts with the file name.
+    """
     p = Path(path)
     try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ConfigError(f"cannot read config {str(p)!r}: {exc.strerror}") from None
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise ConfigError(f"cannot read config {str(p)!r}: {reason}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: invalid TOML: {exc}") from None
-    return config_from_dict(data, name=p.stem)
+    try:
+        return config_from_dict(data, name=p.stem)
+    except ConfigError as exc:
+        raise ConfigError("\n".join(f"{p}: {line}" for line in str(exc).splitlines())) from None
+
+
+def preset_config(name: str) -> FormationConfig:
+    """A built-in configuration by name (see :data:`auv_hinf.presets.PRESETS`)."""
+    from .presets import preset_config as make
+
+    return make(name)
+
+
+def __getattr__(name: str) -> Any:
+    """``PRESETS`` and ``HEXAGON_RADIUS`` are re-exported from :mod:`auv_hinf.presets` (imported lazily)."""
+    if name in ("PRESETS", "HEXAGON_RADIUS"):
+        from . import presets
+
+        return getattr(presets, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = [
+    "PAPER_ENVELOPE",
+    "DisturbanceConfig",
+    "FormationConfig",
+    "ReferenceConfig",
+    "SimulationConfig",
+    "UncertaintyConfig",
+    "config_from_dict",
+    "load_config",
+    "preset_config",
+]

@@ -1,53 +1,60 @@
-"""Formation controller: orientation (eqs. 26-28), velocity + position (eq. 39), allocation (eq. 41).
+"""Formation control law (Yang & Zhang, eqs. 26-28, 39, 41) in its O(N) per-vehicle form.
 
-All functions are vectorised over the N vehicles; no Python loop runs per vehicle.
+With scalar gains ``alpha I`` and ``K1 = k1 I`` and ``Phi 1 = e_N`` (the centroid row),
+the law of eqs. (39) and (41) reduces exactly to one law per vehicle in vehicle
+coordinates (inertial frame)::
+
+    w_i = -alpha (p_i' - p_id') - k1 (p_i - p_id) - G_i p_id' + p_id'',   tau_xy,i = M1 R(psi_i)^T w_i
+
+where ``p_id`` is vehicle i's desired position and ``G_i = R B(u, v, r) R^T`` (eq. 8) is
+evaluated at the measured state. :class:`VehicleLaw` applies it with no N x N matrix;
+:class:`FormationController` keeps the paper's Jacobi form (dense ``Phi``) as a reference.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import control as ct
 import numpy as np
 from numpy.typing import NDArray
 
-from ._typing import OrientationLaw
-from .exceptions import DesignError, require_finite
+from ._typing import FloatArray, OrientationLaw
+from .exceptions import DesignError, ParameterError, require_finite
 from .formation import JacobiTransform
-from ._typing import FloatArray
+from .paths import MissionReference, SineReference, heading_from_velocity
+from .reference import Motion, wrap_angle
 from .vehicle import VehicleParams, inertial_block, rotation
 
-class Trajectory(Protocol):
-    """Desired formation-centre trajectory ``q_cd(t)`` (inertial frame, m)."""
 
-    def __call__(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Return position, velocity, acceleration and jerk, each shape (2,)."""
+@runtime_checkable
+class MotionSource(Protocol):
+    """Anything that gives the desired motion of every vehicle.
+
+    ``motion(t)`` with a scalar ``t`` (s) returns a :class:`~auv_hinf.reference.Motion`
+    with vectors of shape ``(N, 2)`` and scalars of shape ``(N,)``; with ``t`` of shape
+    ``(S,)`` it returns ``(S, N, 2)`` and ``(S, N)``: row ``s`` is the motion at ``t[s]``
+    (for a batch of scenarios, row ``s`` belongs to scenario ``s``).
+    """
+
+    def motion(self, t: float | FloatArray) -> Motion:
+        """Desired motion at time(s) ``t`` (s)."""
         ...
 
 
-@dataclass(frozen=True)
-class SineTrajectory:
-    """``q_cd(t) = [speed t, amplitude sin(omega t)]`` (Section V: speed 1, amplitude 30, omega 0.1)."""
+@runtime_checkable
+class VehicleMotionSource(MotionSource, Protocol):
+    """A :class:`MotionSource` that can also evaluate each vehicle at its own time.
 
-    speed: float = 1.0
-    amplitude: float = 30.0
-    omega: float = 0.1
+    ``motion_per_vehicle(t)`` takes ``t`` of shape ``(..., N)`` (s) and returns vectors
+    ``(..., N, 2)`` and scalars ``(..., N)``, vehicle ``i`` evaluated at ``t[..., i]``.
+    Needed to integrate a decoupled fleet with one step size per vehicle.
+    """
 
-    def __call__(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        a, w, s = self.amplitude, self.omega, self.speed
-        sn, cs = np.sin(w * t), np.cos(w * t)
-        return (
-            np.array([s * t, a * sn]),
-            np.array([s, a * w * cs]),
-            np.array([0.0, -a * w * w * sn]),
-            np.array([0.0, -a * w**3 * cs]),
-        )
-
-
-def wrap_angle(x: FloatArray | float) -> FloatArray:
-    """Wrap angles to ``(-pi, pi]`` (rad)."""
-    return np.pi - np.mod(np.pi - np.asarray(x, dtype=float), 2.0 * np.pi)
+    def motion_per_vehicle(self, t: FloatArray) -> Motion:
+        """Desired motion of vehicle ``i`` at time ``t[..., i]`` (s)."""
+        ...
 
 
 def heading_gains(params: VehicleParams, poles: tuple[float, float] = (-1.0, -1.5)) -> tuple[float, float]:
@@ -63,53 +70,110 @@ def heading_gains(params: VehicleParams, poles: tuple[float, float] = (-1.0, -1.
     return float(k[0]), float(k[1])
 
 
-def heading_reference(qd: FloatArray, qdd: FloatArray, qddd: FloatArray) -> tuple[float, float, float]:
-    """Direction of the desired velocity and its first two time derivatives (PAPER-NOTES 17).
-
-    Returns ``psi_d`` (rad), ``psi_d'`` (rad/s), ``psi_d''`` (rad/s^2).
-    """
-    x1, y1 = qd
-    x2, y2 = qdd
-    x3, y3 = qddd
-    den = x1 * x1 + y1 * y1
-    if den <= 0:
-        raise DesignError("desired velocity is zero: heading reference undefined")
-    num = x1 * y2 - y1 * x2
-    num_d = x1 * y3 - y1 * x3
-    den_d = 2.0 * (x1 * x2 + y1 * y2)
-    return float(np.arctan2(y1, x1)), num / den, (num_d * den - num * den_d) / (den * den)
+#: Backward-compatible names: the Section V sine path and the course of a velocity.
+SineTrajectory = SineReference
+heading_reference = heading_from_velocity
 
 
 @dataclass(frozen=True)
-class FormationController:
-    """Yang & Zhang controller with the corrected eq. (28).
+class RigidReference:
+    """Vehicles on fixed offsets around a mission path, heading along the path's velocity.
+
+    ``p_id(t) = offsets_i + q(t)``, ``psi_d = atan2(q')``: the same motion as an unshaped
+    :class:`~auv_hinf.reference.FleetReference`, and also a :class:`VehicleMotionSource`
+    (each vehicle at its own time), which the decoupled per-vehicle integration needs.
+
+    Parameters
+    ----------
+    trajectory : MissionReference
+        Centre path (inertial, m), e.g. :class:`~auv_hinf.paths.SineReference`.
+    offsets : ndarray, shape (N, 2)
+        Desired vehicle positions relative to the centre (inertial, m).
+    """
+
+    trajectory: MissionReference
+    offsets: FloatArray
+
+    def __post_init__(self) -> None:
+        off = np.asarray(self.offsets, dtype=float)
+        if off.ndim != 2 or off.shape[1] != 2 or not np.all(np.isfinite(off)):
+            raise ParameterError(f"offsets must be a finite (N, 2) array, got shape {off.shape}")
+        object.__setattr__(self, "offsets", off)
+
+    def motion(self, t: float | FloatArray) -> Motion:
+        """Motion at ``t`` (scalar or shape ``(S,)``), all vehicles at the same time."""
+        tt = np.asarray(t, dtype=float)
+        return self.motion_per_vehicle(np.broadcast_to(tt[..., None], tt.shape + (len(self.offsets),)))
+
+    def motion_per_vehicle(self, t: FloatArray) -> Motion:
+        """Motion of vehicle ``i`` at ``t[..., i]`` (s)."""
+        q, qd, qdd, qddd = self.trajectory(np.asarray(t, dtype=float))
+        psi, r, r_dot = heading_from_velocity(qd, qdd, qddd)
+        return Motion(p=q + self.offsets, v=qd, a=qdd, psi=psi, r=r, r_dot=r_dot)
+
+
+def heading_torque(
+    params: VehicleParams, k_psi: tuple[float, float], orientation: OrientationLaw,
+    states: FloatArray, psi_d: FloatArray, r_d: FloatArray, r_dot_d: FloatArray,
+) -> FloatArray:
+    """Yaw moment of eqs. (26)-(28) (N m), shape ``states.shape[:-1]``.
+
+    ``"corrected"``: ``V = psi_d'' + (d33/m33) psi_d' - k1 e - k2 e'``;
+    ``"printed"``: ``V = psi_d' + (d33/m33) psi_d - k1 e - k2 e'``, with
+    ``e = wrap(psi - psi_d)``, ``e' = r - psi_d'`` and ``d33 = d33(r)`` at the measured rate.
+    """
+    psi, u, v, r = states[..., 2], states[..., 3], states[..., 4], states[..., 5]
+    d33_over_m = (params.d33_lin + params.d33_quad * np.abs(r)) / params.m33
+    e = wrap_angle(psi - psi_d)
+    e_dot = r - r_d
+    k1p, k2p = k_psi
+    if orientation == "corrected":
+        big_v = r_dot_d + d33_over_m * r_d - k1p * e - k2p * e_dot
+    else:
+        big_v = r_d + d33_over_m * psi_d - k1p * e - k2p * e_dot
+    result: FloatArray = params.m33 * big_v - (params.m11 - params.m22) * u * v  # eq. (26)
+    return result
+
+
+def check_gains(alpha: float, k1: float, orientation: str) -> None:
+    """Validate the scalar gains and the heading-law name shared by both law forms."""
+    require_finite("alpha", alpha)
+    if require_finite("k1", k1) <= 0:
+        raise DesignError(f"k1 must be > 0 (K1 positive definite), got {k1!r}")
+    if orientation not in ("corrected", "printed"):
+        raise DesignError(f"orientation must be 'corrected' or 'printed', got {orientation!r}")
+
+
+def saturate(tau: FloatArray, limit: tuple[float, float, float] | None) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Clip ``tau (..., 3)`` to ``|tau_k| <= limit_k`` (N, N, N m); also the per-vehicle active flag."""
+    if limit is None:
+        return tau, np.zeros(tau.shape[:-1], dtype=bool)
+    lim = np.asarray(limit, dtype=float)
+    clipped = np.clip(tau, -lim, lim)
+    return clipped, np.any(clipped != tau, axis=-1)
+
+
+@dataclass(frozen=True)
+class VehicleLaw:
+    """The per-vehicle form of the Yang & Zhang law: O(N), vectorised over leading axes.
 
     Parameters
     ----------
     params : VehicleParams
         The controller's model of the vehicles (may differ from the plant).
-    transform : JacobiTransform
-    shape : ndarray, shape (N-1, 2)
-        Desired Jacobi shape vectors ``rho_d`` (m).
-    trajectory : Trajectory
-        Desired centre trajectory.
     alpha : float
         Velocity gain (1/s), from Theorem 1.
     k1 : float
-        Position gain ``K1 = k1 I`` (1/s^2).
+        Position gain ``K1 = k1 I`` (1/s^2), > 0.
     k_psi : tuple of float
         Heading gains ``(k1_psi, k2_psi)`` (1/s^2, 1/s).
     orientation : {"corrected", "printed"}
-        ``"corrected"``: ``V = psi_d'' + (d33/m33) psi_d' - k1 e - k2 e'`` (PAPER-NOTES 16);
-        ``"printed"``: eq. (28) as printed, ``V = psi_d' + (d33/m33) psi_d - k1 e - k2 e'``.
+        Heading law, see :func:`heading_torque`.
     thrust_limit : tuple of float, optional
         Saturation ``(|tau_x|, |tau_y|, |tau_psi|)`` in N, N, N m.
     """
 
     params: VehicleParams
-    transform: JacobiTransform
-    shape: FloatArray
-    trajectory: Trajectory
     alpha: float
     k1: float
     k_psi: tuple[float, float]
@@ -117,23 +181,81 @@ class FormationController:
     thrust_limit: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
-        require_finite("alpha", self.alpha)
-        if require_finite("k1", self.k1) <= 0:
-            raise DesignError(f"k1 must be > 0 (K1 positive definite), got {self.k1!r}")
-        if self.orientation not in ("corrected", "printed"):
-            raise DesignError(f"orientation must be 'corrected' or 'printed', got {self.orientation!r}")
-        object.__setattr__(self, "shape", np.asarray(self.shape, dtype=float).reshape(self.transform.n - 1, 2))
+        check_gains(self.alpha, self.k1, self.orientation)
+        if self.thrust_limit is not None:
+            lim = tuple(require_finite("thrust_limit", x) for x in self.thrust_limit)
+            if len(lim) != 3 or min(lim) <= 0:
+                raise ParameterError(f"thrust_limit must be three positive numbers, got {self.thrust_limit!r}")
+            object.__setattr__(self, "thrust_limit", lim)
 
-    def desired(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray, tuple[float, float, float]]:
-        """``X_d``, ``Z_d``, ``Z_d'`` (each (N, 2), Jacobi coords) and the heading reference."""
-        q, qd, qdd, qddd = self.trajectory(t)
-        zeros = np.zeros_like(self.shape)
-        return (
-            np.vstack([self.shape, q]),
-            np.vstack([zeros, qd]),
-            np.vstack([zeros, qdd]),
-            heading_reference(qd, qdd, qddd),
-        )
+    def unsaturated(self, states: FloatArray, p_dot: FloatArray, motion: Motion) -> FloatArray:
+        """Commanded body-frame thrust before saturation, shape ``(..., N, 3)`` (N, N, N m).
+
+        Parameters
+        ----------
+        states : ndarray, shape (..., N, 6)
+            Measured ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s).
+        p_dot : ndarray, shape (..., N, 2)
+            Measured inertial (ground) velocity (m/s).
+        motion : Motion
+            Desired motion, broadcastable to the same leading shape.
+        """
+        par = self.params
+        psi, u, v, r = states[..., 2], states[..., 3], states[..., 4], states[..., 5]
+        c, s = np.cos(psi), np.sin(psi)
+        # inertial part of w_i without the drift term: -alpha e' - k1 e + p_id''
+        w = -self.alpha * (p_dot - motion.v) - self.k1 * (states[..., 0:2] - motion.p) + motion.a
+        # everything in the body frame: R^T w and R^T G v_d = B R^T v_d
+        wx, wy = c * w[..., 0] + s * w[..., 1], -s * w[..., 0] + c * w[..., 1]
+        vx = c * motion.v[..., 0] + s * motion.v[..., 1]
+        vy = -s * motion.v[..., 0] + c * motion.v[..., 1]
+        d11 = par.d11_lin + par.d11_quad * np.abs(u)
+        d22 = par.d22_lin + par.d22_quad * np.abs(v)
+        dm = (par.m22 - par.m11) * r
+        bx = -d11 / par.m11 * vx + dm / par.m11 * vy  # eq. (8) body block times R^T v_d
+        by = dm / par.m22 * vx - d22 / par.m22 * vy
+        tau_psi = heading_torque(par, self.k_psi, self.orientation, states, motion.psi, motion.r, motion.r_dot)
+        return np.stack([par.m11 * (wx - bx), par.m22 * (wy - by), tau_psi], -1)
+
+    def forces(self, states: FloatArray, p_dot: FloatArray, motion: Motion) -> FloatArray:
+        """Applied body-frame thrust (after saturation), shape ``(..., N, 3)``; see :meth:`unsaturated`."""
+        return saturate(self.unsaturated(states, p_dot, motion), self.thrust_limit)[0]
+
+
+@dataclass(frozen=True)
+class FormationController:
+    """The paper's Jacobi form of the law (eqs. 39, 41): dense ``Phi``, O(N^2) per call.
+
+    Kept as the reference that :class:`VehicleLaw` is tested against. The desired Jacobi
+    motion is ``X_d = Phi p_d`` (likewise ``Z_d = Phi p_d'``, ``Z_d' = Phi p_d''``), so a
+    time-varying desired shape is allowed.
+
+    Parameters
+    ----------
+    params, alpha, k1, k_psi, orientation, thrust_limit
+        As in :class:`VehicleLaw`.
+    transform : JacobiTransform
+    reference : MotionSource
+        Desired motion of the N vehicles.
+    """
+
+    params: VehicleParams
+    transform: JacobiTransform
+    reference: MotionSource
+    alpha: float
+    k1: float
+    k_psi: tuple[float, float]
+    orientation: OrientationLaw = "corrected"
+    thrust_limit: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        check_gains(self.alpha, self.k1, self.orientation)
+
+    def desired(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``X_d``, ``Z_d``, ``Z_d'`` at time ``t`` (s), each ``(N, 2)`` in Jacobi coordinates."""
+        m = self.reference.motion(t)
+        phi = self.transform.phi
+        return phi @ m.p, phi @ m.v, phi @ m.a
 
     def forces(self, t: float, states: FloatArray, p_dot: FloatArray) -> tuple[FloatArray, bool]:
         """Body-frame thrust ``(N, 3)`` and whether saturation was active.
@@ -142,30 +264,24 @@ class FormationController:
         """
         par, tr = self.params, self.transform
         psi, u, v, r = states[:, 2], states[:, 3], states[:, 4], states[:, 5]
-        x_d, z_d, z_d_dot, (psi_d, psi_d1, psi_d2) = self.desired(t)
+        m = self.reference.motion(t)
+        x_d, z_d, z_d_dot = self.desired(t)
         x = tr.phi @ states[:, 0:2]
         z = tr.phi @ p_dot
         mu = -self.alpha * (z - z_d) - self.k1 * (x - x_d)  # eq. (39)
         # A Z_d = Phi G Phi^-1 Z_d, with G at the current (measured) state
         g = inertial_block(par, psi, u, v, r)
         a_zd = tr.phi @ np.einsum("nij,nj->ni", g, tr.phi_inv @ z_d)
-        rhs = mu - a_zd + z_d_dot
-        # Gamma U = rhs  <=>  H(psi_i) tau_i = (Phi^-1 rhs)_i, H^-1 = M1 R^T (eq. 41)
-        w = tr.phi_inv @ rhs
+        # Gamma U = mu - A Z_d + Z_d'  <=>  H(psi_i) tau_i = (Phi^-1 (...))_i, H^-1 = M1 R^T (eq. 41)
+        w = tr.phi_inv @ (mu - a_zd + z_d_dot)
         body = np.einsum("nji,nj->ni", rotation(psi), w)
-        tau_xy = body * np.array([par.m11, par.m22])
-        _, _, d33 = par.damping(u, v, r)
-        e = wrap_angle(psi - psi_d)
-        e_dot = r - psi_d1
-        k1p, k2p = self.k_psi
-        if self.orientation == "corrected":
-            big_v = psi_d2 + d33 / par.m33 * psi_d1 - k1p * e - k2p * e_dot
-        else:
-            big_v = psi_d1 + d33 / par.m33 * psi_d - k1p * e - k2p * e_dot
-        tau_psi = par.m33 * big_v - (par.m11 - par.m22) * u * v  # eq. (26)
-        tau = np.column_stack([tau_xy, tau_psi])
-        if self.thrust_limit is None:
-            return tau, False
-        lim = np.asarray(self.thrust_limit, dtype=float)
-        clipped = np.clip(tau, -lim, lim)
-        return clipped, bool(np.any(clipped != tau))
+        tau_psi = heading_torque(par, self.k_psi, self.orientation, states, m.psi, m.r, m.r_dot)
+        tau = np.column_stack([body * np.array([par.m11, par.m22]), tau_psi])
+        clipped, active = saturate(tau, self.thrust_limit)
+        return clipped, bool(active.any())
+
+
+__all__ = [
+    "FormationController", "MotionSource", "RigidReference", "SineTrajectory", "VehicleLaw", "VehicleMotionSource",
+    "check_gains", "heading_gains", "heading_reference", "heading_torque", "saturate", "wrap_angle",
+]

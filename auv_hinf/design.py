@@ -1,25 +1,36 @@
 """Theorem 1 gain design: the paper's alpha, the stabilising Riccati root, the minimal gain.
 
 With ``L = alpha I`` the Riccati equation (37) of the paper is, per channel, the scalar
-quadratic (PAPER-NOTES item 9)::
+quadratic (see docs/errata.md)::
 
     c alpha^2 + 2 lam alpha + 1 = 0,      c = 1/gamma^2 - 2.
 
 Its roots are ``(-lam +- s)/c`` with ``s = sqrt(lam^2 - c)``; they are real iff
 ``gamma >= 1/sqrt(lam^2 + 2)``. The closed loop of each channel is ``1/(s + alpha - lam)``,
-so ``||T||_inf = 1/(alpha - lam)`` exactly (item 13).
+so ``||T||_inf = 1/(alpha - lam)`` exactly (docs/errata.md).
 
 Three designs are offered:
 
 * :func:`alpha_paper` -- eq. (32) exactly as printed. It returns ``alpha = 0`` at
-  ``gamma = 1/sqrt(2)``, which leaves a residual of 1 in (37) (item 10), and below
+  ``gamma = 1/sqrt(2)``, which leaves a residual of 1 in (37), and below
   ``1/sqrt(2)`` it takes the ``+`` root, which is not the stabilising solution and is a far
-  larger gain (item 12). Both are flagged on the result.
+  larger gain. Both are flagged on the result.
 * :func:`alpha_stabilizing` -- the stabilising root ``lam + c alpha = -s < 0``, the one that
   ``care`` returns, written as ``1/(|lam| + s)``: no cancellation and continuous through
   ``gamma = 1/sqrt(2)`` where it equals ``-1/(2 lam)``.
 * :func:`alpha_minimal` -- the smallest alpha with ``||T||_inf <= gamma``:
-  ``max(0, 1/gamma + lam)``. It drops the paper's ``K = -L`` restriction (item 13).
+  ``max(0, 1/gamma + lam)``. It drops the paper's ``K = -L`` restriction.
+
+Numerical regimes of (37) (:func:`riccati_regime`), shared by every solver route:
+
+* ``"double-root"``: the discriminant ``lam^2 - c`` is zero up to
+  :data:`DOUBLE_ROOT_RTOL`; the two roots merge, the Hamiltonian of (37) has a double
+  eigenvalue at 0 and ``care`` cannot split it, so solvers use the closed form of the double
+  root. :func:`theorem1_conditions` accepts exactly the gammas whose discriminant is
+  ``>= -DOUBLE_ROOT_RTOL * scale``, so every accepted gamma has a root on every route;
+* ``"lyapunov"``: ``|c|`` is negligible next to ``lam^2`` (:data:`LYAPUNOV_RTOL`); (37) is
+  the Lyapunov equation ``2 lam L + I = 0`` to better than round-off of the Riccati routes;
+* ``"R>0"`` / ``"R<0"``: ``c < 0`` / ``c > 0``, the two signs of care's weight ``R = -1/c``.
 """
 
 from __future__ import annotations
@@ -28,17 +39,33 @@ import math
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
-from ._typing import GAIN_METHODS, GainMethod
-
+from ._typing import GAIN_METHODS as GAIN_METHODS
+from ._typing import GainMethod
 from .exceptions import DesignError, require_finite
-
 
 #: ``|1/gamma^2 - 2|`` at or below this is treated as ``gamma = 1/sqrt(2)``. It is about
 #: ten ulps of 2, so only the exact value up to round-off takes the singular branch.
 GAMMA_SINGULAR_TOL = 1e-14
 
 #: Relative tolerance of the condition ``gamma >= 1/sqrt(lam^2+2)`` (round-off in the bound).
+#: The check itself is done on the discriminant with :data:`DOUBLE_ROOT_RTOL`, which is the
+#: same tolerance: ``gamma = gamma_min (1 - e)`` gives a discriminant of
+#: ``-e (lam^2+2)/(lam^2+1) * scale``, i.e. between ``-e`` and ``-2e`` times the scale.
 GAMMA_MIN_RTOL = 1e-12
+
+#: The discriminant ``lam^2 - c = lam^2 + 2 - 1/gamma^2`` of (37) counts as zero (merged roots)
+#: when ``|disc| <= DOUBLE_ROOT_RTOL * (lam^2 + 1/gamma^2)``. The scale is the size of the terms
+#: that cancel in ``disc``, so its round-off is a few ulps (~1e-15) of the scale; 1e-12 is
+#: 1000 times that, and equals :data:`GAMMA_MIN_RTOL` on gamma (see its comment). The same
+#: number decides ``gamma_ok`` and the solvers' double-root branch, so an accepted gamma never
+#: reaches a solver that cannot handle it.
+DOUBLE_ROOT_RTOL = GAMMA_MIN_RTOL
+
+#: (37) is solved as the Lyapunov equation ``2 lam L + I = 0`` when ``|c| <= LYAPUNOV_RTOL *
+#: lam^2``. The Lyapunov root ``-1/(2 lam)`` differs from the true root by the relative amount
+#: ``|c|/(4 lam^2) + O(c^2) <= 2.5e-13``, far below every Riccati tolerance (ARE_RTOL = 1e-9),
+#: while care with ``R = -1/c`` of size ``>= 1e12/lam^2`` is no longer well scaled.
+LYAPUNOV_RTOL = 1e-12
 
 #: Relative tolerance under which ``|lam| == 1/gamma - gamma`` counts as the singular case
 #: of Theorem 1 (the matrix ``A_lam + (1/gamma^2 - 1) L`` is then singular).
@@ -60,6 +87,37 @@ def riccati_c(gamma: float) -> float:
 def gamma_min(lam: float) -> float:
     """Smallest gamma for which (37) has a real root: ``1/sqrt(lam^2 + 2)``."""
     return 1.0 / math.sqrt(lam * lam + 2.0)
+
+
+def discriminant(lam: float, gamma: float) -> float:
+    """Discriminant ``lam^2 - c = lam^2 + 2 - 1/gamma^2`` of (37) (1/s^2); roots are real iff >= 0."""
+    return lam * lam + 2.0 - 1.0 / (gamma * gamma)
+
+
+def discriminant_scale(lam: float, gamma: float) -> float:
+    """Size ``lam^2 + 1/gamma^2`` of the terms that cancel in :func:`discriminant` (1/s^2)."""
+    return lam * lam + 1.0 / (gamma * gamma)
+
+
+def riccati_regime(lam: float, gamma: float) -> str:
+    """Numerical regime of eq. (37): ``"double-root"``, ``"lyapunov"``, ``"R>0"`` or ``"R<0"``.
+
+    See the module docstring; the tolerances are :data:`DOUBLE_ROOT_RTOL` and
+    :data:`LYAPUNOV_RTOL`. Every route (care, scipy, LMI) branches on this one function.
+
+    Examples
+    --------
+    >>> riccati_regime(-1.2, 2.86), riccati_regime(-1.2, 0.7), riccati_regime(-1.2, 2 ** -0.5)
+    ('R>0', 'R<0', 'lyapunov')
+    >>> riccati_regime(-1.2, gamma_min(-1.2))
+    'double-root'
+    """
+    if discriminant(lam, gamma) <= DOUBLE_ROOT_RTOL * discriminant_scale(lam, gamma):
+        return "double-root"
+    c = riccati_c(gamma)
+    if abs(c) <= LYAPUNOV_RTOL * lam * lam:
+        return "lyapunov"
+    return "R>0" if c < 0 else "R<0"
 
 
 def _check_lam_gamma(lam: float, gamma: float, *, need_negative_lam: bool) -> tuple[float, float]:
@@ -87,7 +145,8 @@ class Theorem1Conditions:
     gamma_min : float
         ``1/sqrt(lam^2 + 2)``.
     gamma_ok : bool
-        ``gamma >= gamma_min`` (relative tolerance :data:`GAMMA_MIN_RTOL`).
+        ``gamma >= gamma_min``, decided on the discriminant with :data:`DOUBLE_ROOT_RTOL`
+        (the tolerance of the solvers' double-root branch).
     gamma_margin : float
         ``gamma - gamma_min``.
     lam_negative : bool
@@ -147,7 +206,7 @@ def theorem1_conditions(lam: float, gamma: float) -> Theorem1Conditions:
         lam=lam_f,
         gamma=g,
         gamma_min=gmin,
-        gamma_ok=g >= gmin * (1.0 - GAMMA_MIN_RTOL),
+        gamma_ok=discriminant(lam_f, g) >= -DOUBLE_ROOT_RTOL * discriminant_scale(lam_f, g),
         gamma_margin=g - gmin,
         lam_negative=lam_f < 0,
         singular_case=abs(singular_margin) <= SINGULAR_CASE_RTOL * max(abs(lam_f), 1.0 / g),
@@ -372,7 +431,7 @@ class PositionLoop:
 
 
 def position_loop(lam: float, alpha: float, k1: float) -> PositionLoop:
-    """Exact H-infinity norm and poles of the Theorem 2 loop (PAPER-NOTES item 15).
+    """Exact H-infinity norm and poles of the Theorem 2 loop (see docs/errata.md).
 
     Raises
     ------

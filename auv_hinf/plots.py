@@ -1,112 +1,338 @@
-"""Matplotlib figures. Every function returns a Figure; library code never calls show()."""
+"""Matplotlib figures of certificates and simulations.
+
+Every function returns a :class:`~matplotlib.figure.Figure`; library code never calls
+``show()``. The simulation figures read only ``t``, ``states``, ``forces``,
+``shape_error``, ``center_error``, ``desired_center`` and ``scenario.name`` /
+``scenario.envelope`` of a result, so any object with those attributes can be plotted.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from .sigma import sigma_grid
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
     from .certificate import Certificate
     from .config import FormationConfig
     from .simulation import SimulationResult
 
+#: Level of the contour drawn on the sigma heatmap, as a fraction of the certified sigma.
+SIGMA_CONTOUR_FRACTION = 0.9
 
-def sigma_heatmap(cfg: "FormationConfig", cert: "Certificate", resolution: int = 121) -> Figure:
-    """sigma = ||B - lam I|| over (u, r) and (v, r) slices, with the certified level marked."""
-    env, lam = cfg.envelope, cert.lam
+#: Relative margin around the data in the trajectory figure.
+TRAJECTORY_MARGIN = 0.04
+
+
+def _vehicle_labels(n: int) -> list[str]:
+    return [f"AUV {i + 1}" for i in range(n)]
+
+
+def _vehicle_legend(ax: Axes, n: int) -> None:
+    """One legend entry per vehicle, right of the axes (never over the data)."""
+    ax.legend(
+        loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, ncol=-(-n // 16), title="vehicle", title_fontsize=7
+    )
+
+
+def _scenario_name(res: Any) -> str:
+    return str(getattr(getattr(res, "scenario", None), "name", "simulation"))
+
+
+def _scenario_envelope(res: Any) -> Any:
+    return getattr(getattr(res, "scenario", None), "envelope", None)
+
+
+def _witness_vertex(cert: Certificate) -> tuple[float, float, float] | None:
+    """The ``(u, v, r)`` vertex at which the certified vehicle sigma is attained, if recorded."""
+    witness = getattr(cert.sigma, "witness", None) or {}
+    try:
+        return float(witness["u"][0]), float(witness["v"][0]), float(witness["r"][0])
+    except (KeyError, IndexError, TypeError, ValueError):
+        return None
+
+
+def sigma_heatmap(cfg: FormationConfig, cert: Certificate, resolution: int = 121) -> Figure:
+    """Vehicle-coordinate sigma over two slices of the envelope, through the certified vertex.
+
+    The left panel sweeps surge ``u`` and yaw rate ``r`` at the sway speed of the vertex
+    where the certified sigma is attained; the right panel sweeps ``v`` and ``r`` at that
+    vertex's surge speed. Both panels share one colour scale spanning the plotted values
+    (from their minimum, not from 0). The white contour marks
+    :data:`SIGMA_CONTOUR_FRACTION` (90 %) of the certified sigma and the star the
+    certified vertex.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        Configuration: vehicle parameters and envelope.
+    cert : Certificate
+        Its certificate: ``lam`` and the vehicle-coordinate ``sigma``.
+    resolution : int
+        Grid points per axis.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels and a shared colour bar labelled in 1/s.
+    """
+    env, lam, upper = cfg.envelope, float(cert.lam), float(cert.sigma.upper)
+    vertex = _witness_vertex(cert)
+    if vertex is None:  # no witness recorded: slice at the largest speeds
+        vertex = (max(abs(env.u[0]), abs(env.u[1])), max(abs(env.v[0]), abs(env.v[1])), env.r[1])
+    u_w, v_w, r_w = vertex
     r = np.linspace(env.r[0], env.r[1], resolution)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
-    for ax, axis, rng, other in (
-        (axes[0], "u", env.u, max(abs(env.v[0]), abs(env.v[1]))),
-        (axes[1], "v", env.v, max(abs(env.u[0]), abs(env.u[1]))),
-    ):
+    panels = []
+    for axis, rng, other, at in (("u", env.u, abs(v_w), u_w), ("v", env.v, abs(u_w), v_w)):
         x = np.linspace(rng[0], rng[1], resolution)
-        s = sigma_grid(cfg.vehicle, lam, x, r, axis=axis, other=other)  # type: ignore[arg-type]
-        im = ax.pcolormesh(x, r, s, shading="auto", vmin=0, vmax=cert.sigma.upper)
-        ax.contour(x, r, s, levels=[0.9 * cert.sigma.upper], colors="w", linewidths=0.8)
+        panels.append((axis, x, other, at, sigma_grid(cfg.vehicle, lam, x, r, axis=axis, other=other)))  # type: ignore[arg-type]
+    lo = float(min(p[4].min() for p in panels))
+    hi = float(max(p[4].max() for p in panels))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), constrained_layout=True, sharey=True)
+    level = SIGMA_CONTOUR_FRACTION * upper
+    im, contoured = None, False
+    for ax, (axis, x, other, at, s) in zip(axes, panels):
+        im = ax.pcolormesh(x, r, s, shading="auto", vmin=lo, vmax=hi, cmap="viridis")
+        if s.min() < level < s.max():
+            ax.contour(x, r, s, levels=[level], colors="w", linewidths=1.2)
+            contoured = True
+        ax.plot([at], [r_w], marker="*", ms=15, mfc="r", mec="w", ls="none", clip_on=False, zorder=4)
         ax.set_xlabel(f"{axis} [m/s]")
-        ax.set_ylabel("r [rad/s]")
         fixed = "|v|" if axis == "u" else "|u|"
-        ax.set_title(f"sigma over ({axis}, r), {fixed} = {other:g}")
-        fig.colorbar(im, ax=ax, label="||G - lam I|| [1/s]")
-    fig.suptitle(f"{cfg.name}: lambda = {lam:.3g}, certified sigma = {cert.sigma.upper:.4g}")
+        ax.set_title(f"over ({axis}, r) at {fixed} = {other:.3g} m/s", fontsize=10)
+    axes[0].set_ylabel("r [rad/s]")
+    assert im is not None
+    fig.colorbar(im, ax=list(axes), label="sigma = ||B - lam I|| [1/s]")
+    contour_label = f"white contour: {SIGMA_CONTOUR_FRACTION:.0%} of certified sigma ({level:.3g} 1/s)"
+    if not contoured:
+        contour_label += f", not reached: sigma >= {lo:.3g} 1/s on these slices"
+    handles = [
+        Line2D([], [], color="w", mec="k", lw=1.2, label=contour_label),
+        Line2D(
+            [], [], marker="*", ms=12, mfc="r", mec="k", ls="none", label=f"certified vertex (sigma = {upper:.4g} 1/s)"
+        ),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=8, facecolor="0.75")
+    fig.suptitle(f"{cfg.name}: lambda = {lam:.3g} 1/s, certified sigma = {upper:.4g} 1/s")
     return fig
 
 
-def save_sigma_heatmap(cfg: "FormationConfig", cert: "Certificate", path: Path) -> None:
-    """Write :func:`sigma_heatmap` to ``path``."""
+def save_sigma_heatmap(cfg: FormationConfig, cert: Certificate, path: Path) -> None:
+    """Write :func:`sigma_heatmap` to ``path``.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        Configuration.
+    cert : Certificate
+        Its certificate.
+    path : pathlib.Path
+        Image file; the format follows the suffix.
+    """
     fig = sigma_heatmap(cfg, cert)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def trajectories(res: "SimulationResult", marker_every: float = 50.0) -> Figure:
-    """Fig. 1 / Fig. 3: paths, the desired centre path and the formation every ``marker_every`` s."""
-    fig, ax = plt.subplots(figsize=(10, 5), constrained_layout=True)
-    xy = res.states[..., 0:2]
-    for i in range(xy.shape[1]):
-        ax.plot(xy[:, i, 0], xy[:, i, 1], lw=1, label=f"AUV {i + 1}")
-    ax.plot(res.desired_center[:, 0], res.desired_center[:, 1], "k--", lw=0.8, label="desired centre")
-    for tm in np.arange(0.0, res.t[-1] + 1e-9, marker_every):
-        k = int(np.argmin(np.abs(res.t - tm)))
-        pts = xy[k]
-        ax.fill(pts[:, 0], pts[:, 1], fill=False, ec="0.4", lw=0.7)
-        ax.plot(pts[:, 0], pts[:, 1], ">", color="0.2", ms=5)
-    ax.set_aspect("equal")
+def _snapshot_indices(t: np.ndarray, every: float) -> list[int]:
+    """Sample indices nearest to ``0, every, 2 every, ...`` (no repeats)."""
+    if every <= 0 or len(t) == 0:
+        return [0] if len(t) else []
+    times = np.arange(float(t[0]), float(t[-1]) + 1e-9, every)
+    return sorted({int(np.argmin(np.abs(t - tm))) for tm in times})
+
+
+def trajectories(res: SimulationResult, marker_every: float = 50.0) -> Figure:
+    """Paths of the vehicles, the desired centre path and the formation every ``marker_every`` s.
+
+    At each snapshot the formation polygon is drawn and every vehicle's heading ``psi``
+    is shown as an arrow. The axes have equal aspect and are fitted to the data; the
+    figure's height follows the data's aspect ratio, so a long, flat mission does not
+    leave the figure mostly empty.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A simulation result (see the module docstring for the attributes read).
+    marker_every : float
+        Time between formation snapshots, s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axes, in m.
+    """
+    t = np.asarray(res.t, dtype=float)
+    states = np.asarray(res.states, dtype=float)
+    xy = states[..., 0:2]
+    centre = np.asarray(res.desired_center, dtype=float)
+    pts = np.concatenate([xy.reshape(-1, 2), centre.reshape(-1, 2)])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = np.maximum(hi - lo, 1e-9)
+    pad = TRAJECTORY_MARGIN * span.max()
+    n = xy.shape[1]
+    legend_rows = -(-(n + 2) // 6)
+    # axes about 9.1 in wide; title, x label and the legend rows below take about 1.1 + 0.25/row in
+    axes_height = float(np.clip(9.1 * (span[1] + 2 * pad) / (span[0] + 2 * pad), 2.0, 8.0))
+    fig, ax = plt.subplots(figsize=(10.0, axes_height + 1.1 + 0.25 * legend_rows), constrained_layout=True)
+    colours = [f"C{i % 10}" for i in range(n)]
+    for i, label in enumerate(_vehicle_labels(n)):
+        ax.plot(xy[:, i, 0], xy[:, i, 1], lw=1, color=colours[i], label=label)
+    ax.plot(centre[:, 0], centre[:, 1], "k--", lw=0.8, label="desired centre")
+    arrow_len = 0.03 * span.max()
+    for k in _snapshot_indices(t, marker_every):
+        snap = xy[k]
+        ax.fill(snap[:, 0], snap[:, 1], fill=False, ec="0.45", lw=0.7)
+        psi = states[k, :, 2]
+        ax.quiver(
+            snap[:, 0],
+            snap[:, 1],
+            arrow_len * np.cos(psi),
+            arrow_len * np.sin(psi),
+            color=colours,
+            angles="xy",
+            scale_units="xy",
+            scale=1.0,
+            pivot="tail",
+            width=0.004,
+            zorder=3,
+        )
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(f"{res.scenario.name}: trajectories, formation every {marker_every:g} s")
-    ax.legend(loc="best", fontsize=8)
+    ax.set_title(f"{_scenario_name(res)}: paths; formation and headings every {marker_every:g} s")
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(Line2D([], [], color="0.3", marker=">", ls="-", lw=1, ms=5))
+    labels.append("heading psi")
+    fig.legend(handles, labels, loc="outside lower center", fontsize=7, ncol=min(len(labels), 6))
     return fig
 
 
-def velocities(res: "SimulationResult") -> Figure:
-    """Fig. 2: surge, sway and yaw rate of every vehicle, with the envelope bounds."""
+def _envelope_ranges(env: Any) -> Sequence[tuple[float, float] | None]:
+    if env is None:
+        return (None, None, None)
+    return (tuple(env.u), tuple(env.v), tuple(env.r))
+
+
+def velocities(res: SimulationResult) -> Figure:
+    """Surge, sway and yaw rate of every vehicle (Fig. 2), with the envelope bounds dotted.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A simulation result.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three stacked axes; the top one carries one legend entry per vehicle.
+    """
+    t = np.asarray(res.t, dtype=float)
+    states = np.asarray(res.states, dtype=float)
+    n = states.shape[1]
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
-    env = res.scenario.envelope
-    for ax, k, label, rng in zip(axes, (3, 4, 5), ("u [m/s]", "v [m/s]", "r [rad/s]"),
-                                 (None if env is None else env.u, None if env is None else env.v, None if env is None else env.r)):
-        ax.plot(res.t, res.states[:, :, k], lw=1)
+    for ax, k, label, rng in zip(
+        axes, (3, 4, 5), ("u [m/s]", "v [m/s]", "r [rad/s]"), _envelope_ranges(_scenario_envelope(res))
+    ):
+        lines = ax.plot(t, states[:, :, k], lw=1)
+        for line, name in zip(lines, _vehicle_labels(n)):
+            line.set_label(name)
         if rng is not None:
             for b in rng:
                 ax.axhline(b, color="r", ls=":", lw=0.8)
         ax.set_ylabel(label)
+    _vehicle_legend(axes[0], n)
     axes[-1].set_xlabel("t [s]")
-    axes[0].set_title("surge, sway and yaw rate (dotted: certified envelope)")
+    envelope_note = "" if _scenario_envelope(res) is None else " (dotted: certified envelope)"
+    axes[0].set_title(f"{_scenario_name(res)}: surge, sway and yaw rate{envelope_note}")
     return fig
 
 
-def errors(res: "SimulationResult") -> Figure:
-    """Shape and centre error on a log scale."""
+def errors(res: SimulationResult) -> Figure:
+    """Shape and centre error on a log scale.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A simulation result.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axes, errors in m (floored at 1e-16 for the log scale).
+    """
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
-    ax.semilogy(res.t, np.maximum(res.shape_error, 1e-16), label="shape error [m]")
-    ax.semilogy(res.t, np.maximum(res.center_error, 1e-16), label="centre error [m]")
+    ax.semilogy(res.t, np.maximum(res.shape_error, 1e-16), label="shape error")
+    ax.semilogy(res.t, np.maximum(res.center_error, 1e-16), label="centre error")
     ax.set_xlabel("t [s]")
+    ax.set_ylabel("error [m]")
+    ax.set_title(f"{_scenario_name(res)}: formation errors")
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)
     return fig
 
 
-def forces(res: "SimulationResult") -> Figure:
-    """Thrust and moment of every vehicle."""
+def forces(res: SimulationResult) -> Figure:
+    """Surge force, sway force and yaw moment of every vehicle.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A simulation result.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three stacked axes; the top one carries one legend entry per vehicle.
+    """
+    t = np.asarray(res.t, dtype=float)
+    f = np.asarray(res.forces, dtype=float)
+    n = f.shape[1]
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     for ax, k, label in zip(axes, range(3), ("tau_x [N]", "tau_y [N]", "tau_psi [N m]")):
-        ax.plot(res.t, res.forces[:, :, k], lw=1)
+        lines = ax.plot(t, f[:, :, k], lw=1)
+        for line, name in zip(lines, _vehicle_labels(n)):
+            line.set_label(name)
         ax.set_ylabel(label)
+    _vehicle_legend(axes[0], n)
     axes[-1].set_xlabel("t [s]")
+    axes[0].set_title(f"{_scenario_name(res)}: thrust and yaw moment (body frame)")
     return fig
 
 
-def save_simulation_plots(res: "SimulationResult", out: Path) -> list[Path]:
-    """Write the trajectory, velocity, error and force figures as PNGs into ``out``."""
+def save_simulation_plots(res: SimulationResult, out: Path) -> list[Path]:
+    """Write the trajectory, velocity, error and force figures as PNGs into ``out``.
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A simulation result.
+    out : pathlib.Path
+        Existing directory.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
     paths = []
-    for name, fn in (("trajectories", trajectories), ("velocities", velocities), ("errors", errors), ("forces", forces)):
+    for name, fn in (
+        ("trajectories", trajectories),
+        ("velocities", velocities),
+        ("errors", errors),
+        ("forces", forces),
+    ):
         fig = fn(res)
         path = Path(out) / f"{name}.png"
         fig.savefig(path, dpi=110)

@@ -1,17 +1,52 @@
-"""Mission references (centre paths) and the shaped start, with sound bounds.
+"""Fleet references: a mission path, formation offsets and a shaped start, with sound tubes.
 
-INTERFACE STUB: the dataclasses below are the contract shared by ``control_law``,
-``simulation`` and ``closed_loop``. The implementation of the paths and the shaped start
-is filled in around them.
+Vehicle ``i`` tracks ``p_i(t) = off_i + q(t) + c_i(t)`` (inertial frame, m): ``q`` is the
+mission path (:mod:`auv_hinf.paths`, re-exported here) and ``c_i`` an optional start
+correction that blends the vehicle's actual initial state into the formation over
+``[0, T_b]`` and is identically zero afterwards. The desired heading is the course of
+``p_i'`` plus a blended offset ``delta_i``. :func:`shaped_tube` bounds the motion for all
+``t >= 0``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.polynomial import Polynomial
+from numpy.typing import ArrayLike
 
 from ._typing import FloatArray
+from .exceptions import ParameterError, require_finite
+from .lawnmower import LawnmowerReference
+from .paths import (
+    SMOOTHSTEP,
+    CircleReference,
+    LineReference,
+    MissionBounds,
+    MissionReference,
+    SineReference,
+    heading_from_velocity,
+    poly_sup,
+    times,
+)
+
+#: Blend basis on ``tau`` in [0, 1]: ``h0 = 1 - b`` (septic smoothstep) and
+#: ``h1 = tau (1 - tau)^4 (1 + 4 tau)``: ``h0(0) = 1``, ``h1'(0) = 1``, ``h0'(0) = h1(0) = 0``,
+#: ``h0''(0) = h1''(0) = 0`` (the start keeps the mission's initial acceleration), and both
+#: vanish at ``tau = 1`` with their first three derivatives. The low degrees keep the peaks
+#: of ``|h0'|`` (35/16) and ``|h1'|`` (1, at ``tau = 0``) small.
+BLEND_H0 = 1.0 - SMOOTHSTEP
+BLEND_H1 = Polynomial([0.0, 1.0]) * Polynomial([1.0, -1.0]) ** 4 * Polynomial([1.0, 4.0])
+#: ``sup |h0^(k)|`` and ``sup |h1^(k)|`` on [0, 1], ``k = 0..3``, from the coefficients.
+H0_SUP = np.array([poly_sup(BLEND_H0.deriv(k)) for k in range(4)])
+H1_SUP = np.array([poly_sup(BLEND_H1.deriv(k)) for k in range(4)])
+
+#: A shaped start needs each initial ground speed to be at least this fraction of the
+#: mission's minimum speed: the course of a vehicle at rest is undefined, and at 1e-3 of the
+#: mission speed the yaw-rate reference ``|p''|/|p'|`` is already 1000 times the mission's.
+START_SPEED_RTOL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -73,7 +108,7 @@ class ReferenceTube:
             object.__setattr__(self, name, np.atleast_1d(np.asarray(getattr(self, name), dtype=float)))
 
     @staticmethod
-    def concatenate(tubes: "list[ReferenceTube]") -> "ReferenceTube":
+    def concatenate(tubes: list[ReferenceTube]) -> ReferenceTube:
         """One tube holding the cells of all ``tubes``."""
         return ReferenceTube(
             speed=np.concatenate([t.speed for t in tubes]),
@@ -82,3 +117,239 @@ class ReferenceTube:
             accel=np.concatenate([t.accel for t in tubes]),
             yaw_accel=np.concatenate([t.yaw_accel for t in tubes]),
         )
+
+
+def _blend(t: FloatArray, blend_time: float) -> tuple[FloatArray, FloatArray]:
+    """``d^k h0(t/T_b)/dt^k`` and ``T_b d^k h1(t/T_b)/dt^k``, ``k = 0..3``: shape ``(4,) + t.shape``.
+
+    Exactly zero for ``t >= T_b``. For ``t < 0`` the polynomials are continued (the reference
+    is meant for ``t >= 0``; continuing keeps the derivatives consistent across ``t = 0``).
+    """
+    tau = t / blend_time
+    live = tau < 1.0
+    tau = np.minimum(tau, 1.0)
+    h0 = np.stack([np.where(live, BLEND_H0.deriv(k)(tau) / blend_time**k, 0.0) for k in range(4)])
+    h1 = np.stack([np.where(live, BLEND_H1.deriv(k)(tau) / blend_time ** (k - 1), 0.0) for k in range(4)])
+    return h0, h1
+
+
+@dataclass(frozen=True)
+class Shaping:
+    """Start correction of a fleet reference, blended out over ``[0, T_b]``.
+
+    ``c_i(t) = dp_i h0(t/T_b) + T_h dv_i h1(t/T_h)`` is added to the desired position (m) and
+    ``delta_i(t) = dpsi_i h0(t/T_h) + T_h dr_i h1(t/T_h)`` to the desired heading (rad); both
+    vanish for ``t >= T_b`` (basis :data:`BLEND_H0`, :data:`BLEND_H1`). The position error is
+    blended out slowly, over ``T_b``; the velocity and heading mismatches over the shorter
+    turn time ``T_h``, so that the initial velocity error is not extrapolated over the whole
+    blend (a vehicle 20 m off its slot moving 2 m/s the wrong way would otherwise be sent
+    ``T_b * 2 m/s`` further before turning back). Leading batch axes ``...`` hold independent
+    scenarios.
+
+    Parameters
+    ----------
+    blend_time : float
+        ``T_b`` (s), > 0.
+    dp, dv : array_like, shape (..., N, 2)
+        Position (m) and velocity (m/s) corrections at ``t = 0``, inertial frame.
+    dpsi, dr : array_like, shape (..., N)
+        Heading (rad) and yaw-rate (rad/s) offsets at ``t = 0``.
+    turn_time : float or None
+        ``T_h`` (s), ``0 < T_h <= T_b``; ``None`` means ``T_b``.
+    """
+
+    blend_time: float
+    dp: FloatArray
+    dv: FloatArray
+    dpsi: FloatArray
+    dr: FloatArray
+    turn_time: float | None = None
+
+    def __post_init__(self) -> None:
+        tb = require_finite("Shaping.blend_time", self.blend_time)
+        if tb <= 0:
+            raise ParameterError(f"Shaping.blend_time must be > 0 (s), got {tb!r}")
+        object.__setattr__(self, "blend_time", tb)
+        th = tb if self.turn_time is None else require_finite("Shaping.turn_time", self.turn_time)
+        if not 0 < th <= tb:
+            raise ParameterError(f"Shaping.turn_time must be in (0, blend_time = {tb!r}] (s), got {th!r}")
+        object.__setattr__(self, "turn_time", th)
+        dp = np.asarray(self.dp, dtype=float)
+        if dp.ndim < 2 or dp.shape[-1] != 2:
+            raise ParameterError(f"Shaping.dp must have shape (..., N, 2) (m), got {dp.shape}")
+        for name, shape in (("dp", dp.shape), ("dv", dp.shape), ("dpsi", dp.shape[:-1]), ("dr", dp.shape[:-1])):
+            arr = np.asarray(getattr(self, name), dtype=float)
+            if arr.shape != shape or not np.all(np.isfinite(arr)):
+                raise ParameterError(f"Shaping.{name} must be finite with shape {shape}, got {arr!r}")
+            object.__setattr__(self, name, arr)
+
+    def terms(self, t: ArrayLike) -> tuple[list[FloatArray], list[FloatArray]]:
+        """``[c, c', c'', c''']`` (m .. m/s^3, shape ``B + (N, 2)``) and ``[delta, delta', delta'']``
+        (rad .. rad/s^2, shape ``B + (N,)``); ``B`` broadcasts ``np.shape(t)`` with the batch shape."""
+        tt = times(t)
+        h0, _ = _blend(tt, self.blend_time)
+        g0, g1 = _blend(tt, self.th)
+        c = [h0[k][..., None, None] * self.dp + g1[k][..., None, None] * self.dv for k in range(4)]
+        d = [g0[k][..., None] * self.dpsi + g1[k][..., None] * self.dr for k in range(3)]
+        return c, d
+
+    @property
+    def th(self) -> float:
+        """The turn time ``T_h`` (s) as a float."""
+        return float(self.turn_time if self.turn_time is not None else self.blend_time)
+
+
+@dataclass(frozen=True)
+class FleetReference:
+    """Desired motion of a fleet: mission path, formation offsets and optional shaped start.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path ``q(t)``.
+    offsets : array_like, shape (N, 2)
+        Offset of each vehicle from the centre (m, inertial frame).
+    shaping : Shaping or None
+        Start correction (see :func:`shaped_start`); ``None`` for the plain mission.
+    """
+
+    mission: MissionReference
+    offsets: FloatArray
+    shaping: Shaping | None = None
+
+    def __post_init__(self) -> None:
+        off = np.asarray(self.offsets, dtype=float)
+        if off.ndim != 2 or off.shape[1] != 2 or off.shape[0] < 1 or not np.all(np.isfinite(off)):
+            raise ParameterError(f"FleetReference.offsets must be finite with shape (N, 2) (m), got {off!r}")
+        if self.shaping is not None and self.shaping.dp.shape[-2] != off.shape[0]:
+            raise ParameterError(f"shaping is for {self.shaping.dp.shape[-2]} vehicles, offsets for {off.shape[0]}")
+        object.__setattr__(self, "offsets", off)
+
+    def kinematics(self, t: ArrayLike) -> tuple[list[FloatArray], list[FloatArray]]:
+        """``[p, p', p'', p''']`` (m .. m/s^3, inertial, shape ``B + (N, 2)``) and
+        ``[delta, delta', delta'']`` (rad .. rad/s^2, shape ``B + (N,)``), where ``B`` broadcasts
+        ``np.shape(t)`` with the shaping's batch shape."""
+        tt = times(t)
+        q = [x[..., None, :] for x in self.mission(tt)]
+        if self.shaping is None:
+            shape = (*tt.shape, self.offsets.shape[0], 2)
+            zero: FloatArray = np.zeros(shape[:-1])
+            out: list[FloatArray] = [self.offsets + q[0], *(np.broadcast_to(x, shape).copy() for x in q[1:])]
+            return out, [zero] * 3
+        c, d = self.shaping.terms(tt)
+        out = [(self.offsets + q[0]) + c[0], *(q[k] + c[k] for k in range(1, 4))]
+        return out, d
+
+    def motion(self, t: ArrayLike) -> Motion:
+        """Desired motion at times ``t`` (s), shapes ``B + (N, 2)`` / ``B + (N,)`` (see
+        :meth:`kinematics`): ``psi = atan2(p') + delta`` (rad, defined modulo 2 pi),
+        ``r = chi' + delta'``, ``r_dot = chi'' + delta''``.
+
+        Raises
+        ------
+        ParameterError
+            If a desired velocity is zero (heading undefined) or a time is not finite.
+        """
+        (p, v, a, j), (d0, d1, d2) = self.kinematics(t)
+        chi, chi1, chi2 = heading_from_velocity(v, a, j)
+        return Motion(p=p, v=v, a=a, psi=chi + d0, r=chi1 + d1, r_dot=chi2 + d2)
+
+
+def wrap_angle(angle: ArrayLike) -> FloatArray:
+    """``angle`` (rad) wrapped to (-pi, pi]."""
+    out: FloatArray = np.pi - np.mod(np.pi - np.asarray(angle, dtype=float), 2.0 * np.pi)
+    return out
+
+
+def shaped_start(mission: MissionReference, offsets: ArrayLike, initial: ArrayLike, blend_time: float,
+                 current: tuple[float, float] = (0.0, 0.0), turn_time: float | None = None) -> FleetReference:
+    """Fleet reference that starts exactly at the vehicles' initial states.
+
+    At ``t = 0`` each vehicle's desired position, ground velocity, heading (mod 2 pi) and yaw
+    rate equal its actual ones; for ``t >= blend_time`` the reference is the plain mission.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path.
+    offsets : array_like, shape (N, 2)
+        Formation offsets (m, inertial frame).
+    initial : array_like, shape (..., N, 6)
+        Initial states ``[x, y, psi, u, v, r]`` (m, m, rad, m/s and m/s in the body frame, rad/s).
+    blend_time : float
+        ``T_b`` (s), > 0.
+    current : tuple of float
+        Water current (m/s, inertial); the ground velocity is ``R(psi) [u, v] + current``.
+    turn_time : float or None
+        ``T_h`` (s) of the velocity and heading blends (see :class:`Shaping`); default ``T_b``.
+
+    Returns
+    -------
+    FleetReference
+        With ``dp = p(0) - off - q(0)``, ``dv = p'(0) - q'(0)``, ``dpsi = wrap(psi(0) -
+        atan2(p'(0)))`` and ``dr = (r(0) - chi'(0) - dpsi h0'(0)/T_b) / h1'(0)``, where
+        ``chi'(0)`` is the course rate of ``p'(0)`` with ``p''(0) = q''(0) + c''(0)``
+        (``c''(0)`` depends on ``dp, dv`` only).
+
+    Raises
+    ------
+    ParameterError
+        On bad shapes or values, or if an initial ground speed is below
+        :data:`START_SPEED_RTOL` times the mission's minimum speed.
+    """
+    off = np.asarray(offsets, dtype=float)
+    init = np.asarray(initial, dtype=float)
+    if off.ndim != 2 or init.ndim < 2 or init.shape[-2:] != (off.shape[0], 6) or not np.all(np.isfinite(init)):
+        raise ParameterError(f"initial must be finite with shape (..., N, 6) for offsets of shape (N, 2), "
+                             f"got {init.shape} and {off.shape}")
+    cur = np.asarray(current, dtype=float)
+    if cur.shape != (2,) or not np.all(np.isfinite(cur)):
+        raise ParameterError(f"current must be 2 finite numbers (m/s), got {current!r}")
+    tb = require_finite("blend_time", blend_time)
+    if tb <= 0:
+        raise ParameterError(f"blend_time must be > 0 (s), got {tb!r}")
+    q0, q1, q2, _ = mission(0.0)
+    psi, u, v, r = (init[..., k] for k in range(2, 6))
+    vel = np.stack([np.cos(psi) * u - np.sin(psi) * v, np.sin(psi) * u + np.cos(psi) * v], axis=-1) + cur
+    floor = START_SPEED_RTOL * mission.bounds().speed_min
+    speed = np.hypot(vel[..., 0], vel[..., 1])
+    if np.any(speed < floor):
+        raise ParameterError(f"initial ground speed must be >= {floor!r} m/s (START_SPEED_RTOL x mission speed), "
+                             f"got {speed.min()!r}: the heading reference is undefined for a vehicle at rest")
+    dp = init[..., :2] - off - q0
+    dv = vel - q1
+    th = tb if turn_time is None else require_finite("turn_time", turn_time)
+    h0, _ = _blend(np.zeros(1), tb)
+    g0, g1 = _blend(np.zeros(1), th)
+    chi, chi1, _ = heading_from_velocity(vel, q2 + h0[2, 0] * dp + g1[2, 0] * dv, np.zeros_like(vel))
+    dpsi = wrap_angle(psi - chi)
+    dr = (r - chi1 - g0[1, 0] * dpsi) / g1[1, 0]
+    return FleetReference(mission, off, Shaping(tb, dp, dv, dpsi, dr, th))
+
+
+#: Mission classes by ``kind``.
+REFERENCES: dict[str, type] = {c.kind: c for c in (SineReference, LineReference, CircleReference, LawnmowerReference)}
+
+
+def reference_from_dict(kind: str, **params: Any) -> MissionReference:
+    """Mission reference of ``kind`` (a key of :data:`REFERENCES`) built from ``params``.
+
+    Raises
+    ------
+    ParameterError
+        If ``kind`` is unknown or a parameter is invalid.
+    """
+    if kind not in REFERENCES:
+        raise ParameterError(f"reference kind must be one of {sorted(REFERENCES)}, got {kind!r}")
+    try:
+        ref: MissionReference = REFERENCES[kind](**params)
+    except TypeError as exc:
+        raise ParameterError(f"invalid parameters for reference kind {kind!r}: {exc}") from None
+    return ref
+
+
+__all__ = [
+    "BLEND_H0", "BLEND_H1", "REFERENCES", "START_SPEED_RTOL", "CircleReference", "FleetReference",
+    "LawnmowerReference", "LineReference", "MissionBounds", "MissionReference", "Motion", "ReferenceTube",
+    "Shaping", "SineReference", "heading_from_velocity", "reference_from_dict", "shaped_start", "wrap_angle",
+]

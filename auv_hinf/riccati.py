@@ -1,15 +1,24 @@
 """Riccati solves of eq. (37) on the full ``2N x 2N`` problem (python-control and scipy).
 
 Eq. (37), ``A^T L + L A + c L^2 + I = 0`` with ``A = lam I`` and ``c = 1/gamma^2 - 2``, maps to
-``care``'s form ``A^T X + X A - X B R^-1 B^T X + Q = 0`` with ``B = Q = I`` and ``R = -(1/c) I``:
+``care``'s form ``A^T X + X A - X B R^-1 B^T X + Q = 0`` with ``B = Q = I`` and ``R = -(1/c) I``.
+The branch is :func:`auv_hinf.design.riccati_regime`:
 
-* ``gamma > 1/sqrt2`` (``c < 0``): ``R`` is positive definite, the usual LQR-type ARE;
-* ``gamma < 1/sqrt2`` (``c > 0``): ``R`` is *negative* definite. Both ``control.care`` and
-  ``scipy.linalg.solve_continuous_are`` accept it (they work on the Hamiltonian pencil, whose
-  eigenvalues ``+-s`` stay real and split) and return the stabilising root ``lam + c L = -s I``,
-  not the paper's '+' root;
-* ``gamma = 1/sqrt2`` (``c = 0``): ``R`` would be infinite; (37) is the Lyapunov equation
-  ``2 lam L + I = 0``, solved with ``control.lyap`` / scipy's Lyapunov solver.
+* ``"R>0"`` (``c < 0``, gamma > 1/sqrt2): the usual LQR-type ARE;
+* ``"R<0"`` (``c > 0``, gamma < 1/sqrt2): ``R`` is *negative* definite. Both ``control.care``
+  and ``scipy.linalg.solve_continuous_are`` accept it (they work on the Hamiltonian pencil,
+  whose eigenvalues ``+-s`` stay real and split) and return the stabilising root
+  ``lam + c L = -s I``, not the paper's '+' root;
+* ``"lyapunov"`` (``|c|`` negligible next to ``lam^2``): ``R`` would be (nearly) infinite; (37)
+  is the Lyapunov equation ``2 lam L + I = 0``, solved with ``control.lyap`` / scipy;
+* ``"double-root"`` (discriminant ``lam^2 - c`` zero up to round-off, gamma = gamma_min): the
+  Hamiltonian has a double eigenvalue at 0, no solver can split it, and the root is the
+  closed form ``L = (-lam - sqrt(max(disc, 0)))/c I`` of the merged pair (solver
+  ``"closed-form"``). The report records this, so the comparison is not counted as an
+  independent solve.
+
+Solver failures (``LinAlgError``, python-control or slycot errors) are raised as
+:class:`~auv_hinf.exceptions.SolverError`.
 """
 
 from __future__ import annotations
@@ -22,11 +31,18 @@ import numpy as np
 import scipy.linalg as sla
 
 from ._typing import RiccatiSolver
-from .design import GAMMA_SINGULAR_TOL, riccati_c, theorem1_conditions
-from .exceptions import DesignError, require_fleet_size
+from .design import discriminant, riccati_c, riccati_regime, theorem1_conditions
+from .exceptions import DesignError, SolverError, require_fleet_size
 
-#: Riccati solvers agree with the closed form to round-off of a 2N-dimensional QZ/Schur.
+#: Relative agreement of the Riccati solvers with the closed form: round-off of a
+#: 2N-dimensional QZ/Schur is ~1e-15 relative to alpha; 1e-9 leaves room for the
+#: conditioning near gamma_min, which the cross-check multiplies in (:func:`root_condition`).
 ARE_RTOL = 1e-9
+
+#: Exceptions a solver back end raises on failure; they are re-raised as SolverError.
+_SOLVER_FAILURES: tuple[type[BaseException], ...] = (
+    np.linalg.LinAlgError, ArithmeticError, ct.ControlArgument, ValueError, RuntimeError,
+)
 
 
 @dataclass(frozen=True)
@@ -36,15 +52,18 @@ class RiccatiResult:
     Attributes
     ----------
     solver : str
-        ``"control.care"``, ``"scipy.care"``, ``"control.lyap"`` or ``"scipy.lyap"``.
+        ``"control.care"``, ``"scipy.care"``, ``"control.lyap"``, ``"scipy.lyap"`` or
+        ``"closed-form"`` (double root).
     regime : str
-        ``"R>0"`` (gamma > 1/sqrt2), ``"R<0"`` (gamma < 1/sqrt2) or ``"lyapunov"``.
+        :func:`auv_hinf.design.riccati_regime`: ``"R>0"``, ``"R<0"``, ``"lyapunov"`` or
+        ``"double-root"``.
     alpha : float
         ``trace(L)/(2N)``, 1/s.
     structure_error : float
-        ``max |L - alpha I|``: how far L is from a multiple of the identity.
+        ``max |L - alpha I|`` (1/s): how far L is from a multiple of the identity.
     residual : float
-        Max absolute entry of the left side of (37) at L.
+        Max absolute entry of the left side of (37) at L (dimensionless: the constant term
+        of (37) is ``I``, so this is already relative to the equation's scale).
     """
 
     solver: str
@@ -69,32 +88,52 @@ def riccati_alpha(lam: float, gamma: float, n: int, *, solver: RiccatiSolver = "
     lam : float
         Nominal value lambda < 0 (1/s).
     gamma : float
-        Bound with ``gamma >= 1/sqrt(lam^2+2)``.
+        Bound with ``gamma >= 1/sqrt(lam^2+2)`` (s).
     n : int
         Number of vehicles; the problem has size ``2n``.
     solver : {"control", "scipy"}
+
+    Raises
+    ------
+    DesignError
+        If gamma is below the bound (no real root) or ``solver`` is unknown.
+    SolverError
+        If the back end fails or returns a non-finite matrix.
     """
     require_real_solution(lam, gamma)
+    if solver not in ("control", "scipy"):
+        raise DesignError(f"Riccati solver must be 'control' or 'scipy', got {solver!r}")
     size = 2 * require_fleet_size(n)
     a = lam * np.eye(size)
     eye = np.eye(size)
     c = riccati_c(gamma)
-    if abs(c) <= GAMMA_SINGULAR_TOL:
-        regime = "lyapunov"
-        if solver == "control":
-            x = ct.lyap(a, eye)  # A X + X A^T + Q = 0
+    regime = riccati_regime(lam, gamma)
+    try:
+        if regime == "double-root":
+            # Merged roots: (c L + lam I)^2 = disc I with disc ~ 0, so c L = -(lam + sqrt(disc)) I.
+            # c > 0 here (c = lam^2 > 0), and -lam - sqrt(disc) has no cancellation.
+            x = (-(lam + math.sqrt(max(discriminant(lam, gamma), 0.0))) / c) * eye
+            name = "closed-form"
+        elif regime == "lyapunov":
+            if solver == "control":
+                x = ct.lyap(a, eye)  # A X + X A^T + Q = 0
+            else:
+                x = sla.solve_continuous_lyapunov(a, -eye)  # A X + X A^H = Q
+            name = f"{solver}.lyap"
         else:
-            x = sla.solve_continuous_lyapunov(a, -eye)  # A X + X A^H = Q
-        name = f"{solver}.lyap"
-    else:
-        regime = "R>0" if c < 0 else "R<0"
-        r = (-1.0 / c) * eye
-        if solver == "control":
-            x, _, _ = ct.care(a, eye, eye, r)
-        else:
-            x = sla.solve_continuous_are(a, eye, eye, r)
-        name = f"{solver}.care"
+            r = (-1.0 / c) * eye
+            if solver == "control":
+                x, _, _ = ct.care(a, eye, eye, r)
+            else:
+                x = sla.solve_continuous_are(a, eye, eye, r)
+            name = f"{solver}.care"
+    except _SOLVER_FAILURES as exc:
+        raise SolverError(
+            f"{solver} Riccati solve of eq. (37) failed (regime {regime}, lambda={lam!r}, gamma={gamma!r}): {exc}"
+        ) from exc
     x = np.asarray(x, dtype=float)
+    if not np.all(np.isfinite(x)):
+        raise SolverError(f"{solver} Riccati solve of eq. (37) returned a non-finite matrix (regime {regime})")
     alpha = float(np.trace(x) / size)
     residual = a.T @ x + x @ a + c * x @ x + eye
     return RiccatiResult(

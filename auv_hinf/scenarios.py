@@ -1,14 +1,19 @@
-"""Paper scenarios (Section V) built from a configuration and its certificate."""
+"""Paper scenarios (Section V) built from a configuration and its Theorem 1 gain."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .certificate import certify
+from ._typing import OrientationLaw
 from .config import FormationConfig, preset_config
-from .control_law import FormationController, SineTrajectory, heading_gains
+from .control_law import MotionSource, VehicleLaw, heading_gains
+from .design import design_alpha
+from .envelope import envelope_lambda
 from .exceptions import DesignError
-from .formation import offsets_from_shape
+from .paths import SineReference
+from .postprocess import positions_from_jacobi
+from .reference import FleetReference
+from .sigma import vehicle_sigma
 from .simulation import Scenario
 from .vehicle import VehicleParams
 
@@ -25,7 +30,7 @@ def default_initial(cfg: FormationConfig) -> np.ndarray:
     Vehicles start on the desired shape scaled by 1.5 and rotated by 0.3 rad about the
     origin, heading 0, surge 1 m/s, at rest otherwise.
     """
-    off = offsets_from_shape(np.asarray(cfg.shape), cfg.transform)
+    off = config_offsets(cfg)
     c, s = np.cos(0.3), np.sin(0.3)
     pos = 1.5 * off @ np.array([[c, s], [-s, c]])
     init = np.zeros((cfg.n, 6))
@@ -34,37 +39,61 @@ def default_initial(cfg: FormationConfig) -> np.ndarray:
     return init
 
 
-def scenario_from_config(
-    cfg: FormationConfig,
-    *,
-    horizon: float = 300.0,
-    plant: VehicleParams | None = None,
-    current: tuple[float, float] = (0.0, 0.0),
-    orientation: str = "corrected",
-    thrust_limit: tuple[float, float, float] | None = None,
-    initial: np.ndarray | None = None,
-) -> Scenario:
-    """Certify ``cfg`` and build the closed-loop scenario with the certified gain.
+def config_offsets(cfg: FormationConfig) -> np.ndarray:
+    """Vehicle offsets from the formation centre, shape ``(N, 2)`` (m), computed in O(N)."""
+    rho = np.asarray(cfg.shape, dtype=float).reshape(cfg.n - 1, 2)
+    return positions_from_jacobi(np.vstack([rho, np.zeros((1, 2))]), cfg.jacobi)
+
+
+def config_alpha(cfg: FormationConfig) -> float:
+    """Theorem 1 velocity gain (1/s) of ``cfg`` on its envelope, without a full certificate.
+
+    ``lam`` = ``cfg.lam`` or :func:`~auv_hinf.envelope.envelope_lambda`; ``sigma`` = the exact
+    vehicle-coordinate bound (upper); ``gamma`` = ``cfg.gamma`` or ``1/sigma``.
 
     Raises
     ------
     DesignError
         If the configured method gives no gain (e.g. gamma below the Theorem 1 bound).
     """
-    cert = certify(cfg, jacobi_samples=200)
-    if cert.alpha_used is None:
-        raise DesignError(f"no gain for method {cfg.method!r}: {'; '.join(cert.reasons)}")
-    ctrl = FormationController(
-        params=cfg.vehicle, transform=cfg.transform, shape=np.asarray(cfg.shape),
-        trajectory=SineTrajectory(), alpha=cert.alpha_used, k1=cfg.k1,
-        k_psi=heading_gains(cfg.vehicle), orientation=orientation,  # type: ignore[arg-type]
-        thrust_limit=thrust_limit,
+    lam = cfg.lam if cfg.lam is not None else envelope_lambda(cfg.vehicle, cfg.envelope)
+    sigma = vehicle_sigma(cfg.vehicle, cfg.envelope, lam, cfg.n).upper
+    gamma = cfg.gamma if cfg.gamma is not None else 1.0 / sigma
+    alpha = design_alpha(lam, gamma, cfg.method).alpha
+    if not np.isfinite(alpha):
+        raise DesignError(f"no finite gain for method {cfg.method!r} at lambda={lam:g}, gamma={gamma:g}")
+    return float(alpha)
+
+
+def scenario_from_config(
+    cfg: FormationConfig,
+    *,
+    horizon: float = 300.0,
+    plant: VehicleParams | None = None,
+    current: tuple[float, float] = (0.0, 0.0),
+    orientation: OrientationLaw = "corrected",
+    thrust_limit: tuple[float, float, float] | None = None,
+    initial: np.ndarray | None = None,
+    samples: int = 3001,
+    reference: MotionSource | None = None,
+) -> Scenario:
+    """Closed-loop scenario of ``cfg``: the paper's sine centre path, offsets from ``cfg.shape``.
+
+    The law uses the Theorem 1 gain of :func:`config_alpha` and heading gains by pole
+    placement; ``initial`` defaults to the paper's states for ``paper-triangle`` and to
+    :func:`default_initial` otherwise. ``reference`` (e.g. a shaped
+    :class:`~auv_hinf.reference.FleetReference`) replaces the plain sine mission.
+    """
+    law = VehicleLaw(
+        params=cfg.vehicle, alpha=config_alpha(cfg), k1=cfg.k1, k_psi=heading_gains(cfg.vehicle),
+        orientation=orientation, thrust_limit=thrust_limit,
     )
     if initial is None:
         initial = PAPER_TRIANGLE_INITIAL if cfg.name == "paper-triangle" else default_initial(cfg)
     return Scenario(
-        controller=ctrl, plant=plant or cfg.vehicle, initial=initial, horizon=horizon,
-        current=current, envelope=cfg.envelope, name=cfg.name,
+        law=law, reference=reference or FleetReference(SineReference(), config_offsets(cfg)), plant=plant or cfg.vehicle,
+        initial=initial, horizon=horizon, current=current, envelope=cfg.envelope, samples=samples,
+        name=cfg.name, jacobi=cfg.jacobi,
     )
 
 
@@ -73,4 +102,7 @@ def paper_scenario(name: str = "paper-triangle", **kwargs: object) -> Scenario:
     return scenario_from_config(preset_config(name), **kwargs)  # type: ignore[arg-type]
 
 
-__all__ = ["PAPER_TRIANGLE_INITIAL", "default_initial", "paper_scenario", "scenario_from_config"]
+__all__ = [
+    "PAPER_TRIANGLE_INITIAL", "config_alpha", "config_offsets", "default_initial", "paper_scenario",
+    "scenario_from_config",
+]

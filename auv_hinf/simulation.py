@@ -1,25 +1,31 @@
-"""Vectorised nonlinear closed-loop simulation of N vehicles (scipy ``solve_ivp``)."""
+"""Closed-loop simulation of N vehicles under the per-vehicle law, one scenario or a batch.
+
+The closed loop costs O(N) per right-hand-side call. A batch of ``S`` scenarios is one
+vectorised system of shape ``(S, N, 6)``; the integrator treats each scenario (or, for
+the decoupled fleet, each vehicle) as an independent system with its own step size.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
+from typing import Literal, cast
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy.integrate import solve_ivp
 
-from .control_law import FormationController
+from ._typing import FloatArray, JacobiKind
+from .control_law import MotionSource, VehicleLaw, VehicleMotionSource
 from .envelope import Envelope
-from .exceptions import ParameterError, SolverError
-from ._typing import FloatArray
+from .exceptions import ParameterError, require_finite
+from .integrators import ATOL, RTOL, BatchSolution, EventFn, dopri5, rk45_reference
+from .postprocess import envelope_margin, ground_velocity
+from .reference import FleetReference, Motion
+from .results import SimulationResult, build_result
 from .vehicle import VehicleParams, rhs
 
-
-#: Integration tolerances: shape errors of 1e-3 m on formations of 10-30 m need a
-#: relative accuracy well below 1e-5; 1e-8 / 1e-8 keeps the integration error negligible.
-RTOL, ATOL = 1e-8, 1e-8
+Method = Literal["dopri", "rk45"]
+Systems = Literal["scenario", "vehicle"]
+_COEFFS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
 
 
 @dataclass(frozen=True)
@@ -28,9 +34,12 @@ class Scenario:
 
     Attributes
     ----------
-    controller : FormationController
+    law : VehicleLaw
+        The controller (its ``params`` are the controller's model).
+    reference : MotionSource
+        Desired motion the law tracks.
     plant : VehicleParams
-        The simulated vehicles (differs from ``controller.params`` for a mismatch study).
+        The simulated vehicles (differs from ``law.params`` for a mismatch study).
     initial : ndarray, shape (N, 6)
         ``[x, y, psi, u, v, r]`` per vehicle (m, m, rad, m/s, m/s, rad/s).
     horizon : float
@@ -40,11 +49,18 @@ class Scenario:
     envelope : Envelope, optional
         Certified envelope to check the trajectory against.
     samples : int
-        Number of output samples.
+        Number of output samples (>= 2), equally spaced on ``[0, horizon]``.
     name : str
+    mission : MotionSource, optional
+        The unshaped mission reference for the formation and position errors. Default:
+        for a shaped :class:`~auv_hinf.reference.FleetReference`, the same reference without
+        its shaping; otherwise ``reference`` itself.
+    jacobi : {"paper", "orthonormal"}
+        Jacobi convention of the reported shape error.
     """
 
-    controller: FormationController
+    law: VehicleLaw
+    reference: MotionSource
     plant: VehicleParams
     initial: FloatArray
     horizon: float
@@ -52,135 +68,253 @@ class Scenario:
     envelope: Envelope | None = None
     samples: int = 3001
     name: str = "scenario"
+    mission: MotionSource | None = None
+    jacobi: JacobiKind = "paper"
 
     def __post_init__(self) -> None:
         init = np.asarray(self.initial, dtype=float)
-        n = self.controller.transform.n
+        n = np.shape(self.reference.motion(0.0).p)[0]
         if init.shape != (n, 6) or not np.all(np.isfinite(init)):
             raise ParameterError(f"initial states must be a finite ({n}, 6) array, got shape {init.shape}")
         if not np.isfinite(self.horizon) or self.horizon <= 0:
             raise ParameterError(f"horizon must be > 0 s, got {self.horizon!r}")
+        if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or self.samples < 2:
+            raise ParameterError(f"samples must be an integer >= 2, got {self.samples!r}")
+        cur = tuple(require_finite("current", c) for c in self.current)
+        if len(cur) != 2:
+            raise ParameterError(f"current must be a pair (m/s), got {self.current!r}")
         object.__setattr__(self, "initial", init)
+        object.__setattr__(self, "current", cur)
+        ref = self.reference
+        if self.mission is None and isinstance(ref, FleetReference) and ref.shaping is not None:
+            object.__setattr__(self, "mission", FleetReference(ref.mission, ref.offsets))
 
+    @property
+    def n(self) -> int:
+        """Number of vehicles."""
+        return int(self.initial.shape[0])
 
-def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
-    """Time derivative of the stacked state ``y`` (6N,), one vectorised call for all vehicles.
-
-    Vehicle velocities are relative to the water; the current adds to the kinematics.
-    """
-    s = y.reshape(-1, 6)
-    p_dot = ground_velocity(s, scn.current)
-    tau, _ = scn.controller.forces(t, s, p_dot)
-    d = rhs(scn.plant, s, tau)
-    d[:, 0:2] += scn.current
-    return d.ravel()
-
-
-def ground_velocity(s: FloatArray, current: tuple[float, float]) -> FloatArray:
-    """Inertial velocity ``R(psi) [u, v] + current`` of stacked states ``(N, 6)``, m/s."""
-    c, sn = np.cos(s[:, 2]), np.sin(s[:, 2])
-    return np.column_stack([c * s[:, 3] - sn * s[:, 4], sn * s[:, 3] + c * s[:, 4]]) + np.asarray(current)
+    @property
+    def times(self) -> FloatArray:
+        """Output sample times (s)."""
+        return np.linspace(0.0, self.horizon, self.samples)
 
 
 @dataclass(frozen=True)
-class SimulationResult:
-    """Trajectories and metrics.
+class PlantBatch:
+    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,)."""
+
+    m11: FloatArray
+    m22: FloatArray
+    m33: FloatArray
+    d11_lin: FloatArray
+    d11_quad: FloatArray
+    d22_lin: FloatArray
+    d22_quad: FloatArray
+    d33_lin: FloatArray
+    d33_quad: FloatArray
+
+    def __post_init__(self) -> None:
+        arrays = [np.atleast_1d(np.asarray(getattr(self, k), dtype=float)) for k in _COEFFS]
+        if any(a.ndim != 1 or a.shape != arrays[0].shape for a in arrays):
+            raise ParameterError("plant coefficients must be 1-D arrays of one common length S")
+        for k, a in zip(_COEFFS, arrays):
+            object.__setattr__(self, k, a)
+        for s in range(len(self)):
+            self[s]  # VehicleParams checks signs and finiteness, naming the field
+
+    @classmethod
+    def from_params(cls, params: Sequence[VehicleParams]) -> PlantBatch:
+        """Stack a list of :class:`VehicleParams`."""
+        if len(params) == 0:
+            raise ParameterError("a plant batch needs at least one VehicleParams")
+        return cls(**{k: np.array([getattr(p, k) for p in params]) for k in _COEFFS})
+
+    def __len__(self) -> int:
+        return int(self.m11.shape[0])
+
+    def __getitem__(self, s: int) -> VehicleParams:
+        return VehicleParams(**{k: float(getattr(self, k)[s]) for k in _COEFFS}, name=f"plant[{s}]")
+
+    def coefficients(self, trailing: int) -> VehicleParams:
+        """Duck-typed parameters with arrays of shape ``(S,) + (1,) * trailing`` for :func:`vehicle.rhs`.
+
+        ``vehicle.rhs`` reads only the nine coefficients and ``damping``, which broadcast.
+        """
+        shape = (len(self),) + (1,) * trailing
+        return cast(VehicleParams, _Coefficients({k: getattr(self, k).reshape(shape) for k in _COEFFS}))
+
+
+class _Coefficients:
+    """Array-valued stand-in for :class:`VehicleParams` (see :meth:`PlantBatch.coefficients`)."""
+
+    damping = VehicleParams.damping
+
+    def __init__(self, values: dict[str, FloatArray]) -> None:
+        self.__dict__.update(values)
+
+
+@dataclass(frozen=True)
+class ScenarioBatch:
+    """``S`` scenarios integrated together as one vectorised system of shape ``(S, N, 6)``.
+
+    All scenarios share the law, horizon, samples, envelope and N; they may differ in
+    plant parameters, initial states, currents and (through ``reference``) desired motion.
+
+    Parameters
+    ----------
+    scenarios : sequence of Scenario
+    reference : MotionSource, optional
+        Batched source: ``motion(t)`` with ``t`` of shape (S,) gives row ``s`` for scenario
+        ``s``. Default: the scenarios' common reference (it must be one object).
 
     Attributes
     ----------
-    t : ndarray (T,)
-        Time, s.
-    states : ndarray (T, N, 6)
-    forces : ndarray (T, N, 3)
-        Applied thrust (after saturation), N and N m.
-    jacobi : ndarray (T, N, 2)
-        Jacobi coordinates (m).
-    shape_error : ndarray (T,)
-        ``||X_shape - rho_d||`` (m, Frobenius over the N-1 vectors).
-    center_error : ndarray (T,)
-        ``||q_c - q_cd||`` (m).
-    desired_center : ndarray (T, 2)
-    saturated : ndarray (T,) of bool
-    scenario : Scenario
+    plant : PlantBatch
+    initial : ndarray, shape (S, N, 6)
+    current : ndarray, shape (S, 2)
+        Inertial, m/s.
     """
 
-    t: FloatArray
-    states: FloatArray
-    forces: FloatArray
-    jacobi: FloatArray
-    shape_error: FloatArray
-    center_error: FloatArray
-    desired_center: FloatArray
-    saturated: NDArray[np.bool_]
-    scenario: Scenario = field(repr=False)
+    scenarios: tuple[Scenario, ...]
+    reference: MotionSource | None = None
+    plant: PlantBatch = field(init=False)
+    initial: FloatArray = field(init=False)
+    current: FloatArray = field(init=False)
 
-    def error_at(self, time: float) -> tuple[float, float]:
-        """Shape and centre error (m) at the sample nearest to ``time``."""
-        k = int(np.argmin(np.abs(self.t - time)))
-        return float(self.shape_error[k]), float(self.center_error[k])
+    def __post_init__(self) -> None:
+        scn = tuple(self.scenarios)
+        if not scn:
+            raise ParameterError("a scenario batch needs at least one scenario")
+        first = scn[0]
+        for name in ("law", "horizon", "samples", "envelope", "jacobi", "n"):
+            if any(getattr(s, name) != getattr(first, name) for s in scn):
+                raise ParameterError(f"all scenarios of a batch must share {name!r}")
+        if self.reference is None:
+            if any(s.reference is not first.reference for s in scn):
+                raise ParameterError("scenarios with different references need an explicit batched reference")
+            object.__setattr__(self, "reference", first.reference)
+        object.__setattr__(self, "scenarios", scn)
+        object.__setattr__(self, "plant", PlantBatch.from_params([s.plant for s in scn]))
+        object.__setattr__(self, "initial", np.stack([s.initial for s in scn]))
+        object.__setattr__(self, "current", np.array([s.current for s in scn]))
 
-    def envelope_check(self) -> tuple[bool | None, float | None]:
-        """Whether ``(u, v, r)`` stayed in the scenario's envelope, and the first exit time (s)."""
-        env = self.scenario.envelope
-        if env is None:
-            return None, None
-        inside = env.contains(self.states[..., 3], self.states[..., 4], self.states[..., 5]).all(axis=1)
-        if inside.all():
-            return True, None
-        return False, float(self.t[int(np.argmin(inside))])
-
-    def summary(self) -> dict[str, Any]:
-        """Metrics as a JSON-safe dictionary."""
-        stayed, exit_time = self.envelope_check()
-        return {
-            "scenario": self.scenario.name,
-            "n": int(self.states.shape[1]),
-            "horizon": float(self.t[-1]),
-            "final_shape_error": float(self.shape_error[-1]),
-            "final_center_error": float(self.center_error[-1]),
-            "rms_shape_error": float(np.sqrt(np.mean(self.shape_error**2))),
-            "max_force": float(np.abs(self.forces[..., :2]).max()),
-            "max_moment": float(np.abs(self.forces[..., 2]).max()),
-            "max_speed": float(np.abs(self.states[..., 3]).max()),
-            "max_sway": float(np.abs(self.states[..., 4]).max()),
-            "max_yaw_rate": float(np.abs(self.states[..., 5]).max()),
-            "final_sway": float(np.abs(self.states[-1, :, 4]).max()),
-            "saturation_fraction": float(self.saturated.mean()),
-            "stayed_in_envelope": stayed,
-            "first_exit_time": exit_time,
-        }
-
-    def save_npz(self, path: str | Path) -> None:
-        """Write time, states, forces and Jacobi coordinates to a ``.npz`` file."""
-        np.savez_compressed(path, t=self.t, states=self.states, forces=self.forces, jacobi=self.jacobi)
+    @property
+    def source(self) -> MotionSource:
+        """The batched reference (never None after construction)."""
+        return cast(MotionSource, self.reference)
 
 
-def simulate(scn: Scenario, *, rtol: float = RTOL, atol: float = ATOL) -> SimulationResult:
-    """Integrate the closed loop with RK45 and compute metrics.
+def fleet_derivative(law: VehicleLaw, plant: VehicleParams, current: FloatArray, states: FloatArray,
+                     motion: Motion) -> FloatArray:
+    """Closed-loop ``d/dt`` of states ``(..., N, 6)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s)."""
+    p_dot = ground_velocity(states, current)
+    d = rhs(plant, states, law.forces(states, p_dot, motion))
+    d[..., 0:2] += current
+    return d
 
-    ``rtol``/``atol`` default to :data:`RTOL`/:data:`ATOL`; benchmarks loosen them to
-    match a fixed-step peer's accuracy.
+
+def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
+    """Time derivative of the flat state ``y`` (6N,) of one scenario at time ``t`` (s)."""
+    s = np.asarray(y, dtype=float).reshape(-1, 6)
+    return fleet_derivative(scn.law, scn.plant, np.asarray(scn.current), s, scn.reference.motion(t)).ravel()
+
+
+def batch_system(batch: ScenarioBatch, systems: Systems = "scenario") -> tuple[Callable[[FloatArray, FloatArray], FloatArray], EventFn | None]:
+    """Batched rhs ``(t (B,), y (B, d)) -> (B, d)`` and envelope event of ``batch``.
+
+    ``systems="scenario"``: ``B = S``, ``d = 6N``. ``systems="vehicle"``: ``B = S N``,
+    ``d = 6``, each vehicle with its own time (the law has no shared state, so the fleet is
+    decoupled); needs a :class:`VehicleMotionSource`.
     """
-    t_eval = np.linspace(0.0, scn.horizon, scn.samples)
-    sol = solve_ivp(
-        lambda t, y: closed_loop_rhs(scn, t, y), (0.0, scn.horizon), scn.initial.ravel(),
-        method="RK45", t_eval=t_eval, rtol=rtol, atol=atol,
-    )
-    if not sol.success:
-        raise SolverError(f"solve_ivp failed: {sol.message}")
-    n = scn.controller.transform.n
-    states = sol.y.T.reshape(-1, n, 6)
-    ctrl = scn.controller
-    forces = np.empty((len(sol.t), n, 3))
-    sat = np.zeros(len(sol.t), dtype=bool)
-    xd_c = np.empty((len(sol.t), 2))
-    for k, tk in enumerate(sol.t):
-        forces[k], sat[k] = ctrl.forces(tk, states[k], ground_velocity(states[k], scn.current))
-        xd_c[k] = ctrl.trajectory(tk)[0]
-    jac = np.einsum("jk,tkd->tjd", ctrl.transform.phi, states[..., 0:2])
-    shape_err = np.linalg.norm((jac[:, :-1, :] - ctrl.shape).reshape(len(sol.t), -1), axis=1)
-    center_err = np.linalg.norm(jac[:, -1, :] - xd_c, axis=1)
-    return SimulationResult(
-        t=sol.t, states=states, forces=forces, jacobi=jac, shape_error=shape_err,
-        center_error=center_err, desired_center=xd_c, saturated=sat, scenario=scn,
-    )
+    n_s, n = batch.initial.shape[:2]
+    law, ref, env = batch.scenarios[0].law, batch.source, batch.scenarios[0].envelope
+    plant = batch.plant.coefficients(1)
+    current = batch.current[:, None, :]
+    if systems == "vehicle":
+        if not isinstance(ref, VehicleMotionSource):
+            raise ParameterError("per-vehicle systems need a reference with motion_per_vehicle(t)")
+        vref = ref
+
+        def f_vehicle(t: FloatArray, y: FloatArray) -> FloatArray:
+            s = y.reshape(n_s, n, 6)
+            return fleet_derivative(law, plant, current, s, vref.motion_per_vehicle(t.reshape(n_s, n))).reshape(-1, 6)
+
+        ev_v = None if env is None else (lambda t, y: envelope_margin(env, y))
+        return f_vehicle, ev_v
+    if systems != "scenario":
+        raise ParameterError(f"systems must be 'scenario' or 'vehicle', got {systems!r}")
+
+    def f_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
+        return fleet_derivative(law, plant, current, y.reshape(n_s, n, 6), ref.motion(t)).reshape(n_s, -1)
+
+    def ev_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
+        assert env is not None
+        margin: FloatArray = envelope_margin(env, y.reshape(y.shape[:-1] + (n, 6))).min(axis=-1)
+        return margin
+
+    return f_scenario, (None if env is None else ev_scenario)
+
+
+def simulate_batch(
+    batch: ScenarioBatch, *, method: Method = "dopri", systems: Systems = "scenario",
+    rtol: float = RTOL, atol: float = ATOL, subdivisions: int = 8,
+) -> list[SimulationResult]:
+    """Integrate all scenarios of ``batch`` together and post-process each.
+
+    Parameters
+    ----------
+    method : {"dopri", "rk45"}
+        ``"dopri"``: vectorised Dormand-Prince with per-system step control
+        (:func:`~auv_hinf.integrators.dopri5`); ``"rk45"``: scipy ``solve_ivp`` per
+        scenario (the reference; scenario systems only).
+    systems : {"scenario", "vehicle"}
+        What one independently step-controlled system is.
+    rtol, atol : float
+        Tolerances (default :data:`~auv_hinf.integrators.RTOL`, ``ATOL``).
+    subdivisions : int
+        Sub-grid points per step on which the envelope margin is checked before brentq.
+    """
+    first = batch.scenarios[0]
+    n_s, n = batch.initial.shape[:2]
+    span = (0.0, float(first.horizon))
+    sol: BatchSolution
+    if method == "rk45" and systems == "scenario":
+        singles = [ScenarioBatch((scn,)) for scn in batch.scenarios] if n_s > 1 else [batch]
+        parts = []
+        for one in singles:
+            f1, ev1 = batch_system(one, "scenario")
+            parts.append(rk45_reference(f1, span, one.initial.reshape(1, 6 * n), first.times, rtol=rtol, atol=atol,
+                                        event=ev1))
+        sol = BatchSolution(t=first.times, y=np.concatenate([p.y for p in parts], axis=1),
+                            event_time=np.concatenate([p.event_time for p in parts]),
+                            n_steps=np.concatenate([p.n_steps for p in parts]),
+                            n_rejected=np.concatenate([p.n_rejected for p in parts]))
+    elif method == "dopri":
+        f, event = batch_system(batch, systems)
+        y0 = batch.initial.reshape(n_s * n, 6) if systems == "vehicle" else batch.initial.reshape(n_s, 6 * n)
+        sol = dopri5(f, span, y0, first.times, rtol=rtol, atol=atol, event=event, subdivisions=subdivisions)
+    else:
+        raise ParameterError(f"method must be 'dopri', or 'rk45' with scenario systems, got {method!r}/{systems!r}")
+    states = sol.y.reshape(sol.t.size, n_s, n, 6)
+    exits = sol.event_time.reshape(n_s, -1)
+    steps = sol.n_steps.reshape(n_s, -1).max(axis=1)
+    out = []
+    for s, scn in enumerate(batch.scenarios):
+        exit_s = exits[s][~np.isnan(exits[s])]
+        exit_time = float(exit_s.min()) if exit_s.size else None
+        out.append(build_result(scn, sol.t, states[:, s], exit_time, int(steps[s])))
+    return out
+
+
+def simulate(scn: Scenario, *, method: Method = "dopri", systems: Systems = "scenario",
+             rtol: float = RTOL, atol: float = ATOL, subdivisions: int = 8) -> SimulationResult:
+    """Integrate one scenario and compute its metrics; see :func:`simulate_batch`."""
+    return simulate_batch(ScenarioBatch((scn,)), method=method, systems=systems, rtol=rtol, atol=atol,
+                          subdivisions=subdivisions)[0]
+
+
+__all__ = [
+    "PlantBatch", "Scenario", "ScenarioBatch", "SimulationResult", "batch_system", "closed_loop_rhs",
+    "fleet_derivative", "ground_velocity", "simulate", "simulate_batch",
+]

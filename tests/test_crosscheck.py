@@ -8,10 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from auv_hinf.crosscheck import crosscheck
+from auv_hinf.design import alpha_stabilizing, gamma_min
 from auv_hinf.lmi import LMI_RTOL, lmi_hinf_norm
 from auv_hinf.loops import NORM_RTOL, hinf_norm, position_block, velocity_block
 from auv_hinf.riccati import ARE_RTOL, riccati_alpha
-from auv_hinf.design import alpha_stabilizing, gamma_min
 
 INV_SQRT2 = 2 ** -0.5
 
@@ -82,3 +82,53 @@ def test_property_crosscheck_agrees(lam, gamma):
     assert r.ok, [c for c in r.checks if not c.ok]
     if r.alpha_minimal > 0:
         assert r.alpha_lmi_minimal == pytest.approx(r.alpha_minimal, rel=LMI_RTOL)
+
+
+# ---------------------------------------------------------------------------------------
+# Reliability: every check is relative to its own quantity, so a 1 % error fails at every
+# scale; formerly failing inputs now give a report (with the formulation used), no traceback.
+# ---------------------------------------------------------------------------------------
+
+# gammas away from gamma_min, where the Riccati tolerances are not widened by root_condition
+SCALES = [(-1e-3, 1.0), (-1.0, 0.9), (-1e3, 2e-3), (-1e6, 1.0)]
+
+
+@pytest.mark.parametrize("lam, gamma", SCALES)
+def test_wrong_values_fail_every_check_at_every_scale(lam, gamma):
+    r = crosscheck(lam, gamma, 2)
+    assert r.ok, [c for c in r.checks if not c.ok]
+    assert len(r.checks) >= 8
+    for c in r.checks:
+        wrong = c.reference * 1.01 if c.reference != 0 else 0.01 * c.scale
+        assert wrong != c.reference
+        assert not c.with_value(wrong).ok, c.name
+        assert c.with_value(c.reference).ok
+
+
+def test_lmi_norm_at_lambda_minus_1e6_is_accurate():
+    """Regression: the BRL norm was 13.7x the exact one and the check still passed."""
+    r = crosscheck(-1e6, 1.0, 2)
+    assert r.hinf_lmi == pytest.approx(r.hinf_exact, rel=LMI_RTOL)
+    check = next(c for c in r.checks if c.name.startswith("BRL LMI"))
+    assert not check.with_value(13.7 * r.hinf_exact).ok
+
+
+@pytest.mark.parametrize(
+    "lam, gamma",
+    [(-1e-6, 0.5), (-1.2, 0.7071067811865497), (-1.2, gamma_min(-1.2) * (1 - 1e-14)), (-0.002, 1 / 0.0021),
+     (-1.2, INV_SQRT2 * (1 + 1e-13)), (-1.2, INV_SQRT2 * (1 - 1e-13))],
+)
+def test_former_failures_give_consistent_reports(lam, gamma):
+    r = crosscheck(lam, gamma, 2)
+    assert r.ok, [c for c in r.checks if not c.ok]
+    d = r.to_dict()
+    assert d["formulations"]["lmi_minimal"].startswith("normalised")
+    if r.alpha_care is not None:
+        assert d["formulations"]["riccati"].split(":")[0] == r.riccati_regime
+
+
+def test_double_root_formulation_recorded():
+    r = crosscheck(-1.2, gamma_min(-1.2) * (1 - 1e-14), 2)
+    assert r.riccati_regime == "double-root"
+    assert r.formulations["lmi_stabilizing"] == "double-root linear"
+    assert "closed-form" in r.formulations["riccati"]

@@ -1,4 +1,4 @@
-"""Theorem 1/2 gain design and the paper's errata (PAPER-NOTES items 9-15)."""
+"""Theorem 1/2 gain design and the paper's errata (see docs/errata.md)."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ def test_paper_notes_item14_values():
 
 
 def test_erratum_eq32_at_inv_sqrt2():
-    """PAPER-NOTES 10: eq. (32) gives alpha = 0 at gamma = 1/sqrt2, residual 1."""
+    """Erratum (docs/errata.md): eq. (32) gives alpha = 0 at gamma = 1/sqrt2, residual 1."""
     lam = -1.2
     d = alpha_paper(lam, INV_SQRT2)
     assert d.alpha == 0.0
@@ -53,7 +53,7 @@ def test_stabilizing_continuous_through_inv_sqrt2():
 
 
 def test_erratum_wrong_branch_below_inv_sqrt2():
-    """PAPER-NOTES 12: lam=-1.2, g=0.70 gives 58.4 (paper) vs 0.419 (stabilising)."""
+    """Erratum (docs/errata.md): lam=-1.2, g=0.70 gives 58.4 (paper) vs 0.419 (stabilising)."""
     p, s = alpha_paper(-1.2, 0.70), alpha_stabilizing(-1.2, 0.70)
     assert p.alpha == pytest.approx(58.38, abs=0.01)
     assert s.alpha == pytest.approx(0.4197, abs=1e-4)
@@ -135,3 +135,22 @@ def test_property_designs(lam, gamma):
         assert p.alpha == pytest.approx(s.alpha, rel=1e-6)
     elif gamma < INV_SQRT2 * (1 - 1e-9):
         assert p.alpha >= s.alpha * (1 - 1e-9)
+
+
+def test_regimes_and_gamma_ok_share_the_discriminant_tolerance():
+    from auv_hinf.design import DOUBLE_ROOT_RTOL, discriminant, discriminant_scale, riccati_regime
+
+    for lam in (-1e-3, -1.2, -1e3):
+        gmin = gamma_min(lam)
+        assert riccati_regime(lam, gmin) == "double-root"
+        inside = gmin * (1 - 0.4 * DOUBLE_ROOT_RTOL)  # within the admitted band
+        outside = gmin * (1 - 4 * DOUBLE_ROOT_RTOL)
+        assert theorem1_conditions(lam, inside).gamma_ok and riccati_regime(lam, inside) == "double-root"
+        assert not theorem1_conditions(lam, outside).gamma_ok
+        assert discriminant(lam, outside) < -DOUBLE_ROOT_RTOL * discriminant_scale(lam, outside)
+        # the double root is 1/|lam|, reached continuously
+        assert alpha_stabilizing(lam, inside).alpha == pytest.approx(1 / abs(lam), rel=1e-5)
+    assert riccati_regime(-1.2, INV_SQRT2) == "lyapunov"
+    # c = -6e-15: the Lyapunov root is exact to 1e-15 relative
+    assert riccati_regime(-1.2, 0.7071067811865497) == "lyapunov"
+    assert riccati_regime(-1.2, INV_SQRT2 * (1 + 1e-6)) == "R>0"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import control as ct
 import numpy as np
@@ -12,6 +13,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
+from auv_hinf.envelope import Envelope, envelope_lambda
+from auv_hinf.sigma import vehicle_sigma
 from auv_hinf.vehicle import (
     VehicleParams,
     body_block,
@@ -20,6 +23,7 @@ from auv_hinf.vehicle import (
     input_matrix,
     paper2011,
     preset,
+    remus100,
     rhs,
     rotation,
     vehicle_nlsys,
@@ -204,3 +208,46 @@ def test_property_eq20_and_psi_invariance(m, d, psi, uvr):
     n0 = np.linalg.norm(body_block(p, u, v, r) - lam * np.eye(2), 2)
     n1 = np.linalg.norm(g - lam * np.eye(2), 2)
     assert n1 == pytest.approx(n0, rel=1e-9, abs=1e-12)
+
+
+# --- REMUS 100 provenance -------------------------------------------------------------
+# Prestero (2001) tabulates the sway cross-flow drag Y_v|v| = -1310 kg/m, ten times its
+# heave twin Z_w|w| = -131 kg/m, although the hull is axisymmetric (the two should be
+# equal). The preset keeps the published 1310; this test shows how much the certificate
+# depends on that one number.
+REMUS_ENVELOPE = dict(u=(0.5, 2.5), v=(-0.3, 0.3), r=(-0.3, 0.3))
+PRESTERO = dict(m=30.48, y_vdot=-35.5, x_udot=-0.93, x_uu=-1.62, y_uv=-28.6, z_ww=-131.0, y_vv=-1310.0)
+
+
+def test_remus100_uses_published_sway_drag():
+    p = remus100()
+    assert p.d22_quad == -PRESTERO["y_vv"]
+    assert p.d22_quad == pytest.approx(-10.0 * PRESTERO["z_ww"])
+    assert p.m22 == pytest.approx(PRESTERO["m"] - PRESTERO["y_vdot"])
+
+
+def test_remus100_sway_drag_sensitivity():
+    """d22_quad = 131 kg/m (the heave value) instead of 1310: lambda and sigma both move."""
+    env = Envelope(**REMUS_ENVELOPE)
+    published = remus100()
+    axisym = replace(published, d22_quad=-PRESTERO["z_ww"], name="remus100 (Y_v|v| = Z_w|w|)")
+
+    # lambda from the Prestero table alone: the most negative damping rate at |u| = 2.5, |v| = 0.3
+    u0, umax, vmax = 1.5, 2.5, 0.3
+    m11, m22 = PRESTERO["m"] - PRESTERO["x_udot"], PRESTERO["m"] - PRESTERO["y_vdot"]
+    surge_rate = -PRESTERO["x_uu"] * umax / m11
+    for params, y_vv in ((published, PRESTERO["y_vv"]), (axisym, PRESTERO["z_ww"])):
+        sway_rate = (-PRESTERO["y_uv"] * u0 - y_vv * vmax) / m22
+        assert envelope_lambda(params, env) == pytest.approx(-max(surge_rate, sway_rate), rel=1e-12)
+
+    lam_pub, lam_axi = envelope_lambda(published, env), envelope_lambda(axisym, env)
+    sig_pub = vehicle_sigma(published, env, lam_pub).upper
+    sig_axi = vehicle_sigma(axisym, env, lam_axi).upper
+    print("\nREMUS 100, u in [0.5, 2.5], v in [-0.3, 0.3], r in [-0.3, 0.3] (vehicle coordinates):")
+    print(f"  Y_v|v| = -1310 kg/m (published): lambda = {lam_pub:.4f} 1/s, sigma = {sig_pub:.4f} 1/s")
+    print(f"  Y_v|v| =  -131 kg/m (= Z_w|w|):  lambda = {lam_axi:.4f} 1/s, sigma = {sig_axi:.4f} 1/s")
+    # the sway rate at |v| = 0.3 sets lambda in both cases: 1310 * 0.3 - 131 * 0.3 = 353.7 kg/s less drag
+    assert lam_axi - lam_pub == pytest.approx((1310.0 - 131.0) * vmax / m22, rel=1e-12)
+    # sigma is dominated by |lambda| minus the smallest damping rate, so it shrinks by about as much
+    assert sig_axi < sig_pub - 1.0
+    assert abs((sig_pub - sig_axi) - (lam_axi - lam_pub)) < 0.5

@@ -1,0 +1,343 @@
+"""From a configuration to a certified run: gains, closed-loop certificate, start, scenario.
+
+:func:`design_gains` computes the Theorem 1 gains without the cross-checks (the
+certificate runs those); :func:`closed_loop_for` certifies the full error loop along the
+configured mission; :func:`plan_run` chooses the reference of one run (shaped or raw start,
+:mod:`auv_hinf.coverage`) and builds the :class:`~auv_hinf.simulation.Scenario`;
+:func:`run_report` puts the measured and the certified numbers side by side.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ._typing import FloatArray
+from .closed_loop import ClosedLoopCertificate, closed_loop_certificate
+from .config import FormationConfig
+from .control_law import VehicleLaw, heading_gains
+from .coverage import Coverage, StartMode, cover_start
+from .design import design_alpha
+from .envelope import envelope_lambda
+from .exceptions import AuvHinfError, DesignError
+from .paths import MissionReference
+from .postprocess import positions_from_jacobi
+from .presets import spread_start
+from .reference import FleetReference, reference_from_dict
+from .results import SimulationResult
+from .sigma import vehicle_sigma
+from .simulation import Scenario
+from .tubes import mission_tube
+
+#: The measured decay rate is the average rate of the per-vehicle Lyapunov norm from
+#: ``t = 0`` until it has fallen by this factor (six decades of error), far above the
+#: integrator's noise (rtol 1e-8 of errors of order 1) and far enough to average out transients.
+DECAY_MEASURE_DROP = 1e-6
+#: Vehicles whose initial Lyapunov norm is below this (about 1e-6 m or m/s of error) have
+#: nothing measurable to decay: their errors start at the integrator's noise level.
+DECAY_MEASURE_FLOOR = 1e-6
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Gains of one design.
+
+    Attributes
+    ----------
+    lam, sigma, gamma : float
+        Envelope lambda (1/s), certified vehicle-coordinate sigma (1/s) and the H-infinity
+        bound used (s).
+    alpha : float
+        Velocity gain (1/s).
+    k1 : float
+        Position gain (1/s^2).
+    k_psi : tuple of float
+        Heading gains ``(k1psi, k2psi)`` (1/s^2, 1/s).
+    """
+
+    lam: float
+    sigma: float
+    gamma: float
+    alpha: float
+    k1: float
+    k_psi: tuple[float, float]
+
+
+def design_gains(cfg: FormationConfig) -> Gains:
+    """Theorem 1 gains of ``cfg`` on its envelope (no cross-checks).
+
+    Raises
+    ------
+    DesignError
+        If the configured method gives no gain (e.g. gamma below the Theorem 1 bound).
+    """
+    lam = cfg.lam if cfg.lam is not None else envelope_lambda(cfg.vehicle, cfg.envelope)
+    sigma = vehicle_sigma(cfg.vehicle, cfg.envelope, lam, cfg.n).upper
+    gamma = cfg.gamma if cfg.gamma is not None else 1.0 / sigma
+    alpha = float(design_alpha(lam, gamma, cfg.method).alpha)
+    if not math.isfinite(alpha):
+        raise DesignError(f"no finite gain for method {cfg.method!r} at lambda={lam:g}, gamma={gamma:g}")
+    return Gains(lam, sigma, gamma, alpha, cfg.k1, heading_gains(cfg.vehicle, tuple(cfg.heading_poles)))  # type: ignore[arg-type]
+
+
+def mission_reference(cfg: FormationConfig) -> MissionReference:
+    """The configured mission (centre path)."""
+    return reference_from_dict(cfg.reference.kind, **cfg.reference.kwargs())
+
+
+def formation_offsets(cfg: FormationConfig) -> FloatArray:
+    """Vehicle offsets from the formation centre, shape ``(N, 2)`` (m), in O(N)."""
+    rho = np.asarray(cfg.shape, dtype=float).reshape(cfg.n - 1, 2)
+    return positions_from_jacobi(np.vstack([rho, np.zeros((1, 2))]), cfg.jacobi)
+
+
+def initial_states(cfg: FormationConfig) -> FloatArray:
+    """The configured initial states ``(N, 6)``, or the spread start of :func:`~auv_hinf.presets.spread_start`."""
+    if cfg.simulation.initial is not None:
+        return np.asarray(cfg.simulation.initial, dtype=float)
+    return np.asarray(spread_start(tuple(map(tuple, cfg.shape)), cfg.transform), dtype=float)
+
+
+def closed_loop_for(cfg: FormationConfig, gains: Gains) -> ClosedLoopCertificate:
+    """Closed-loop certificate of ``cfg`` along its mission (raises when there is none).
+
+    Raises
+    ------
+    DesignError
+        If the small-gain condition fails or the mission leaves the envelope even at zero
+        error.
+    """
+    tube = mission_tube(mission_reference(cfg))
+    return closed_loop_certificate(gains.lam, gains.alpha, gains.k1, gains.sigma, cfg.vehicle, cfg.envelope,
+                                   gains.k_psi, tube)
+
+
+def coverage_for(cfg: FormationConfig, gains: Gains, cert: ClosedLoopCertificate, initial: FloatArray,
+                 start: StartMode) -> Coverage:
+    """Coverage of the run of ``cfg`` from ``initial`` in ``start`` mode (nominal plant, no current)."""
+    return cover_start(cert, cfg.vehicle, cfg.envelope, (gains.alpha, gains.k1), gains.k_psi, mission_reference(cfg),
+                       formation_offsets(cfg), initial, start=start, blend_time=cfg.simulation.blend_time,
+                       thrust_limit=cfg.simulation.thrust_limit)
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """A run ready to simulate, with what the certificate says about it.
+
+    Attributes
+    ----------
+    gains : Gains
+    certificate : ClosedLoopCertificate or None
+        ``None`` when the design has no closed-loop certificate (see ``notes``).
+    coverage : Coverage or None
+        The certificate's verdict on this run.
+    covered : bool
+        The certificate covers this run: certified design, covered start, nominal plant and
+        no current.
+    scenario : Scenario
+    notes : tuple of str
+        One line per reason the run is not covered.
+    start : {"shaped", "paper"}
+        The start mode of the run.
+    """
+
+    gains: Gains
+    certificate: ClosedLoopCertificate | None
+    coverage: Coverage | None
+    covered: bool
+    scenario: Scenario
+    notes: tuple[str, ...]
+    start: str = "shaped"
+
+
+def plan_run(cfg: FormationConfig, *, start: StartMode | None = None, horizon: float | None = None,
+             samples: int = 3001) -> RunPlan:
+    """Gains, certificate and scenario of one configured run.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``simulation`` table gives the start, current and plant).
+    start : {"shaped", "paper"}, optional
+        Overrides ``cfg.simulation.start``.
+    horizon : float, optional
+        Overrides ``cfg.simulation.horizon`` (s).
+    samples : int
+        Output samples.
+    """
+    sim = cfg.simulation
+    mode: StartMode = start or sim.start
+    gains = design_gains(cfg)
+    initial = initial_states(cfg)
+    notes: list[str] = []
+    cert: ClosedLoopCertificate | None = None
+    cov: Coverage | None = None
+    try:
+        cert = closed_loop_for(cfg, gains)
+        cov = coverage_for(cfg, gains, cert, initial, mode)
+        if not cov.covered:
+            notes.append(cov.reason)
+    except AuvHinfError as exc:
+        notes.append(f"design not certified: {exc}")
+    plant = sim.plant_params(cfg.vehicle)
+    if plant != cfg.vehicle:
+        notes.append("the plant differs from the controller's model; the nominal certificate assumes it is known")
+    if any(c != 0.0 for c in sim.current):
+        notes.append("a current is present; the nominal certificate assumes none")
+    reference = cov.reference if cov is not None else FleetReference(mission_reference(cfg), formation_offsets(cfg))
+    law = VehicleLaw(params=cfg.vehicle, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi,
+                     thrust_limit=sim.thrust_limit)
+    scn = Scenario(law=law, reference=reference, plant=plant, initial=initial,
+                   horizon=float(horizon if horizon is not None else sim.horizon), current=sim.current,
+                   envelope=cfg.envelope, samples=samples, name=cfg.name, jacobi=cfg.jacobi)
+    return RunPlan(gains, cert, cov, cov is not None and cov.covered and not notes, scn, tuple(notes), mode)
+
+
+def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:
+    """Average decay rate (1/s) of the slowest vehicle's certified Lyapunov norm.
+
+    ``V_i = x_i^T (P2 kron I2) x_i + z_i^T Q z_i`` with the decay matrices of ``cert``;
+    ``sqrt(V_i)`` must decay at least at ``cert.rate``. The rate is
+    ``ln(sqrt(V_i(0)/V_i(t*)))/t*`` with ``t*`` the first sample where ``V_i`` has fallen by
+    :data:`DECAY_MEASURE_DROP` (or the end), minimised over the vehicles whose initial norm
+    exceeds :data:`DECAY_MEASURE_FLOOR`; ``None`` when no vehicle starts with an error.
+    """
+    tr = result.tracking
+    p, q = cert.position.matrix, cert.heading.matrix
+    v = (p[0, 0] * (tr.e**2).sum(-1) + 2 * p[0, 1] * (tr.e * tr.e_dot).sum(-1) + p[1, 1] * (tr.e_dot**2).sum(-1)
+         + q[0, 0] * tr.e_psi**2 + 2 * q[0, 1] * tr.e_psi * tr.e_psi_dot + q[1, 1] * tr.e_psi_dot**2)
+    rates = []
+    for i in range(v.shape[1]):
+        v0 = v[0, i]
+        if not math.sqrt(max(v0, 0.0)) > DECAY_MEASURE_FLOOR:
+            continue
+        below = np.nonzero(v[:, i] <= DECAY_MEASURE_DROP * v0)[0]
+        k = int(below[0]) if below.size else v.shape[0] - 1
+        if k == 0 or result.t[k] <= 0:
+            continue
+        rates.append(0.5 * math.log(v0 / max(v[k, i], 1e-300)) / float(result.t[k]))
+    return min(rates) if rates else None
+
+
+def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
+    """The simulation summary plus the certificate's verdict and bounds next to the measured ones."""
+    out = result.summary()
+    tr = result.tracking
+    measured = {
+        "position_error": float(np.linalg.norm(tr.e, axis=-1).max()),
+        "velocity_error": float(np.linalg.norm(tr.e_dot, axis=-1).max()),
+        "heading_error": float(np.abs(tr.e_psi).max()),
+        "yaw_rate_error": float(np.abs(tr.e_psi_dot).max()),
+    }
+    cov = plan.coverage
+    certified = None
+    if cov is not None:
+        b = cov.bounds
+        certified = {"position_error": b.position, "velocity_error": b.velocity, "heading_error": b.heading,
+                     "yaw_rate_error": b.yaw_rate}
+    cert = plan.certificate
+    out.update({
+        "start": plan.start,
+        "blend_time": None if cov is None else cov.blend_time,
+        "turn_time": None if cov is None else cov.turn_time,
+        "certificate_covers_run": plan.covered,
+        "coverage_reason": "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None),
+        "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
+        "certified_decay_rate": None if cert is None else cert.rate,
+        "measured_errors": measured,
+        "certified_errors": certified,
+        "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
+        "alpha": plan.gains.alpha, "k1": plan.gains.k1, "k_psi": list(plan.gains.k_psi),
+    })
+    return out
+
+
+def with_start(cfg: FormationConfig, initial: FloatArray) -> FormationConfig:
+    """Copy of ``cfg`` whose simulation starts from ``initial`` ``(N, 6)``."""
+    return replace(cfg, simulation=replace(cfg.simulation, initial=tuple(map(tuple, np.asarray(initial).tolist()))))
+
+
+@dataclass(frozen=True)
+class ClosedLoopSummary:
+    """What :func:`~auv_hinf.certificate.certify` reports about the closed loop.
+
+    Attributes
+    ----------
+    certificate : ClosedLoopCertificate or None
+        Decay rates, start region and thrust over the region; ``None`` when the mission
+        leaves the envelope even at zero error (see ``reasons``).
+    shaped : Coverage or None
+        Verdict on the configured start in shaped mode.
+    declared_start : bool
+        The configuration gives its own initial states (then the verdict requires them covered).
+    reasons : tuple of str
+        Why the closed loop is not certified (empty when it is).
+    """
+
+    certificate: ClosedLoopCertificate | None
+    shaped: Coverage | None
+    declared_start: bool
+    reasons: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        """The closed loop is certified."""
+        return not self.reasons
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``closed_loop`` object of ``auv-hinf certify --json``."""
+        c, s = self.certificate, self.shaped
+        forces = [] if c is None else [c.thrust.force_x, c.thrust.force_y]
+        moments = [] if c is None else [c.thrust.moment]
+        if s is not None and s.covered and s.thrust is not None:
+            forces += [s.thrust.force_x, s.thrust.force_y]
+            moments.append(s.thrust.moment)
+
+        def radii(r: Any) -> dict[str, float]:
+            return {"position_error": float(r.position), "velocity_error": float(r.velocity),
+                    "heading_error": float(r.heading), "yaw_rate_error": float(r.yaw_rate)}
+
+        return {
+            "decay_rate": None if c is None else c.rate,
+            "position_decay_rate": None if c is None else c.position.rate,
+            "heading_decay_rate": None if c is None else c.heading.rate,
+            "region": None if c is None else radii(c.region.region),
+            "single_axis_region": None if c is None else radii(c.region.single_axis),
+            "region_error_bounds": None if c is None else radii(c.region.bounds),
+            "reference_inside_envelope": c is not None,
+            "max_force": max(forces) if forces else None,
+            "max_moment": max(moments) if moments else None,
+            "covers_shaped_start": bool(s is not None and s.covered),
+            "shaped_start": None if s is None else s.to_dict(),
+            "method": None if c is None else c.method,
+            "certified": self.ok,
+            "reasons": list(self.reasons),
+        }
+
+
+def closed_loop_summary(cfg: FormationConfig, gains: Gains) -> ClosedLoopSummary:
+    """Certify the closed loop of ``cfg`` along its mission and check its configured start."""
+    reasons: list[str] = []
+    try:
+        cert = closed_loop_for(cfg, gains)
+    except AuvHinfError as exc:
+        return ClosedLoopSummary(None, None, cfg.simulation.initial is not None,
+                                 (f"closed loop not certified: {exc}",))
+    limit = cfg.simulation.thrust_limit
+    t = cert.thrust
+    if limit is not None and not (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2]):
+        reasons.append(f"thrust needed over the start region ({t.force_x:.4g} N, {t.force_y:.4g} N, "
+                       f"{t.moment:.4g} N m) exceeds the limits {tuple(limit)}")
+    declared = cfg.simulation.initial is not None
+    try:
+        shaped: Coverage | None = coverage_for(cfg, gains, cert, initial_states(cfg), "shaped")
+    except AuvHinfError as exc:
+        shaped = None
+        if declared:
+            reasons.append(f"configured start: {exc}")
+    if declared and shaped is not None and not shaped.covered:
+        reasons.append(f"configured start not covered: {shaped.reason}")
+    return ClosedLoopSummary(cert, shaped, declared, tuple(reasons))

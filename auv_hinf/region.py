@@ -1,0 +1,436 @@
+"""Invariant regions of the per-vehicle error loops and their operating-envelope margins.
+
+Vehicle i's errors obey, while its body velocities ``(u, v, r)`` stay in the envelope,
+
+* position: ``e'' = (lam - alpha) e' + D(t) e' - k1 e`` with ``||D(t)|| <= sigma``;
+* heading:  ``e_psi'' = -k1psi e_psi - c(t) e_psi'`` with ``c(t)`` in ``[c_lo, c_hi]``;
+
+and its body velocities are ``u = S cos(delta + e_psi) + w1``,
+``v = -S sin(delta + e_psi) + w2`` (``|w| = ||e'||``), ``r = psi_d' + e_psi'``. A quadratic
+Lyapunov function ``V`` that does not increase (LMI at ``beta = 0``) bounds the errors by
+its sub-level set through the start set; the bounds give the velocities by interval
+arithmetic over the reference tube (:func:`envelope_margins`).
+
+First-exit argument (why margins ``>= 0`` suffice). ``sigma`` and the range of ``c`` are
+taken over the envelope inflated by ``eta`` = :data:`ENVELOPE_INFLATION_RTOL` times its
+scale (:func:`inflate_envelope`). Let ``T`` be the first time the body velocities leave the
+inflated box. On ``[0, T)`` the loops satisfy their LMIs, so the errors obey the bounds
+and, the computed margins being ``>= 0``, the velocities lie in the nominal box up to
+floating-point round-off (about 1e-15 of the scale, far below ``eta``). By continuity they
+are in that closed set at ``T`` too, which is interior to the inflated box, so they stay in
+it a little longer: a contradiction, hence ``T = inf``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ._typing import FloatArray
+from .envelope import Envelope, abs_range
+from .exceptions import DesignError
+from .lmi import LyapunovResult, lmi_heading_region, lmi_position_region
+from .reference import ReferenceTube
+from .sigma import vehicle_sigma
+from .vehicle import VehicleParams
+
+#: Relative inflation of the envelope on which sigma and the c-range are certified (see the
+#: module docstring); ~1e6 times the round-off of the margin arithmetic, invisible in sigma.
+ENVELOPE_INFLATION_RTOL = 1e-9
+#: Relative round-off allowance added to every ellipsoid bound ``sqrt(rho (M^-1)_ii)``
+#: (a few ulps of a handful of flops, taken generously).
+BOUND_RTOL = 1e-12
+#: Relative width at which the bisections on a region scale stop.
+REGION_RTOL = 1e-5
+#: Absolute width (rad) at which the bisection on the heading budget stops.
+ANGLE_ATOL = 1e-12
+#: Heading errors must stay below this (rad): the tube's heading offset then keeps its meaning.
+MAX_HEADING_ERROR = 0.5 * math.pi
+#: Doublings allowed while bracketing a single-axis radius (2^60 times the initial 1 unit).
+_MAX_DOUBLINGS = 60
+
+
+@dataclass(frozen=True)
+class ErrorBounds:
+    """Bounds of one vehicle's errors over all time (sup_t).
+
+    Attributes
+    ----------
+    position : float
+        ``||p - p_d||``, m.
+    velocity : float
+        ``||p' - p_d'||``, m/s.
+    heading : float
+        ``|psi - psi_d|``, rad.
+    yaw_rate : float
+        ``|r - psi_d'|``, rad/s.
+    """
+
+    position: float
+    velocity: float
+    heading: float
+    yaw_rate: float
+
+    def to_dict(self) -> dict[str, float]:
+        """JSON-safe dictionary."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Region:
+    """Simultaneous start set: every start with ``||e(0)|| <= position`` (m),
+    ``||e'(0)|| <= velocity`` (m/s), ``|e_psi(0)| <= heading`` (rad) and
+    ``|e_psi'(0)| <= yaw_rate`` (rad/s), all at once, is covered."""
+
+    position: float
+    velocity: float
+    heading: float
+    yaw_rate: float
+
+    def scaled(self, kappa: float) -> Region:
+        """All four radii times ``kappa``."""
+        return Region(*(float(kappa * x) for x in self.as_array()))
+
+    def as_array(self) -> FloatArray:
+        """``[position, velocity, heading, yaw_rate]``."""
+        return np.array([self.position, self.velocity, self.heading, self.yaw_rate])
+
+    def to_dict(self) -> dict[str, float]:
+        """JSON-safe dictionary."""
+        return asdict(self)
+
+
+def ellipsoid_extent(m: FloatArray, r1: float, r2: float) -> tuple[float, float]:
+    """Sup of ``|x1|`` and ``|x2|`` over ``{x^T M x <= rho}``, rho the max over the start box.
+
+    For ``M = M2`` (or ``M2 kron I2`` with ``x1, x2`` planar vectors) and the start set
+    ``|x1| <= r1, |x2| <= r2``, ``rho = m11 r1^2 + 2 |m12| r1 r2 + m22 r2^2`` exactly, and
+    the extents are ``sqrt(rho (M^-1)_11)``, ``sqrt(rho (M^-1)_22)``; both are inflated by
+    :data:`BOUND_RTOL` for round-off. Units follow ``r1, r2``.
+    """
+    m11, m12, m22 = float(m[0, 0]), float(m[0, 1]), float(m[1, 1])
+    rho = m11 * r1 * r1 + 2.0 * abs(m12) * r1 * r2 + m22 * r2 * r2
+    det = m11 * m22 - m12 * m12
+    if rho == 0.0:
+        return 0.0, 0.0
+    k = 1.0 + BOUND_RTOL
+    return k * math.sqrt(rho * m22 / det), k * math.sqrt(rho * m11 / det)
+
+
+def start_bounds(p2: FloatArray, q: FloatArray, e0: ArrayLike, de0: ArrayLike, epsi0: ArrayLike,
+                 depsi0: ArrayLike) -> FloatArray:
+    """Per-start error bounds from actual initial errors, vectorised over starts.
+
+    Parameters
+    ----------
+    p2, q : ndarray, shape (2, 2)
+        Non-increasing Lyapunov matrices of the position and heading loops.
+    e0, de0 : array_like, shape (..., 2)
+        Initial position (m) and velocity (m/s) errors.
+    epsi0, depsi0 : array_like, shape (...)
+        Initial heading (rad) and yaw-rate (rad/s) errors.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        Bounds of ``sup_t ||e||, ||e'||, |e_psi|, |e_psi'|`` (m, m/s, rad, rad/s) with
+        ``rho = x0^T P x0``.
+    """
+    e, de = np.asarray(e0, dtype=float), np.asarray(de0, dtype=float)
+    h, dh = np.asarray(epsi0, dtype=float), np.asarray(depsi0, dtype=float)
+    rho_p = p2[0, 0] * (e * e).sum(-1) + 2.0 * p2[0, 1] * (e * de).sum(-1) + p2[1, 1] * (de * de).sum(-1)
+    rho_q = q[0, 0] * h * h + 2.0 * q[0, 1] * h * dh + q[1, 1] * dh * dh
+    ip, iq = np.linalg.inv(p2), np.linalg.inv(q)
+    k = 1.0 + BOUND_RTOL
+    rp, rq = np.maximum(rho_p, 0.0), np.maximum(rho_q, 0.0)
+    out: FloatArray = k * np.sqrt(np.stack(np.broadcast_arrays(rp * ip[0, 0], rp * ip[1, 1], rq * iq[0, 0],
+                                                                rq * iq[1, 1]), -1))
+    return out
+
+
+def inflate_envelope(envelope: Envelope, rtol: float = ENVELOPE_INFLATION_RTOL) -> Envelope:
+    """The envelope widened by ``rtol * max(1, largest |bound|)`` on every side (m/s, rad/s)."""
+    eta = rtol * max(1.0, *(abs(x) for x in (*envelope.u, *envelope.v, *envelope.r)))
+    return Envelope(u=(envelope.u[0] - eta, envelope.u[1] + eta), v=(envelope.v[0] - eta, envelope.v[1] + eta),
+                    r=(envelope.r[0] - eta, envelope.r[1] + eta), psi=envelope.psi)
+
+
+def heading_c_range(params: VehicleParams, envelope: Envelope, k_psi: tuple[float, float]) -> tuple[float, float]:
+    """Range of ``c = k2psi + d33(r)/m33`` (1/s) over the envelope's yaw rates."""
+    lo, hi = abs_range(*envelope.r)
+    base = k_psi[1] + params.d33_lin / params.m33
+    return base + params.d33_quad * lo / params.m33, base + params.d33_quad * hi / params.m33
+
+
+def _cos_range(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Exact range of ``cos`` over ``[lo, hi]`` (elementwise)."""
+    two_pi = 2.0 * math.pi
+    top = np.floor(hi / two_pi) >= np.ceil(lo / two_pi)
+    bottom = np.floor((hi - math.pi) / two_pi) >= np.ceil((lo - math.pi) / two_pi)
+    ca, cb = np.cos(lo), np.cos(hi)
+    return np.where(bottom, -1.0, np.minimum(ca, cb)), np.where(top, 1.0, np.maximum(ca, cb))
+
+
+def _scaled_range(
+    s_lo: FloatArray, s_hi: FloatArray, g_lo: FloatArray, g_hi: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Range of ``S g`` for ``S`` in ``[s_lo, s_hi]`` (> 0) and ``g`` in ``[g_lo, g_hi]``."""
+    return np.minimum(s_lo * g_lo, s_hi * g_lo), np.maximum(s_lo * g_hi, s_hi * g_hi)
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Distances of the body velocities from the envelope edges (positive = inside).
+
+    Attributes
+    ----------
+    u_hi, u_lo, v_hi, v_lo : float
+        ``u_max - sup u``, ``inf u - u_min`` and likewise for sway, m/s.
+    r_hi, r_lo : float
+        Same for the yaw rate, rad/s.
+    """
+
+    u_hi: float
+    u_lo: float
+    v_hi: float
+    v_lo: float
+    r_hi: float
+    r_lo: float
+
+    @property
+    def min(self) -> float:
+        """Smallest margin (mixed units: m/s and rad/s)."""
+        return float(min(self.u_hi, self.u_lo, self.v_hi, self.v_lo, self.r_hi, self.r_lo))
+
+    @property
+    def ok(self) -> bool:
+        """All margins ``>= 0``: the velocities stay in the (closed) envelope."""
+        return self.min >= 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary with ``min`` and ``ok``."""
+        return {**asdict(self), "min": self.min, "ok": self.ok}
+
+
+def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -> Margins:
+    """Sound envelope margins of every tube cell, minimised over cells.
+
+    Per cell ``theta = delta + e_psi`` lies in ``[offset_lo - E_psi, offset_hi + E_psi]``
+    and ``S`` in ``[speed_lo, speed_hi]``; exact interval ``cos``/``sin`` give
+    ``u`` in ``[min S cos theta - E_v, max S cos theta + E_v]``,
+    ``v`` in ``[min(-S sin theta) - E_v, max(-S sin theta) + E_v]`` and
+    ``r`` in ``[yaw_rate_lo - E_r, yaw_rate_hi + E_r]``.
+
+    Raises
+    ------
+    DesignError
+        If ``E_psi >= pi/2`` or a tube speed is not positive.
+    """
+    if not bounds.heading < MAX_HEADING_ERROR:
+        raise DesignError(f"heading error bound {bounds.heading!r} rad must be < pi/2")
+    s_lo, s_hi = tube.speed[:, 0], tube.speed[:, 1]
+    if np.any(s_lo <= 0):
+        raise DesignError("the reference tube's speed must be > 0 in every cell")
+    th_lo, th_hi = tube.offset[:, 0] - bounds.heading, tube.offset[:, 1] + bounds.heading
+    u_lo, u_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo, th_hi))
+    # -sin(theta) = cos(theta + pi/2)
+    v_lo, v_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
+    ev, er = bounds.velocity, bounds.yaw_rate
+    return Margins(
+        u_hi=float(np.min(envelope.u[1] - (u_hi + ev))), u_lo=float(np.min(u_lo - ev - envelope.u[0])),
+        v_hi=float(np.min(envelope.v[1] - (v_hi + ev))), v_lo=float(np.min(v_lo - ev - envelope.v[0])),
+        r_hi=float(np.min(envelope.r[1] - (tube.yaw_rate[:, 1] + er))),
+        r_lo=float(np.min(tube.yaw_rate[:, 0] - er - envelope.r[0])),
+    )
+
+
+@dataclass(frozen=True)
+class RegionCertificate:
+    """Largest certified simultaneous start region.
+
+    Attributes
+    ----------
+    single_axis : Region
+        Largest radius of each error *alone* (the others zero), NOT simultaneous.
+    kappa : float
+        Common fraction of the single-axis radii certified simultaneously.
+    region : Region
+        ``kappa * single_axis``: the simultaneous start region.
+    bounds : ErrorBounds
+        Sup-in-time error bounds over every start in ``region``.
+    margins : Margins
+        Envelope margins under ``bounds`` (all ``>= 0``).
+    p2, q : ndarray or None
+        Verified non-increasing Lyapunov matrices of the position and heading loops used
+        for ``region`` (None when that loop starts at zero error and so stays there).
+    sigma : float
+        ``||D|| bound`` used (1/s): the larger of the given sigma and the certified sigma
+        of the inflated envelope.
+    c_range : tuple of float
+        Range of the heading damping ``c`` (1/s) over the inflated envelope.
+    """
+
+    single_axis: Region
+    kappa: float
+    region: Region
+    bounds: ErrorBounds
+    margins: Margins
+    p2: FloatArray | None
+    q: FloatArray | None
+    sigma: float
+    c_range: tuple[float, float]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary."""
+        return {
+            "single_axis": self.single_axis.to_dict(), "kappa": self.kappa, "region": self.region.to_dict(),
+            "bounds": self.bounds.to_dict(), "margins": self.margins.to_dict(),
+            "p2": None if self.p2 is None else self.p2.tolist(), "q": None if self.q is None else self.q.tolist(),
+            "sigma": self.sigma, "c_range": list(self.c_range),
+        }
+
+
+@dataclass(frozen=True)
+class _Trial:
+    ok: bool
+    bounds: ErrorBounds
+    margins: Margins | None
+    p2: FloatArray | None
+    q: FloatArray | None
+
+
+class _RegionProblem:
+    """Decides whether a start region is certified (verified P2, Q and exact margins)."""
+
+    def __init__(self, lam: float, alpha: float, k1: float, sigma: float, k1psi: float,
+                 c_range: tuple[float, float], tube: ReferenceTube, envelope: Envelope) -> None:
+        self.loop = (lam, alpha, k1, sigma)
+        self.k1psi, self.c_range, self.tube, self.envelope = k1psi, c_range, tube, envelope
+        self._p2: dict[tuple[float, float], LyapunovResult] = {}
+        zero = envelope_margins(tube, ErrorBounds(0.0, 0.0, 0.0, 0.0), envelope)
+        if not zero.ok:
+            raise DesignError(f"the reference tube itself leaves the envelope (margins {zero.to_dict()})")
+        self.yaw_budget = min(zero.r_hi, zero.r_lo)
+
+    def position(self, rp: float, rv: float) -> tuple[float, float, FloatArray | None]:
+        """Position and velocity extents (m, m/s) and the P2 giving them."""
+        if rp == 0.0 and rv == 0.0:
+            return 0.0, 0.0, None
+        n = max(rp, rv)
+        key = (rp / n, rv / n)  # the SDP is homogeneous: one solve per direction
+        if key not in self._p2:
+            self._p2[key] = lmi_position_region(*self.loop, *key)
+        p2 = self._p2[key].matrix
+        return (*ellipsoid_extent(p2, rp, rv), p2)
+
+    def heading_budget(self, ev: float) -> float:
+        """Largest heading-error bound (rad) that keeps the u, v margins ``>= 0`` at ``ev``."""
+        def uv_ok(eh: float) -> bool:
+            m = envelope_margins(self.tube, ErrorBounds(0.0, ev, eh, 0.0), self.envelope)
+            return min(m.u_hi, m.u_lo, m.v_hi, m.v_lo) >= 0.0
+        if not uv_ok(0.0):
+            return -1.0
+        lo, hi = 0.0, MAX_HEADING_ERROR
+        while hi - lo > ANGLE_ATOL:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if uv_ok(mid) else (lo, mid)
+        return lo
+
+    def trial(self, region: Region) -> _Trial:
+        """Certify ``region``: solve for P2 and Q, then check the exact margins."""
+        ep, ev, p2 = self.position(region.position, region.velocity)
+        rh, rr = region.heading, region.yaw_rate
+        q: FloatArray | None = None
+        eh = er = 0.0
+        fail = _Trial(False, ErrorBounds(ep, ev, math.inf, math.inf), None, p2, None)
+        if rh > 0.0 or rr > 0.0:
+            b_psi, b_r = self.heading_budget(ev), self.yaw_budget
+            if b_psi <= 0.0 or b_r <= 0.0:
+                return fail
+            n = max(rh, rr)
+            q = lmi_heading_region(self.k1psi, self.c_range, rh / n, rr / n, ((b_psi / n) ** 2, (b_r / n) ** 2)).matrix
+            eh, er = ellipsoid_extent(q, rh, rr)
+            if eh >= MAX_HEADING_ERROR:
+                return fail
+        bounds = ErrorBounds(ep, ev, eh, er)
+        margins = envelope_margins(self.tube, bounds, self.envelope)
+        return _Trial(margins.ok, bounds, margins, p2, q)
+
+
+def _axis_ok(prob: _RegionProblem, axis: FloatArray, k: float) -> bool:
+    return prob.trial(Region(*(k * axis))).ok
+
+
+def _largest(ok: Callable[[float], bool], hi: float) -> float:
+    """Largest ``k`` in ``[0, hi]`` with ``ok(k)`` (``ok(0)`` true, monotone), by bisection."""
+    lo = 0.0
+    if ok(hi):
+        return hi
+    while hi - lo > REGION_RTOL * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
+
+
+def certify_region(lam: float, alpha: float, k1: float, sigma: float, params: VehicleParams, envelope: Envelope,
+                   k_psi: tuple[float, float], tube: ReferenceTube) -> RegionCertificate:
+    """Largest simultaneous start region keeping every vehicle in the envelope.
+
+    Each single-axis radius is the largest radius of that error alone (others zero) whose
+    invariant-ellipsoid bounds keep all margins ``>= 0``, with P2 (position loop) and Q
+    (heading loop) optimised for that start set (:func:`auv_hinf.lmi.lmi_position_region`,
+    :func:`auv_hinf.lmi.lmi_heading_region`). Then the common fraction ``kappa`` of the four
+    is maximised by bisection, re-optimising P2 and Q. The u/v budget shared by the
+    velocity and heading errors is split exactly: the velocity extent is fixed by P2, the
+    heading SDP gets the largest heading budget compatible with it.
+
+    Parameters
+    ----------
+    lam, alpha, k1 : float
+        Loop constants (1/s, 1/s, 1/s^2).
+    sigma : float
+        Bound of ``||G_i - lam I||`` (1/s); raised to the certified value on the inflated
+        envelope if smaller (see the module docstring).
+    params : VehicleParams
+    envelope : Envelope
+    k_psi : tuple of float
+        Heading gains ``(k1psi, k2psi)`` (1/s^2, 1/s).
+    tube : ReferenceTube
+
+    Raises
+    ------
+    DesignError
+        If ``alpha - lam <= sigma`` (no common quadratic Lyapunov function) or the tube
+        already leaves the envelope at zero error.
+    """
+    inflated = inflate_envelope(envelope)
+    sig = max(float(sigma), vehicle_sigma(params, inflated, lam).upper)
+    if alpha - lam <= sig:
+        raise DesignError(f"alpha - lambda = {alpha - lam:.6g} must exceed sigma = {sig:.6g} 1/s")
+    c_range = heading_c_range(params, inflated, k_psi)
+    prob = _RegionProblem(lam, alpha, k1, sig, k_psi[0], c_range, tube, envelope)
+    axes = np.eye(4)
+    single = []
+    for axis in axes:
+        hi = 1.0
+        for _ in range(_MAX_DOUBLINGS):
+            if not prob.trial(Region(*(hi * axis))).ok:
+                break
+            hi *= 2.0
+        else:
+            raise DesignError(f"single-axis radius along {axis} is unbounded: the margins never bind")
+        single.append(_largest(partial(_axis_ok, prob, axis), hi))
+    single_axis = Region(*single)
+    kappa = _largest(lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0)
+    region = single_axis.scaled(kappa)
+    final = prob.trial(region)
+    if not final.ok or final.margins is None:  # the bisection keeps only certified scales
+        raise DesignError("the region found by bisection failed its final check")
+    return RegionCertificate(single_axis=single_axis, kappa=kappa, region=region, bounds=final.bounds,
+                             margins=final.margins, p2=final.p2, q=final.q, sigma=sig, c_range=c_range)

@@ -1,0 +1,427 @@
+"""The TOML configuration format as strict pydantic models.
+
+Every table is a model with ``extra="forbid"`` and strict types: a string is never read
+as a number, a float never as an integer (an integer is fine where a float is expected),
+NaN and infinities are refused. Each physical field carries its unit (``unit`` in the
+JSON Schema) and its valid range. :func:`auv_hinf.validation.parse_config` turns a parsed TOML document into a
+validated :class:`ConfigFile`; every problem becomes one line of a
+:class:`~auv_hinf.exceptions.ConfigError` that names its TOML path (``design.gamma``) and,
+for a misspelled key, the closest valid name.
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from ._typing import GainMethod, JacobiKind
+from .envelope import PAPER_ENVELOPE, check_interval
+from .formation import (
+    JacobiTransform,
+    offsets_from_shape,
+    regular_polygon,
+    shape_from_offsets,
+)
+from .vehicle import VehicleParams
+
+#: The nine model parameters: name -> (unit, lower-bound kind). Masses are > 0, damping >= 0.
+PARAMETERS: dict[str, tuple[str, str]] = {
+    "m11": ("kg", "gt"),
+    "m22": ("kg", "gt"),
+    "m33": ("kg m^2", "gt"),
+    "d11_lin": ("kg/s", "ge"),
+    "d11_quad": ("kg/m", "ge"),
+    "d22_lin": ("kg/s", "ge"),
+    "d22_quad": ("kg/m", "ge"),
+    "d33_lin": ("kg m^2/s", "ge"),
+    "d33_quad": ("kg m^2", "ge"),
+}
+VehiclePreset = Literal["paper2011", "remus100"]
+ReferenceKind = Literal["sine", "line", "circle", "lawnmower"]
+StartKind = Literal["shaped", "paper"]
+DEFAULT_POLYGON_RADIUS = 15.0  # m
+DEFAULT_HEADING_POLES = (-1.0, -1.5)  # 1/s
+MAX_VEHICLES = 1000
+MAX_HORIZON = 1e5  # s
+MAX_COORDINATE = 1e6  # m: offsets and radii beyond 1000 km are refused
+
+
+def _field(default: Any, description: str, unit: str = "", **kw: Any) -> Any:
+    """A pydantic ``Field`` whose description ends with the unit, which is also kept in the schema."""
+    text = f"{description} [{unit}]" if unit else description
+    return Field(
+        default,
+        description=text,
+        json_schema_extra={"unit": unit} if unit else None,
+        **kw,
+    )
+
+
+Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
+Point = Annotated[
+    list[Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE)]],
+    Field(min_length=2, max_length=2),
+]
+NegativePair = Annotated[list[Annotated[float, Field(lt=0.0)]], Field(min_length=2, max_length=2)]
+StateRow = Annotated[list[float], Field(min_length=6, max_length=6)]
+PositiveTriple = Annotated[list[Annotated[float, Field(gt=0.0)]], Field(min_length=3, max_length=3)]
+
+
+class _Table(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+class VehicleTable(_Table):
+    """``[vehicle]``: a preset, or all nine parameters of the 3-DOF model.
+
+    See :class:`~auv_hinf.vehicle.VehicleParams`.
+    """
+
+    preset: VehiclePreset | None = _field(None, "built-in vehicle; excludes the nine parameters")
+    name: str | None = _field(None, "label of a custom vehicle (default: the configuration name)")
+    m11: float | None = _field(None, "surge inertia m - X_udot", "kg", gt=0.0, examples=[200.0])
+    m22: float | None = _field(None, "sway inertia m - Y_vdot", "kg", gt=0.0, examples=[250.0])
+    m33: float | None = _field(None, "yaw inertia I_z - N_rdot", "kg m^2", gt=0.0, examples=[80.0])
+    d11_lin: float | None = _field(None, "linear surge damping", "kg/s", ge=0.0, examples=[70.0])
+    d11_quad: float | None = _field(None, "quadratic surge damping (times |u|)", "kg/m", ge=0.0, examples=[100.0])
+    d22_lin: float | None = _field(None, "linear sway damping", "kg/s", ge=0.0, examples=[100.0])
+    d22_quad: float | None = _field(None, "quadratic sway damping (times |v|)", "kg/m", ge=0.0, examples=[200.0])
+    d33_lin: float | None = _field(None, "linear yaw damping", "kg m^2/s", ge=0.0, examples=[50.0])
+    d33_quad: float | None = _field(None, "quadratic yaw damping (times |r|)", "kg m^2", ge=0.0, examples=[100.0])
+
+    @model_validator(mode="before")
+    @classmethod
+    def _preset_or_parameters(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in PARAMETERS if k in data]
+        if "preset" in data and given:
+            raise ValueError(
+                f"give either vehicle.preset or the nine parameters, not both "
+                f"(got preset = {data['preset']!r} and {', '.join(given)})"
+            )
+        missing = [k for k in PARAMETERS if k not in data]
+        if "preset" not in data and missing:
+            hint = unknown_key_hints(data, list(cls.model_fields))
+            raise ValueError(f"missing keys {missing} (or give vehicle.preset){hint}")
+        return data
+
+    def to_params(self, default_name: str) -> VehicleParams:
+        """The validated :class:`VehicleParams`."""
+        if self.preset is not None:
+            from .vehicle import preset
+
+            return preset(self.preset)
+        values = {k: getattr(self, k) for k in PARAMETERS}
+        return VehicleParams(**values, name=self.name or default_name)
+
+
+def _check_distinct(offsets: Any) -> None:
+    """Raise ``ValueError`` if two desired vehicle positions coincide (or are not finite)."""
+    import numpy as np
+
+    off = np.asarray(offsets, dtype=float)
+    scale = max(1.0, float(np.max(np.abs(off))))
+    with np.errstate(all="ignore"):
+        dist = np.linalg.norm((off[:, None, :] - off[None, :, :]) / scale, axis=-1)
+    dist[np.diag_indices(len(off))] = np.inf
+    i, j = np.unravel_index(int(np.argmin(dist)), dist.shape)
+    if dist[i, j] <= 1e-9:
+        a, b = sorted((int(i), int(j)))
+        raise ValueError(
+            f"vehicles {a + 1} and {b + 1} have the same desired position "
+            f"({off[a, 0]:.6g}, {off[a, 1]:.6g}) m; every vehicle needs its own place"
+        )
+
+
+class FormationTable(_Table):
+    """``[formation]``: fleet size, Jacobi scaling, and at most one way of giving the shape."""
+
+    n: int = _field(3, "number of vehicles", ge=2, le=MAX_VEHICLES)
+    jacobi: JacobiKind = _field("paper", "Jacobi transform scaling (paper: as printed; orthonormal: unit rows)")
+    shape: list[Point] | None = _field(None, "N-1 desired Jacobi vectors [[x, y], ...]", "m")
+    offsets: list[Point] | None = _field(None, "N desired vehicle offsets [[x, y], ...] from any common point", "m")
+    polygon_radius: float | None = _field(
+        None,
+        "regular polygon of this circumradius (the default, with 15 m)",
+        "m",
+        gt=0.0,
+        le=MAX_COORDINATE,
+    )
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> FormationTable:
+        given = [k for k in ("shape", "offsets", "polygon_radius") if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give exactly one of shape, offsets, polygon_radius (got {', '.join(given)})")
+        for key, count in (("shape", self.n - 1), ("offsets", self.n)):
+            rows = getattr(self, key)
+            if rows is not None and len(rows) != count:
+                raise ValueError(f"{key} must have {count} rows [x, y] for n = {self.n}, got {len(rows)}")
+        _check_distinct(offsets_from_shape(self.jacobi_shape(), JacobiTransform(self.n, self.jacobi)))
+        return self
+
+    def jacobi_shape(self) -> tuple[tuple[float, float], ...]:
+        """Desired Jacobi shape vectors (N-1 pairs, m) in this table's convention."""
+        t = JacobiTransform(self.n, self.jacobi)
+        if self.shape is not None:
+            rho = self.shape
+        elif self.offsets is not None:
+            rho = shape_from_offsets(self.offsets, t).tolist()
+        else:
+            rho = shape_from_offsets(
+                regular_polygon(self.n, self.polygon_radius or DEFAULT_POLYGON_RADIUS),
+                t,
+            ).tolist()
+        return tuple((float(a), float(b)) for a, b in rho)
+
+
+class EnvelopeTable(_Table):
+    """``[envelope]``: ranges [min, max] of the body velocities and heading."""
+
+    u: Pair = _field(list(PAPER_ENVELOPE.u), "surge speed range [min, max]", "m/s")
+    v: Pair = _field(list(PAPER_ENVELOPE.v), "sway speed range [min, max]", "m/s")
+    r: Pair = _field(list(PAPER_ENVELOPE.r), "yaw-rate range [min, max]", "rad/s")
+    psi: Pair = _field(list(PAPER_ENVELOPE.psi), "heading range [min, max], at most 2 pi wide", "rad")
+
+    @field_validator("u", "v", "r", "psi")
+    @classmethod
+    def _interval(cls, value: list[float], info: Any) -> list[float]:
+        return list(check_interval(info.field_name, value))
+
+
+class DesignTable(_Table):
+    """``[design]``: Theorem 1 gain method and bounds, Theorem 2 and heading gains."""
+
+    method: GainMethod = _field("stabilizing", "Theorem 1 gain: paper (eq. 32), stabilizing root, or minimal")
+    gamma: float | None = _field(None, "H-infinity bound (default 1/sigma_upper of the envelope)", "s", gt=0.0)
+    lam: float | None = _field(
+        None,
+        "nominal lambda (default: the most negative over the envelope)",
+        "1/s",
+        lt=0.0,
+        alias="lambda",
+    )
+    k1: float = _field(0.5, "Theorem 2 position gain", "1/s^2", gt=0.0)
+    heading_poles: NegativePair = _field(
+        list(DEFAULT_HEADING_POLES),
+        "two distinct negative closed-loop poles of the heading loop",
+        "1/s",
+    )
+
+    @field_validator("heading_poles")
+    @classmethod
+    def _distinct(cls, value: list[float]) -> list[float]:
+        if value[0] == value[1]:
+            raise ValueError(f"heading poles must be distinct (single-input pole placement), got {value}")
+        return value
+
+
+_KIND_TEXT = "path kind: sine, line, circle or lawnmower, each with its own keys (see `auv-hinf schema`)"
+
+
+class _Reference(_Table):
+    speed: float = _field(1.0, "speed of the formation centre along the path", "m/s", gt=0.0)
+
+
+class SineReference(_Reference):
+    """Sine path ``[speed t, amplitude sin(omega t)]`` (the paper's Section V)."""
+
+    kind: Literal["sine"] = _field("sine", _KIND_TEXT)
+    amplitude: float = _field(30.0, "amplitude of the lateral sine", "m", ge=0.0)
+    omega: float = _field(0.1, "angular frequency of the sine", "rad/s", gt=0.0)
+
+
+class LineReference(_Reference):
+    """Straight line at constant heading."""
+
+    kind: Literal["line"] = _field("line", _KIND_TEXT)
+    heading: float = _field(0.0, "direction of travel from the x axis", "rad")
+
+
+class CircleReference(_Reference):
+    """Circle of given radius."""
+
+    kind: Literal["circle"] = _field("circle", _KIND_TEXT)
+    radius: float = _field(..., "circle radius", "m", gt=0.0, examples=[50.0])
+
+
+class LawnmowerReference(_Reference):
+    """Survey pattern: straight legs joined by turns."""
+
+    kind: Literal["lawnmower"] = _field("lawnmower", _KIND_TEXT)
+    leg_length: float = _field(..., "length of one straight leg", "m", gt=0.0, examples=[200.0])
+    spacing: float = _field(..., "distance between neighbouring legs", "m", gt=0.0, examples=[40.0])
+    turn_radius: float = _field(..., "radius of the turns", "m", gt=0.0, examples=[20.0])
+
+
+REFERENCE_MODELS: dict[str, type[_Reference]] = {
+    "sine": SineReference,
+    "line": LineReference,
+    "circle": CircleReference,
+    "lawnmower": LawnmowerReference,
+}
+ReferenceTable = Annotated[
+    SineReference | LineReference | CircleReference | LawnmowerReference,
+    Field(discriminator="kind"),
+]
+
+
+class PlantTable(_Table):
+    """``[simulation.plant]``: the true plant as multipliers (> 0) of the controller's parameters."""
+
+    m11: float | None = _field(None, "multiplier of m11", gt=0.0)
+    m22: float | None = _field(None, "multiplier of m22", gt=0.0)
+    m33: float | None = _field(None, "multiplier of m33", gt=0.0)
+    d11_lin: float | None = _field(None, "multiplier of d11_lin", gt=0.0)
+    d11_quad: float | None = _field(None, "multiplier of d11_quad", gt=0.0)
+    d22_lin: float | None = _field(None, "multiplier of d22_lin", gt=0.0)
+    d22_quad: float | None = _field(None, "multiplier of d22_quad", gt=0.0)
+    d33_lin: float | None = _field(None, "multiplier of d33_lin", gt=0.0)
+    d33_quad: float | None = _field(None, "multiplier of d33_quad", gt=0.0)
+
+
+class UncertaintyTable(_Table):
+    """``[uncertainty]``: declared box of relative multipliers ``[lo, hi]``, 0 < lo <= 1 <= hi."""
+
+    m11: Pair | None = _field(None, "relative range [lo, hi] of m11")
+    m22: Pair | None = _field(None, "relative range [lo, hi] of m22")
+    m33: Pair | None = _field(None, "relative range [lo, hi] of m33")
+    d11_lin: Pair | None = _field(None, "relative range [lo, hi] of d11_lin")
+    d11_quad: Pair | None = _field(None, "relative range [lo, hi] of d11_quad")
+    d22_lin: Pair | None = _field(None, "relative range [lo, hi] of d22_lin")
+    d22_quad: Pair | None = _field(None, "relative range [lo, hi] of d22_quad")
+    d33_lin: Pair | None = _field(None, "relative range [lo, hi] of d33_lin")
+    d33_quad: Pair | None = _field(None, "relative range [lo, hi] of d33_quad")
+
+    @field_validator(*PARAMETERS)
+    @classmethod
+    def _box(cls, value: list[float] | None, info: Any) -> list[float] | None:
+        if value is not None and not (0.0 < value[0] <= 1.0 <= value[1]):
+            raise ValueError(f"a relative range [lo, hi] must satisfy 0 < lo <= 1 <= hi, got {value}")
+        return value
+
+
+class SimulationTable(_Table):
+    """``[simulation]``: the closed-loop run."""
+
+    horizon: float = _field(300.0, "simulated time", "s", gt=0.0, le=MAX_HORIZON)
+    start: StartKind = _field(
+        "shaped",
+        "shaped: the reference blends from the actual start; paper: raw reference",
+    )
+    initial: list[StateRow] | None = _field(
+        None,
+        "one [x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s); default: a shaped start",
+    )
+    current: Pair = _field([0.0, 0.0], "constant ocean current, inertial frame", "m/s")
+    thrust_limit: PositiveTriple | None = _field(
+        None,
+        "saturation of [tau_x, tau_y, tau_psi] (N, N, N m)",
+        examples=[[500.0, 500.0, 200.0]],
+    )
+    blend_time: float | None = _field(
+        None,
+        "reference blending time (default: chosen by the certificate)",
+        "s",
+        gt=0.0,
+    )
+    plant: PlantTable = Field(
+        default_factory=PlantTable,
+        description="true plant as multipliers of the parameters",
+    )
+
+
+class DisturbanceTable(_Table):
+    """``[disturbance]``: declared bounds of the ocean current."""
+
+    current_speed: float | None = _field(None, "bound on |current|", "m/s", ge=0.0)
+    current_rate: float | None = _field(None, "bound on |d current / dt|", "m/s^2", ge=0.0)
+
+
+class ConfigFile(_Table):
+    """A whole configuration file (every table optional)."""
+
+    name: str | None = _field(None, "configuration name (default: the file stem)")
+    vehicle: VehicleTable = Field(default_factory=lambda: VehicleTable(preset="paper2011"))
+    formation: FormationTable = Field(default_factory=FormationTable)
+    envelope: EnvelopeTable = Field(default_factory=EnvelopeTable)
+    design: DesignTable = Field(default_factory=DesignTable)
+    reference: ReferenceTable = Field(default_factory=SineReference)
+    simulation: SimulationTable = Field(default_factory=SimulationTable)
+    uncertainty: UncertaintyTable = Field(default_factory=UncertaintyTable)
+    disturbance: DisturbanceTable = Field(default_factory=DisturbanceTable)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_reference_kind(cls, data: Any) -> Any:
+        ref = data.get("reference") if isinstance(data, dict) else None
+        if isinstance(ref, dict) and "kind" not in ref:
+            data = {**data, "reference": {"kind": "sine", **ref}}
+        return data
+
+    @model_validator(mode="after")
+    def _initial_rows(self) -> ConfigFile:
+        init = self.simulation.initial
+        if init is not None and len(init) != self.formation.n:
+            raise ValueError(f"simulation.initial must have one row per vehicle ({self.formation.n}), got {len(init)}")
+        return self
+
+
+def suggest_key(key: str, names: list[str]) -> str:
+    """``; did you mean 'x'?`` for the closest of ``names``, else the list of valid names."""
+    close = difflib.get_close_matches(key, names, n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else f"; expected one of: {', '.join(names)}"
+
+
+def table_keys(model: type[BaseModel]) -> list[str]:
+    """The TOML keys of a table model (aliases such as ``lambda`` included)."""
+    return [f.alias or name for name, f in model.model_fields.items()]
+
+
+def unknown_key_hints(data: dict[str, Any], allowed: list[str]) -> str:
+    """Text naming the keys of ``data`` that are not in ``allowed``, with a suggestion each."""
+    return "".join(f"; unknown key {k!r}{suggest_key(str(k), allowed)}" for k in data if k not in allowed)
+
+
+TABLES: dict[tuple[str, ...], type[BaseModel]] = {
+    (): ConfigFile,
+    ("vehicle",): VehicleTable,
+    ("formation",): FormationTable,
+    ("envelope",): EnvelopeTable,
+    ("design",): DesignTable,
+    ("simulation",): SimulationTable,
+    ("simulation", "plant"): PlantTable,
+    ("uncertainty",): UncertaintyTable,
+    ("disturbance",): DisturbanceTable,
+    **{("reference", k): m for k, m in REFERENCE_MODELS.items()},
+}
+
+
+def json_schema() -> dict[str, Any]:
+    """JSON Schema of the TOML format (``auv-hinf schema``)."""
+    schema = ConfigFile.model_json_schema(by_alias=True)
+    schema["title"] = "auv-hinf configuration (TOML)"
+    return schema
+
+
+__all__ = [
+    "PARAMETERS",
+    "REFERENCE_MODELS",
+    "TABLES",
+    "ConfigFile",
+    "DesignTable",
+    "DisturbanceTable",
+    "EnvelopeTable",
+    "FormationTable",
+    "PlantTable",
+    "SimulationTable",
+    "UncertaintyTable",
+    "VehicleTable",
+    "json_schema",
+    "suggest_key",
+    "table_keys",
+    "unknown_key_hints",
+]

@@ -1,0 +1,209 @@
+"""Figures: legends, units, tight trajectory limits, headings, the sigma colour scale.
+
+The simulation figures are fed a small synthetic stand-in with the attributes they read,
+not a 300 s simulation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from types import SimpleNamespace
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from matplotlib.collections import QuadMesh
+from matplotlib.contour import ContourSet
+from matplotlib.quiver import Quiver
+
+from auv_hinf import plots
+from auv_hinf.envelope import Envelope, envelope_lambda
+from auv_hinf.sigma import vehicle_sigma
+from auv_hinf.vehicle import VehicleParams, paper2011
+
+N_VEHICLES = 4
+HORIZON = 120.0
+SNAPSHOT_EVERY = 40.0
+
+
+@pytest.fixture(autouse=True)
+def _close_figures() -> Iterator[None]:
+    yield
+    plt.close("all")
+
+
+def synthetic_result(n: int = N_VEHICLES, *, envelope: Envelope | None = None) -> SimpleNamespace:
+    """A long, flat mission (300 m x 60 m) like the paper's, with turning headings."""
+    t = np.linspace(0.0, HORIZON, 241)
+    centre = np.column_stack([2.5 * t, 30.0 * np.sin(0.05 * t)])
+    offsets = 8.0 * np.column_stack([np.cos(2 * np.pi * np.arange(n) / n), np.sin(2 * np.pi * np.arange(n) / n)])
+    states = np.zeros((len(t), n, 6))
+    states[..., 0:2] = centre[:, None, :] + offsets[None]
+    states[..., 2] = np.arctan2(1.5 * np.cos(0.05 * t), 2.5)[:, None] + 0.1 * np.arange(n)[None]
+    states[..., 3] = 2.5 + 0.1 * np.arange(n)[None]
+    states[..., 4] = 0.05 * np.sin(t)[:, None]
+    states[..., 5] = 0.02 * np.cos(t)[:, None]
+    forces = np.stack([np.full((len(t), n), 100.0), np.zeros((len(t), n)), np.full((len(t), n), -3.0)], -1)
+    forces = forces + np.arange(n)[None, :, None]
+    return SimpleNamespace(
+        t=t,
+        states=states,
+        forces=forces,
+        shape_error=np.exp(-t / 10.0),
+        center_error=0.5 * np.exp(-t / 20.0),
+        desired_center=centre,
+        scenario=SimpleNamespace(name="synthetic", envelope=envelope),
+    )
+
+
+def legend_texts(ax: plt.Axes) -> list[str]:
+    legend = ax.get_legend()
+    assert legend is not None, "axes has no legend"
+    return [text.get_text() for text in legend.get_texts()]
+
+
+@pytest.mark.parametrize("n", [2, N_VEHICLES, 12])
+def test_velocity_legend_has_one_entry_per_vehicle(n):
+    env = Envelope(u=(0.0, 3.5), v=(-1.0, 1.0), r=(-0.5, 0.5))
+    fig = plots.velocities(synthetic_result(n, envelope=env))
+    assert legend_texts(fig.axes[0]) == [f"AUV {i + 1}" for i in range(n)]
+    assert [ax.get_ylabel() for ax in fig.axes] == ["u [m/s]", "v [m/s]", "r [rad/s]"]
+    assert fig.axes[-1].get_xlabel() == "t [s]"
+    # the envelope bounds are drawn as horizontal lines on each axes
+    for ax, rng in zip(fig.axes, (env.u, env.v, env.r)):
+        hlines = {line.get_ydata()[0] for line in ax.get_lines() if line.get_linestyle() == ":"}
+        assert hlines == set(rng)
+
+
+def test_velocity_figure_without_envelope():
+    fig = plots.velocities(synthetic_result())
+    assert all(line.get_linestyle() != ":" for ax in fig.axes for line in ax.get_lines())
+    assert "envelope" not in fig.axes[0].get_title()
+
+
+def test_force_legend_and_units():
+    fig = plots.forces(synthetic_result())
+    assert legend_texts(fig.axes[0]) == [f"AUV {i + 1}" for i in range(N_VEHICLES)]
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels == ["tau_x [N]", "tau_y [N]", "tau_psi [N m]"]
+    # each vehicle's line carries that vehicle's data
+    res = synthetic_result()
+    for i, line in enumerate(fig.axes[0].get_lines()):
+        np.testing.assert_array_equal(line.get_ydata(), res.forces[:, i, 0])
+
+
+def test_error_figure_units():
+    fig = plots.errors(synthetic_result())
+    (ax,) = fig.axes
+    assert ax.get_ylabel() == "error [m]"
+    assert ax.get_xlabel() == "t [s]"
+    assert ax.get_yscale() == "log"
+    assert legend_texts(ax) == ["shape error", "centre error"]
+
+
+def test_trajectory_headings_are_arrows_along_psi():
+    res = synthetic_result()
+    fig = plots.trajectories(res, marker_every=SNAPSHOT_EVERY)
+    (ax,) = fig.axes
+    quivers = [c for c in ax.collections if isinstance(c, Quiver)]
+    snapshots = np.arange(0.0, HORIZON + 1e-9, SNAPSHOT_EVERY)
+    assert len(quivers) == len(snapshots)
+    for q, tm in zip(quivers, snapshots):
+        k = int(np.argmin(np.abs(res.t - tm)))
+        np.testing.assert_allclose(q.X, res.states[k, :, 0])
+        np.testing.assert_allclose(q.Y, res.states[k, :, 1])
+        np.testing.assert_allclose(np.arctan2(q.V, q.U), res.states[k, :, 2], atol=1e-12)
+    (legend,) = fig.legends
+    labels = [text.get_text() for text in legend.get_texts()]
+    assert labels[:N_VEHICLES] == [f"AUV {i + 1}" for i in range(N_VEHICLES)]
+    assert "desired centre" in labels and any("heading" in s for s in labels)
+    assert ax.get_xlabel() == "x [m]" and ax.get_ylabel() == "y [m]"
+
+
+def test_trajectory_limits_are_tight_and_axes_fill_the_figure():
+    res = synthetic_result()
+    fig = plots.trajectories(res)
+    (ax,) = fig.axes
+    fig.canvas.draw()
+    pts = np.concatenate([res.states[..., 0:2].reshape(-1, 2), res.desired_center])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    # every point is shown, with at most a 5 % margin of the larger span on each side
+    pad = 0.05 * (hi - lo).max()
+    assert x0 <= lo[0] and x1 >= hi[0] and y0 <= lo[1] and y1 >= hi[1]
+    assert lo[0] - x0 <= pad and x1 - hi[0] <= pad and lo[1] - y0 <= pad and y1 - hi[1] <= pad
+    assert ax.get_aspect() == 1.0
+    # equal aspect on a 5:1 mission must not leave the figure mostly white
+    box = ax.get_position()
+    assert box.width * box.height > 0.5
+
+
+@pytest.fixture(scope="module")
+def heatmap_inputs() -> tuple[SimpleNamespace, SimpleNamespace]:
+    vehicle = paper2011()
+    env = Envelope(u=(0.0, 3.5), v=(-1.0, 1.0), r=(-0.5, 0.5))
+    lam = envelope_lambda(vehicle, env)
+    sigma = vehicle_sigma(vehicle, env, lam, 3)
+    cfg = SimpleNamespace(name="synthetic", vehicle=vehicle, envelope=env)
+    cert = SimpleNamespace(lam=lam, sigma=sigma)
+    return cfg, cert
+
+
+def test_sigma_heatmap_colour_scale_is_the_data_range(heatmap_inputs):
+    cfg, cert = heatmap_inputs
+    fig = plots.sigma_heatmap(cfg, cert, resolution=41)
+    meshes = [c for ax in fig.axes[:2] for c in ax.collections if isinstance(c, QuadMesh)]
+    assert len(meshes) == 2
+    data = np.concatenate([np.ravel(m.get_array()) for m in meshes])
+    for m in meshes:
+        assert m.get_clim() == pytest.approx((data.min(), data.max()), rel=0, abs=0)
+    assert data.min() > 0.0  # the scale does not start at 0
+    # the slices pass through the certified vertex: their maximum is the certified value
+    assert data.max() == pytest.approx(cert.sigma.lower, rel=1e-12)
+    assert data.max() <= cert.sigma.upper
+    assert fig.axes[2].get_ylabel().endswith("[1/s]"), "the colour bar is labelled in 1/s"
+
+
+def figure_legend_texts(fig: plt.Figure) -> list[str]:
+    assert len(fig.legends) == 1
+    return [text.get_text() for text in fig.legends[0].get_texts()]
+
+
+def test_sigma_heatmap_marks_vertex_and_explains_contour(heatmap_inputs):
+    cfg, cert = heatmap_inputs
+    fig = plots.sigma_heatmap(cfg, cert, resolution=41)
+    u_w, v_w, r_w = (cert.sigma.witness[k][0] for k in ("u", "v", "r"))
+    for ax, at in zip(fig.axes[:2], (u_w, v_w)):
+        stars = [line for line in ax.get_lines() if line.get_marker() == "*"]
+        assert len(stars) == 1
+        assert (stars[0].get_xdata()[0], stars[0].get_ydata()[0]) == pytest.approx((at, r_w))
+    labels = figure_legend_texts(fig)
+    assert any("certified vertex" in s for s in labels)
+    # on these slices sigma stays above 90 % of the certified value: the legend says so
+    (contour_label,) = [s for s in labels if "90%" in s]
+    assert "not reached" in contour_label
+    assert all(len(ax.collections) == 1 for ax in fig.axes[:2])
+
+
+def test_sigma_heatmap_contour_at_ninety_percent():
+    """Surge drag spans [0, 1.75] 1/s, sway drag is constant: the 90 % level is crossed."""
+    vehicle = VehicleParams(200.0, 210.0, 80.0, 0.0, 100.0, 100.0, 0.0, 50.0, 0.0)
+    env = Envelope(u=(0.0, 3.5), v=(-0.5, 0.5), r=(-0.2, 0.2))
+    lam = envelope_lambda(vehicle, env)
+    sigma = vehicle_sigma(vehicle, env, lam, 3)
+    cfg = SimpleNamespace(name="wide", vehicle=vehicle, envelope=env)
+    fig = plots.sigma_heatmap(cfg, SimpleNamespace(lam=lam, sigma=sigma), resolution=41)
+    contours = [c for ax in fig.axes[:2] for c in ax.collections if isinstance(c, ContourSet)]
+    assert contours, "the 90 % level lies inside the plotted range"
+    for c in contours:
+        assert list(c.levels) == pytest.approx([0.9 * sigma.upper])
+    (contour_label,) = [s for s in figure_legend_texts(fig) if "90%" in s]
+    assert "not reached" not in contour_label
+
+
+def test_save_simulation_plots_writes_four_pngs(tmp_path):
+    paths = plots.save_simulation_plots(synthetic_result(), tmp_path)
+    assert [p.name for p in paths] == ["trajectories.png", "velocities.png", "errors.png", "forces.png"]
+    for p in paths:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert plt.get_fignums() == []
