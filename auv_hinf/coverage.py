@@ -172,9 +172,9 @@ def check_run(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Enve
     per = start_bounds(eye if p2 is None else p2, eye if q is None else q, e, de, ep, dep)
     bounds = ErrorBounds(*(float(x) for x in per.max(axis=0)))
     sh = fleet.shaping
-    blend = None if sh is None else (sh.blend_time, sh.th)
+    tb, th = (None, None) if sh is None else (sh.blend_time, sh.th)
     if not bounds.heading < 0.5 * math.pi:
-        return Coverage(False, start, fleet, bounds, None, None, *(blend or (None, None)),
+        return Coverage(False, start, fleet, bounds, None, None, tb, th,
                         f"heading error bound {bounds.heading:.4g} rad reaches pi/2")
     try:
         margins, thrusts = [], []
@@ -183,7 +183,7 @@ def check_run(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Enve
             margins.append(envelope_margins(tube, bounds, envelope))
             thrusts.append(thrust_bounds(params, inflate_envelope(envelope), tube, bounds, gains[0], gains[1], k_psi))
     except AuvHinfError as exc:
-        return Coverage(False, start, fleet, bounds, None, None, *(blend or (None, None)), str(exc))
+        return Coverage(False, start, fleet, bounds, None, None, tb, th, str(exc))
     marg = _merge_margins(margins)
     thrust = ThrustBounds(*(max(getattr(t, f) for t in thrusts) for f in ("force_x", "force_y", "moment")))
     if not marg.ok:
@@ -195,7 +195,7 @@ def check_run(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Enve
                   f"{thrust.moment:.4g} N m) exceeds the limits {tuple(thrust_limit)}")
     else:
         reason = "covered: start inside the certified invariant set, reference inside the envelope"
-    return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, *(blend or (None, None)), reason)
+    return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, tb, th, reason)
 
 
 def cover_start(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Envelope, gains: tuple[float, float],

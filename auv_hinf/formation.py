@@ -95,12 +95,14 @@ class JacobiTransform:
         The same map applies to velocities and accelerations.
         """
         arr = self._check_stack(p, "p")
-        return np.einsum("jk,...kd->...jd", self.phi, arr)
+        out: FloatArray = np.einsum("jk,...kd->...jd", self.phi, arr)
+        return out
 
     def to_positions(self, x: ArrayLike) -> FloatArray:
         """Inverse of :meth:`to_jacobi`: positions from Jacobi coordinates."""
         arr = self._check_stack(x, "X")
-        return np.einsum("jk,...kd->...jd", self.phi_inv, arr)
+        out: FloatArray = np.einsum("jk,...kd->...jd", self.phi_inv, arr)
+        return out
 
     def _check_stack(self, a: ArrayLike, name: str) -> FloatArray:
         arr = np.asarray(a, dtype=float)

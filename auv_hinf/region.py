@@ -33,16 +33,21 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._typing import FloatArray
-from .envelope import Envelope, abs_range
+from .envelope import Envelope
 from .exceptions import DesignError
 from .lmi import LyapunovResult, lmi_heading_region, lmi_position_region
+from .margins import (
+    MAX_HEADING_ERROR,
+    ErrorBounds,
+    Margins,
+    envelope_margins,
+    heading_c_range,
+    inflate_envelope,
+)
 from .reference import ReferenceTube
 from .sigma import vehicle_sigma
 from .vehicle import VehicleParams
 
-#: Relative inflation of the envelope on which sigma and the c-range are certified (see the
-#: module docstring); ~1e6 times the round-off of the margin arithmetic, invisible in sigma.
-ENVELOPE_INFLATION_RTOL = 1e-9
 #: Relative round-off allowance added to every ellipsoid bound ``sqrt(rho (M^-1)_ii)``
 #: (a few ulps of a handful of flops, taken generously).
 BOUND_RTOL = 1e-12
@@ -50,36 +55,8 @@ BOUND_RTOL = 1e-12
 REGION_RTOL = 1e-5
 #: Absolute width (rad) at which the bisection on the heading budget stops.
 ANGLE_ATOL = 1e-12
-#: Heading errors must stay below this (rad): the tube's heading offset then keeps its meaning.
-MAX_HEADING_ERROR = 0.5 * math.pi
 #: Doublings allowed while bracketing a single-axis radius (2^60 times the initial 1 unit).
 _MAX_DOUBLINGS = 60
-
-
-@dataclass(frozen=True)
-class ErrorBounds:
-    """Bounds of one vehicle's errors over all time (sup_t).
-
-    Attributes
-    ----------
-    position : float
-        ``||p - p_d||``, m.
-    velocity : float
-        ``||p' - p_d'||``, m/s.
-    heading : float
-        ``|psi - psi_d|``, rad.
-    yaw_rate : float
-        ``|r - psi_d'|``, rad/s.
-    """
-
-    position: float
-    velocity: float
-    heading: float
-    yaw_rate: float
-
-    def to_dict(self) -> dict[str, float]:
-        """JSON-safe dictionary."""
-        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -152,102 +129,6 @@ def start_bounds(p2: FloatArray, q: FloatArray, e0: ArrayLike, de0: ArrayLike, e
     out: FloatArray = k * np.sqrt(np.stack(np.broadcast_arrays(rp * ip[0, 0], rp * ip[1, 1], rq * iq[0, 0],
                                                                 rq * iq[1, 1]), -1))
     return out
-
-
-def inflate_envelope(envelope: Envelope, rtol: float = ENVELOPE_INFLATION_RTOL) -> Envelope:
-    """The envelope widened by ``rtol * max(1, largest |bound|)`` on every side (m/s, rad/s)."""
-    eta = rtol * max(1.0, *(abs(x) for x in (*envelope.u, *envelope.v, *envelope.r)))
-    return Envelope(u=(envelope.u[0] - eta, envelope.u[1] + eta), v=(envelope.v[0] - eta, envelope.v[1] + eta),
-                    r=(envelope.r[0] - eta, envelope.r[1] + eta), psi=envelope.psi)
-
-
-def heading_c_range(params: VehicleParams, envelope: Envelope, k_psi: tuple[float, float]) -> tuple[float, float]:
-    """Range of ``c = k2psi + d33(r)/m33`` (1/s) over the envelope's yaw rates."""
-    lo, hi = abs_range(*envelope.r)
-    base = k_psi[1] + params.d33_lin / params.m33
-    return base + params.d33_quad * lo / params.m33, base + params.d33_quad * hi / params.m33
-
-
-def _cos_range(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Exact range of ``cos`` over ``[lo, hi]`` (elementwise)."""
-    two_pi = 2.0 * math.pi
-    top = np.floor(hi / two_pi) >= np.ceil(lo / two_pi)
-    bottom = np.floor((hi - math.pi) / two_pi) >= np.ceil((lo - math.pi) / two_pi)
-    ca, cb = np.cos(lo), np.cos(hi)
-    return np.where(bottom, -1.0, np.minimum(ca, cb)), np.where(top, 1.0, np.maximum(ca, cb))
-
-
-def _scaled_range(
-    s_lo: FloatArray, s_hi: FloatArray, g_lo: FloatArray, g_hi: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Range of ``S g`` for ``S`` in ``[s_lo, s_hi]`` (> 0) and ``g`` in ``[g_lo, g_hi]``."""
-    return np.minimum(s_lo * g_lo, s_hi * g_lo), np.maximum(s_lo * g_hi, s_hi * g_hi)
-
-
-@dataclass(frozen=True)
-class Margins:
-    """Distances of the body velocities from the envelope edges (positive = inside).
-
-    Attributes
-    ----------
-    u_hi, u_lo, v_hi, v_lo : float
-        ``u_max - sup u``, ``inf u - u_min`` and likewise for sway, m/s.
-    r_hi, r_lo : float
-        Same for the yaw rate, rad/s.
-    """
-
-    u_hi: float
-    u_lo: float
-    v_hi: float
-    v_lo: float
-    r_hi: float
-    r_lo: float
-
-    @property
-    def min(self) -> float:
-        """Smallest margin (mixed units: m/s and rad/s)."""
-        return float(min(self.u_hi, self.u_lo, self.v_hi, self.v_lo, self.r_hi, self.r_lo))
-
-    @property
-    def ok(self) -> bool:
-        """All margins ``>= 0``: the velocities stay in the (closed) envelope."""
-        return self.min >= 0.0
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dictionary with ``min`` and ``ok``."""
-        return {**asdict(self), "min": self.min, "ok": self.ok}
-
-
-def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -> Margins:
-    """Sound envelope margins of every tube cell, minimised over cells.
-
-    Per cell ``theta = delta + e_psi`` lies in ``[offset_lo - E_psi, offset_hi + E_psi]``
-    and ``S`` in ``[speed_lo, speed_hi]``; exact interval ``cos``/``sin`` give
-    ``u`` in ``[min S cos theta - E_v, max S cos theta + E_v]``,
-    ``v`` in ``[min(-S sin theta) - E_v, max(-S sin theta) + E_v]`` and
-    ``r`` in ``[yaw_rate_lo - E_r, yaw_rate_hi + E_r]``.
-
-    Raises
-    ------
-    DesignError
-        If ``E_psi >= pi/2`` or a tube speed is not positive.
-    """
-    if not bounds.heading < MAX_HEADING_ERROR:
-        raise DesignError(f"heading error bound {bounds.heading!r} rad must be < pi/2")
-    s_lo, s_hi = tube.speed[:, 0], tube.speed[:, 1]
-    if np.any(s_lo <= 0):
-        raise DesignError("the reference tube's speed must be > 0 in every cell")
-    th_lo, th_hi = tube.offset[:, 0] - bounds.heading, tube.offset[:, 1] + bounds.heading
-    u_lo, u_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo, th_hi))
-    # -sin(theta) = cos(theta + pi/2)
-    v_lo, v_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
-    ev, er = bounds.velocity, bounds.yaw_rate
-    return Margins(
-        u_hi=float(np.min(envelope.u[1] - (u_hi + ev))), u_lo=float(np.min(u_lo - ev - envelope.u[0])),
-        v_hi=float(np.min(envelope.v[1] - (v_hi + ev))), v_lo=float(np.min(v_lo - ev - envelope.v[0])),
-        r_hi=float(np.min(envelope.r[1] - (tube.yaw_rate[:, 1] + er))),
-        r_lo=float(np.min(tube.yaw_rate[:, 0] - er - envelope.r[0])),
-    )
 
 
 @dataclass(frozen=True)
@@ -434,3 +315,9 @@ def certify_region(lam: float, alpha: float, k1: float, sigma: float, params: Ve
         raise DesignError("the region found by bisection failed its final check")
     return RegionCertificate(single_axis=single_axis, kappa=kappa, region=region, bounds=final.bounds,
                              margins=final.margins, p2=final.p2, q=final.q, sigma=sig, c_range=c_range)
+
+
+__all__ = [
+    "ENVELOPE_INFLATION_RTOL", "MAX_HEADING_ERROR", "ErrorBounds", "Margins", "Region", "RegionCertificate",
+    "certify_region", "ellipsoid_extent", "envelope_margins", "heading_c_range", "inflate_envelope", "start_bounds",
+]

@@ -69,7 +69,8 @@ def sigma_max_2x2(m: ArrayLike) -> FloatArray:
     """
     x = np.asarray(m, dtype=float)
     a, b, c, d = x[..., 0, 0], x[..., 0, 1], x[..., 1, 0], x[..., 1, 1]
-    return 0.5 * (np.hypot(a + d, b - c) + np.hypot(a - d, b + c))
+    out: FloatArray = 0.5 * (np.hypot(a + d, b - c) + np.hypot(a - d, b + c))
+    return out
 
 
 def _signed(value: float, interval: tuple[float, float]) -> float:

@@ -217,12 +217,35 @@ def test_preset_contents():
     assert tri.shape == ((0.0, 10.0), (20.0, 0.0)) and tri.n == 3 and tri.vehicle == paper2011()
     assert tri.simulation.initial == PAPER_TRIANGLE_INITIAL and tri.simulation.horizon == 300.0
     assert tri.simulation.start == "shaped" and tri.reference.kind == "sine"
-    assert tri.envelope.u == (0.0, 3.5) and tri.envelope.v == (-1.0, 1.0) and tri.envelope.r == (-0.5, 0.5)
+    assert tri.envelope.u == (0.0, 3.5) and tri.envelope.v == (-1.5, 1.5) and tri.envelope.r == (-0.5, 0.5)
     assert hexa.n == 6 and hexa.simulation.initial == spread_start(hexa.shape, hexa.transform)
     radii = [math.hypot(x, y) for x, y, *_ in hexa.simulation.initial]
     assert radii == pytest.approx([1.5 * 15.0] * 6)
     with pytest.raises(ConfigError, match="expected one of: paper-triangle, paper-hexagon"):
         preset_config("nope")
+
+
+def test_demo_envelope_keeps_the_paper_gains():
+    """The presets widen sway to 1.5 m/s (the paper's start sits on |v| = 1); lambda and sigma,
+    computed independently by brute force over the vertices, are those of the paper's envelope."""
+    from itertools import product
+
+    from auv_hinf.envelope import PAPER_ENVELOPE
+
+    p = paper2011()
+
+    def lam_sigma(env):
+        lam = min(-(p.d11_lin + p.d11_quad * 3.5) / p.m11, -(p.d22_lin + p.d22_quad * max(map(abs, env.v))) / p.m22)
+        worst = 0.0
+        for u, v, r in product((0.0, 3.5), (0.0, max(map(abs, env.v))), env.r):
+            b = np.array([[-(p.d11_lin + p.d11_quad * u) / p.m11, (p.m22 - p.m11) * r / p.m11],
+                          [(p.m22 - p.m11) * r / p.m22, -(p.d22_lin + p.d22_quad * v) / p.m22]])
+            worst = max(worst, np.linalg.norm(b - lam * np.eye(2), 2))
+        return lam, worst
+
+    demo = preset_config("paper-triangle").envelope
+    assert lam_sigma(demo) == pytest.approx(lam_sigma(PAPER_ENVELOPE), rel=1e-12)
+    assert demo.v == (-1.5, 1.5) and PAPER_ENVELOPE.v == (-1.0, 1.0)
 
 
 def test_vehicle_preset_literal_matches_registry():
