@@ -5,11 +5,11 @@ for Autonomous Underwater Vehicles*. See the README for a tour.
 """
 
 from .certificate import Certificate, certify
+from .closed_loop import ClosedLoopCertificate, closed_loop_certificate
 from .config import FormationConfig, load_config, preset_config
-from .control_law import FormationController, SineTrajectory, heading_gains
+from .control_law import FormationController, SineTrajectory, VehicleLaw, heading_gains
+from .coverage import Coverage, cover_start
 from .crosscheck import CrosscheckReport, crosscheck
-from .lmi import lmi_hinf_norm
-from .loops import hinf_norm, position_block, velocity_block
 from .design import (
     GainDesign,
     Theorem1Conditions,
@@ -38,8 +38,21 @@ from .formation import (
     regular_polygon,
     shape_from_offsets,
 )
-from .simulation import Scenario, SimulationResult, simulate
+from .lmi import lmi_hinf_norm
+from .loops import hinf_norm, hinf_norm_peak, position_block, velocity_block
+from .plan import Gains, RunPlan, design_gains, plan_run, run_report
+from .presets import PRESETS
+from .reference import (
+    CircleReference,
+    FleetReference,
+    LawnmowerReference,
+    LineReference,
+    SineReference,
+    shaped_start,
+)
+from .region import ErrorBounds, Region
 from .sigma import SigmaBounds, jacobi_sigma_bounds, sigma_grid, sigma_max_2x2, vehicle_sigma
+from .simulation import Scenario, ScenarioBatch, SimulationResult, simulate, simulate_batch
 from .vehicle import (
     VehicleParams,
     body_block,
@@ -54,6 +67,28 @@ from .vehicle import (
 __version__ = "0.2.0"
 
 __all__ = [
+    "ScenarioBatch",
+    "simulate_batch",
+    "ClosedLoopCertificate",
+    "closed_loop_certificate",
+    "Coverage",
+    "cover_start",
+    "Gains",
+    "RunPlan",
+    "design_gains",
+    "plan_run",
+    "run_report",
+    "PRESETS",
+    "CircleReference",
+    "FleetReference",
+    "LawnmowerReference",
+    "LineReference",
+    "SineReference",
+    "shaped_start",
+    "ErrorBounds",
+    "Region",
+    "VehicleLaw",
+    "hinf_norm_peak",
     "Certificate",
     "CrosscheckReport",
     "Envelope",

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
+
+import control as ct
 
 from .config import FormationConfig
 from .crosscheck import CrosscheckReport, crosscheck
@@ -47,7 +50,8 @@ class Certificate:
     lam : float
         Constant lambda (1/s).
     sigma : SigmaBounds
-        Vehicle-coordinate bounds, used by the small-gain test (PAPER-NOTES item 7).
+        Vehicle-coordinate bounds, used by the small-gain test: the nominal loop
+        ``(lam - alpha) I`` is the same in every coordinate system (``docs/derivations/sigma.md``).
     sigma_jacobi : SigmaBounds
         Jacobi-coordinate bounds, reported for comparison.
     gamma : float
@@ -123,6 +127,49 @@ class Certificate:
             "vehicle": self.config.vehicle.to_dict(),
             "closed_loop": None if self.closed_loop is None else self.closed_loop.to_dict(),
         }
+
+    def save(self, path: str | Path) -> Path:
+        """Write the certificate as a versioned, complete JSON file; see :mod:`auv_hinf.persist`.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
+        from .persist import save_certificate
+
+        return save_certificate(self, path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> Certificate:
+        """Read a file written by :meth:`save` and restore the certificate exactly (no re-certification).
+
+        Raises
+        ------
+        ConfigError
+            Wrong format or version, invalid configuration, or an edited record.
+        """
+        from .persist import load_certificate
+
+        return load_certificate(path)
+
+    def controller(self) -> ct.NonlinearIOSystem:
+        """The certified law along the raw mission as a static python-control ``nlsys``.
+
+        Inputs ``x[i], y[i], psi[i], u[i], v[i], r[i]``, outputs ``tau_x[i], tau_y[i],
+        tau_psi[i]`` (N, N, N m); see :func:`auv_hinf.interconnect.certificate_controller`.
+        """
+        from .interconnect import certificate_controller
+
+        return certificate_controller(self)
+
+    def closed_loop_system(self) -> ct.NonlinearIOSystem:
+        """``control.interconnect`` of the N nominal plants and :meth:`controller`: no inputs,
+        state the stacked fleet state; see :func:`auv_hinf.interconnect.certificate_closed_loop`.
+        """
+        from .interconnect import certificate_closed_loop
+
+        return certificate_closed_loop(self)
 
     def summary(self) -> str:
         """Readable table."""

@@ -10,7 +10,7 @@ Conventions
 * Every function broadcasts over leading axes, so a fleet of N vehicles is a stack of
   shape ``(..., N)`` (scalars) or ``(..., N, 6)`` (states).
 
-Equations (PAPER-NOTES item 2)::
+Equations (the surge, sway and yaw equations behind eqs. 5-6; see ``docs/errata.md``)::
 
     m11 u' - m22 v r + d11 u = tau_x
     m22 v' + m11 u r + d22 v = tau_y
@@ -153,6 +153,15 @@ def remus100(design_speed: float = 1.5) -> VehicleParams:
     linear surge damping, so ``d11_lin = 0``. Off-diagonal terms (``Y_r``, ``N_v``) are
     dropped, as the paper's model assumes.
 
+    Provenance note: Prestero's table gives the sway cross-flow drag ``Y_v|v| = -1310 kg/m``
+    but the heave drag ``Z_w|w| = -131 kg/m``. The hull is axisymmetric, so the two should be
+    equal, and one of them is probably off by a factor of 10. This preset keeps the published
+    1310 kg/m. The choice matters: on ``u in [0.5, 2.5] m/s``, ``|v| <= 0.3 m/s``,
+    ``|r| <= 0.3 rad/s`` the envelope lambda is -6.61 1/s and the vehicle-coordinate sigma
+    6.67 1/s; with 131 kg/m they are -1.25 1/s and 1.31 1/s
+    (``tests/test_vehicle.py::test_remus100_sway_drag_sensitivity``). To study the
+    alternative, use ``dataclasses.replace(remus100(), d22_quad=131.0)``.
+
     Parameters
     ----------
     design_speed : float
@@ -212,7 +221,7 @@ def body_block(params: VehicleParams, u: ArrayLike, v: ArrayLike, r: ArrayLike) 
     """Body-frame block ``S(r) - M1^-1 D1`` of eq. (8), shape ``(..., 2, 2)``, in 1/s.
 
     Equal to ``[[-d11/m11, (m22-m11) r/m11], [(m22-m11) r/m22, -d22/m22]]``
-    (PAPER-NOTES item 1).
+    (eq. 20 equals eq. 8; ``tests/test_vehicle.py::test_eq20_equals_eq8_symbolically``).
     """
     md = coriolis_damping_matrix(params, u, v, r)
     r_ = np.asarray(r, dtype=float)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from auv_hinf.certificate import certify
@@ -18,10 +19,22 @@ def test_presets_certify(name):
     c = certify(preset_config(name))
     assert c.certified, c.reasons
     assert c.lam == pytest.approx(-2.1)  # -(70 + 100*3.5)/200
-    assert c.small_gain_margin == pytest.approx(c.alpha_used - c.lam - c.sigma.upper)
+    # sigma is an upper bound of independently sampled ||B - lam I|| over the envelope
+    rng = np.random.default_rng(3)
+    env, p = c.config.envelope, c.config.vehicle
+    u, v, r = (rng.uniform(*rg, 100_000) for rg in (env.u, env.v, env.r))
+    d11, d22 = p.d11_lin + p.d11_quad * np.abs(u), p.d22_lin + p.d22_quad * np.abs(v)
+    blocks = np.stack([np.stack([-d11 / p.m11 - c.lam, (p.m22 - p.m11) * r / p.m11], -1),
+                       np.stack([(p.m22 - p.m11) * r / p.m22, -d22 / p.m22 - c.lam], -1)], -2)
+    assert c.sigma.upper >= np.linalg.norm(blocks, 2, axis=(-2, -1)).max()
     assert c.small_gain_margin > 0
     assert c.sigma_jacobi.upper >= c.sigma.upper
-    assert c.position_loop_hinf == pytest.approx(1 / (c.alpha_used - c.lam))
+    loop = c.to_dict()["closed_loop"]
+    slow_pole = min(-np.roots([1.0, c.alpha_used - c.lam, c.config.k1]).real)
+    assert 0 < loop["decay_rate"] < slow_pole  # no certificate can promise more than the nominal slow pole
+    assert loop["decay_rate"] < c.small_gain_margin  # the margin is not the closed loop's decay rate
+    assert loop["reference_inside_envelope"] and loop["covers_shaped_start"]
+    assert all(v > 0 for v in loop["region"].values())
 
 
 def test_bad_design_not_certified_with_reasons():
@@ -107,11 +120,12 @@ def test_toml_round_trip(tmp_path):
     assert cfg.n == 4 and cfg.jacobi == "orthonormal" and cfg.k1 == 0.3
     c = certify(cfg)
     assert c.crosscheck.ok
-    assert main(["certify", "--config", str(f)]) in (0, 1)
+    # the CLI verdict is the API verdict
+    assert main(["certify", "--config", str(f)]) == (0 if c.certified else 1)
 
 
-def test_large_fleet_certifies_quickly():
-    """Cross-check size and Jacobi search are capped, so N = 40 certifies without a 80x80 LMI compile."""
+def test_large_fleet_caps_the_crosscheck_size():
+    """The cross-check size is capped (every channel is identical), and the Jacobi upper bound is cond(Phi) sigma."""
     from auv_hinf.certificate import CROSSCHECK_MAX_N
     from auv_hinf.config import config_from_dict
 
@@ -119,3 +133,21 @@ def test_large_fleet_certifies_quickly():
     c = certify(cfg)
     assert c.certified and c.crosscheck.n == CROSSCHECK_MAX_N
     assert c.sigma_jacobi.upper == pytest.approx(cfg.transform.cond * c.sigma.upper, rel=1e-9)
+
+
+def test_certify_json_closed_loop_keys_and_thrust_bound(capsys):
+    """The closed_loop object has the documented keys, and its thrust bound covers a simulated run."""
+    from auv_hinf.plan import plan_run
+    from auv_hinf.simulation import simulate
+
+    assert main(["certify", "--preset", "paper-triangle", "--json"]) == 0
+    loop = json.loads(capsys.readouterr().out)["closed_loop"]
+    for key in ("decay_rate", "region", "reference_inside_envelope", "max_force", "max_moment",
+                "covers_shaped_start", "method"):
+        assert key in loop
+    assert set(loop["region"]) == {"position_error", "velocity_error", "heading_error", "yaw_rate_error"}
+    assert isinstance(loop["method"], str) and loop["method"]
+    plan = plan_run(preset_config("paper-triangle"), horizon=60.0)
+    res = simulate(plan.scenario)
+    assert np.abs(res.forces[..., :2]).max() <= loop["max_force"]
+    assert np.abs(res.forces[..., 2]).max() <= loop["max_moment"]

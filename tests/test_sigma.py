@@ -1,4 +1,4 @@
-"""Certified sigma bounds (PAPER-NOTES items 4-8)."""
+"""Certified sigma bounds: heading invariance, the vertex argument, Jacobi bounds."""
 
 from __future__ import annotations
 

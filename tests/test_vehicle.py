@@ -87,7 +87,7 @@ def test_body_block_closed_form(vehicle, rng):
 
 
 def test_shift_norm_is_heading_invariant(vehicle, rng):
-    """PAPER-NOTES item 4: ||G_i - lam I||_2 does not depend on psi."""
+    """||G_i - lam I||_2 does not depend on psi (R is orthogonal and lam I commutes with it)."""
     u, v, r = 1.3, -0.4, 0.3
     lam = -1.35
     norms = [
