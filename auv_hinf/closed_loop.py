@@ -144,8 +144,14 @@ class DecayCertificate:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
-        return {"rate": self.rate, "supremum": self.supremum, "matrix": self.matrix.tolist(),
-                "multiplier": self.multiplier, "max_eig": self.max_eig, "margin": self.margin}
+        return {
+            "rate": self.rate,
+            "supremum": self.supremum,
+            "matrix": self.matrix.tolist(),
+            "multiplier": self.multiplier,
+            "max_eig": self.max_eig,
+            "margin": self.margin,
+        }
 
 
 def position_decay_certificate(lam: float, alpha: float, k1: float, sigma: float) -> DecayCertificate:
@@ -164,8 +170,9 @@ def position_decay_certificate(lam: float, alpha: float, k1: float, sigma: float
 def lmi_position_decay_rate(lam: float, alpha: float, k1: float, sigma: float) -> float:
     """Position decay rate (1/s) by bisection on the verified LMI alone (cross-check)."""
     b, k = _position_constants(lam, alpha, k1)
-    return _bisect_lmi(lambda beta: lmi_position_lyapunov(lam, alpha, k1, sigma, beta) is not None,
-                       _stable_shift(b, k))[0]
+    return _bisect_lmi(
+        lambda beta: lmi_position_lyapunov(lam, alpha, k1, sigma, beta) is not None, _stable_shift(b, k)
+    )[0]
 
 
 def _bisect_lmi(feasible: Any, hi: float) -> tuple[float, float]:
@@ -184,9 +191,11 @@ def heading_decay_upper(k1psi: float, c_lo: float, c_hi: float) -> float:
     ``-max Re eig`` is ``c/2`` up to ``c = 2 sqrt(k1psi)`` and ``(c - sqrt(c^2 - 4 k1psi))/2``
     (decreasing) beyond, so it is unimodal and the minimum is at an end of the interval.
     """
+
     def rate(c: float) -> float:
         disc = c * c - 4.0 * k1psi
         return 0.5 * (c - math.sqrt(disc)) if disc > 0 else 0.5 * c
+
     return min(rate(c_lo), rate(c_hi))
 
 
@@ -204,8 +213,9 @@ def heading_decay_rate(k1psi: float, c_lo: float, c_hi: float) -> DecayCertifica
     if not (k1psi > 0 and 0 < c_lo <= c_hi):
         raise DesignError(f"need k1psi > 0 and 0 < c_lo <= c_hi, got {k1psi!r}, {c_lo!r}, {c_hi!r}")
     c_range = (float(c_lo), float(c_hi))
-    lo, hi = _bisect_lmi(lambda beta: lmi_heading_lyapunov(k1psi, c_range, beta) is not None,
-                         heading_decay_upper(k1psi, c_lo, c_hi))
+    lo, hi = _bisect_lmi(
+        lambda beta: lmi_heading_lyapunov(k1psi, c_range, beta) is not None, heading_decay_upper(k1psi, c_lo, c_hi)
+    )
     res = lmi_heading_lyapunov(k1psi, c_range, lo)
     if res is None:
         raise SolverError(f"heading Lyapunov LMI did not re-verify at beta = {lo!r}")
@@ -233,8 +243,15 @@ class ThrustBounds:
         return {"force_x": self.force_x, "force_y": self.force_y, "moment": self.moment}
 
 
-def thrust_bounds(params: VehicleParams, envelope: Envelope, tube: ReferenceTube, bounds: ErrorBounds,
-                  alpha: float, k1: float, k_psi: tuple[float, float]) -> ThrustBounds:
+def thrust_bounds(
+    params: VehicleParams,
+    envelope: Envelope,
+    tube: ReferenceTube,
+    bounds: ErrorBounds,
+    alpha: float,
+    k1: float,
+    k_psi: tuple[float, float],
+) -> ThrustBounds:
     """Sound bounds of ``|tau_x|, |tau_y|, |tau_psi|`` while the velocities stay in ``envelope``.
 
     ``tau_xy = M1 (-alpha R^T e' - k1 R^T e - B R^T p_d' + R^T p_d'')``, so per cell
@@ -248,7 +265,7 @@ def thrust_bounds(params: VehicleParams, envelope: Envelope, tube: ReferenceTube
     rows = np.linalg.norm(body_block(params, verts[:, 0], verts[:, 1], verts[:, 2]), axis=-1).max(axis=0)
     err = alpha * bounds.velocity + k1 * bounds.position
     drift = tube.speed[:, 1][:, None] * rows[None, :] + tube.accel[:, None]
-    fx, fy = (np.array([params.m11, params.m22]) * (err + drift.max(axis=0)))
+    fx, fy = np.array([params.m11, params.m22]) * (err + drift.max(axis=0))
     d33_max = params.d33_lin + params.d33_quad * abs_range(*envelope.r)[1]
     yaw = np.abs(tube.yaw_rate).max(axis=1)
     big_v = float(np.max(tube.yaw_accel + d33_max / params.m33 * yaw))
@@ -285,26 +302,54 @@ class ClosedLoopCertificate:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
-        return {"position": self.position.to_dict(), "heading": self.heading.to_dict(), "rate": self.rate,
-                "region": self.region.to_dict(), "thrust": self.thrust.to_dict(), "method": self.method}
+        return {
+            "position": self.position.to_dict(),
+            "heading": self.heading.to_dict(),
+            "rate": self.rate,
+            "region": self.region.to_dict(),
+            "thrust": self.thrust.to_dict(),
+            "method": self.method,
+        }
 
 
 def closed_loop_certificate(
-    lam: float, alpha: float, k1: float, sigma: float, params: VehicleParams, envelope: Envelope,
-    k_psi: tuple[float, float], tube: ReferenceTube,
+    lam: float,
+    alpha: float,
+    k1: float,
+    sigma: float,
+    params: VehicleParams,
+    envelope: Envelope,
+    k_psi: tuple[float, float],
+    tube: ReferenceTube,
 ) -> ClosedLoopCertificate:
     """Decay rates, largest start region and thrust bounds (see :func:`certify_region`)."""
     region = certify_region(lam, alpha, k1, sigma, params, envelope, k_psi, tube)
     position = position_decay_certificate(lam, alpha, k1, region.sigma)
     heading = heading_decay_rate(k_psi[0], *region.c_range)
     thrust = thrust_bounds(params, inflate_envelope(envelope), tube, region.bounds, alpha, k1, k_psi)
-    return ClosedLoopCertificate(position=position, heading=heading, rate=min(position.rate, heading.rate),
-                                 region=region, thrust=thrust)
+    return ClosedLoopCertificate(
+        position=position, heading=heading, rate=min(position.rate, heading.rate), region=region, thrust=thrust
+    )
 
 
 __all__ = [
-    "ClosedLoopCertificate", "DecayCertificate", "ErrorBounds", "Margins", "Region", "RegionCertificate",
-    "ThrustBounds", "certify_region", "closed_loop_certificate", "envelope_margins", "heading_c_range",
-    "heading_decay_rate", "heading_decay_upper", "lmi_position_decay_rate", "position_decay_certificate",
-    "position_decay_rate", "shifted_peak", "start_bounds", "thrust_bounds",
+    "ClosedLoopCertificate",
+    "DecayCertificate",
+    "ErrorBounds",
+    "Margins",
+    "Region",
+    "RegionCertificate",
+    "ThrustBounds",
+    "certify_region",
+    "closed_loop_certificate",
+    "envelope_margins",
+    "heading_c_range",
+    "heading_decay_rate",
+    "heading_decay_upper",
+    "lmi_position_decay_rate",
+    "position_decay_certificate",
+    "position_decay_rate",
+    "shifted_peak",
+    "start_bounds",
+    "thrust_bounds",
 ]

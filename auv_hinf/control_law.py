@@ -103,7 +103,7 @@ class RigidReference:
     def motion(self, t: float | FloatArray) -> Motion:
         """Motion at ``t`` (scalar or shape ``(S,)``), all vehicles at the same time."""
         tt = np.asarray(t, dtype=float)
-        return self.motion_per_vehicle(np.broadcast_to(tt[..., None], tt.shape + (len(self.offsets),)))
+        return self.motion_per_vehicle(np.broadcast_to(tt[..., None], (*tt.shape, len(self.offsets))))
 
     def motion_per_vehicle(self, t: FloatArray) -> Motion:
         """Motion of vehicle ``i`` at ``t[..., i]`` (s)."""
@@ -113,8 +113,13 @@ class RigidReference:
 
 
 def heading_torque(
-    params: VehicleParams, k_psi: tuple[float, float], orientation: OrientationLaw,
-    states: FloatArray, psi_d: FloatArray, r_d: FloatArray, r_dot_d: FloatArray,
+    params: VehicleParams,
+    k_psi: tuple[float, float],
+    orientation: OrientationLaw,
+    states: FloatArray,
+    psi_d: FloatArray,
+    r_d: FloatArray,
+    r_dot_d: FloatArray,
 ) -> FloatArray:
     """Yaw moment of eqs. (26)-(28) (N m), shape ``states.shape[:-1]``.
 
@@ -282,6 +287,16 @@ class FormationController:
 
 
 __all__ = [
-    "FormationController", "MotionSource", "RigidReference", "SineTrajectory", "VehicleLaw", "VehicleMotionSource",
-    "check_gains", "heading_gains", "heading_reference", "heading_torque", "saturate", "wrap_angle",
+    "FormationController",
+    "MotionSource",
+    "RigidReference",
+    "SineTrajectory",
+    "VehicleLaw",
+    "VehicleMotionSource",
+    "check_gains",
+    "heading_gains",
+    "heading_reference",
+    "heading_torque",
+    "saturate",
+    "wrap_angle",
 ]

@@ -32,7 +32,7 @@ from .closed_loop import ClosedLoopCertificate, ThrustBounds, thrust_bounds
 from .envelope import Envelope
 from .exceptions import AuvHinfError, ParameterError
 from .reference import FleetReference, MissionReference, shaped_start, wrap_angle
-from .region import ErrorBounds, Margins, inflate_envelope, envelope_margins, start_bounds
+from .region import ErrorBounds, Margins, envelope_margins, inflate_envelope, start_bounds
 from .tubes import shaped_tube
 from .vehicle import VehicleParams
 
@@ -85,15 +85,20 @@ class Coverage:
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
         return {
-            "covered": self.covered, "start": self.start, "blend_time": self.blend_time,
-            "turn_time": self.turn_time, "bounds": self.bounds.to_dict(),
+            "covered": self.covered,
+            "start": self.start,
+            "blend_time": self.blend_time,
+            "turn_time": self.turn_time,
+            "bounds": self.bounds.to_dict(),
             "margins": None if self.margins is None else self.margins.to_dict(),
-            "thrust": None if self.thrust is None else self.thrust.to_dict(), "reason": self.reason,
+            "thrust": None if self.thrust is None else self.thrust.to_dict(),
+            "reason": self.reason,
         }
 
 
-def initial_errors(fleet: FleetReference, initial: ArrayLike,
-                   current: tuple[float, float] = (0.0, 0.0)) -> tuple[FloatArray, ...]:
+def initial_errors(
+    fleet: FleetReference, initial: ArrayLike, current: tuple[float, float] = (0.0, 0.0)
+) -> tuple[FloatArray, ...]:
     """Errors of each vehicle at ``t = 0`` against ``fleet``.
 
     Parameters
@@ -136,9 +141,18 @@ def _chunks(fleet: FleetReference) -> Iterable[FleetReference]:
         yield FleetReference(fleet.mission, fleet.offsets[sl], part)
 
 
-def check_run(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Envelope, gains: tuple[float, float],
-              k_psi: tuple[float, float], fleet: FleetReference, initial: ArrayLike, *,
-              thrust_limit: tuple[float, float, float] | None = None, start: str = "paper") -> Coverage:
+def check_run(
+    cert: ClosedLoopCertificate,
+    params: VehicleParams,
+    envelope: Envelope,
+    gains: tuple[float, float],
+    k_psi: tuple[float, float],
+    fleet: FleetReference,
+    initial: ArrayLike,
+    *,
+    thrust_limit: tuple[float, float, float] | None = None,
+    start: str = "paper",
+) -> Coverage:
     """Coverage of the run that tracks ``fleet`` from ``initial`` (see the module docstring).
 
     Parameters
@@ -166,16 +180,34 @@ def check_run(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Enve
     p2, q = cert.region.p2, cert.region.q
     if (p2 is None and (np.any(e != 0) or np.any(de != 0))) or (q is None and (np.any(ep != 0) or np.any(dep != 0))):
         nan = ErrorBounds(math.inf, math.inf, math.inf, math.inf)
-        return Coverage(False, start, fleet, nan, None, None, None, None,
-                        "the certificate has no Lyapunov function for nonzero initial errors")
+        return Coverage(
+            False,
+            start,
+            fleet,
+            nan,
+            None,
+            None,
+            None,
+            None,
+            "the certificate has no Lyapunov function for nonzero initial errors",
+        )
     eye = np.eye(2)
     per = start_bounds(eye if p2 is None else p2, eye if q is None else q, e, de, ep, dep)
     bounds = ErrorBounds(*(float(x) for x in per.max(axis=0)))
     sh = fleet.shaping
     tb, th = (None, None) if sh is None else (sh.blend_time, sh.th)
     if not bounds.heading < 0.5 * math.pi:
-        return Coverage(False, start, fleet, bounds, None, None, tb, th,
-                        f"heading error bound {bounds.heading:.4g} rad reaches pi/2")
+        return Coverage(
+            False,
+            start,
+            fleet,
+            bounds,
+            None,
+            None,
+            tb,
+            th,
+            f"heading error bound {bounds.heading:.4g} rad reaches pi/2",
+        )
     try:
         margins, thrusts = [], []
         for part in _chunks(fleet):
@@ -189,19 +221,32 @@ def check_run(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Enve
     if not marg.ok:
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
         reason = f"not covered: envelope margin {worst} = {getattr(marg, worst):.4g} < 0"
-    elif thrust_limit is not None and not (thrust.force_x <= thrust_limit[0] and thrust.force_y <= thrust_limit[1]
-                                           and thrust.moment <= thrust_limit[2]):
-        reason = (f"not covered: certified thrust ({thrust.force_x:.4g} N, {thrust.force_y:.4g} N, "
-                  f"{thrust.moment:.4g} N m) exceeds the limits {tuple(thrust_limit)}")
+    elif thrust_limit is not None and not (
+        thrust.force_x <= thrust_limit[0] and thrust.force_y <= thrust_limit[1] and thrust.moment <= thrust_limit[2]
+    ):
+        reason = (
+            f"not covered: certified thrust ({thrust.force_x:.4g} N, {thrust.force_y:.4g} N, "
+            f"{thrust.moment:.4g} N m) exceeds the limits {tuple(thrust_limit)}"
+        )
     else:
         reason = "covered: start inside the certified invariant set, reference inside the envelope"
     return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, tb, th, reason)
 
 
-def cover_start(cert: ClosedLoopCertificate, params: VehicleParams, envelope: Envelope, gains: tuple[float, float],
-                k_psi: tuple[float, float], mission: MissionReference, offsets: ArrayLike, initial: ArrayLike, *,
-                start: StartMode = "shaped", blend_time: float | None = None,
-                thrust_limit: tuple[float, float, float] | None = None) -> Coverage:
+def cover_start(
+    cert: ClosedLoopCertificate,
+    params: VehicleParams,
+    envelope: Envelope,
+    gains: tuple[float, float],
+    k_psi: tuple[float, float],
+    mission: MissionReference,
+    offsets: ArrayLike,
+    initial: ArrayLike,
+    *,
+    start: StartMode = "shaped",
+    blend_time: float | None = None,
+    thrust_limit: tuple[float, float, float] | None = None,
+) -> Coverage:
     """Choose the reference for a run and decide whether the certificate covers it.
 
     Parameters
@@ -240,17 +285,28 @@ def cover_start(cert: ClosedLoopCertificate, params: VehicleParams, envelope: En
             try:
                 fleet = shaped_start(mission, offsets, initial, tb, turn_time=th)
             except AuvHinfError as exc:
-                return Coverage(False, start, raw, base.bounds, base.margins, base.thrust, None, None,
-                                f"no shaped start: {exc}")
-            cov = check_run(cert, params, envelope, gains, k_psi, fleet, initial, thrust_limit=thrust_limit,
-                            start=start)
+                return Coverage(
+                    False, start, raw, base.bounds, base.margins, base.thrust, None, None, f"no shaped start: {exc}"
+                )
+            cov = check_run(
+                cert, params, envelope, gains, k_psi, fleet, initial, thrust_limit=thrust_limit, start=start
+            )
             if cov.covered:
                 return cov
             if best is None or _score(cov) > _score(best):
                 best = cov
     assert best is not None
-    return Coverage(False, start, best.reference, best.bounds, best.margins, best.thrust, best.blend_time,
-                    best.turn_time, f"no candidate blend time covers this start; best {best.reason}")
+    return Coverage(
+        False,
+        start,
+        best.reference,
+        best.bounds,
+        best.margins,
+        best.thrust,
+        best.blend_time,
+        best.turn_time,
+        f"no candidate blend time covers this start; best {best.reason}",
+    )
 
 
 def _score(cov: Coverage) -> float:

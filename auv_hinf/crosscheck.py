@@ -211,8 +211,13 @@ def crosscheck(lam: float, gamma: float, n: int = 3, k1: float = 0.2) -> Crossch
         add("scipy care alpha vs stabilizing", scipy_r.alpha, stab.alpha, are_tol)
         add("control.care max |L - alpha I| / alpha", care_r.structure_error, 0.0, STRUCTURE_RTOL, stab.alpha)
         add("Riccati-inequality LMI alpha vs stabilizing", lmi_stab.value, stab.alpha, LMI_RTOL * cond_factor)
-        add("Riccati-inequality LMI max |L - alpha I| / alpha", lmi_stab.structure_error, 0.0,
-            LMI_STRUCTURE_RTOL * cond_factor, stab.alpha)
+        add(
+            "Riccati-inequality LMI max |L - alpha I| / alpha",
+            lmi_stab.structure_error,
+            0.0,
+            LMI_STRUCTURE_RTOL * cond_factor,
+            stab.alpha,
+        )
         vel = velocity_block(lam, stab.alpha)
         hinf_pc = hinf_norm(vel)
         lmi_norm = lmi_hinf_norm(vel)
@@ -243,7 +248,8 @@ def crosscheck(lam: float, gamma: float, n: int = 3, k1: float = 0.2) -> Crossch
                 "infeasible: gamma below 1/sqrt(lambda^2+2); eq. (32) and the stabilising root do not exist, "
                 "only the minimal gain",
             )
-            if paper is None else paper.flags
+            if paper is None
+            else paper.flags
         ),
         riccati_regime=None if care_r is None else care_r.regime,
         hinf_exact=None if stab is None else stab.closed_loop_hinf,

@@ -149,7 +149,7 @@ def alpha_paper(lam: float, gamma: float) -> GainDesign:
     --------
     >>> round(alpha_paper(-1.2, 2.86).alpha, 6)
     0.330965
-    >>> alpha_paper(-1.2, 2 ** -0.5).are_residual
+    >>> alpha_paper(-1.2, 2**-0.5).are_residual
     1.0
     """
     lam_f, g = _check_lam_gamma(lam, gamma, need_negative_lam=True)
@@ -193,7 +193,7 @@ def alpha_stabilizing(lam: float, gamma: float) -> GainDesign:
     --------
     >>> round(alpha_stabilizing(-1.2, 0.70).alpha, 4)
     0.4197
-    >>> round(alpha_stabilizing(-1.2, 2 ** -0.5).alpha, 6)
+    >>> round(alpha_stabilizing(-1.2, 2**-0.5).alpha, 6)
     0.416667
     """
     lam_f, g = _check_lam_gamma(lam, gamma, need_negative_lam=True)
@@ -229,9 +229,9 @@ def alpha_minimal(lam: float, gamma: float) -> GainDesign:
     result = _evaluate("minimal", lam_f, g, max(0.0, 1.0 / g + lam_f), [])
     if abs(result.are_residual) < ROOT_RESIDUAL_TOL:
         return result
-    return replace(result, flags=(
-        "not-a-root-of-37: the minimal gain drops the paper's K = -L choice, so eq. (37) is not solved",
-    ))
+    return replace(
+        result, flags=("not-a-root-of-37: the minimal gain drops the paper's K = -L choice, so eq. (37) is not solved",)
+    )
 
 
 def design_alpha(lam: float, gamma: float, method: GainMethod) -> GainDesign:

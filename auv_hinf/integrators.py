@@ -50,15 +50,17 @@ _A = [
 ]
 _B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84])
 _E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
-_P = np.array([
-    [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
-    [0.0, 0.0, 0.0, 0.0],
-    [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
-    [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
-    [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
-    [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
-    [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
-])
+_P = np.array(
+    [
+        [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+        [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+        [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
+        [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+        [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+    ]
+)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _ERR_EXP = -1.0 / 5.0  # error estimate of order 4
 
@@ -110,7 +112,9 @@ def _combine(k: FloatArray, weights: FloatArray) -> FloatArray:
     return out
 
 
-def _initial_step(rhs: BatchRhs, t0: float, t1: float, y0: FloatArray, f0: FloatArray, rtol: float, atol: float) -> FloatArray:
+def _initial_step(
+    rhs: BatchRhs, t0: float, t1: float, y0: FloatArray, f0: FloatArray, rtol: float, atol: float
+) -> FloatArray:
     """Hairer's starting step (Solving ODEs I, II.4), per system, as in scipy."""
     scale = atol + np.abs(y0) * rtol
     d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
@@ -131,9 +135,9 @@ def _dense(y_old: FloatArray, h: FloatArray, q: FloatArray, theta: FloatArray) -
     return out
 
 
-def _locate(event: EventFn, t_old: float, h: float, y_old: FloatArray, q: FloatArray,
-            lo: float, hi: float) -> float:
+def _locate(event: EventFn, t_old: float, h: float, y_old: FloatArray, q: FloatArray, lo: float, hi: float) -> float:
     """Root of the event on the interpolant of one step, bracketed in ``theta in [lo, hi]``."""
+
     def g(theta: float) -> float:
         th = np.array([theta])
         return float(event(np.array([t_old + theta * h]), _dense(y_old[None], np.array([h]), q[None], th))[0])
@@ -148,8 +152,15 @@ def _locate(event: EventFn, t_old: float, h: float, y_old: FloatArray, q: FloatA
 
 
 def dopri5(
-    rhs: BatchRhs, t_span: tuple[float, float], y0: FloatArray, t_eval: FloatArray, *,
-    rtol: float = RTOL, atol: float = ATOL, event: EventFn | None = None, subdivisions: int = 8,
+    rhs: BatchRhs,
+    t_span: tuple[float, float],
+    y0: FloatArray,
+    t_eval: FloatArray,
+    *,
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    event: EventFn | None = None,
+    subdivisions: int = 8,
     max_steps: int = 1_000_000,
 ) -> BatchSolution:
     """Integrate ``B`` independent systems with per-system Dormand-Prince 5(4) steps.
@@ -237,8 +248,17 @@ def dopri5(
     return BatchSolution(t=te, y=out, event_time=event_time, n_steps=n_steps, n_rejected=n_rej)
 
 
-def _sample(out: FloatArray, te: FloatArray, next_idx: NDArray[np.int_], b: NDArray[np.int_],
-            t_old: FloatArray, h: FloatArray, t_new: FloatArray, y_old: FloatArray, q: FloatArray) -> None:
+def _sample(
+    out: FloatArray,
+    te: FloatArray,
+    next_idx: NDArray[np.int_],
+    b: NDArray[np.int_],
+    t_old: FloatArray,
+    h: FloatArray,
+    t_new: FloatArray,
+    y_old: FloatArray,
+    q: FloatArray,
+) -> None:
     """Write the output samples that fall in each accepted step ``(t_old, t_new]``."""
     n_out = te.size
     while True:
@@ -252,8 +272,16 @@ def _sample(out: FloatArray, te: FloatArray, next_idx: NDArray[np.int_], b: NDAr
         next_idx[b[sel]] += 1
 
 
-def _events(event: EventFn, event_time: FloatArray, b: NDArray[np.int_], t_old: FloatArray, h: FloatArray,
-            y_old: FloatArray, q: FloatArray, subdivisions: int) -> None:
+def _events(
+    event: EventFn,
+    event_time: FloatArray,
+    b: NDArray[np.int_],
+    t_old: FloatArray,
+    h: FloatArray,
+    y_old: FloatArray,
+    q: FloatArray,
+    subdivisions: int,
+) -> None:
     """Locate first exits inside the accepted steps of systems that have not exited yet."""
     live = np.flatnonzero(np.isnan(event_time[b]))
     if live.size == 0:
@@ -271,8 +299,14 @@ def _events(event: EventFn, event_time: FloatArray, b: NDArray[np.int_], t_old: 
 
 
 def rk45_reference(
-    rhs: BatchRhs, t_span: tuple[float, float], y0: FloatArray, t_eval: FloatArray, *,
-    rtol: float = RTOL, atol: float = ATOL, event: EventFn | None = None,
+    rhs: BatchRhs,
+    t_span: tuple[float, float],
+    y0: FloatArray,
+    t_eval: FloatArray,
+    *,
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    event: EventFn | None = None,
 ) -> BatchSolution:
     """scipy ``solve_ivp`` (RK45) on one system (``B = 1``); same interface as :func:`dopri5`.
 
@@ -316,8 +350,9 @@ def rk45_reference(
     if event is not None and np.isnan(event_time[0]) and sol.t_events[0].size:
         event_time[0] = float(sol.t_events[0][0])
     n_steps = np.array([max(sol.nfev - 2, 0) // 6])  # 6 evaluations per step (FSAL) + 2 for the first step
-    return BatchSolution(t=te, y=sol.y.T[:, None, :], event_time=event_time, n_steps=n_steps,
-                         n_rejected=np.zeros(1, dtype=int))
+    return BatchSolution(
+        t=te, y=sol.y.T[:, None, :], event_time=event_time, n_steps=n_steps, n_rejected=np.zeros(1, dtype=int)
+    )
 
 
 __all__ = ["ATOL", "RTOL", "BatchRhs", "BatchSolution", "EventFn", "dopri5", "rk45_reference"]

@@ -126,14 +126,19 @@ class LawnmowerReference(_Base):
         tan = np.where((sg != 0)[..., None], _vec(np.cos(chi), np.sin(chi)), direc[k])
         nor = _vec(-tan[..., 1], tan[..., 0])
         q = np.asarray(self.start) + (pos[-1] * n_per[..., None] + pos[k]) + self._advance(tau, sg, chi0[k], direc[k])
-        return (q, s * tan, (s * d1)[..., None] * nor,
-                (s * d2)[..., None] * nor - (s * d1 * d1)[..., None] * tan)
+        return (q, s * tan, (s * d1)[..., None] * nor, (s * d2)[..., None] * nor - (s * d1 * d1)[..., None] * tan)
 
     def bounds(self) -> MissionBounds:
         """Bounds of the class Notes, widened by :data:`BOUND_RTOL`."""
         s = self.speed
         w1 = s / self.turn_radius
         w2 = 0.5 * np.pi * SMOOTHSTEP_D2_MAX / self.t90**2
-        return MissionBounds.widened(speed_min=s, speed_max=s, accel_max=s * w1,
-                                     jerk_max=s * math.sqrt(w2 * w2 + w1**4), turn_rate_min=-w1,
-                                     turn_rate_max=w1, turn_accel_max=float(w2))
+        return MissionBounds.widened(
+            speed_min=s,
+            speed_max=s,
+            accel_max=s * w1,
+            jerk_max=s * math.sqrt(w2 * w2 + w1**4),
+            turn_rate_min=-w1,
+            turn_rate_max=w1,
+            turn_accel_max=float(w2),
+        )

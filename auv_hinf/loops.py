@@ -177,10 +177,12 @@ def hinf_norm_peak(sys: ct.StateSpace, *, rtol: float = PEAK_RTOL) -> HinfPeak:
         r = g * g * np.eye(nu) - d.T @ d
         r_inv_dt = np.linalg.solve(r, d.T)
         a_h = a + b @ r_inv_dt @ c
-        ham = np.block([
-            [a_h, b @ np.linalg.solve(r, b.T)],
-            [-c.T @ (np.eye(ny) + d @ r_inv_dt) @ c, -a_h.T],
-        ])
+        ham = np.block(
+            [
+                [a_h, b @ np.linalg.solve(r, b.T)],
+                [-c.T @ (np.eye(ny) + d @ r_inv_dt) @ c, -a_h.T],
+            ]
+        )
         eig = np.linalg.eigvals(ham)
         on_axis = np.abs(eig.real) <= IMAG_AXIS_RTOL * float(np.abs(ham).sum(axis=0).max())
         omegas = np.unique(np.round(np.sort(np.abs(eig[on_axis].imag)), 14))

@@ -58,8 +58,12 @@ class ErrorBounds:
 def inflate_envelope(envelope: Envelope, rtol: float = ENVELOPE_INFLATION_RTOL) -> Envelope:
     """The envelope widened by ``rtol * max(1, largest |bound|)`` on every side (m/s, rad/s)."""
     eta = rtol * max(1.0, *(abs(x) for x in (*envelope.u, *envelope.v, *envelope.r)))
-    return Envelope(u=(envelope.u[0] - eta, envelope.u[1] + eta), v=(envelope.v[0] - eta, envelope.v[1] + eta),
-                    r=(envelope.r[0] - eta, envelope.r[1] + eta), psi=envelope.psi)
+    return Envelope(
+        u=(envelope.u[0] - eta, envelope.u[1] + eta),
+        v=(envelope.v[0] - eta, envelope.v[1] + eta),
+        r=(envelope.r[0] - eta, envelope.r[1] + eta),
+        psi=envelope.psi,
+    )
 
 
 def heading_c_range(params: VehicleParams, envelope: Envelope, k_psi: tuple[float, float]) -> tuple[float, float]:
@@ -144,8 +148,10 @@ def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelop
     v_lo, v_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
     ev, er = bounds.velocity, bounds.yaw_rate
     return Margins(
-        u_hi=float(np.min(envelope.u[1] - (u_hi + ev))), u_lo=float(np.min(u_lo - ev - envelope.u[0])),
-        v_hi=float(np.min(envelope.v[1] - (v_hi + ev))), v_lo=float(np.min(v_lo - ev - envelope.v[0])),
+        u_hi=float(np.min(envelope.u[1] - (u_hi + ev))),
+        u_lo=float(np.min(u_lo - ev - envelope.u[0])),
+        v_hi=float(np.min(envelope.v[1] - (v_hi + ev))),
+        v_lo=float(np.min(v_lo - ev - envelope.v[0])),
         r_hi=float(np.min(envelope.r[1] - (tube.yaw_rate[:, 1] + er))),
         r_lo=float(np.min(tube.yaw_rate[:, 0] - er - envelope.r[0])),
     )

@@ -186,8 +186,12 @@ class SineReference(_Base):
         s, a, w = self.speed, self.amplitude, self.omega
         sn, cs = np.sin(w * tt), np.cos(w * tt)
         zero = np.zeros_like(tt)
-        return (_vec(s * tt, a * sn), _vec(s + zero, a * w * cs),
-                _vec(zero, -a * w * w * sn), _vec(zero, -a * w**3 * cs))
+        return (
+            _vec(s * tt, a * sn),
+            _vec(s + zero, a * w * cs),
+            _vec(zero, -a * w * w * sn),
+            _vec(zero, -a * w**3 * cs),
+        )
 
     def bounds(self) -> MissionBounds:
         """Exact bounds (see Notes), widened by :data:`BOUND_RTOL`."""
@@ -198,8 +202,13 @@ class SineReference(_Base):
         c = 1.0 if z >= k else math.sqrt(z / k)
         h = c * (1 + 2 * k - k * c * c) / (1 + k * c * c) ** 2
         return MissionBounds.widened(
-            speed_min=s, speed_max=math.hypot(s, a), accel_max=a * w, jerk_max=a * w * w,
-            turn_rate_min=-a * w / s, turn_rate_max=a * w / s, turn_accel_max=a * w * w / s * h,
+            speed_min=s,
+            speed_max=math.hypot(s, a),
+            accel_max=a * w,
+            jerk_max=a * w * w,
+            turn_rate_min=-a * w / s,
+            turn_rate_max=a * w / s,
+            turn_accel_max=a * w * w / s * h,
         )
 
 
@@ -237,8 +246,15 @@ class LineReference(_Base):
     def bounds(self) -> MissionBounds:
         """Speed ``s``; acceleration, jerk and turn terms zero (exact)."""
         s = self.speed
-        return MissionBounds.widened(speed_min=s, speed_max=s, accel_max=0.0, jerk_max=0.0,
-                                     turn_rate_min=0.0, turn_rate_max=0.0, turn_accel_max=0.0)
+        return MissionBounds.widened(
+            speed_min=s,
+            speed_max=s,
+            accel_max=0.0,
+            jerk_max=0.0,
+            turn_rate_min=0.0,
+            turn_rate_max=0.0,
+            turn_accel_max=0.0,
+        )
 
 
 @dataclass(frozen=True)
@@ -282,9 +298,15 @@ class CircleReference(_Base):
     def bounds(self) -> MissionBounds:
         """Exact constants (see Notes), widened by :data:`BOUND_RTOL`."""
         s, rad = self.speed, self.radius
-        return MissionBounds.widened(speed_min=s, speed_max=s, accel_max=s * s / rad,
-                                     jerk_max=s**3 / rad**2, turn_rate_min=s / rad,
-                                     turn_rate_max=s / rad, turn_accel_max=0.0)
+        return MissionBounds.widened(
+            speed_min=s,
+            speed_max=s,
+            accel_max=s * s / rad,
+            jerk_max=s**3 / rad**2,
+            turn_rate_min=s / rad,
+            turn_rate_max=s / rad,
+            turn_accel_max=0.0,
+        )
 
 
 def heading_from_velocity(v: ArrayLike, a: ArrayLike, j: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:

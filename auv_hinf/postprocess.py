@@ -7,64 +7,14 @@ vehicles). Positions are inertial (m); stacks have shape ``(..., N, 2)``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import get_args
 
 import numpy as np
 
 from ._typing import FloatArray, JacobiKind
 from .control_law import wrap_angle
 from .envelope import Envelope
-from .exceptions import FormationError
+from .formation import jacobi_coordinates, positions_from_jacobi
 from .reference import Motion
-
-
-def _check(p: FloatArray, kind: str) -> FloatArray:
-    arr = np.asarray(p, dtype=float)
-    if arr.ndim < 2 or arr.shape[-1] != 2 or arr.shape[-2] < 2:
-        raise FormationError(f"stacked vectors must have shape (..., N >= 2, 2), got {arr.shape}")
-    if kind not in get_args(JacobiKind):
-        raise FormationError(f"Jacobi kind must be one of {get_args(JacobiKind)}, got {kind!r}")
-    return arr
-
-
-def _row_scale(n: int, kind: str) -> FloatArray:
-    """Scale of the shape rows ``j = 1..N-1``: 1 (paper) or ``sqrt(j/(j+1))`` (orthonormal)."""
-    j = np.arange(1, n, dtype=float)
-    return np.ones(n - 1) if kind == "paper" else np.sqrt(j / (j + 1.0))
-
-
-def jacobi_coordinates(p: FloatArray, kind: JacobiKind = "paper") -> FloatArray:
-    """``X = Phi p`` in O(N) with a cumulative sum (same result as ``JacobiTransform.phi``).
-
-    Row ``j`` (``1 <= j <= N-1``) is ``rho_j = mean(p_1..p_j) - p_{j+1}`` (times
-    ``sqrt(j/(j+1))`` for ``"orthonormal"``); the last row is the centre ``mean(p)``.
-
-    Parameters
-    ----------
-    p : ndarray, shape (..., N, 2)
-        Positions (m), or velocities / accelerations.
-    kind : {"paper", "orthonormal"}
-    """
-    arr = _check(p, kind)
-    n = arr.shape[-2]
-    means = np.cumsum(arr, axis=-2) / np.arange(1, n + 1, dtype=float)[:, None]
-    rho = (means[..., :-1, :] - arr[..., 1:, :]) * _row_scale(n, kind)[:, None]
-    return np.concatenate([rho, means[..., -1:, :]], axis=-2)
-
-
-def positions_from_jacobi(x: FloatArray, kind: JacobiKind = "paper") -> FloatArray:
-    """Inverse of :func:`jacobi_coordinates` in O(N) (reverse cumulative sum).
-
-    With ``m_j = mean(p_1..p_j)``: ``m_N = q_c``, ``m_j = m_{j+1} + rho_j / (j+1)``,
-    ``p_{j+1} = m_j - rho_j`` and ``p_1 = m_1``.
-    """
-    arr = _check(x, kind)
-    n = arr.shape[-2]
-    j = np.arange(1, n, dtype=float)[:, None]
-    rho = arr[..., :-1, :] / _row_scale(n, kind)[:, None]
-    tail = np.cumsum((rho / (j + 1.0))[..., ::-1, :], axis=-2)[..., ::-1, :]  # sum_{k>=j} rho_k/(k+1)
-    means = arr[..., -1:, :] + tail  # m_1 .. m_{N-1}
-    return np.concatenate([means[..., :1, :], means - rho], axis=-2)
 
 
 def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
@@ -74,10 +24,16 @@ def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
     the sign and the roots matter (the first root is the first exit time).
     """
     u, v, r = states[..., 3], states[..., 4], states[..., 5]
-    margin: FloatArray = np.minimum.reduce([
-        u - envelope.u[0], envelope.u[1] - u, v - envelope.v[0], envelope.v[1] - v,
-        r - envelope.r[0], envelope.r[1] - r,
-    ])
+    margin: FloatArray = np.minimum.reduce(
+        [
+            u - envelope.u[0],
+            envelope.u[1] - u,
+            v - envelope.v[0],
+            envelope.v[1] - v,
+            r - envelope.r[0],
+            envelope.r[1] - r,
+        ]
+    )
     return margin
 
 
@@ -114,7 +70,10 @@ def tracking_errors(states: FloatArray, p_dot: FloatArray, motion: Motion) -> Tr
     """:class:`TrackingErrors` of states ``(T, N, 6)`` with ground velocities ``(T, N, 2)``."""
     e_psi = wrap_angle(states[..., 2] - motion.psi)
     return TrackingErrors(
-        e=states[..., 0:2] - motion.p, e_dot=p_dot - motion.v, e_psi=e_psi, e_psi_dot=states[..., 5] - motion.r,
+        e=states[..., 0:2] - motion.p,
+        e_dot=p_dot - motion.v,
+        e_psi=e_psi,
+        e_psi_dot=states[..., 5] - motion.r,
     )
 
 
@@ -158,6 +117,12 @@ def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind
 
 
 __all__ = [
-    "FormationErrors", "TrackingErrors", "envelope_margin", "formation_errors",
-    "ground_velocity", "jacobi_coordinates", "positions_from_jacobi", "tracking_errors",
+    "FormationErrors",
+    "TrackingErrors",
+    "envelope_margin",
+    "formation_errors",
+    "ground_velocity",
+    "jacobi_coordinates",
+    "positions_from_jacobi",
+    "tracking_errors",
 ]

@@ -261,8 +261,14 @@ def wrap_angle(angle: ArrayLike) -> FloatArray:
     return out
 
 
-def shaped_start(mission: MissionReference, offsets: ArrayLike, initial: ArrayLike, blend_time: float,
-                 current: tuple[float, float] = (0.0, 0.0), turn_time: float | None = None) -> FleetReference:
+def shaped_start(
+    mission: MissionReference,
+    offsets: ArrayLike,
+    initial: ArrayLike,
+    blend_time: float,
+    current: tuple[float, float] = (0.0, 0.0),
+    turn_time: float | None = None,
+) -> FleetReference:
     """Fleet reference that starts exactly at the vehicles' initial states.
 
     At ``t = 0`` each vehicle's desired position, ground velocity, heading (mod 2 pi) and yaw
@@ -300,8 +306,10 @@ def shaped_start(mission: MissionReference, offsets: ArrayLike, initial: ArrayLi
     off = np.asarray(offsets, dtype=float)
     init = np.asarray(initial, dtype=float)
     if off.ndim != 2 or init.ndim < 2 or init.shape[-2:] != (off.shape[0], 6) or not np.all(np.isfinite(init)):
-        raise ParameterError(f"initial must be finite with shape (..., N, 6) for offsets of shape (N, 2), "
-                             f"got {init.shape} and {off.shape}")
+        raise ParameterError(
+            f"initial must be finite with shape (..., N, 6) for offsets of shape (N, 2), "
+            f"got {init.shape} and {off.shape}"
+        )
     cur = np.asarray(current, dtype=float)
     if cur.shape != (2,) or not np.all(np.isfinite(cur)):
         raise ParameterError(f"current must be 2 finite numbers (m/s), got {current!r}")
@@ -314,8 +322,10 @@ def shaped_start(mission: MissionReference, offsets: ArrayLike, initial: ArrayLi
     floor = START_SPEED_RTOL * mission.bounds().speed_min
     speed = np.hypot(vel[..., 0], vel[..., 1])
     if np.any(speed < floor):
-        raise ParameterError(f"initial ground speed must be >= {floor!r} m/s (START_SPEED_RTOL x mission speed), "
-                             f"got {speed.min()!r}: the heading reference is undefined for a vehicle at rest")
+        raise ParameterError(
+            f"initial ground speed must be >= {floor!r} m/s (START_SPEED_RTOL x mission speed), "
+            f"got {speed.min()!r}: the heading reference is undefined for a vehicle at rest"
+        )
     dp = init[..., :2] - off - q0
     dv = vel - q1
     th = tb if turn_time is None else require_finite("turn_time", turn_time)
@@ -349,7 +359,22 @@ def reference_from_dict(kind: str, **params: Any) -> MissionReference:
 
 
 __all__ = [
-    "BLEND_H0", "BLEND_H1", "REFERENCES", "START_SPEED_RTOL", "CircleReference", "FleetReference",
-    "LawnmowerReference", "LineReference", "MissionBounds", "MissionReference", "Motion", "ReferenceTube",
-    "Shaping", "SineReference", "heading_from_velocity", "reference_from_dict", "shaped_start", "wrap_angle",
+    "BLEND_H0",
+    "BLEND_H1",
+    "REFERENCES",
+    "START_SPEED_RTOL",
+    "CircleReference",
+    "FleetReference",
+    "LawnmowerReference",
+    "LineReference",
+    "MissionBounds",
+    "MissionReference",
+    "Motion",
+    "ReferenceTube",
+    "Shaping",
+    "SineReference",
+    "heading_from_velocity",
+    "reference_from_dict",
+    "shaped_start",
+    "wrap_angle",
 ]

@@ -12,7 +12,7 @@ its sub-level set through the start set; the bounds give the velocities by inter
 arithmetic over the reference tube (:func:`envelope_margins`).
 
 First-exit argument (why margins ``>= 0`` suffice). ``sigma`` and the range of ``c`` are
-taken over the envelope inflated by ``eta`` = :data:`ENVELOPE_INFLATION_RTOL` times its
+taken over the envelope inflated by ``eta`` = :data:`~auv_hinf.margins.ENVELOPE_INFLATION_RTOL` times its
 scale (:func:`inflate_envelope`). Let ``T`` be the first time the body velocities leave the
 inflated box. On ``[0, T)`` the loops satisfy their LMIs, so the errors obey the bounds
 and, the computed margins being ``>= 0``, the velocities lie in the nominal box up to
@@ -37,6 +37,7 @@ from .envelope import Envelope
 from .exceptions import DesignError
 from .lmi import LyapunovResult, lmi_heading_region, lmi_position_region
 from .margins import (
+    ENVELOPE_INFLATION_RTOL,
     MAX_HEADING_ERROR,
     ErrorBounds,
     Margins,
@@ -61,9 +62,12 @@ _MAX_DOUBLINGS = 60
 
 @dataclass(frozen=True)
 class Region:
-    """Simultaneous start set: every start with ``||e(0)|| <= position`` (m),
-    ``||e'(0)|| <= velocity`` (m/s), ``|e_psi(0)| <= heading`` (rad) and
-    ``|e_psi'(0)| <= yaw_rate`` (rad/s), all at once, is covered."""
+    """Simultaneous start set of one vehicle's errors.
+
+    Every start with ``||e(0)|| <= position`` (m), ``||e'(0)|| <= velocity`` (m/s),
+    ``|e_psi(0)| <= heading`` (rad) and ``|e_psi'(0)| <= yaw_rate`` (rad/s), all at once, is
+    covered. The errors are taken against the reference at ``t = 0``.
+    """
 
     position: float
     velocity: float
@@ -100,8 +104,9 @@ def ellipsoid_extent(m: FloatArray, r1: float, r2: float) -> tuple[float, float]
     return k * math.sqrt(rho * m22 / det), k * math.sqrt(rho * m11 / det)
 
 
-def start_bounds(p2: FloatArray, q: FloatArray, e0: ArrayLike, de0: ArrayLike, epsi0: ArrayLike,
-                 depsi0: ArrayLike) -> FloatArray:
+def start_bounds(
+    p2: FloatArray, q: FloatArray, e0: ArrayLike, de0: ArrayLike, epsi0: ArrayLike, depsi0: ArrayLike
+) -> FloatArray:
     """Per-start error bounds from actual initial errors, vectorised over starts.
 
     Parameters
@@ -126,8 +131,9 @@ def start_bounds(p2: FloatArray, q: FloatArray, e0: ArrayLike, de0: ArrayLike, e
     ip, iq = np.linalg.inv(p2), np.linalg.inv(q)
     k = 1.0 + BOUND_RTOL
     rp, rq = np.maximum(rho_p, 0.0), np.maximum(rho_q, 0.0)
-    out: FloatArray = k * np.sqrt(np.stack(np.broadcast_arrays(rp * ip[0, 0], rp * ip[1, 1], rq * iq[0, 0],
-                                                                rq * iq[1, 1]), -1))
+    out: FloatArray = k * np.sqrt(
+        np.stack(np.broadcast_arrays(rp * ip[0, 0], rp * ip[1, 1], rq * iq[0, 0], rq * iq[1, 1]), -1)
+    )
     return out
 
 
@@ -170,10 +176,15 @@ class RegionCertificate:
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
         return {
-            "single_axis": self.single_axis.to_dict(), "kappa": self.kappa, "region": self.region.to_dict(),
-            "bounds": self.bounds.to_dict(), "margins": self.margins.to_dict(),
-            "p2": None if self.p2 is None else self.p2.tolist(), "q": None if self.q is None else self.q.tolist(),
-            "sigma": self.sigma, "c_range": list(self.c_range),
+            "single_axis": self.single_axis.to_dict(),
+            "kappa": self.kappa,
+            "region": self.region.to_dict(),
+            "bounds": self.bounds.to_dict(),
+            "margins": self.margins.to_dict(),
+            "p2": None if self.p2 is None else self.p2.tolist(),
+            "q": None if self.q is None else self.q.tolist(),
+            "sigma": self.sigma,
+            "c_range": list(self.c_range),
         }
 
 
@@ -189,8 +200,17 @@ class _Trial:
 class _RegionProblem:
     """Decides whether a start region is certified (verified P2, Q and exact margins)."""
 
-    def __init__(self, lam: float, alpha: float, k1: float, sigma: float, k1psi: float,
-                 c_range: tuple[float, float], tube: ReferenceTube, envelope: Envelope) -> None:
+    def __init__(
+        self,
+        lam: float,
+        alpha: float,
+        k1: float,
+        sigma: float,
+        k1psi: float,
+        c_range: tuple[float, float],
+        tube: ReferenceTube,
+        envelope: Envelope,
+    ) -> None:
         self.loop = (lam, alpha, k1, sigma)
         self.k1psi, self.c_range, self.tube, self.envelope = k1psi, c_range, tube, envelope
         self._p2: dict[tuple[float, float], LyapunovResult] = {}
@@ -212,9 +232,11 @@ class _RegionProblem:
 
     def heading_budget(self, ev: float) -> float:
         """Largest heading-error bound (rad) that keeps the u, v margins ``>= 0`` at ``ev``."""
+
         def uv_ok(eh: float) -> bool:
             m = envelope_margins(self.tube, ErrorBounds(0.0, ev, eh, 0.0), self.envelope)
             return min(m.u_hi, m.u_lo, m.v_hi, m.v_lo) >= 0.0
+
         if not uv_ok(0.0):
             return -1.0
         lo, hi = 0.0, MAX_HEADING_ERROR
@@ -259,8 +281,16 @@ def _largest(ok: Callable[[float], bool], hi: float) -> float:
     return lo
 
 
-def certify_region(lam: float, alpha: float, k1: float, sigma: float, params: VehicleParams, envelope: Envelope,
-                   k_psi: tuple[float, float], tube: ReferenceTube) -> RegionCertificate:
+def certify_region(
+    lam: float,
+    alpha: float,
+    k1: float,
+    sigma: float,
+    params: VehicleParams,
+    envelope: Envelope,
+    k_psi: tuple[float, float],
+    tube: ReferenceTube,
+) -> RegionCertificate:
     """Largest simultaneous start region keeping every vehicle in the envelope.
 
     Each single-axis radius is the largest radius of that error alone (others zero) whose
@@ -313,11 +343,30 @@ def certify_region(lam: float, alpha: float, k1: float, sigma: float, params: Ve
     final = prob.trial(region)
     if not final.ok or final.margins is None:  # the bisection keeps only certified scales
         raise DesignError("the region found by bisection failed its final check")
-    return RegionCertificate(single_axis=single_axis, kappa=kappa, region=region, bounds=final.bounds,
-                             margins=final.margins, p2=final.p2, q=final.q, sigma=sig, c_range=c_range)
+    return RegionCertificate(
+        single_axis=single_axis,
+        kappa=kappa,
+        region=region,
+        bounds=final.bounds,
+        margins=final.margins,
+        p2=final.p2,
+        q=final.q,
+        sigma=sig,
+        c_range=c_range,
+    )
 
 
 __all__ = [
-    "ENVELOPE_INFLATION_RTOL", "MAX_HEADING_ERROR", "ErrorBounds", "Margins", "Region", "RegionCertificate",
-    "certify_region", "ellipsoid_extent", "envelope_margins", "heading_c_range", "inflate_envelope", "start_bounds",
+    "ENVELOPE_INFLATION_RTOL",
+    "MAX_HEADING_ERROR",
+    "ErrorBounds",
+    "Margins",
+    "Region",
+    "RegionCertificate",
+    "certify_region",
+    "ellipsoid_extent",
+    "envelope_margins",
+    "heading_c_range",
+    "inflate_envelope",
+    "start_bounds",
 ]

@@ -104,8 +104,9 @@ class SimulationResult:
         np.savez_compressed(path, t=self.t, states=self.states, forces=self.forces, jacobi=self.jacobi)
 
 
-def build_result(scn: Scenario, t: FloatArray, states: FloatArray, exit_time: float | None,
-                 n_steps: int) -> SimulationResult:
+def build_result(
+    scn: Scenario, t: FloatArray, states: FloatArray, exit_time: float | None, n_steps: int
+) -> SimulationResult:
     """Post-process the samples ``states (T, N, 6)`` at times ``t (T,)`` in whole-array calls."""
     p_dot = ground_velocity(states, scn.current)
     motion = scn.reference.motion(t)
@@ -114,10 +115,20 @@ def build_result(scn: Scenario, t: FloatArray, states: FloatArray, exit_time: fl
     form = formation_errors(states[..., 0:2], target, scn.jacobi)
     track = tracking_errors(states, p_dot, motion)
     return SimulationResult(
-        t=t, states=states, forces=forces, jacobi=form.jacobi, shape_error=form.shape_error,
-        center_error=form.center_error, desired_center=form.desired_center, saturated=np.asarray(active.any(axis=-1), dtype=bool),
-        position_error=np.linalg.norm(track.e, axis=-1), mission_error=form.position_error, tracking=track,
-        exit_time=exit_time, n_steps=n_steps, scenario=scn,
+        t=t,
+        states=states,
+        forces=forces,
+        jacobi=form.jacobi,
+        shape_error=form.shape_error,
+        center_error=form.center_error,
+        desired_center=form.desired_center,
+        saturated=np.asarray(active.any(axis=-1), dtype=bool),
+        position_error=np.linalg.norm(track.e, axis=-1),
+        mission_error=form.position_error,
+        tracking=track,
+        exit_time=exit_time,
+        n_steps=n_steps,
+        scenario=scn,
     )
 
 

@@ -41,7 +41,11 @@ ARE_RTOL = 1e-9
 
 #: Exceptions a solver back end raises on failure; they are re-raised as SolverError.
 _SOLVER_FAILURES: tuple[type[BaseException], ...] = (
-    np.linalg.LinAlgError, ArithmeticError, ct.ControlArgument, ValueError, RuntimeError,
+    np.linalg.LinAlgError,
+    ArithmeticError,
+    ct.ControlArgument,
+    ValueError,
+    RuntimeError,
 )
 
 
@@ -160,5 +164,3 @@ def root_condition(lam: float, gamma: float) -> float:
     c = riccati_c(gamma)
     s = math.sqrt(max(lam * lam - c, 0.0))
     return min(ROOT_CONDITION_CAP, 1.0 + abs(lam) / s) if s > 0 else ROOT_CONDITION_CAP
-
-

@@ -85,15 +85,26 @@ def scenario_from_config(
     :class:`~auv_hinf.reference.FleetReference`) replaces the plain sine mission.
     """
     law = VehicleLaw(
-        params=cfg.vehicle, alpha=config_alpha(cfg), k1=cfg.k1, k_psi=heading_gains(cfg.vehicle),
-        orientation=orientation, thrust_limit=thrust_limit,
+        params=cfg.vehicle,
+        alpha=config_alpha(cfg),
+        k1=cfg.k1,
+        k_psi=heading_gains(cfg.vehicle),
+        orientation=orientation,
+        thrust_limit=thrust_limit,
     )
     if initial is None:
         initial = PAPER_TRIANGLE_INITIAL if cfg.name == "paper-triangle" else default_initial(cfg)
     return Scenario(
-        law=law, reference=reference or FleetReference(SineReference(), config_offsets(cfg)), plant=plant or cfg.vehicle,
-        initial=initial, horizon=horizon, current=current, envelope=cfg.envelope, samples=samples,
-        name=cfg.name, jacobi=cfg.jacobi,
+        law=law,
+        reference=reference or FleetReference(SineReference(), config_offsets(cfg)),
+        plant=plant or cfg.vehicle,
+        initial=initial,
+        horizon=horizon,
+        current=current,
+        envelope=cfg.envelope,
+        samples=samples,
+        name=cfg.name,
+        jacobi=cfg.jacobi,
     )
 
 
@@ -103,6 +114,10 @@ def paper_scenario(name: str = "paper-triangle", **kwargs: object) -> Scenario:
 
 
 __all__ = [
-    "PAPER_TRIANGLE_INITIAL", "config_alpha", "config_offsets", "default_initial", "paper_scenario",
+    "PAPER_TRIANGLE_INITIAL",
+    "config_alpha",
+    "config_offsets",
+    "default_initial",
+    "paper_scenario",
     "scenario_from_config",
 ]

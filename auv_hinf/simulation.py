@@ -205,8 +205,9 @@ class ScenarioBatch:
         return cast(MotionSource, self.reference)
 
 
-def fleet_derivative(law: VehicleLaw, plant: VehicleParams, current: FloatArray, states: FloatArray,
-                     motion: Motion) -> FloatArray:
+def fleet_derivative(
+    law: VehicleLaw, plant: VehicleParams, current: FloatArray, states: FloatArray, motion: Motion
+) -> FloatArray:
     """Closed-loop ``d/dt`` of states ``(..., N, 6)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s)."""
     p_dot = ground_velocity(states, current)
     d = rhs(plant, states, law.forces(states, p_dot, motion))
@@ -220,7 +221,9 @@ def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
     return fleet_derivative(scn.law, scn.plant, np.asarray(scn.current), s, scn.reference.motion(t)).ravel()
 
 
-def batch_system(batch: ScenarioBatch, systems: Systems = "scenario") -> tuple[Callable[[FloatArray, FloatArray], FloatArray], EventFn | None]:
+def batch_system(
+    batch: ScenarioBatch, systems: Systems = "scenario"
+) -> tuple[Callable[[FloatArray, FloatArray], FloatArray], EventFn | None]:
     """Batched rhs ``(t (B,), y (B, d)) -> (B, d)`` and envelope event of ``batch``.
 
     ``systems="scenario"``: ``B = S``, ``d = 6N``. ``systems="vehicle"``: ``B = S N``,
@@ -250,15 +253,20 @@ def batch_system(batch: ScenarioBatch, systems: Systems = "scenario") -> tuple[C
 
     def ev_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
         assert env is not None
-        margin: FloatArray = envelope_margin(env, y.reshape(y.shape[:-1] + (n, 6))).min(axis=-1)
+        margin: FloatArray = envelope_margin(env, y.reshape((*y.shape[:-1], n, 6))).min(axis=-1)
         return margin
 
     return f_scenario, (None if env is None else ev_scenario)
 
 
 def simulate_batch(
-    batch: ScenarioBatch, *, method: Method = "dopri", systems: Systems = "scenario",
-    rtol: float = RTOL, atol: float = ATOL, subdivisions: int = 8,
+    batch: ScenarioBatch,
+    *,
+    method: Method = "dopri",
+    systems: Systems = "scenario",
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    subdivisions: int = 8,
 ) -> list[SimulationResult]:
     """Integrate all scenarios of ``batch`` together and post-process each.
 
@@ -284,12 +292,16 @@ def simulate_batch(
         parts = []
         for one in singles:
             f1, ev1 = batch_system(one, "scenario")
-            parts.append(rk45_reference(f1, span, one.initial.reshape(1, 6 * n), first.times, rtol=rtol, atol=atol,
-                                        event=ev1))
-        sol = BatchSolution(t=first.times, y=np.concatenate([p.y for p in parts], axis=1),
-                            event_time=np.concatenate([p.event_time for p in parts]),
-                            n_steps=np.concatenate([p.n_steps for p in parts]),
-                            n_rejected=np.concatenate([p.n_rejected for p in parts]))
+            parts.append(
+                rk45_reference(f1, span, one.initial.reshape(1, 6 * n), first.times, rtol=rtol, atol=atol, event=ev1)
+            )
+        sol = BatchSolution(
+            t=first.times,
+            y=np.concatenate([p.y for p in parts], axis=1),
+            event_time=np.concatenate([p.event_time for p in parts]),
+            n_steps=np.concatenate([p.n_steps for p in parts]),
+            n_rejected=np.concatenate([p.n_rejected for p in parts]),
+        )
     elif method == "dopri":
         f, event = batch_system(batch, systems)
         y0 = batch.initial.reshape(n_s * n, 6) if systems == "vehicle" else batch.initial.reshape(n_s, 6 * n)
@@ -307,14 +319,30 @@ def simulate_batch(
     return out
 
 
-def simulate(scn: Scenario, *, method: Method = "dopri", systems: Systems = "scenario",
-             rtol: float = RTOL, atol: float = ATOL, subdivisions: int = 8) -> SimulationResult:
+def simulate(
+    scn: Scenario,
+    *,
+    method: Method = "dopri",
+    systems: Systems = "scenario",
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    subdivisions: int = 8,
+) -> SimulationResult:
     """Integrate one scenario and compute its metrics; see :func:`simulate_batch`."""
-    return simulate_batch(ScenarioBatch((scn,)), method=method, systems=systems, rtol=rtol, atol=atol,
-                          subdivisions=subdivisions)[0]
+    return simulate_batch(
+        ScenarioBatch((scn,)), method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions
+    )[0]
 
 
 __all__ = [
-    "PlantBatch", "Scenario", "ScenarioBatch", "SimulationResult", "batch_system", "closed_loop_rhs",
-    "fleet_derivative", "ground_velocity", "simulate", "simulate_batch",
+    "PlantBatch",
+    "Scenario",
+    "ScenarioBatch",
+    "SimulationResult",
+    "batch_system",
+    "closed_loop_rhs",
+    "fleet_derivative",
+    "ground_velocity",
+    "simulate",
+    "simulate_batch",
 ]

@@ -87,7 +87,7 @@ def riccati_regime(lam: float, gamma: float) -> str:
 
     Examples
     --------
-    >>> riccati_regime(-1.2, 2.86), riccati_regime(-1.2, 0.7), riccati_regime(-1.2, 2 ** -0.5)
+    >>> riccati_regime(-1.2, 2.86), riccati_regime(-1.2, 0.7), riccati_regime(-1.2, 2**-0.5)
     ('R>0', 'R<0', 'lyapunov')
     >>> riccati_regime(-1.2, gamma_min(-1.2))
     'double-root'
@@ -106,9 +106,7 @@ def _check_lam_gamma(lam: float, gamma: float, *, need_negative_lam: bool) -> tu
     if g <= 0:
         raise DesignError(f"gamma must be > 0, got {g!r}")
     if need_negative_lam and lam_f >= 0:
-        raise DesignError(
-            f"lambda must be < 0 (a dissipative nominal block, Theorem 1), got {lam_f!r}"
-        )
+        raise DesignError(f"lambda must be < 0 (a dissipative nominal block, Theorem 1), got {lam_f!r}")
     return lam_f, g
 
 

@@ -34,9 +34,13 @@ def mission_tube(ref: MissionReference) -> ReferenceTube:
         accel ``turn_accel_max`` (rad/s^2) of :meth:`MissionReference.bounds`.
     """
     b: MissionBounds = ref.bounds()
-    return ReferenceTube(speed=np.array([[b.speed_min, b.speed_max]]), offset=np.zeros((1, 2)),
-                         yaw_rate=np.array([[b.turn_rate_min, b.turn_rate_max]]),
-                         accel=np.array([b.accel_max]), yaw_accel=np.array([b.turn_accel_max]))
+    return ReferenceTube(
+        speed=np.array([[b.speed_min, b.speed_max]]),
+        offset=np.zeros((1, 2)),
+        yaw_rate=np.array([[b.turn_rate_min, b.turn_rate_max]]),
+        accel=np.array([b.accel_max]),
+        yaw_accel=np.array([b.turn_accel_max]),
+    )
 
 
 def _interval(val: FloatArray, pad: FloatArray, scale: FloatArray | float) -> FloatArray:
@@ -111,9 +115,16 @@ def shaped_tube(fleet: FleetReference, *, cells: int | None = None, resolution: 
     k = _cells(cells, resolution, tb, float(acc.max()))
     while True:  # by default, refine until every speed is bounded away from zero
         try:
-            parts = [_blend_cells(FleetReference(fleet.mission, fleet.offsets, Shaping(tb, dp[b], dv[b], dpsi[b],
-                                                                                       dr[b], th)),
-                                  tb, k, (acc[b], jerk[b], d1[b], d2[b]), b) for b in range(dp.shape[0])]
+            parts = [
+                _blend_cells(
+                    FleetReference(fleet.mission, fleet.offsets, Shaping(tb, dp[b], dv[b], dpsi[b], dr[b], th)),
+                    tb,
+                    k,
+                    (acc[b], jerk[b], d1[b], d2[b]),
+                    b,
+                )
+                for b in range(dp.shape[0])
+            ]
             return ReferenceTube.concatenate([*parts, tail])
         except _SpeedVanishes:
             if cells is not None or k >= MAX_CELLS:
@@ -135,9 +146,11 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
     slo = speed[..., 0]
     if not np.all(slo > 0):
         kk, i = np.unravel_index(int(np.argmin(slo)), slo.shape)
-        raise _SpeedVanishes(f"desired speed of vehicle {i} (scenario {b}) cannot be bounded away from 0 (m/s) "
-                             f"near t = {tc[kk]:.6g} s (lower bound {slo.min():.3g}) with {k} cells: the heading "
-                             "reference may be undefined; lengthen blend_time or start closer to the mission velocity")
+        raise _SpeedVanishes(
+            f"desired speed of vehicle {i} (scenario {b}) cannot be bounded away from 0 (m/s) "
+            f"near t = {tc[kk]:.6g} s (lower bound {slo.min():.3g}) with {k} cells: the heading "
+            "reference may be undefined; lengthen blend_time or start closer to the mission velocity"
+        )
     _, chi1, _ = heading_from_velocity(v, a, j)
     rate = jerk / slo + 2.0 * acc**2 / slo**2 + d2
     return ReferenceTube(

@@ -21,15 +21,15 @@ with ``d11 = d11_lin + d11_quad |u|`` and likewise for sway (|v|) and yaw (|r|).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
-from typing import Any, Callable
+from typing import Any
 
 import control as ct
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ._typing import FloatArray
-
 from .exceptions import ParameterError, require_finite
 
 _MASS_FIELDS = ("m11", "m22", "m33")
@@ -79,18 +79,12 @@ class VehicleParams:
             object.__setattr__(self, field, value)
         for field in _MASS_FIELDS:
             if getattr(self, field) <= 0.0:
-                raise ParameterError(
-                    f"{field} must be > 0 (an inertia), got {getattr(self, field)!r}"
-                )
+                raise ParameterError(f"{field} must be > 0 (an inertia), got {getattr(self, field)!r}")
         for field in _DAMPING_FIELDS:
             if getattr(self, field) < 0.0:
-                raise ParameterError(
-                    f"{field} must be >= 0 (damping is dissipative), got {getattr(self, field)!r}"
-                )
+                raise ParameterError(f"{field} must be >= 0 (damping is dissipative), got {getattr(self, field)!r}")
 
-    def damping(
-        self, u: ArrayLike, v: ArrayLike, r: ArrayLike
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def damping(self, u: ArrayLike, v: ArrayLike, r: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Diagonal damping ``(d11, d22, d33)`` at body velocities ``(u, v, r)``.
 
         Parameters
@@ -112,7 +106,7 @@ class VehicleParams:
             self.d33_lin + self.d33_quad * np.abs(r_),
         )
 
-    def with_damping_scale(self, factor: float) -> "VehicleParams":
+    def with_damping_scale(self, factor: float) -> VehicleParams:
         """Return a copy whose six damping coefficients are multiplied by ``factor``.
 
         Used to model a plant/controller mismatch (e.g. ``factor=1.2`` for 20 % more drag).
@@ -193,9 +187,7 @@ def preset(name: str) -> VehicleParams:
     try:
         return PRESETS[name]()
     except KeyError:
-        raise ParameterError(
-            f"unknown vehicle preset {name!r}; expected one of {sorted(PRESETS)}"
-        ) from None
+        raise ParameterError(f"unknown vehicle preset {name!r}; expected one of {sorted(PRESETS)}") from None
 
 
 def rotation(psi: ArrayLike) -> FloatArray:
@@ -230,9 +222,7 @@ def body_block(params: VehicleParams, u: ArrayLike, v: ArrayLike, r: ArrayLike) 
     return skew - md
 
 
-def inertial_block(
-    params: VehicleParams, psi: ArrayLike, u: ArrayLike, v: ArrayLike, r: ArrayLike
-) -> FloatArray:
+def inertial_block(params: VehicleParams, psi: ArrayLike, u: ArrayLike, v: ArrayLike, r: ArrayLike) -> FloatArray:
     """``G(psi, r, |u|, |v|) = R(psi) [S(r) - M1^-1 D1] R(psi)^T`` of eq. (8), in 1/s.
 
     Maps the inertial velocity ``p'`` (m/s) to its drift acceleration, shape ``(..., 2, 2)``.

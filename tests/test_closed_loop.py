@@ -60,8 +60,13 @@ def sine_tube() -> ReferenceTube:
     den = 1.0 + 9.0 * c * c
     # d/dt of -0.3 s / den with th' = 0.1
     yaw_acc = 0.1 * (-0.3 * c * den - (-0.3 * s) * (-18.0 * c * s)) / den**2
-    return ReferenceTube(speed=[[1.0, math.sqrt(10.0)]], offset=[[0.0, 0.0]], yaw_rate=[[-0.3, 0.3]],
-                         accel=[0.3], yaw_accel=[1.05 * float(np.abs(yaw_acc).max())])
+    return ReferenceTube(
+        speed=[[1.0, math.sqrt(10.0)]],
+        offset=[[0.0, 0.0]],
+        yaw_rate=[[-0.3, 0.3]],
+        accel=[0.3],
+        yaw_accel=[1.05 * float(np.abs(yaw_acc).max())],
+    )
 
 
 @pytest.fixture(scope="module")
@@ -187,8 +192,10 @@ def test_single_axis_radii(triangle: dict) -> None:
     assert reg.single_axis.heading <= math.asin(ENV.v[1] / s_hi)
     assert reg.single_axis.position >= 0.645
     assert 0 < reg.kappa < 1 and reg.margins.ok
-    print(f"\nsingle-axis radii {reg.single_axis.to_dict()}\nsimultaneous (kappa={reg.kappa:.4f}) "
-          f"{reg.region.to_dict()}\nbounds {reg.bounds.to_dict()}")
+    print(
+        f"\nsingle-axis radii {reg.single_axis.to_dict()}\nsimultaneous (kappa={reg.kappa:.4f}) "
+        f"{reg.region.to_dict()}\nbounds {reg.bounds.to_dict()}"
+    )
 
 
 def test_region_bounds_match_sampled_start_box(triangle: dict, rng: np.random.Generator) -> None:
@@ -211,9 +218,13 @@ def test_cos_interval_and_margins_by_sampling(rng: np.random.Generator) -> None:
     lo = rng.uniform(-1.2, 1.2, (k, 2))
     offs = np.sort(lo, axis=1)
     s_lo = rng.uniform(0.5, 2.0, k)
-    tube = ReferenceTube(speed=np.stack([s_lo, s_lo + rng.uniform(0, 1, k)], -1), offset=offs,
-                         yaw_rate=np.sort(rng.uniform(-0.2, 0.2, (k, 2)), axis=1), accel=np.zeros(k),
-                         yaw_accel=np.zeros(k))
+    tube = ReferenceTube(
+        speed=np.stack([s_lo, s_lo + rng.uniform(0, 1, k)], -1),
+        offset=offs,
+        yaw_rate=np.sort(rng.uniform(-0.2, 0.2, (k, 2)), axis=1),
+        accel=np.zeros(k),
+        yaw_accel=np.zeros(k),
+    )
     env = Envelope(u=(-4.0, 4.0), v=(-4.0, 4.0), r=(-1.0, 1.0))
     bounds = ErrorBounds(0.0, 0.1, 0.3, 0.05)
     m = envelope_margins(tube, bounds, env)
@@ -222,8 +233,12 @@ def test_cos_interval_and_margins_by_sampling(rng: np.random.Generator) -> None:
     sp = np.linspace(tube.speed[:, 0], tube.speed[:, 1], 11).T[:, :, None]
     u = sp * np.cos(th)[:, None, :]
     v = -sp * np.sin(th)[:, None, :]
-    sampled = {"u_hi": env.u[1] - u.max() - bounds.velocity, "u_lo": u.min() - bounds.velocity - env.u[0],
-               "v_hi": env.v[1] - v.max() - bounds.velocity, "v_lo": v.min() - bounds.velocity - env.v[0]}
+    sampled = {
+        "u_hi": env.u[1] - u.max() - bounds.velocity,
+        "u_lo": u.min() - bounds.velocity - env.u[0],
+        "v_hi": env.v[1] - v.max() - bounds.velocity,
+        "v_lo": v.min() - bounds.velocity - env.v[0],
+    }
     for name, val in sampled.items():
         assert getattr(m, name) <= val + 1e-12
         assert getattr(m, name) >= val - 1e-4
@@ -254,8 +269,14 @@ def _rot(phi: np.ndarray) -> np.ndarray:
 
 
 def _simulate_position(
-    x0: np.ndarray, alpha: float, sigma: float, strategy: str, p2: np.ndarray, rng: np.random.Generator,
-    t_end: float = 30.0, dt: float = 0.01,
+    x0: np.ndarray,
+    alpha: float,
+    sigma: float,
+    strategy: str,
+    p2: np.ndarray,
+    rng: np.random.Generator,
+    t_end: float = 30.0,
+    dt: float = 0.01,
 ) -> tuple[np.ndarray, np.ndarray]:
     """RK4 on ``e'' = (lam - alpha) e' + D e' - k1 e``, D held over each step; returns
     ``sup_t ||e'||`` per start and ``V(t)/V(0)`` with ``V = x^T (p2 kron I2) x``."""
@@ -296,13 +317,14 @@ def _boundary_starts(rp: float, rv: float, rng: np.random.Generator, n: int = 64
     a = rng.uniform(0, 2 * np.pi, (n, 2))
     a[: n // 4, 1] = a[: n // 4, 0]  # parallel and antiparallel starts hit the box corners
     a[n // 4 : n // 2, 1] = a[n // 4 : n // 2, 0] + np.pi
-    return np.concatenate([rp * np.stack([np.cos(a[:, 0]), np.sin(a[:, 0])], -1),
-                           rv * np.stack([np.cos(a[:, 1]), np.sin(a[:, 1])], -1)], 1)
+    return np.concatenate(
+        [rp * np.stack([np.cos(a[:, 0]), np.sin(a[:, 0])], -1), rv * np.stack([np.cos(a[:, 1]), np.sin(a[:, 1])], -1)],
+        1,
+    )
 
 
 @pytest.mark.parametrize("strategy", ["greedy", "switching", "constant"])
-def test_position_region_and_decay_under_adversarial_d(triangle: dict, strategy: str,
-                                                       rng: np.random.Generator) -> None:
+def test_position_region_and_decay_under_adversarial_d(triangle: dict, strategy: str, rng: np.random.Generator) -> None:
     cert: ClosedLoopCertificate = triangle["cert"]
     reg, sigma, alpha = cert.region, cert.region.sigma, triangle["alpha"]
     x0 = _boundary_starts(reg.region.position, reg.region.velocity, rng)
@@ -316,8 +338,7 @@ def test_position_region_and_decay_under_adversarial_d(triangle: dict, strategy:
 
 
 @pytest.mark.parametrize("strategy", ["greedy", "switching", "lo", "hi"])
-def test_heading_region_and_decay_under_switching_c(triangle: dict, strategy: str,
-                                                    rng: np.random.Generator) -> None:
+def test_heading_region_and_decay_under_switching_c(triangle: dict, strategy: str, rng: np.random.Generator) -> None:
     cert: ClosedLoopCertificate = triangle["cert"]
     reg, k1p = cert.region, triangle["k_psi"][0]
     c_lo, c_hi = reg.c_range
@@ -333,6 +354,7 @@ def test_heading_region_and_decay_under_switching_c(triangle: dict, strategy: st
                 c = np.where((k // 40 + np.arange(n)) % 2 == 0, c_lo, c_hi)
             else:
                 c = np.full(n, c_lo if strategy == "lo" else c_hi)
+
             def f(z: np.ndarray, c: np.ndarray = c) -> np.ndarray:
                 return np.stack([z[:, 1], -k1p * z[:, 0] - c * z[:, 1]], 1)
 
@@ -369,8 +391,10 @@ def test_ceiling_ratio(triangle: dict) -> None:
         worst = max(worst, float(np.linalg.norm(x[:, 2:], axis=1).max()))
     ceiling = budget / worst
     ratio = cert.region.single_axis.position / ceiling
-    print(f"\nposition-only: certified {cert.region.single_axis.position:.4f} m, constant-D ceiling "
-          f"{ceiling:.4f} m, ratio {ratio:.3f}")
+    print(
+        f"\nposition-only: certified {cert.region.single_axis.position:.4f} m, constant-D ceiling "
+        f"{ceiling:.4f} m, ratio {ratio:.3f}"
+    )
     assert 0.7 <= ratio <= 1.0
 
 
@@ -398,8 +422,12 @@ def test_thrust_bounds_by_sampling(triangle: dict, rng: np.random.Generator) -> 
     tau_xy = np.einsum("nji,nj->ni", rotation(psi), w) * np.array([params.m11, params.m22])
     yaw = rng.uniform(*tube.yaw_rate[0], n)
     _, _, d33 = params.damping(u, v, r)
-    big_v = (rng.uniform(-1, 1, n) * tube.yaw_accel[0] + d33 / params.m33 * yaw
-             - k1p * rng.uniform(-b.heading, b.heading, n) - k2p * rng.uniform(-b.yaw_rate, b.yaw_rate, n))
+    big_v = (
+        rng.uniform(-1, 1, n) * tube.yaw_accel[0]
+        + d33 / params.m33 * yaw
+        - k1p * rng.uniform(-b.heading, b.heading, n)
+        - k2p * rng.uniform(-b.yaw_rate, b.yaw_rate, n)
+    )
     tau_psi = params.m33 * big_v - (params.m11 - params.m22) * u * v
     t = cert.thrust
     assert np.abs(tau_xy[:, 0]).max() <= t.force_x

@@ -238,8 +238,12 @@ def test_demo_envelope_keeps_the_paper_gains():
         lam = min(-(p.d11_lin + p.d11_quad * 3.5) / p.m11, -(p.d22_lin + p.d22_quad * max(map(abs, env.v))) / p.m22)
         worst = 0.0
         for u, v, r in product((0.0, 3.5), (0.0, max(map(abs, env.v))), env.r):
-            b = np.array([[-(p.d11_lin + p.d11_quad * u) / p.m11, (p.m22 - p.m11) * r / p.m11],
-                          [(p.m22 - p.m11) * r / p.m22, -(p.d22_lin + p.d22_quad * v) / p.m22]])
+            b = np.array(
+                [
+                    [-(p.d11_lin + p.d11_quad * u) / p.m11, (p.m22 - p.m11) * r / p.m11],
+                    [(p.m22 - p.m11) * r / p.m22, -(p.d22_lin + p.d22_quad * v) / p.m22],
+                ]
+            )
             worst = max(worst, np.linalg.norm(b - lam * np.eye(2), 2))
         return lam, worst
 

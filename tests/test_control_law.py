@@ -34,13 +34,26 @@ class _ArbitraryMotion:
 
 
 def _random_motion(rng: np.random.Generator, n: int) -> Motion:
-    return Motion(p=rng.normal(scale=20.0, size=(n, 2)), v=rng.normal(size=(n, 2)), a=rng.normal(scale=0.1, size=(n, 2)),
-                  psi=rng.uniform(-np.pi, np.pi, n), r=rng.normal(scale=0.2, size=n), r_dot=rng.normal(scale=0.05, size=n))
+    return Motion(
+        p=rng.normal(scale=20.0, size=(n, 2)),
+        v=rng.normal(size=(n, 2)),
+        a=rng.normal(scale=0.1, size=(n, 2)),
+        psi=rng.uniform(-np.pi, np.pi, n),
+        r=rng.normal(scale=0.2, size=n),
+        r_dot=rng.normal(scale=0.05, size=n),
+    )
 
 
 def _random_states(rng: np.random.Generator, n: int) -> np.ndarray:
-    s = np.column_stack([rng.normal(scale=20.0, size=(n, 2)), rng.uniform(-np.pi, np.pi, n),
-                         rng.uniform(-1, 3, n), rng.uniform(-1, 1, n), rng.uniform(-0.5, 0.5, n)])
+    s = np.column_stack(
+        [
+            rng.normal(scale=20.0, size=(n, 2)),
+            rng.uniform(-np.pi, np.pi, n),
+            rng.uniform(-1, 3, n),
+            rng.uniform(-1, 1, n),
+            rng.uniform(-0.5, 0.5, n),
+        ]
+    )
     return s
 
 
@@ -53,10 +66,19 @@ def _law(**kw: object) -> VehicleLaw:
 @pytest.mark.parametrize("orientation", ["corrected", "printed"])
 def test_vehicle_law_equals_jacobi_form(rng, n, orientation):
     law = _law(orientation=orientation)
-    for source in (_ArbitraryMotion(_random_motion(rng, n)),
-                   RigidReference(SineReference(), rng.normal(scale=10.0, size=(n, 2)))):
-        paper = FormationController(params=law.params, transform=JacobiTransform(n), reference=source, alpha=law.alpha,
-                                    k1=law.k1, k_psi=law.k_psi, orientation=law.orientation)
+    for source in (
+        _ArbitraryMotion(_random_motion(rng, n)),
+        RigidReference(SineReference(), rng.normal(scale=10.0, size=(n, 2))),
+    ):
+        paper = FormationController(
+            params=law.params,
+            transform=JacobiTransform(n),
+            reference=source,
+            alpha=law.alpha,
+            k1=law.k1,
+            k_psi=law.k_psi,
+            orientation=law.orientation,
+        )
         for t in (0.0, 7.3):
             s = _random_states(rng, n)
             pdot = ground_velocity(s, rng.normal(scale=0.3, size=2))
@@ -88,7 +110,9 @@ def test_perfect_model_error_dynamics(rng):
     psi, u, v, r = s[:, 2], s[:, 3], s[:, 4], s[:, 5]
     c, sn = np.cos(psi), np.sin(psi)
     # p'' = d/dt R(psi)[u, v] = R [u', v'] + r R' [u, v]
-    pdd = np.column_stack([c * d[:, 3] - sn * d[:, 4] - r * (sn * u + c * v), sn * d[:, 3] + c * d[:, 4] + r * (c * u - sn * v)])
+    pdd = np.column_stack(
+        [c * d[:, 3] - sn * d[:, 4] - r * (sn * u + c * v), sn * d[:, 3] + c * d[:, 4] + r * (c * u - sn * v)]
+    )
     e, e_dot = s[:, :2] - m.p, pdot - m.v
     g = inertial_block(par, psi, u, v, r)
     expected = np.einsum("nij,nj->ni", g, e_dot) - law.alpha * e_dot - law.k1 * e + m.a

@@ -13,7 +13,7 @@ from auv_hinf.lmi import LMI_RTOL, lmi_hinf_norm
 from auv_hinf.loops import NORM_RTOL, hinf_norm, position_block, velocity_block
 from auv_hinf.riccati import ARE_RTOL, riccati_alpha
 
-INV_SQRT2 = 2 ** -0.5
+INV_SQRT2 = 2**-0.5
 
 
 def test_item14_four_ways():
@@ -115,8 +115,14 @@ def test_lmi_norm_at_lambda_minus_1e6_is_accurate():
 
 @pytest.mark.parametrize(
     "lam, gamma",
-    [(-1e-6, 0.5), (-1.2, 0.7071067811865497), (-1.2, gamma_min(-1.2) * (1 - 1e-14)), (-0.002, 1 / 0.0021),
-     (-1.2, INV_SQRT2 * (1 + 1e-13)), (-1.2, INV_SQRT2 * (1 - 1e-13))],
+    [
+        (-1e-6, 0.5),
+        (-1.2, 0.7071067811865497),
+        (-1.2, gamma_min(-1.2) * (1 - 1e-14)),
+        (-0.002, 1 / 0.0021),
+        (-1.2, INV_SQRT2 * (1 + 1e-13)),
+        (-1.2, INV_SQRT2 * (1 - 1e-13)),
+    ],
 )
 def test_former_failures_give_consistent_reports(lam, gamma):
     r = crosscheck(lam, gamma, 2)

@@ -19,7 +19,7 @@ from auv_hinf.design import (
     theorem1_conditions,
 )
 
-INV_SQRT2 = 2 ** -0.5
+INV_SQRT2 = 2**-0.5
 # Closed forms are evaluated in a handful of flops: round-off tolerance.
 CLOSED_FORM_RTOL = 1e-12
 
@@ -79,8 +79,12 @@ def test_below_gamma_min_is_clear_error(method):
 
 @pytest.mark.parametrize(
     "lam, gamma, pattern",
-    [(0.5, 1.0, "lambda must be < 0"), (-1.0, -1.0, "gamma must be > 0"),
-     (math.nan, 1.0, "lambda must be finite"), (-1.0, math.inf, "gamma must be finite")],
+    [
+        (0.5, 1.0, "lambda must be < 0"),
+        (-1.0, -1.0, "gamma must be > 0"),
+        (math.nan, 1.0, "lambda must be finite"),
+        (-1.0, math.inf, "gamma must be finite"),
+    ],
 )
 def test_bad_inputs(lam, gamma, pattern):
     with pytest.raises(ValueError, match=pattern):

@@ -37,9 +37,15 @@ def test_dense_output_accuracy_against_exact_solution():
 
 
 def test_matches_tight_scipy_reference():
-    tight = np.concatenate([
-        rk45_reference(lambda t, y, i=i: _osc_one(t, y, i), (0.0, 10.0), Y0[i : i + 1], T_EVAL,
-                       rtol=1e-12, atol=1e-12).y for i in range(len(PARAMS))], axis=1)
+    tight = np.concatenate(
+        [
+            rk45_reference(
+                lambda t, y, i=i: _osc_one(t, y, i), (0.0, 10.0), Y0[i : i + 1], T_EVAL, rtol=1e-12, atol=1e-12
+            ).y
+            for i in range(len(PARAMS))
+        ],
+        axis=1,
+    )
     for tol in (1e-6, 1e-8, 1e-10):
         sol = dopri5(_osc, (0.0, 10.0), Y0, T_EVAL, rtol=tol, atol=tol)
         err = np.abs(sol.y - tight).max()

@@ -13,7 +13,7 @@ from auv_hinf.lmi import LMI_RTOL, lmi_hinf_norm, lmi_minimal_alpha, lmi_stabili
 from auv_hinf.loops import hinf_norm_peak, velocity_block
 from auv_hinf.riccati import root_condition
 
-INV_SQRT2 = 2 ** -0.5
+INV_SQRT2 = 2**-0.5
 
 
 def _sweep_norm(sys: ct.StateSpace) -> float:
@@ -92,8 +92,18 @@ def test_minimal_alpha_at_every_scale(lam, gamma):
 
 @pytest.mark.parametrize(
     "lam, gamma",
-    [(-1.2, 0.7071067811865497), (-1.2, INV_SQRT2), (-1.2, INV_SQRT2 * (1 + 1e-13)), (-1.2, INV_SQRT2 * (1 - 1e-13)),
-     (-1.2, 2.86), (-1.2, 0.6), (-1e-6, 0.8), (-1e6, 1.0), (-1e6, 1.2e-6), (-1e-3, 1e4)],
+    [
+        (-1.2, 0.7071067811865497),
+        (-1.2, INV_SQRT2),
+        (-1.2, INV_SQRT2 * (1 + 1e-13)),
+        (-1.2, INV_SQRT2 * (1 - 1e-13)),
+        (-1.2, 2.86),
+        (-1.2, 0.6),
+        (-1e-6, 0.8),
+        (-1e6, 1.0),
+        (-1e6, 1.2e-6),
+        (-1e-3, 1e4),
+    ],
 )
 def test_stabilizing_alpha_near_inv_sqrt2_and_scales(lam, gamma):
     """Regression: gamma within 1e-13 of 1/sqrt2 raised cvxpy's SolverError (1/|c| ~ 1e13)."""

@@ -97,7 +97,7 @@ def _partitioned_plant(lam: float, delta: float = DELTA) -> ct.StateSpace:
     a = [[lam]]
     b = [[1.0, 0.0, 1.0]]  # inputs [w1, w2, u]
     c = [[1.0], [0.0], [1.0]]  # outputs [z1 = x, z2 = u/sqrt2, y]
-    d = [[0.0, 0.0, 0.0], [0.0, 0.0, 2 ** -0.5], [0.0, delta, 0.0]]
+    d = [[0.0, 0.0, 0.0], [0.0, 0.0, 2**-0.5], [0.0, delta, 0.0]]
     return ct.ss(a, b, c, d)
 
 

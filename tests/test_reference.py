@@ -142,8 +142,12 @@ def test_bounds_hold_on_random_times(name: str, rng: np.random.Generator) -> Non
 def _maximise(f, lo: float, hi: float, n: int = 20_001) -> float:
     grid = np.linspace(lo, hi, n)
     i = int(np.argmax(f(grid)))
-    res = minimize_scalar(lambda x: -f(np.array(x)), bounds=(grid[max(i - 1, 0)], grid[min(i + 1, n - 1)]),
-                          method="bounded", options={"xatol": 1e-12})
+    res = minimize_scalar(
+        lambda x: -f(np.array(x)),
+        bounds=(grid[max(i - 1, 0)], grid[min(i + 1, n - 1)]),
+        method="bounded",
+        options={"xatol": 1e-12},
+    )
     return float(max(-res.fun, f(grid).max()))
 
 
@@ -151,9 +155,15 @@ def _maximise(f, lo: float, hi: float, n: int = 20_001) -> float:
 def test_sine_bounds_are_exact(params: tuple[float, float, float]) -> None:
     ref = SineReference(*params)
     b, period = ref.bounds(), 2 * np.pi / ref.omega
-    for key, val, sign in (("speed", b.speed_max, 1), ("speed", b.speed_min, -1), ("accel", b.accel_max, 1),
-                           ("jerk", b.jerk_max, 1), ("rate", b.turn_rate_max, 1), ("rate", b.turn_rate_min, -1),
-                           ("racc", b.turn_accel_max, 1)):
+    for key, val, sign in (
+        ("speed", b.speed_max, 1),
+        ("speed", b.speed_min, -1),
+        ("accel", b.accel_max, 1),
+        ("jerk", b.jerk_max, 1),
+        ("rate", b.turn_rate_max, 1),
+        ("rate", b.turn_rate_min, -1),
+        ("racc", b.turn_accel_max, 1),
+    ):
         best = sign * _maximise(lambda t, key=key, sign=sign: sign * _sampled(ref, t)[key], 0.0, period)
         assert abs(best - val) <= 1e-9 * max(abs(val), 1e-12), (key, best, val)
 
@@ -161,8 +171,14 @@ def test_sine_bounds_are_exact(params: tuple[float, float, float]) -> None:
 def test_circle_and_lawnmower_constants_are_exact(rng: np.random.Generator) -> None:
     ref = MISSIONS["circle"]
     s, b = _sampled(ref, rng.uniform(0, 1e4, 1000)), ref.bounds()
-    for key, val in (("speed", b.speed_max), ("speed", b.speed_min), ("accel", b.accel_max), ("jerk", b.jerk_max),
-                     ("rate", b.turn_rate_max), ("rate", b.turn_rate_min)):
+    for key, val in (
+        ("speed", b.speed_max),
+        ("speed", b.speed_min),
+        ("accel", b.accel_max),
+        ("jerk", b.jerk_max),
+        ("rate", b.turn_rate_max),
+        ("rate", b.turn_rate_min),
+    ):
         assert np.allclose(s[key], val, rtol=1e-9, atol=0)
     assert np.allclose(s["racc"], 0.0, atol=1e-15)
     assert np.allclose(ref(0.0)[1], [ref.speed, 0.0]) and np.allclose(ref(0.0)[0], [5.0, 7.0 - 40.0])
@@ -186,14 +202,19 @@ def test_line_bounds_are_zero() -> None:
     assert b.accel_max == b.jerk_max == b.turn_rate_min == b.turn_rate_max == b.turn_accel_max == 0.0
 
 
-@pytest.mark.parametrize(("cls", "kwargs", "field"), [
-    (SineReference, {"speed": -1.0}, "speed"), (SineReference, {"amplitude": -2.0}, "amplitude"),
-    (SineReference, {"omega": float("nan")}, "omega"), (LineReference, {"speed": 0.0}, "speed"),
-    (LineReference, {"speed": 1.0, "start": (0.0, np.inf)}, "start"),
-    (CircleReference, {"speed": 1.0, "radius": 0.0}, "radius"),
-    (LawnmowerReference, {"speed": 1.0, "leg_length": 10.0, "spacing": 5.0, "turn_radius": 3.0}, "spacing"),
-    (LawnmowerReference, {"speed": 1.0, "leg_length": -1.0, "spacing": 50.0, "turn_radius": 3.0}, "leg_length"),
-])
+@pytest.mark.parametrize(
+    ("cls", "kwargs", "field"),
+    [
+        (SineReference, {"speed": -1.0}, "speed"),
+        (SineReference, {"amplitude": -2.0}, "amplitude"),
+        (SineReference, {"omega": float("nan")}, "omega"),
+        (LineReference, {"speed": 0.0}, "speed"),
+        (LineReference, {"speed": 1.0, "start": (0.0, np.inf)}, "start"),
+        (CircleReference, {"speed": 1.0, "radius": 0.0}, "radius"),
+        (LawnmowerReference, {"speed": 1.0, "leg_length": 10.0, "spacing": 5.0, "turn_radius": 3.0}, "spacing"),
+        (LawnmowerReference, {"speed": 1.0, "leg_length": -1.0, "spacing": 50.0, "turn_radius": 3.0}, "leg_length"),
+    ],
+)
 def test_invalid_parameters_raise(cls: type, kwargs: dict, field: str) -> None:
     with pytest.raises(ParameterError, match=field):
         cls(**kwargs)
@@ -356,8 +377,13 @@ def test_shaped_tube_is_sound(name: str, rng: np.random.Generator) -> None:
         tube = shaped_tube(fleet, resolution=5e-3)
         assert fleet.shaping is not None
         tb = fleet.shaping.blend_time
-        t = np.concatenate([rng.uniform(0, tb, (4000, s)), rng.uniform(tb, 5 * tb, (300, s)),
-                            np.linspace(0, tb, 200)[:, None] + np.zeros(s)])
+        t = np.concatenate(
+            [
+                rng.uniform(0, tb, (4000, s)),
+                rng.uniform(tb, 5 * tb, (300, s)),
+                np.linspace(0, tb, 200)[:, None] + np.zeros(s),
+            ]
+        )
         _check_tube(fleet, tube, t)
         n_total += t.size * off.shape[0]
     assert n_total >= 100_000
@@ -391,5 +417,6 @@ def test_unshaped_tube_is_mission_tube_and_vanishing_speed_raises() -> None:
     with pytest.raises(ParameterError, match="bounded away from 0"):
         shaped_tube(shaped_start(line, off, init, 20.0))
     with pytest.raises(ParameterError, match="cells"):
-        shaped_tube(shaped_start(mission, off, _random_starts(mission, off, np.random.default_rng(1), 1)[0], 50.0),
-                    cells=0)
+        shaped_tube(
+            shaped_start(mission, off, _random_starts(mission, off, np.random.default_rng(1), 1)[0], 50.0), cells=0
+        )

@@ -21,7 +21,7 @@ from auv_hinf.design import (
 from auv_hinf.exceptions import DesignError, SolverError
 from auv_hinf.riccati import ARE_RTOL, riccati_alpha, root_condition
 
-INV_SQRT2 = 2 ** -0.5
+INV_SQRT2 = 2**-0.5
 
 
 def _residual_root(lam: float, gamma: float, alpha: float) -> float:

@@ -56,7 +56,9 @@ def test_postprocessing_against_dense_reference(triangle):
     k = np.array([0, 17, 900, 3000])
     jac = np.einsum("jk,tkd->tjd", phi, triangle.states[k, :, :2])
     target = np.einsum("jk,tkd->tjd", phi, scn.reference.motion(triangle.t[k]).p)
-    assert_allclose(triangle.shape_error[k], np.linalg.norm((jac - target)[:, :-1].reshape(len(k), -1), axis=1), atol=1e-10)
+    assert_allclose(
+        triangle.shape_error[k], np.linalg.norm((jac - target)[:, :-1].reshape(len(k), -1), axis=1), atol=1e-10
+    )
     assert_allclose(triangle.center_error[k], np.linalg.norm((jac - target)[:, -1], axis=1), atol=1e-10)
     for j in k:  # forces of the one vectorised call equal per-sample law calls
         s = triangle.states[j]
@@ -113,9 +115,15 @@ def test_damping_mismatch_still_converges():
 
 def test_batch_equals_single_runs(rng):
     base = paper_scenario("paper-triangle", horizon=30.0, samples=61)
-    scns = [replace(base, plant=paper2011().with_damping_scale(f), current=tuple(rng.normal(scale=0.1, size=2)),
-                    initial=base.initial + rng.normal(scale=0.5, size=(3, 6)) * [1, 1, 0.1, 0.1, 0.1, 0.02])
-            for f in (0.9, 1.0, 1.15)]
+    scns = [
+        replace(
+            base,
+            plant=paper2011().with_damping_scale(f),
+            current=tuple(rng.normal(scale=0.1, size=2)),
+            initial=base.initial + rng.normal(scale=0.5, size=(3, 6)) * [1, 1, 0.1, 0.1, 0.1, 0.02],
+        )
+        for f in (0.9, 1.0, 1.15)
+    ]
     batch = simulate_batch(ScenarioBatch(tuple(scns)))
     for scn, res in zip(scns, batch):
         one = simulate(scn)
@@ -156,10 +164,21 @@ def test_rhs_cost_at_n1000(rng):
     n = 1000
     base = paper_scenario("paper-triangle")
     off = regular_polygon(n, 2.0 * n)
-    scn = replace(base, reference=RigidReference(SineReference(), off), initial=np.column_stack(
-        [off + rng.normal(size=(n, 2)), rng.normal(scale=0.1, size=n), np.ones(n), np.zeros((n, 2))]))
-    dense = FormationController(params=scn.law.params, transform=JacobiTransform(n), reference=scn.reference,
-                                alpha=scn.law.alpha, k1=scn.law.k1, k_psi=scn.law.k_psi)
+    scn = replace(
+        base,
+        reference=RigidReference(SineReference(), off),
+        initial=np.column_stack(
+            [off + rng.normal(size=(n, 2)), rng.normal(scale=0.1, size=n), np.ones(n), np.zeros((n, 2))]
+        ),
+    )
+    dense = FormationController(
+        params=scn.law.params,
+        transform=JacobiTransform(n),
+        reference=scn.reference,
+        alpha=scn.law.alpha,
+        k1=scn.law.k1,
+        k_psi=scn.law.k_psi,
+    )
     s = scn.initial
 
     def old() -> np.ndarray:
@@ -178,8 +197,10 @@ def test_rhs_cost_at_n1000(rng):
             fn()
             reps.append(time.perf_counter() - t0)
         cost[name] = min(reps)
-    print(f"N=1000 rhs: dense Jacobi {cost['old'] * 1e3:.2f} ms, per-vehicle {cost['new'] * 1e3:.3f} ms, "
-          f"ratio {cost['old'] / cost['new']:.0f}x")
+    print(
+        f"N=1000 rhs: dense Jacobi {cost['old'] * 1e3:.2f} ms, per-vehicle {cost['new'] * 1e3:.3f} ms, "
+        f"ratio {cost['old'] / cost['new']:.0f}x"
+    )
 
 
 def test_bad_scenario():

@@ -106,8 +106,13 @@ def test_input_matrix(vehicle):
 def test_rhs_matches_eq10(vehicle, rng):
     """p'' computed by differentiating the rhs equals G p' + H tau (eq. 10)."""
     state = np.column_stack(
-        [rng.normal(size=(20, 2)), rng.uniform(-3, 3, 20), rng.uniform(0.2, 2, 20),
-         rng.uniform(-1, 1, 20), rng.uniform(-0.5, 0.5, 20)]
+        [
+            rng.normal(size=(20, 2)),
+            rng.uniform(-3, 3, 20),
+            rng.uniform(0.2, 2, 20),
+            rng.uniform(-1, 1, 20),
+            rng.uniform(-0.5, 0.5, 20),
+        ]
     )
     tau = rng.normal(scale=50, size=(20, 3))
     d = rhs(vehicle, state, tau)

@@ -133,9 +133,12 @@ def lmi_hinf_norm(sys: ct.StateSpace) -> LmiResult:
     if np.any(poles.real >= 0):
         raise DesignError(f"lmi_hinf_norm needs an asymptotically stable system; poles {poles}")
     freqs = np.concatenate([[0.0], np.abs(poles)])
-    gains = [float(np.linalg.norm(d, 2))] + [
-        float(np.linalg.norm(c @ np.linalg.solve(1j * w * np.eye(nx) - a, b) + d, 2)) for w in freqs
-    ] if nx else [float(np.linalg.norm(d, 2))]
+    gains = (
+        [float(np.linalg.norm(d, 2))]
+        + [float(np.linalg.norm(c @ np.linalg.solve(1j * w * np.eye(nx) - a, b) + d, 2)) for w in freqs]
+        if nx
+        else [float(np.linalg.norm(d, 2))]
+    )
     k = max(gains)
     if not k > 0.0 or not math.isfinite(k):
         k = 1.0
@@ -146,7 +149,7 @@ def lmi_hinf_norm(sys: ct.StateSpace) -> LmiResult:
         a1, b1, c1 = a0 / w0, b0 / math.sqrt(w0), c0 / (math.sqrt(w0) * k)
         side = nx + max(nu, ny)
         big = np.zeros((side, side))
-        big[:nx, :nx], big[:nx, nx:nx + nu], big[nx:nx + ny, :nx] = a1, b1, c1
+        big[:nx, :nx], big[:nx, nx : nx + nu], big[nx : nx + ny, :nx] = a1, b1, c1
         _, (scale, _) = sla.matrix_balance(big, permute=False, separate=True)
         t = np.asarray(scale[:nx], dtype=float)
         return a1 * t[None, :] / t[:, None], b1 / t[:, None], c1 * t[None, :]
@@ -187,8 +190,9 @@ def lmi_hinf_norm(sys: ct.StateSpace) -> LmiResult:
         raise SolverError(f"{what}: balanced form failed ({first}); modal basis too ill-conditioned") from first
     am, bm, cm = (np.asarray(m, dtype=float) for m in (modal.A, modal.B, modal.C))
     g_val, solves, max_eig = brl(*scaled(am, bm, cm), d / k, what + " (modal)")
-    return LmiResult(value=k * g_val, status=cp.OPTIMAL, solves=total + solves, max_eig=max_eig,
-                     formulation="modal+balanced")
+    return LmiResult(
+        value=k * g_val, status=cp.OPTIMAL, solves=total + solves, max_eig=max_eig, formulation="modal+balanced"
+    )
 
 
 #: Largest condition number of the modal basis accepted by :func:`lmi_hinf_norm`: the

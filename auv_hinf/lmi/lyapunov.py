@@ -117,7 +117,12 @@ class LyapunovResult:
 
 
 def _verify_lyapunov(
-    what: str, matrix: FloatArray, mats: list[tuple[FloatArray, float]], tau: float, beta: float, objective: float,
+    what: str,
+    matrix: FloatArray,
+    mats: list[tuple[FloatArray, float]],
+    tau: float,
+    beta: float,
+    objective: float,
 ) -> LyapunovResult | None:
     """Re-check strict negativity of every LMI matrix and ``matrix > 0``; None if it fails."""
     top, margin = -math.inf, 0.0
@@ -217,8 +222,9 @@ def lmi_heading_lyapunov(k1psi: float, c_range: tuple[float, float], beta: float
     solve(problem, "heading-loop Lyapunov LMI")
     qv = np.asarray(q.value, dtype=float)
     qv = 0.5 * (qv + qv.T)
-    return _verify_lyapunov("heading LMI", qv, heading_lmi_matrices(qv, k1psi, c_range, beta), 0.0, beta,
-                            _value(problem))
+    return _verify_lyapunov(
+        "heading LMI", qv, heading_lmi_matrices(qv, k1psi, c_range, beta), 0.0, beta, _value(problem)
+    )
 
 
 def _start_constraints(m: cp.Variable, w: dict[str, cp.Parameter]) -> list[cp.Constraint]:
@@ -271,8 +277,9 @@ def lmi_position_region(lam: float, alpha: float, k1: float, sigma: float, rp: f
     p2 = np.asarray(p.value, dtype=float)
     p2 = 0.5 * (p2 + p2.T)
     t = max(float(np.asarray(tau.value, dtype=float)), 0.0)
-    res = _verify_lyapunov("position region", p2, [position_lmi_matrix(p2, t, lam, alpha, k1, sigma, 0.0)], t, 0.0,
-                           _value(problem))
+    res = _verify_lyapunov(
+        "position region", p2, [position_lmi_matrix(p2, t, lam, alpha, k1, sigma, 0.0)], t, 0.0, _value(problem)
+    )
     if res is None:
         raise SolverError("position-region SDP: the returned P2 fails the strict eigvalsh re-check")
     return res
@@ -315,8 +322,9 @@ def lmi_heading_region(
     solve(problem, "heading-region SDP")
     qv = np.asarray(q.value, dtype=float)
     qv = 0.5 * (qv + qv.T)
-    res = _verify_lyapunov("heading region", qv, heading_lmi_matrices(qv, k1psi, c_range, 0.0), 0.0, 0.0,
-                           _value(problem))
+    res = _verify_lyapunov(
+        "heading region", qv, heading_lmi_matrices(qv, k1psi, c_range, 0.0), 0.0, 0.0, _value(problem)
+    )
     if res is None:
         raise SolverError("heading-region SDP: the returned Q fails the strict eigvalsh re-check")
     return res
