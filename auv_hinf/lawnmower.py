@@ -18,6 +18,11 @@ from .paths import GL_NODES, SMOOTHSTEP, Derivatives, MissionBounds, _Base, _che
 #: ``|b''|`` at ``84/(5 sqrt 5)`` (s = 1/2 -+ 1/(2 sqrt 5)); computed from the polynomial.
 SMOOTHSTEP_D1_MAX = poly_sup(SMOOTHSTEP.deriv())
 SMOOTHSTEP_D2_MAX = poly_sup(SMOOTHSTEP.deriv(2))
+#: Smoothstep derivatives and the Gauss-Legendre rule, built once (paths are evaluated at
+#: every right-hand-side call).
+_SMOOTHSTEP_D1 = SMOOTHSTEP.deriv()
+_SMOOTHSTEP_D2 = SMOOTHSTEP.deriv(2)
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(GL_NODES)
 
 
 @dataclass(frozen=True)
@@ -101,7 +106,7 @@ class LawnmowerReference(_Base):
 
     def _advance(self, tau: FloatArray, sign: FloatArray, chi0: FloatArray, direc: FloatArray) -> FloatArray:
         """Displacement (m) after local time ``tau`` (s) in segments of the given ``sign``, ``chi0``, ``direc``."""
-        x, w = np.polynomial.legendre.leggauss(GL_NODES)
+        x, w = _GL_X, _GL_W
         frac = (tau / self.t90)[..., None]
         chi = chi0[..., None] + sign[..., None] * 0.5 * np.pi * SMOOTHSTEP(frac * 0.5 * (x + 1))
         turn = self.speed * self.t90 * frac * 0.5 * _vec(np.sum(w * np.cos(chi), -1), np.sum(w * np.sin(chi), -1))
@@ -121,8 +126,8 @@ class LawnmowerReference(_Base):
         frac = np.clip(tau / t90, 0.0, 1.0)
         sg = sign[k]
         chi = chi0[k] + sg * 0.5 * np.pi * SMOOTHSTEP(frac)
-        d1 = sg * 0.5 * np.pi * SMOOTHSTEP.deriv()(frac) / t90
-        d2 = sg * 0.5 * np.pi * SMOOTHSTEP.deriv(2)(frac) / t90**2
+        d1 = sg * 0.5 * np.pi * _SMOOTHSTEP_D1(frac) / t90
+        d2 = sg * 0.5 * np.pi * _SMOOTHSTEP_D2(frac) / t90**2
         tan = np.where((sg != 0)[..., None], _vec(np.cos(chi), np.sin(chi)), direc[k])
         nor = _vec(-tan[..., 1], tan[..., 0])
         q = np.asarray(self.start) + (pos[-1] * n_per[..., None] + pos[k]) + self._advance(tau, sg, chi0[k], direc[k])

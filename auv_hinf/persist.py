@@ -104,8 +104,11 @@ def encode_value(obj: Any) -> Any:
     if isinstance(obj, np.ndarray):
         if obj.dtype.kind not in ARRAY_KINDS:
             raise ConfigError(f"cannot store a numpy array of dtype {obj.dtype}")
-        return {"$ndarray": obj.dtype.str, "shape": list(obj.shape),
-                "data": [encode_value(x) for x in obj.ravel().tolist()]}
+        return {
+            "$ndarray": obj.dtype.str,
+            "shape": list(obj.shape),
+            "data": [encode_value(x) for x in obj.ravel().tolist()],
+        }
     if isinstance(obj, tuple):
         return {"$tuple": [encode_value(x) for x in obj]}
     if isinstance(obj, list):
@@ -118,8 +121,10 @@ def encode_value(obj: Any) -> Any:
         cls = type(obj)
         if not _in_package(cls.__module__):
             raise ConfigError(f"cannot store an instance of {cls.__module__}.{cls.__qualname__}")
-        return {"$dataclass": f"{cls.__module__}:{cls.__qualname__}",
-                "fields": {f.name: encode_value(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init}}
+        return {
+            "$dataclass": f"{cls.__module__}:{cls.__qualname__}",
+            "fields": {f.name: encode_value(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init},
+        }
     raise ConfigError(f"cannot store a value of type {type(obj).__name__}: {obj!r}")
 
 
@@ -195,10 +200,29 @@ def _dataclass(ref: Any) -> type:
         for part in qualname.split("."):
             obj = getattr(obj, part)
     except (ImportError, AttributeError):
-        raise ConfigError(f"class {ref!r} of a certificate file does not exist in this version") from None
+        obj = _moved_dataclass(qualname)
+        if obj is None:
+            raise ConfigError(f"class {ref!r} of a certificate file does not exist in this version") from None
     if not (isinstance(obj, type) and dataclasses.is_dataclass(obj)):
         raise ConfigError(f"{ref!r} in a certificate file is not a dataclass")
     return obj
+
+
+def _moved_dataclass(qualname: str) -> type | None:
+    """The one dataclass of the package called ``qualname`` (a class moved between modules), or None."""
+    import pkgutil
+
+    pkg = importlib.import_module(PACKAGE)
+    found: set[type] = set()
+    for info in pkgutil.walk_packages(pkg.__path__, PACKAGE + "."):
+        try:
+            mod = importlib.import_module(info.name)
+        except ImportError:  # pragma: no cover - optional dependency of an unrelated module
+            continue
+        obj = getattr(mod, qualname, None)
+        if isinstance(obj, type) and dataclasses.is_dataclass(obj) and _in_package(obj.__module__):
+            found.add(obj)
+    return found.pop() if len(found) == 1 else None
 
 
 def certificate_document(cert: Certificate, created: datetime | None = None) -> dict[str, Any]:
@@ -248,8 +272,10 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
         raise ConfigError(f"{source}: not an auv-hinf certificate file (format {found!r}, expected {FORMAT!r})")
     version = doc.get("version")
     if isinstance(version, bool) or version != VERSION:
-        raise ConfigError(f"{source}: unsupported certificate version {version!r} (this auv-hinf reads "
-                          f"version {VERSION}; it was written by auv-hinf {doc.get('tool_version')!r})")
+        raise ConfigError(
+            f"{source}: unsupported certificate version {version!r} (this auv-hinf reads "
+            f"version {VERSION}; it was written by auv-hinf {doc.get('tool_version')!r})"
+        )
     missing = [k for k in ("config", "certificate", "state") if not isinstance(doc.get(k), dict)]
     if missing:
         raise ConfigError(f"{source}: certificate file lacks the object(s) {missing}")
@@ -262,8 +288,9 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
     absent = [n for n in names if n not in state]
     extra = sorted(set(state) - set(names))
     if absent or extra:
-        raise ConfigError(f"{source}: certificate state does not match this version (missing {absent}, "
-                          f"unknown {extra})")
+        raise ConfigError(
+            f"{source}: certificate state does not match this version (missing {absent}, unknown {extra})"
+        )
     try:
         values = {n: decode_value(state[n]) for n in names}
         cert = Certificate(config=config, **values)
@@ -274,8 +301,7 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
         raise ConfigError(f"{source}: cannot rebuild the certificate: {exc}") from None
     if record != doc["certificate"]:
         diff = sorted(k for k in set(record) | set(doc["certificate"]) if record.get(k) != doc["certificate"].get(k))
-        raise ConfigError(f"{source}: the certificate record disagrees with its stored state in {diff} "
-                          "(edited file?)")
+        raise ConfigError(f"{source}: the certificate record disagrees with its stored state in {diff} (edited file?)")
     return cert
 
 
@@ -332,6 +358,14 @@ def load_certificate(path: str | Path) -> Certificate:
 
 
 __all__ = [
-    "FORMAT", "VERSION", "certificate_document", "certificate_from_document", "decode_value", "encode_value",
-    "json_normal", "json_safe", "load_certificate", "save_certificate",
+    "FORMAT",
+    "VERSION",
+    "certificate_document",
+    "certificate_from_document",
+    "decode_value",
+    "encode_value",
+    "json_normal",
+    "json_safe",
+    "load_certificate",
+    "save_certificate",
 ]

@@ -42,6 +42,12 @@ BLEND_H1 = Polynomial([0.0, 1.0]) * Polynomial([1.0, -1.0]) ** 4 * Polynomial([1
 #: ``sup |h0^(k)|`` and ``sup |h1^(k)|`` on [0, 1], ``k = 0..3``, from the coefficients.
 H0_SUP = np.array([poly_sup(BLEND_H0.deriv(k)) for k in range(4)])
 H1_SUP = np.array([poly_sup(BLEND_H1.deriv(k)) for k in range(4)])
+#: Coefficients (increasing powers of tau, degree <= 7) of h0, h1 and their first three
+#: derivatives, stacked as eight rows (h0 and its derivatives, then h1 and its derivatives):
+#: one small matrix product evaluates all eight at every right-hand-side call.
+_BLEND_COEFS = np.array(
+    [np.pad(p.deriv(k).coef, (0, 8 - len(p.deriv(k).coef))) for p in (BLEND_H0, BLEND_H1) for k in range(4)]
+)
 
 #: A shaped start needs each initial ground speed to be at least this fraction of the
 #: mission's minimum speed: the course of a vehicle at rest is undefined, and at 1e-3 of the
@@ -125,12 +131,17 @@ def _blend(t: FloatArray, blend_time: float) -> tuple[FloatArray, FloatArray]:
     Exactly zero for ``t >= T_b``. For ``t < 0`` the polynomials are continued (the reference
     is meant for ``t >= 0``; continuing keeps the derivatives consistent across ``t = 0``).
     """
-    tau = t / blend_time
+    tau = np.asarray(t, dtype=float) / blend_time
+    if np.all(tau >= 1.0):
+        zero = np.zeros((4, *tau.shape))
+        return zero, zero.copy()
     live = tau < 1.0
-    tau = np.minimum(tau, 1.0)
-    h0 = np.stack([np.where(live, BLEND_H0.deriv(k)(tau) / blend_time**k, 0.0) for k in range(4)])
-    h1 = np.stack([np.where(live, BLEND_H1.deriv(k)(tau) / blend_time ** (k - 1), 0.0) for k in range(4)])
-    return h0, h1
+    powers = np.minimum(tau, 1.0)[..., None] ** np.arange(8)
+    vals = np.where(live, np.moveaxis(powers @ _BLEND_COEFS.T, -1, 0), 0.0)  # (8,) + t.shape
+    shape = (4,) + (1,) * tau.ndim
+    scale0 = (blend_time ** -np.arange(4.0)).reshape(shape)
+    scale1 = (blend_time ** (1.0 - np.arange(4.0))).reshape(shape)
+    return vals[:4] * scale0, vals[4:] * scale1
 
 
 @dataclass(frozen=True)
