@@ -9,13 +9,14 @@ from typing import Any
 import control as ct
 
 from .config import FormationConfig
+from .control_law import heading_gains
 from .crosscheck import CrosscheckReport, crosscheck
-from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop, theorem1_conditions
+from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop
 from .envelope import envelope_lambda
 from .exceptions import DesignError
-from .control_law import heading_gains
 from .plan import ClosedLoopSummary, Gains, closed_loop_summary
 from .sigma import SigmaBounds, jacobi_sigma_bounds, vehicle_sigma
+from .theorem1 import Theorem1Conditions, theorem1_conditions
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
 #: ``A_lam = lam I`` every 2x2 channel is identical, so a larger problem checks nothing
@@ -57,7 +58,9 @@ class Certificate:
     sigma_jacobi : SigmaBounds
         Jacobi-coordinate bounds, reported for comparison.
     gamma : float
-        ``1/sigma.upper`` unless overridden.
+        ``1/sigma.upper`` unless overridden (s).
+    theorem1 : Theorem1Conditions
+        The hypotheses of Theorem 1 at ``(lam, gamma)``.
     designs : dict
         ``GainDesign`` per method, or ``None`` where the method is infeasible.
     alpha_used : float or None
@@ -83,7 +86,7 @@ class Certificate:
     sigma: SigmaBounds
     sigma_jacobi: SigmaBounds
     gamma: float
-    theorem1: dict[str, Any]
+    theorem1: Theorem1Conditions
     designs: dict[str, GainDesign | None]
     alpha_used: float | None
     small_gain_margin: float | None
@@ -101,12 +104,17 @@ class Certificate:
             "n": self.config.n,
             "lambda": self.lam,
             "sigma": {
-                "upper": self.sigma.upper, "lower": self.sigma.lower, "coords": "vehicle",
-                "method": self.sigma.method, "witness": self.sigma.witness,
+                "upper": self.sigma.upper,
+                "lower": self.sigma.lower,
+                "coords": "vehicle",
+                "method": self.sigma.method,
+                "witness": self.sigma.witness,
             },
             "sigma_jacobi": {
-                "upper": self.sigma_jacobi.upper, "lower": self.sigma_jacobi.lower,
-                "method": self.sigma_jacobi.method, "jacobi": self.config.jacobi,
+                "upper": self.sigma_jacobi.upper,
+                "lower": self.sigma_jacobi.lower,
+                "method": self.sigma_jacobi.method,
+                "jacobi": self.config.jacobi,
             },
             "certificate_coords": "vehicle",
             "gamma": self.gamma,
@@ -116,7 +124,7 @@ class Certificate:
                 "used": self.alpha_used,
             },
             "paper_flags": [] if paper is None else list(paper.flags),
-            "theorem1": self.theorem1,
+            "theorem1": self.theorem1.to_dict(),
             "small_gain_margin": self.small_gain_margin,
             "k1": self.config.k1,
             "position_loop_hinf": self.position_loop_hinf,
@@ -177,6 +185,7 @@ class Certificate:
 
     def summary(self) -> str:
         """Readable table."""
+
         def fmt(x: float | None) -> str:
             return "n/a" if x is None else f"{x:.6g}"
 
@@ -185,7 +194,8 @@ class Certificate:
             f"  lambda (envelope)         {fmt(self.lam)} 1/s",
             f"  sigma vehicle  [lo, up]   [{fmt(self.sigma.lower)}, {fmt(self.sigma.upper)}]  <- used",
             f"  sigma Jacobi   [lo, up]   [{fmt(self.sigma_jacobi.lower)}, {fmt(self.sigma_jacobi.upper)}]",
-            f"  gamma = 1/sigma           {fmt(self.gamma)}  (min {fmt(self.theorem1['gamma_min'])})",
+            f"  {'gamma = 1/sigma' if self.config.gamma is None else 'gamma (configured)':<26}"
+            f"{fmt(self.gamma)} s  (Theorem 1 minimum {fmt(self.theorem1.gamma_min)} s)",
         ]
         for m, d in self.designs.items():
             mark = " <- used" if m == self.config.method else ""
@@ -195,7 +205,8 @@ class Certificate:
         lines += [
             f"  small-gain margin         {fmt(self.small_gain_margin)} 1/s",
             f"  position loop ||T||       {fmt(self.position_loop_hinf)} (k1={self.config.k1:g})",
-            f"  cross-check               {'ok' if self.crosscheck.ok else 'DISAGREES'} (max rel {self.crosscheck.max_rel_diff:.2g})",
+            f"  cross-check               {'ok' if self.crosscheck.ok else 'DISAGREES'} "
+            f"(max rel {self.crosscheck.max_rel_diff:.2g})",
         ]
         lines += _closed_loop_lines(self.closed_loop)
         lines += [f"  CERTIFIED: {'yes' if self.certified else 'no'}"]
@@ -220,8 +231,13 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     if config.n > JACOBI_SEARCH_MAX_N:
         jacobi_samples = min(jacobi_samples, max(LARGE_FLEET_JACOBI_SAMPLES, JACOBI_SEARCH_WORK // config.n))
     sig_j = jacobi_sigma_bounds(
-        config.vehicle, config.envelope, lam, transform, samples=jacobi_samples,
-        refine_jacobi=refine_jacobi, progress=True,  # the bar appears only after sigma.PROGRESS_DELAY
+        config.vehicle,
+        config.envelope,
+        lam,
+        transform,
+        samples=jacobi_samples,
+        refine_jacobi=refine_jacobi,
+        progress=True,  # the bar appears only after sigma.PROGRESS_DELAY
     )
     gamma = config.gamma if config.gamma is not None else 1.0 / sig.upper
     cond = theorem1_conditions(lam, gamma)
@@ -264,14 +280,31 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         reasons.append(f"cross-check disagrees (max rel diff {report.max_rel_diff:.3g})")
     loop = None
     if not reasons and alpha is not None:
-        gains = Gains(lam, sig.upper, gamma, alpha, config.k1,
-                      heading_gains(config.vehicle, (config.heading_poles[0], config.heading_poles[1])))
+        gains = Gains(
+            lam,
+            sig.upper,
+            gamma,
+            alpha,
+            config.k1,
+            heading_gains(config.vehicle, (config.heading_poles[0], config.heading_poles[1])),
+        )
         loop = closed_loop_summary(config, gains)
         reasons.extend(loop.reasons)
     return Certificate(
-        config=config, lam=lam, sigma=sig, sigma_jacobi=sig_j, gamma=gamma, theorem1=cond.to_dict(),
-        designs=designs, alpha_used=alpha, small_gain_margin=margin, position_loop_hinf=pos,
-        crosscheck=report, certified=not reasons, reasons=tuple(reasons), closed_loop=loop,
+        config=config,
+        lam=lam,
+        sigma=sig,
+        sigma_jacobi=sig_j,
+        gamma=gamma,
+        theorem1=cond,
+        designs=designs,
+        alpha_used=alpha,
+        small_gain_margin=margin,
+        position_loop_hinf=pos,
+        crosscheck=report,
+        certified=not reasons,
+        reasons=tuple(reasons),
+        closed_loop=loop,
     )
 
 
