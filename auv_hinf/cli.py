@@ -169,7 +169,8 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--out", type=Path, help="file to write (default: print to stdout)")
     i.add_argument("--preset", choices=PRESETS, default=PRESETS[0], help=f"starting point (default {PRESETS[0]})")
     i.add_argument("--force", action="store_true", help="overwrite an existing --out file")
-    for p in (d, *(sub.choices[k] for k in ("certify", "simulate", "schema", "init"))):
+    _campaign_parser(sub)
+    for p in (d, *(sub.choices[k] for k in ("certify", "simulate", "schema", "init", "campaign"))):
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     return parser
 
@@ -295,12 +296,54 @@ def _cmd_init(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _campaign_parser(sub: Any) -> None:
+    """The ``campaign`` sub-command's arguments."""
+    c = sub.add_parser("campaign", help="Monte Carlo runs from inside the certified start region",
+                       allow_abbrev=False)
+    src = c.add_mutually_exclusive_group(required=True)
+    src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
+    src.add_argument("--config", type=Path, help="TOML configuration file")
+    _numeric(c, "--runs", int, 1, 10**7, required=True, help="number of runs K")
+    _numeric(c, "--seed", int, 0, 2**63 - 1, default=0, help="root seed (default 0)")
+    ex = c.add_mutually_exclusive_group()
+    _numeric(ex, "--workers", int, 1, 1024, help="local Dask cluster of W single-threaded worker processes")
+    ex.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    _numeric(c, "--chunk", int, 1, 10**6, help="scenarios per batch (default: up to 64, memory-bounded)")
+    _numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
+    c.add_argument("--out", type=Path, required=True, help="directory for runs.parquet, summary.json, PNGs")
+    c.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+
+
+def _cmd_campaign(args: argparse.Namespace) -> int:
+    from .campaign import dask_client, run_campaign
+    from .campaign_report import write_outputs
+
+    _prepare_out(args.out)
+    cfg = _load(args)
+    with dask_client(args.workers, args.scheduler) as client:
+        try:
+            camp = run_campaign(cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon,
+                                client=client, progress=True)
+        except DesignError as exc:
+            raise _Negative(f"no certified start region to sample from: {exc}") from None
+    summary = write_outputs(camp, args.out)
+    if args.json:
+        print(_dump(summary))
+    else:
+        for key in ("config", "runs", "executor", "counts", "fraction_inside", "worst_ratio", "throughput", "notes"):
+            print(f"{key:>16}: {_short(summary[key])}")
+    c = summary["counts"]
+    return _verdict(summary["ok"], f"{c['outside_bounds']} of {c['certificate_applies']} covered runs outside the "
+                                   f"certified bounds, {c['left_envelope']} of {c['runs']} runs left the envelope")
+
+
 _COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "design": _cmd_design,
     "certify": _cmd_certify,
     "simulate": _cmd_simulate,
     "schema": _cmd_schema,
     "init": _cmd_init,
+    "campaign": _cmd_campaign,
 }
 
 

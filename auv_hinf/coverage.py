@@ -33,7 +33,7 @@ from .envelope import Envelope
 from .exceptions import AuvHinfError, ParameterError
 from .reference import FleetReference, MissionReference, shaped_start, wrap_angle
 from .region import ErrorBounds, Margins, envelope_margins, inflate_envelope, start_bounds
-from .tubes import shaped_tube
+from .tubes import MAX_CELLS, default_cells, shaped_tube
 from .vehicle import VehicleParams
 
 StartMode = Literal["shaped", "paper"]
@@ -141,6 +141,37 @@ def _chunks(fleet: FleetReference) -> Iterable[FleetReference]:
         yield FleetReference(fleet.mission, fleet.offsets[sl], part)
 
 
+def _chunked_margins(
+    params: VehicleParams,
+    envelope: Envelope,
+    gains: tuple[float, float],
+    k_psi: tuple[float, float],
+    fleet: FleetReference,
+    bounds: ErrorBounds,
+) -> tuple[list[Margins], list[ThrustBounds]]:
+    """Margins and thrust bounds of ``fleet``, :data:`TUBE_CHUNK` vehicles at a time, on one time grid.
+
+    The cell count is chosen once for the whole fleet (:func:`~auv_hinf.tubes.default_cells`)
+    so that the result does not depend on the chunking; it is multiplied by 4 (up to
+    :data:`~auv_hinf.tubes.MAX_CELLS`) while some cell's speed cannot be bounded away from zero.
+    """
+    cells = default_cells(fleet)
+    while True:
+        try:
+            margins, thrusts = [], []
+            for part in _chunks(fleet):
+                tube = shaped_tube(part, cells=cells if part.shaping is not None else None)
+                margins.append(envelope_margins(tube, bounds, envelope))
+                thrusts.append(
+                    thrust_bounds(params, inflate_envelope(envelope), tube, bounds, gains[0], gains[1], k_psi)
+                )
+            return margins, thrusts
+        except ParameterError:
+            if cells >= MAX_CELLS:
+                raise
+            cells = min(MAX_CELLS, 4 * cells)
+
+
 def check_run(
     cert: ClosedLoopCertificate,
     params: VehicleParams,
@@ -209,11 +240,7 @@ def check_run(
             f"heading error bound {bounds.heading:.4g} rad reaches pi/2",
         )
     try:
-        margins, thrusts = [], []
-        for part in _chunks(fleet):
-            tube = shaped_tube(part)
-            margins.append(envelope_margins(tube, bounds, envelope))
-            thrusts.append(thrust_bounds(params, inflate_envelope(envelope), tube, bounds, gains[0], gains[1], k_psi))
+        margins, thrusts = _chunked_margins(params, envelope, gains, k_psi, fleet, bounds)
     except AuvHinfError as exc:
         return Coverage(False, start, fleet, bounds, None, None, tb, th, str(exc))
     marg = _merge_margins(margins)

@@ -4,6 +4,22 @@ Positions of N vehicles are stacked as an array of shape ``(..., N, 2)`` (inerti
 frame, m). The Jacobi transform ``Phi`` (N x N) acts on the vehicle index; on the
 stacked 2N vector it is ``Phi kron I2``. Rows ``0..N-2`` give the Jacobi shape vectors
 ``rho_j``; the last row gives the formation centre ``q_c`` (the mean position).
+
+Structure used for O(N) work
+----------------------------
+The rows of ``Phi`` are mutually orthogonal, so ``Phi = D Q`` with ``Q`` orthogonal and
+``D = diag(row norms)``. Hence
+
+* the singular values of ``Phi`` are its row norms: ``sqrt((j+1)/j)`` (``j = 1..N-1``) and
+  ``1/sqrt(N)`` for the centroid row in the paper form, so ``cond(Phi) = sqrt(2N)``; ``1``
+  (N-1 times) and ``1/sqrt(N)`` in the orthonormal form, so ``cond(Phi) = sqrt(N)``;
+* ``Phi^-1 = Phi^T D^-2`` and ``Phi^-T = D^-2 Phi``.
+
+Every product with ``Phi``, ``Phi^T``, ``Phi^-1`` or ``Phi^-T`` is a (reverse) cumulative sum
+over the vehicle index (:func:`jacobi_coordinates`, :func:`positions_from_jacobi`,
+:func:`jacobi_transpose`, :func:`jacobi_inverse_transpose`), O(N) time and memory. The dense
+matrices (:attr:`JacobiTransform.phi` and friends) are built lazily and only up to
+:data:`DENSE_MAX_N` vehicles.
 """
 
 from __future__ import annotations
@@ -13,12 +29,129 @@ from functools import cached_property
 from typing import get_args
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._typing import JacobiKind
+from ._typing import FloatArray, JacobiKind
 from .exceptions import FormationError, require_finite
-from ._typing import FloatArray
 from .vehicle import VehicleParams, inertial_block, input_matrix
+
+#: Largest fleet whose dense ``Phi`` (N x N) and ``Phi kron I2`` (2N x 2N) may be built:
+#: ``Phi kron I2`` takes ``32 N^2`` bytes (128 MB at N = 2000). Larger fleets must use the
+#: O(N) maps of this module.
+DENSE_MAX_N = 2000
+
+
+def _check_kind(kind: str) -> None:
+    if kind not in get_args(JacobiKind):
+        raise FormationError(f"Jacobi kind must be one of {get_args(JacobiKind)}, got {kind!r}")
+
+
+def _check_vectors(p: ArrayLike, kind: str) -> FloatArray:
+    arr = np.asarray(p, dtype=float)
+    if arr.ndim < 2 or arr.shape[-1] != 2 or arr.shape[-2] < 2:
+        raise FormationError(f"stacked vectors must have shape (..., N >= 2, 2), got {arr.shape}")
+    _check_kind(kind)
+    return arr
+
+
+def row_scale(n: int, kind: JacobiKind = "paper") -> FloatArray:
+    """Scale of the shape rows ``j = 1..N-1`` of ``Phi``: 1 (paper) or ``sqrt(j/(j+1))`` (orthonormal).
+
+    Returns
+    -------
+    ndarray, shape (N-1,)
+        Dimensionless factors multiplying the paper rows.
+    """
+    _check_kind(kind)
+    j = np.arange(1, n, dtype=float)
+    return np.ones(n - 1) if kind == "paper" else np.sqrt(j / (j + 1.0))
+
+
+def row_norms(n: int, kind: JacobiKind = "paper") -> FloatArray:
+    """Euclidean norms of the rows of ``Phi`` (dimensionless), shape ``(N,)``, in closed form.
+
+    Paper row ``j`` has ``j`` entries ``1/j`` and one ``-1``: squared norm ``1/j + 1 = (j+1)/j``;
+    the orthonormal rows are scaled to norm 1; the centroid row ``(1/N) 1^T`` has norm
+    ``1/sqrt(N)``. Since the rows are mutually orthogonal these are the singular values of ``Phi``.
+    """
+    j = np.arange(1, n, dtype=float)
+    shape = np.sqrt((j + 1.0) / j) * row_scale(n, kind)
+    return np.append(shape, 1.0 / np.sqrt(n))
+
+
+def jacobi_coordinates(p: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
+    """``X = Phi p`` in O(N) with a cumulative sum (the same as ``JacobiTransform.phi @ p``).
+
+    Row ``j`` (``1 <= j <= N-1``) is ``rho_j = mean(p_1..p_j) - p_{j+1}`` (times
+    ``sqrt(j/(j+1))`` for ``"orthonormal"``); the last row is the centre ``mean(p)``.
+
+    Parameters
+    ----------
+    p : array_like, shape (..., N, 2)
+        Positions (m), or velocities / accelerations.
+    kind : {"paper", "orthonormal"}
+
+    Returns
+    -------
+    ndarray, shape (..., N, 2)
+        ``N-1`` shape vectors then the centre, in the units of ``p``.
+    """
+    arr = _check_vectors(p, kind)
+    n = arr.shape[-2]
+    means = np.cumsum(arr, axis=-2) / np.arange(1, n + 1, dtype=float)[:, None]
+    rho = (means[..., :-1, :] - arr[..., 1:, :]) * row_scale(n, kind)[:, None]
+    return np.concatenate([rho, means[..., -1:, :]], axis=-2)
+
+
+def positions_from_jacobi(x: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
+    """``p = Phi^-1 X``, the inverse of :func:`jacobi_coordinates`, in O(N) (reverse cumulative sum).
+
+    With ``m_j = mean(p_1..p_j)``: ``m_N = q_c``, ``m_j = m_{j+1} + rho_j / (j+1)``,
+    ``p_{j+1} = m_j - rho_j`` and ``p_1 = m_1``.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., N, 2)
+        Jacobi coordinates (m, or m/s, ...).
+    kind : {"paper", "orthonormal"}
+
+    Returns
+    -------
+    ndarray, shape (..., N, 2)
+        Positions (units of ``x``).
+    """
+    arr = _check_vectors(x, kind)
+    n = arr.shape[-2]
+    j = np.arange(1, n, dtype=float)[:, None]
+    rho = arr[..., :-1, :] / row_scale(n, kind)[:, None]
+    tail = np.cumsum((rho / (j + 1.0))[..., ::-1, :], axis=-2)[..., ::-1, :]  # sum_{k>=j} rho_k/(k+1)
+    means = arr[..., -1:, :] + tail  # m_1 .. m_{N-1}
+    return np.concatenate([means[..., :1, :], means - rho], axis=-2)
+
+
+def jacobi_transpose(y: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
+    """``Phi^T y`` in O(N) (reverse cumulative sum), ``y`` of shape ``(..., N, 2)``.
+
+    Column ``k`` (1-based) of ``Phi`` holds ``s_j / j`` in rows ``j >= k`` (``j <= N-1``),
+    ``-s_{k-1}`` in row ``k-1`` and ``1/N`` in the centroid row, with ``s_j`` of :func:`row_scale`.
+    """
+    arr = _check_vectors(y, kind)
+    n = arr.shape[-2]
+    j = np.arange(1, n, dtype=float)[:, None]
+    w = arr[..., :-1, :] * row_scale(n, kind)[:, None]  # s_j y_j, j = 1..N-1
+    tail = np.cumsum((w / j)[..., ::-1, :], axis=-2)[..., ::-1, :]  # sum_{j>=k} s_j y_j / j, k = 1..N-1
+    zero = np.zeros((*arr.shape[:-2], 1, 2))
+    out: FloatArray = np.concatenate([tail, zero], axis=-2) - np.concatenate([zero, w], axis=-2)
+    out += arr[..., -1:, :] / n
+    return out
+
+
+def jacobi_inverse_transpose(z: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
+    """``Phi^-T z = D^-2 Phi z`` in O(N), ``D`` the row norms (:func:`row_norms`)."""
+    arr = _check_vectors(z, kind)
+    out: FloatArray = jacobi_coordinates(arr, kind) / row_norms(arr.shape[-2], kind)[:, None] ** 2
+    return out
+
 
 @dataclass(frozen=True)
 class JacobiTransform:
@@ -39,6 +172,13 @@ class JacobiTransform:
     ------
     FormationError
         If ``n < 2`` or ``kind`` is unknown.
+
+    Notes
+    -----
+    :attr:`singular_values`, :attr:`cond` and the maps :meth:`to_jacobi`, :meth:`to_positions`,
+    :meth:`transpose`, :meth:`inverse_transpose` are O(N); the dense matrices :attr:`phi`,
+    :attr:`phi_inv`, :attr:`matrix`, :attr:`matrix_inv` are built on first use and refused
+    above :data:`DENSE_MAX_N` vehicles.
     """
 
     n: int
@@ -49,60 +189,96 @@ class JacobiTransform:
             raise FormationError(f"number of vehicles n must be an integer >= 2, got {self.n!r}")
         if self.n < 2:
             raise FormationError(f"number of vehicles n must be >= 2, got {self.n}")
-        if self.kind not in get_args(JacobiKind):
-            raise FormationError(
-                f"Jacobi kind must be one of {get_args(JacobiKind)}, got {self.kind!r}"
-            )
+        _check_kind(self.kind)
         object.__setattr__(self, "n", int(self.n))
+
+    def _dense_allowed(self, what: str) -> None:
+        if self.n > DENSE_MAX_N:
+            raise FormationError(
+                f"the dense {what} of N = {self.n} vehicles is refused (more than DENSE_MAX_N = "
+                f"{DENSE_MAX_N}); use the O(N) maps to_jacobi / to_positions / transpose / inverse_transpose"
+            )
 
     @cached_property
     def phi(self) -> FloatArray:
-        """The N x N transform acting on the vehicle index (dimensionless)."""
+        """The dense N x N transform acting on the vehicle index (dimensionless).
+
+        Raises
+        ------
+        FormationError
+            If ``n > DENSE_MAX_N``.
+        """
+        self._dense_allowed("Phi")
         n = self.n
         out = np.zeros((n, n))
-        for j in range(1, n):
-            out[j - 1, :j] = 1.0 / j
-            out[j - 1, j] = -1.0
-            if self.kind == "orthonormal":
-                out[j - 1] *= np.sqrt(j / (j + 1.0))
+        j = np.arange(1, n)
+        out[:-1] = np.where(np.arange(n)[None, :] < j[:, None], 1.0 / j[:, None], 0.0)
+        out[j - 1, j] = -1.0
+        out[:-1] *= row_scale(n, self.kind)[:, None]
         out[n - 1, :] = 1.0 / n
         return out
 
     @cached_property
     def phi_inv(self) -> FloatArray:
-        """Inverse of :attr:`phi`."""
-        return np.linalg.inv(self.phi)
+        """Dense inverse of :attr:`phi`, ``Phi^T D^-2`` (exact up to round-off)."""
+        out: FloatArray = self.phi.T / self.singular_values_by_row[None, :] ** 2
+        return out
 
     @cached_property
     def matrix(self) -> FloatArray:
-        """``Phi kron I2``, the 2N x 2N transform of stacked positions."""
+        """Dense ``Phi kron I2``, the 2N x 2N transform of stacked positions."""
+        self._dense_allowed("Phi kron I2")
         return np.kron(self.phi, np.eye(2))
 
     @cached_property
     def matrix_inv(self) -> FloatArray:
-        """``Phi^-1 kron I2``."""
+        """Dense ``Phi^-1 kron I2``."""
+        self._dense_allowed("Phi^-1 kron I2")
         return np.kron(self.phi_inv, np.eye(2))
 
     @cached_property
+    def singular_values_by_row(self) -> FloatArray:
+        """Row norms of ``Phi`` in row order, shape ``(N,)`` (dimensionless); see :func:`row_norms`."""
+        return row_norms(self.n, self.kind)
+
+    @cached_property
+    def singular_values(self) -> FloatArray:
+        """Singular values of ``Phi`` in decreasing order, shape ``(N,)``, in closed form, O(N).
+
+        The rows of ``Phi`` are orthogonal, so ``Phi Phi^T = D^2`` with ``D`` the row norms.
+        """
+        out: FloatArray = np.sort(self.singular_values_by_row)[::-1].copy()
+        return out
+
+    @cached_property
     def cond(self) -> float:
-        """2-norm condition number of ``Phi`` (also that of ``Phi kron I2``)."""
-        return float(np.linalg.cond(self.phi))
+        """2-norm condition number of ``Phi`` (also that of ``Phi kron I2``), in closed form.
+
+        ``sqrt(2N)`` in the paper form (largest row ``j = 1``, norm ``sqrt 2``; centroid row
+        ``1/sqrt(N)``) and ``sqrt(N)`` in the orthonormal form.
+        """
+        s = self.singular_values_by_row
+        return float(s.max() / s.min())
 
     def to_jacobi(self, p: ArrayLike) -> FloatArray:
-        """Jacobi coordinates ``X = Phi p`` of positions ``p`` of shape ``(..., N, 2)``.
+        """Jacobi coordinates ``X = Phi p`` of positions ``p`` of shape ``(..., N, 2)``, O(N).
 
         Returns shape ``(..., N, 2)``: ``N-1`` shape vectors then the centre ``q_c`` (m).
         The same map applies to velocities and accelerations.
         """
-        arr = self._check_stack(p, "p")
-        out: FloatArray = np.einsum("jk,...kd->...jd", self.phi, arr)
-        return out
+        return jacobi_coordinates(self._check_stack(p, "p"), self.kind)
 
     def to_positions(self, x: ArrayLike) -> FloatArray:
-        """Inverse of :meth:`to_jacobi`: positions from Jacobi coordinates."""
-        arr = self._check_stack(x, "X")
-        out: FloatArray = np.einsum("jk,...kd->...jd", self.phi_inv, arr)
-        return out
+        """Inverse of :meth:`to_jacobi`: positions ``Phi^-1 X`` from Jacobi coordinates, O(N)."""
+        return positions_from_jacobi(self._check_stack(x, "X"), self.kind)
+
+    def transpose(self, y: ArrayLike) -> FloatArray:
+        """``Phi^T y`` for ``y`` of shape ``(..., N, 2)``, O(N)."""
+        return jacobi_transpose(self._check_stack(y, "y"), self.kind)
+
+    def inverse_transpose(self, z: ArrayLike) -> FloatArray:
+        """``Phi^-T z`` for ``z`` of shape ``(..., N, 2)``, O(N)."""
+        return jacobi_inverse_transpose(self._check_stack(z, "z"), self.kind)
 
     def _check_stack(self, a: ArrayLike, name: str) -> FloatArray:
         arr = np.asarray(a, dtype=float)
@@ -126,7 +302,7 @@ def block_diag_stack(blocks: ArrayLike) -> FloatArray:
     """
     b = np.asarray(blocks, dtype=float)
     n = b.shape[-3]
-    out = np.zeros(b.shape[:-3] + (2 * n, 2 * n))
+    out = np.zeros((*b.shape[:-3], 2 * n, 2 * n))
     for i in range(n):
         out[..., 2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = b[..., i, :, :]
     return out
@@ -222,3 +398,45 @@ def offsets_from_shape(shape: ArrayLike, transform: JacobiTransform) -> FloatArr
         raise FormationError(f"shape must have shape ({transform.n - 1}, 2), got {rho.shape}")
     full = np.vstack([rho, np.zeros((1, 2))])
     return transform.to_positions(full)
+
+
+def closest_pair(points: ArrayLike) -> tuple[int, int, float]:
+    """The two closest of ``points`` (shape ``(N, 2)``, N >= 2) and their distance, O(N log N).
+
+    A k-d tree gives every point's nearest other point; the closest pair is the best of
+    these. Ties are broken towards the lowest indices.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 2)
+        Finite coordinates (any length unit).
+
+    Returns
+    -------
+    i, j : int
+        Indices with ``i < j``.
+    distance : float
+        ``||points[i] - points[j]||`` (units of ``points``).
+
+    Raises
+    ------
+    FormationError
+        If ``points`` is not ``(N >= 2, 2)`` or not finite.
+    """
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
+        raise FormationError(f"points must have shape (N >= 2, 2), got {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise FormationError("points must be finite")
+    dist, idx = cKDTree(pts).query(pts, k=2)
+    own = np.arange(len(pts))
+    # with exact duplicates the point itself may be listed second: take the other one
+    other = np.where(idx[:, 0] == own, idx[:, 1], idx[:, 0])
+    d = dist[:, 1]  # distance to the nearest other point (0 for a duplicate either way)
+    best = float(d.min())
+    cand = np.flatnonzero(d == best)
+    pairs = np.sort(np.stack([cand, other[cand]], axis=-1), axis=-1)
+    k = int(np.lexsort((pairs[:, 1], pairs[:, 0]))[0])
+    return int(pairs[k, 0]), int(pairs[k, 1]), best

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from ._typing import FloatArray
 from .closed_loop import ClosedLoopCertificate, closed_loop_certificate
@@ -111,16 +112,28 @@ def closed_loop_for(cfg: FormationConfig, gains: Gains) -> ClosedLoopCertificate
         error.
     """
     tube = mission_tube(mission_reference(cfg))
-    return closed_loop_certificate(gains.lam, gains.alpha, gains.k1, gains.sigma, cfg.vehicle, cfg.envelope,
-                                   gains.k_psi, tube)
+    return closed_loop_certificate(
+        gains.lam, gains.alpha, gains.k1, gains.sigma, cfg.vehicle, cfg.envelope, gains.k_psi, tube
+    )
 
 
-def coverage_for(cfg: FormationConfig, gains: Gains, cert: ClosedLoopCertificate, initial: FloatArray,
-                 start: StartMode) -> Coverage:
+def coverage_for(
+    cfg: FormationConfig, gains: Gains, cert: ClosedLoopCertificate, initial: FloatArray, start: StartMode
+) -> Coverage:
     """Coverage of the run of ``cfg`` from ``initial`` in ``start`` mode (nominal plant, no current)."""
-    return cover_start(cert, cfg.vehicle, cfg.envelope, (gains.alpha, gains.k1), gains.k_psi, mission_reference(cfg),
-                       formation_offsets(cfg), initial, start=start, blend_time=cfg.simulation.blend_time,
-                       thrust_limit=cfg.simulation.thrust_limit)
+    return cover_start(
+        cert,
+        cfg.vehicle,
+        cfg.envelope,
+        (gains.alpha, gains.k1),
+        gains.k_psi,
+        mission_reference(cfg),
+        formation_offsets(cfg),
+        initial,
+        start=start,
+        blend_time=cfg.simulation.blend_time,
+        thrust_limit=cfg.simulation.thrust_limit,
+    )
 
 
 @dataclass(frozen=True)
@@ -153,8 +166,9 @@ class RunPlan:
     start: str = "shaped"
 
 
-def plan_run(cfg: FormationConfig, *, start: StartMode | None = None, horizon: float | None = None,
-             samples: int = 3001) -> RunPlan:
+def plan_run(
+    cfg: FormationConfig, *, start: StartMode | None = None, horizon: float | None = None, samples: int = 3001
+) -> RunPlan:
     """Gains, certificate and scenario of one configured run.
 
     Parameters
@@ -188,11 +202,21 @@ def plan_run(cfg: FormationConfig, *, start: StartMode | None = None, horizon: f
     if any(c != 0.0 for c in sim.current):
         notes.append("a current is present; the nominal certificate assumes none")
     reference = cov.reference if cov is not None else FleetReference(mission_reference(cfg), formation_offsets(cfg))
-    law = VehicleLaw(params=cfg.vehicle, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi,
-                     thrust_limit=sim.thrust_limit)
-    scn = Scenario(law=law, reference=reference, plant=plant, initial=initial,
-                   horizon=float(horizon if horizon is not None else sim.horizon), current=sim.current,
-                   envelope=cfg.envelope, samples=samples, name=cfg.name, jacobi=cfg.jacobi)
+    law = VehicleLaw(
+        params=cfg.vehicle, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi, thrust_limit=sim.thrust_limit
+    )
+    scn = Scenario(
+        law=law,
+        reference=reference,
+        plant=plant,
+        initial=initial,
+        horizon=float(horizon if horizon is not None else sim.horizon),
+        current=sim.current,
+        envelope=cfg.envelope,
+        samples=samples,
+        name=cfg.name,
+        jacobi=cfg.jacobi,
+    )
     return RunPlan(gains, cert, cov, cov is not None and cov.covered and not notes, scn, tuple(notes), mode)
 
 
@@ -207,8 +231,14 @@ def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -
     """
     tr = result.tracking
     p, q = cert.position.matrix, cert.heading.matrix
-    v = (p[0, 0] * (tr.e**2).sum(-1) + 2 * p[0, 1] * (tr.e * tr.e_dot).sum(-1) + p[1, 1] * (tr.e_dot**2).sum(-1)
-         + q[0, 0] * tr.e_psi**2 + 2 * q[0, 1] * tr.e_psi * tr.e_psi_dot + q[1, 1] * tr.e_psi_dot**2)
+    v = (
+        p[0, 0] * (tr.e**2).sum(-1)
+        + 2 * p[0, 1] * (tr.e * tr.e_dot).sum(-1)
+        + p[1, 1] * (tr.e_dot**2).sum(-1)
+        + q[0, 0] * tr.e_psi**2
+        + 2 * q[0, 1] * tr.e_psi * tr.e_psi_dot
+        + q[1, 1] * tr.e_psi_dot**2
+    )
     rates = []
     for i in range(v.shape[1]):
         v0 = v[0, i]
@@ -236,22 +266,30 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
     certified = None
     if cov is not None:
         b = cov.bounds
-        certified = {"position_error": b.position, "velocity_error": b.velocity, "heading_error": b.heading,
-                     "yaw_rate_error": b.yaw_rate}
+        certified = {
+            "position_error": b.position,
+            "velocity_error": b.velocity,
+            "heading_error": b.heading,
+            "yaw_rate_error": b.yaw_rate,
+        }
     cert = plan.certificate
-    out.update({
-        "start": plan.start,
-        "blend_time": None if cov is None else cov.blend_time,
-        "turn_time": None if cov is None else cov.turn_time,
-        "certificate_covers_run": plan.covered,
-        "coverage_reason": "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None),
-        "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
-        "certified_decay_rate": None if cert is None else cert.rate,
-        "measured_errors": measured,
-        "certified_errors": certified,
-        "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
-        "alpha": plan.gains.alpha, "k1": plan.gains.k1, "k_psi": list(plan.gains.k_psi),
-    })
+    out.update(
+        {
+            "start": plan.start,
+            "blend_time": None if cov is None else cov.blend_time,
+            "turn_time": None if cov is None else cov.turn_time,
+            "certificate_covers_run": plan.covered,
+            "coverage_reason": "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None),
+            "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
+            "certified_decay_rate": None if cert is None else cert.rate,
+            "measured_errors": measured,
+            "certified_errors": certified,
+            "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
+            "alpha": plan.gains.alpha,
+            "k1": plan.gains.k1,
+            "k_psi": list(plan.gains.k_psi),
+        }
+    )
     return out
 
 
@@ -297,8 +335,12 @@ class ClosedLoopSummary:
             moments.append(s.thrust.moment)
 
         def radii(r: Any) -> dict[str, float]:
-            return {"position_error": float(r.position), "velocity_error": float(r.velocity),
-                    "heading_error": float(r.heading), "yaw_rate_error": float(r.yaw_rate)}
+            return {
+                "position_error": float(r.position),
+                "velocity_error": float(r.velocity),
+                "heading_error": float(r.heading),
+                "yaw_rate_error": float(r.yaw_rate),
+            }
 
         return {
             "decay_rate": None if c is None else c.rate,
@@ -312,28 +354,57 @@ class ClosedLoopSummary:
             "max_moment": max(moments) if moments else None,
             "covers_shaped_start": bool(s is not None and s.covered),
             "shaped_start": None if s is None else s.to_dict(),
+            "shaped_start_note": (
+                None
+                if s is not None
+                else "not evaluated: the configuration declares no start and the fleet is too large to check "
+                "the default one (give [simulation] initial to have it checked)"
+                if not self.declared_start
+                else "the declared start could not be checked (see reasons)"
+            ),
             "method": None if c is None else c.method,
             "certified": self.ok,
             "reasons": list(self.reasons),
         }
 
 
-def closed_loop_summary(cfg: FormationConfig, gains: Gains) -> ClosedLoopSummary:
-    """Certify the closed loop of ``cfg`` along its mission and check its configured start."""
+def closed_loop_summary(
+    cfg: FormationConfig, gains: Gains, *, default_start_max_n: int = 16, progress_min_n: int = 16
+) -> ClosedLoopSummary:
+    """Certify the closed loop of ``cfg`` along its mission and check its configured start.
+
+    The start check builds per-vehicle tubes for every candidate blend time it tries: from
+    about 0.1 s to 1 s per vehicle (40 vehicles of a spread start: 20 candidates, 30-40 s). A
+    declared start (``simulation.initial``) is always checked and enters the verdict; the
+    default start enters no verdict and is only checked up to ``default_start_max_n`` vehicles
+    (one chunk of tubes): beyond, it is not evaluated (``shaped`` is ``None``, so
+    ``covers_shaped_start`` is false; nothing is claimed about it) and ``auv-hinf simulate``
+    decides coverage for its own run. Above ``progress_min_n`` vehicles a progress bar is shown.
+    """
     reasons: list[str] = []
     try:
         cert = closed_loop_for(cfg, gains)
     except AuvHinfError as exc:
-        return ClosedLoopSummary(None, None, cfg.simulation.initial is not None,
-                                 (f"closed loop not certified: {exc}",))
+        return ClosedLoopSummary(None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",))
     limit = cfg.simulation.thrust_limit
     t = cert.thrust
     if limit is not None and not (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2]):
-        reasons.append(f"thrust needed over the start region ({t.force_x:.4g} N, {t.force_y:.4g} N, "
-                       f"{t.moment:.4g} N m) exceeds the limits {tuple(limit)}")
+        reasons.append(
+            f"thrust needed over the start region ({t.force_x:.4g} N, {t.force_y:.4g} N, "
+            f"{t.moment:.4g} N m) exceeds the limits {tuple(limit)}"
+        )
     declared = cfg.simulation.initial is not None
+    if not declared and cfg.n > default_start_max_n:
+        return ClosedLoopSummary(cert, None, declared, tuple(reasons))
     try:
-        shaped: Coverage | None = coverage_for(cfg, gains, cert, initial_states(cfg), "shaped")
+        with tqdm(
+            total=1,
+            disable=cfg.n <= progress_min_n,
+            unit="start",
+            desc=f"checking the {'declared' if declared else 'default'} start of {cfg.n} vehicles",
+        ) as bar:
+            shaped: Coverage | None = coverage_for(cfg, gains, cert, initial_states(cfg), "shaped")
+            bar.update(1)
     except AuvHinfError as exc:
         shaped = None
         if declared:

@@ -20,6 +20,7 @@ from ._typing import GainMethod, JacobiKind
 from .envelope import PAPER_ENVELOPE, check_interval
 from .formation import (
     JacobiTransform,
+    closest_pair,
     offsets_from_shape,
     regular_polygon,
     shape_from_offsets,
@@ -99,13 +100,11 @@ def _check_distinct(offsets: Any) -> None:
     import numpy as np
 
     off = np.asarray(offsets, dtype=float)
+    if not np.all(np.isfinite(off)):
+        raise ValueError("desired vehicle positions must be finite")
     scale = max(1.0, float(np.max(np.abs(off))))
-    with np.errstate(all="ignore"):
-        dist = np.linalg.norm((off[:, None, :] - off[None, :, :]) / scale, axis=-1)
-    dist[np.diag_indices(len(off))] = np.inf
-    i, j = np.unravel_index(int(np.argmin(dist)), dist.shape)
-    if dist[i, j] <= 1e-9:
-        a, b = sorted((int(i), int(j)))
+    a, b, dist = closest_pair(off / scale)  # O(N log N), k-d tree
+    if dist <= 1e-9:
         raise ValueError(
             f"vehicles {a + 1} and {b + 1} have the same desired position "
             f"({off[a, 0]:.6g}, {off[a, 1]:.6g}) m; every vehicle needs its own place"

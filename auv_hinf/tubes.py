@@ -104,14 +104,10 @@ def shaped_tube(fleet: FleetReference, *, cells: int | None = None, resolution: 
     sh = fleet.shaping
     if sh is None:
         return tail
-    tb, th, mb, n = sh.blend_time, sh.th, fleet.mission.bounds(), fleet.offsets.shape[0]
+    tb, th, n = sh.blend_time, sh.th, fleet.offsets.shape[0]
     dp, dv = sh.dp.reshape(-1, n, 2), sh.dv.reshape(-1, n, 2)
     dpsi, dr = sh.dpsi.reshape(-1, n), sh.dr.reshape(-1, n)
-    dpn, dvn = np.hypot(dp[..., 0], dp[..., 1]), np.hypot(dv[..., 0], dv[..., 1])
-    acc = mb.accel_max + dpn * H0_SUP[2] / tb**2 + dvn * H1_SUP[2] / th
-    jerk = mb.jerk_max + dpn * H0_SUP[3] / tb**3 + dvn * H1_SUP[3] / th**2
-    d1 = np.abs(dpsi) * H0_SUP[1] / th + np.abs(dr) * H1_SUP[1]
-    d2 = np.abs(dpsi) * H0_SUP[2] / th**2 + np.abs(dr) * H1_SUP[2] / th
+    acc, jerk, d1, d2 = _derivative_bounds(fleet)
     k = _cells(cells, resolution, tb, float(acc.max()))
     while True:  # by default, refine until every speed is bounded away from zero
         try:
@@ -130,6 +126,36 @@ def shaped_tube(fleet: FleetReference, *, cells: int | None = None, resolution: 
             if cells is not None or k >= MAX_CELLS:
                 raise
             k = min(MAX_CELLS, 4 * k)
+
+
+def _derivative_bounds(fleet: FleetReference) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Per-vehicle sound bounds ``(A, J, D1, D2)`` of ``|p''|``, ``|p'''|``, ``|delta'|``, ``|delta''|``.
+
+    See :func:`shaped_tube`. Shapes ``(B, N)``, ``B`` the flattened batch of the shaping.
+    """
+    sh = fleet.shaping
+    assert sh is not None
+    tb, th, mb, n = sh.blend_time, sh.th, fleet.mission.bounds(), fleet.offsets.shape[0]
+    dp, dv = sh.dp.reshape(-1, n, 2), sh.dv.reshape(-1, n, 2)
+    dpsi, dr = sh.dpsi.reshape(-1, n), sh.dr.reshape(-1, n)
+    dpn, dvn = np.hypot(dp[..., 0], dp[..., 1]), np.hypot(dv[..., 0], dv[..., 1])
+    acc = mb.accel_max + dpn * H0_SUP[2] / tb**2 + dvn * H1_SUP[2] / th
+    jerk = mb.jerk_max + dpn * H0_SUP[3] / tb**3 + dvn * H1_SUP[3] / th**2
+    d1 = np.abs(dpsi) * H0_SUP[1] / th + np.abs(dr) * H1_SUP[1]
+    d2 = np.abs(dpsi) * H0_SUP[2] / th**2 + np.abs(dr) * H1_SUP[2] / th
+    return acc, jerk, d1, d2
+
+
+def default_cells(fleet: FleetReference, resolution: float = 1e-3) -> int:
+    """The cell count :func:`shaped_tube` would choose for the whole of ``fleet``.
+
+    Use it to tube a large fleet in chunks on one common time grid, so that the margins do
+    not depend on how the fleet was split. Returns 1 for an unshaped reference.
+    """
+    if fleet.shaping is None:
+        return 1
+    acc = _derivative_bounds(fleet)[0]
+    return _cells(None, resolution, fleet.shaping.blend_time, float(acc.max()))
 
 
 class _SpeedVanishes(ParameterError):

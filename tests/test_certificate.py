@@ -24,8 +24,13 @@ def test_presets_certify(name):
     env, p = c.config.envelope, c.config.vehicle
     u, v, r = (rng.uniform(*rg, 100_000) for rg in (env.u, env.v, env.r))
     d11, d22 = p.d11_lin + p.d11_quad * np.abs(u), p.d22_lin + p.d22_quad * np.abs(v)
-    blocks = np.stack([np.stack([-d11 / p.m11 - c.lam, (p.m22 - p.m11) * r / p.m11], -1),
-                       np.stack([(p.m22 - p.m11) * r / p.m22, -d22 / p.m22 - c.lam], -1)], -2)
+    blocks = np.stack(
+        [
+            np.stack([-d11 / p.m11 - c.lam, (p.m22 - p.m11) * r / p.m11], -1),
+            np.stack([(p.m22 - p.m11) * r / p.m22, -d22 / p.m22 - c.lam], -1),
+        ],
+        -2,
+    )
     assert c.sigma.upper >= np.linalg.norm(blocks, 2, axis=(-2, -1)).max()
     assert c.small_gain_margin > 0
     assert c.sigma_jacobi.upper >= c.sigma.upper
@@ -46,7 +51,9 @@ def test_bad_design_not_certified_with_reasons():
 
 
 def test_minimal_with_gamma_equal_inverse_sigma_is_strictly_zero_margin():
-    cfg = replace(preset_config("paper-triangle"), envelope=Envelope(u=(0, 0.5), v=(-1, 1), r=(-3, 3)), method="minimal")
+    cfg = replace(
+        preset_config("paper-triangle"), envelope=Envelope(u=(0, 0.5), v=(-1, 1), r=(-3, 3)), method="minimal"
+    )
     c = certify(cfg)
     assert c.small_gain_margin == pytest.approx(0.0, abs=1e-9)
     assert not c.certified and any("small-gain margin" in r for r in c.reasons)
@@ -56,8 +63,20 @@ def test_cli_certify_json(capsys, tmp_path):
     code = main(["certify", "--preset", "paper-triangle", "--json", "--out", str(tmp_path)])
     data = json.loads(capsys.readouterr().out)
     assert code == 0 and data["certified"] is True
-    for key in ("preset", "n", "lambda", "sigma", "sigma_jacobi", "gamma", "method", "alpha", "theorem1",
-                "small_gain_margin", "position_loop_hinf", "crosscheck_ok"):
+    for key in (
+        "preset",
+        "n",
+        "lambda",
+        "sigma",
+        "sigma_jacobi",
+        "gamma",
+        "method",
+        "alpha",
+        "theorem1",
+        "small_gain_margin",
+        "position_loop_hinf",
+        "crosscheck_ok",
+    ):
         assert key in data
     assert data["sigma"]["coords"] == "vehicle"
     assert (tmp_path / "certificate.json").exists() and (tmp_path / "sigma_heatmap.png").exists()
@@ -82,9 +101,14 @@ def test_cli_design_below_gamma_min_flags_infeasible(capsys):
 
 @pytest.mark.parametrize(
     "argv",
-    [["design", "--lam", "1", "--gamma", "1"], ["design", "--lam", "-1", "--gamma", "nan"],
-     ["design", "--lam", "-1.2", "--gamma", "0"], ["design", "--lam", "x", "--gamma", "1"],
-     ["certify", "--preset", "nope"], ["design", "--lam", "-1", "--gamma", "1", "--n", "1"]],
+    [
+        ["design", "--lam", "1", "--gamma", "1"],
+        ["design", "--lam", "-1", "--gamma", "nan"],
+        ["design", "--lam", "-1.2", "--gamma", "0"],
+        ["design", "--lam", "x", "--gamma", "1"],
+        ["certify", "--preset", "nope"],
+        ["design", "--lam", "-1", "--gamma", "1", "--n", "1"],
+    ],
 )
 def test_cli_bad_input_exit_2(argv, capsys):
     assert main(argv) == 2
@@ -94,13 +118,15 @@ def test_cli_bad_input_exit_2(argv, capsys):
 
 @pytest.mark.parametrize(
     "text, pattern",
-    [("[formation]\nn = 1\n", "n must be >= 2"),
-     ("[vehicle]\nm11 = -5\n", "missing keys"),
-     ("[envelope]\nu = [3, 1]\n", "envelope u is empty"),
-     ("[design]\nmethod = 'fast'\n", "design.method"),
-     ("[design]\nk1 = 'a'\n", "design.k1 has the wrong type"),
-     ("[formation\n", "invalid TOML"),
-     ("[extra]\n", "unknown table")],
+    [
+        ("[formation]\nn = 1\n", "n must be >= 2"),
+        ("[vehicle]\nm11 = -5\n", "missing keys"),
+        ("[envelope]\nu = [3, 1]\n", "envelope u is empty"),
+        ("[design]\nmethod = 'fast'\n", "design.method"),
+        ("[design]\nk1 = 'a'\n", "design.k1 has the wrong type"),
+        ("[formation\n", "invalid TOML"),
+        ("[extra]\n", "unknown table"),
+    ],
 )
 def test_bad_toml(tmp_path, text, pattern, capsys):
     f = tmp_path / "bad.toml"
@@ -142,8 +168,15 @@ def test_certify_json_closed_loop_keys_and_thrust_bound(capsys):
 
     assert main(["certify", "--preset", "paper-triangle", "--json"]) == 0
     loop = json.loads(capsys.readouterr().out)["closed_loop"]
-    for key in ("decay_rate", "region", "reference_inside_envelope", "max_force", "max_moment",
-                "covers_shaped_start", "method"):
+    for key in (
+        "decay_rate",
+        "region",
+        "reference_inside_envelope",
+        "max_force",
+        "max_moment",
+        "covers_shaped_start",
+        "method",
+    ):
         assert key in loop
     assert set(loop["region"]) == {"position_error", "velocity_error", "heading_error", "yaw_rate_error"}
     assert isinstance(loop["method"], str) and loop["method"]

@@ -8,9 +8,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
+from auv_hinf.exceptions import FormationError
 from auv_hinf.formation import (
+    DENSE_MAX_N,
     JacobiTransform,
     block_diag_stack,
+    closest_pair,
     formation_matrices,
     offsets_from_shape,
     regular_polygon,
@@ -132,3 +135,88 @@ def test_property_round_trip(n, kind, seed):
     p = rng.normal(scale=100, size=(n, 2))
     assert_allclose(t.to_positions(t.to_jacobi(p)), p, rtol=1e-10, atol=1e-8)
     assert_allclose(t.to_jacobi(p)[-1], p.mean(axis=0), atol=1e-9)
+
+
+# --- O(N) closed forms against dense linear algebra ---------------------------------------
+
+SIZES = [2, 3, 7, 50, 200]
+#: Round-off allowance of the dense references: a 200 x 200 SVD / inverse is accurate to a few
+#: hundred ulps of the largest entry.
+DENSE_RTOL = 1e-11
+
+
+def dense_phi(n: int, kind: str) -> np.ndarray:
+    """``Phi`` entry by entry from its definition (independent of the implementation)."""
+    out = np.zeros((n, n))
+    for j in range(1, n):
+        for k in range(j):
+            out[j - 1, k] = 1.0 / j
+        out[j - 1, j] = -1.0
+        if kind == "orthonormal":
+            out[j - 1] *= np.sqrt(j / (j + 1.0))
+    out[n - 1] = 1.0 / n
+    return out
+
+
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("n", SIZES)
+def test_closed_form_singular_values_and_cond(kind, n):
+    t = JacobiTransform(n, kind)
+    phi = dense_phi(n, kind)
+    assert_allclose(t.phi, phi, rtol=0, atol=1e-15)
+    sv = np.linalg.svd(phi, compute_uv=False)
+    assert_allclose(t.singular_values, sv, rtol=DENSE_RTOL)
+    assert t.cond == pytest.approx(np.linalg.cond(phi), rel=DENSE_RTOL)
+    # the advertised values: sqrt(2N) (paper) and sqrt(N) (orthonormal)
+    assert t.cond == pytest.approx(np.sqrt(2 * n if kind == "paper" else n), rel=1e-14)
+    # Phi Phi^T is diagonal with the squared row norms: the rows are orthogonal
+    assert_allclose(phi @ phi.T, np.diag(t.singular_values_by_row**2), rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("n", SIZES)
+def test_linear_maps_match_dense_products(kind, n, rng):
+    t = JacobiTransform(n, kind)
+    phi = dense_phi(n, kind)
+    inv = np.linalg.inv(phi)
+    x = rng.normal(scale=30.0, size=(3, n, 2))
+    scale = np.abs(x).max() * np.linalg.cond(phi)
+    for got, mat in ((t.to_jacobi(x), phi), (t.to_positions(x), inv), (t.transpose(x), phi.T),
+                     (t.inverse_transpose(x), inv.T)):
+        assert_allclose(got, np.einsum("jk,mkd->mjd", mat, x), rtol=0, atol=DENSE_RTOL * scale)
+    assert_allclose(t.phi_inv, inv, rtol=0, atol=DENSE_RTOL * np.abs(inv).max())
+    assert_allclose(t.matrix_inv @ t.matrix, np.eye(2 * n), rtol=0, atol=1e-12)
+
+
+def test_dense_matrices_refused_for_large_fleets():
+    t = JacobiTransform(DENSE_MAX_N + 1)
+    assert t.cond == pytest.approx(np.sqrt(2 * (DENSE_MAX_N + 1)), rel=1e-14)
+    for name in ("phi", "phi_inv", "matrix", "matrix_inv"):
+        with pytest.raises(FormationError, match="DENSE_MAX_N"):
+            getattr(t, name)
+
+
+def test_large_fleet_maps_are_linear_time():
+    """100,000 vehicles: round trip and adjoint identity <Phi x, y> = <x, Phi^T y>, without a dense matrix."""
+    n = 100_000
+    rng = np.random.default_rng(5)
+    for kind in KINDS:
+        t = JacobiTransform(n, kind)
+        x, y = rng.normal(size=(n, 2)), rng.normal(size=(n, 2))
+        assert_allclose(t.to_positions(t.to_jacobi(x)), x, rtol=0, atol=1e-9)
+        assert np.vdot(t.to_jacobi(x), y) == pytest.approx(np.vdot(x, t.transpose(y)), rel=1e-9)
+        assert np.vdot(t.to_positions(x), y) == pytest.approx(np.vdot(x, t.inverse_transpose(y)), rel=1e-9)
+        assert "phi" not in t.__dict__
+
+
+def test_closest_pair_matches_brute_force(rng):
+    for _ in range(20):
+        n = int(rng.integers(2, 60))
+        pts = rng.integers(-4, 5, size=(n, 2)).astype(float) * rng.uniform(0.5, 2.0)  # many ties and duplicates
+        d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+        d[np.diag_indices(n)] = np.inf
+        i, j, dist = closest_pair(pts)
+        assert i < j and dist == pytest.approx(d.min(), abs=1e-12)
+        assert np.linalg.norm(pts[i] - pts[j]) == pytest.approx(d.min(), abs=1e-12)
+    with pytest.raises(FormationError, match="finite"):
+        closest_pair([[0.0, 0.0], [np.nan, 1.0]])

@@ -7,8 +7,18 @@ import pytest
 
 from auv_hinf.envelope import Envelope, abs_range, envelope_lambda
 from auv_hinf.formation import JacobiTransform
-from auv_hinf.sigma import jacobi_sigma_bounds, sigma_at_witness, sigma_grid, sigma_max_2x2, vehicle_sigma
-from auv_hinf.vehicle import VehicleParams, body_block, paper2011
+from auv_hinf.sigma import (
+    DENSE_SIGMA_MAX_N,
+    jacobi_apply,
+    jacobi_sigma,
+    jacobi_sigma_bounds,
+    jacobi_sigma_lower,
+    sigma_at_witness,
+    sigma_grid,
+    sigma_max_2x2,
+    vehicle_sigma,
+)
+from auv_hinf.vehicle import VehicleParams, body_block, inertial_block, paper2011
 
 
 def test_closed_form_2x2_norm(rng):
@@ -116,3 +126,91 @@ def test_jacobi_branch_and_bound_is_sound(kind):
     assert fine.upper >= coarse.lower and fine.upper >= fine.lower
     assert fine.upper < t.cond * veh.upper
     assert sigma_at_witness(p, fine, t) == pytest.approx(fine.lower, rel=1e-10)
+
+
+# --- matrix-free Jacobi sigma against the dense reference ---------------------------------
+
+#: The witnessed value is ||M x|| at a unit x: never above ||M|| beyond round-off of the
+#: O(N) maps and of the dense SVD (a few ulps times cond(Phi)^2 <= 100 here).
+LOWER_ROUNDOFF = 1e-12
+#: 24 Krylov steps reach the top singular value to about machine precision at these sizes.
+KRYLOV_MATCH_RTOL = 1e-8
+
+
+def random_vertices(rng, env, m, n):
+    a, b = abs_range(*env.u), abs_range(*env.v)
+    return (rng.uniform(-np.pi, np.pi, (m, n)), np.asarray(a)[rng.integers(0, 2, (m, n))],
+            np.asarray(b)[rng.integers(0, 2, (m, n))], np.asarray(env.r)[rng.integers(0, 2, (m, n))])
+
+
+@pytest.mark.parametrize("kind", ["paper", "orthonormal"])
+@pytest.mark.parametrize("n", [2, 3, 7, 20, 50])
+def test_matrix_free_operator_matches_dense(kind, n, rng):
+    p = paper2011()
+    t = JacobiTransform(n, kind)
+    psi, u, v, r = (rng.uniform(-1, 1, n) for _ in range(4))
+    g = inertial_block(p, psi, u, v, r) + 1.35 * np.eye(2)
+    dense = np.kron(t.phi, np.eye(2)) @ block_diag(g) @ np.kron(np.linalg.inv(t.phi), np.eye(2))
+    x = rng.normal(size=(n, 2))
+    assert_close(jacobi_apply(g, kind, x).ravel(), dense @ x.ravel())
+    assert_close(jacobi_apply(g, kind, x, transpose=True).ravel(), dense.T @ x.ravel())
+
+
+def block_diag(g):
+    n = len(g)
+    out = np.zeros((2 * n, 2 * n))
+    for i in range(n):
+        out[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = g[i]
+    return out
+
+
+def assert_close(a, b):
+    assert np.allclose(a, b, rtol=0, atol=1e-11 * max(1.0, np.abs(b).max()))
+
+
+@pytest.mark.parametrize("kind", ["paper", "orthonormal"])
+@pytest.mark.parametrize("n", [2, 3, 7, 20, 50])
+def test_matrix_free_lower_bound_matches_dense_svd(kind, n):
+    p = paper2011()
+    env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
+    rng = np.random.default_rng(n)
+    t = JacobiTransform(n, kind)
+    psi, u, v, r = random_vertices(rng, env, 40, n)
+    dense = jacobi_sigma(p, -1.35, t, psi, u, v, r)
+    lower, x = jacobi_sigma_lower(p, -1.35, t, psi, u, v, r, rng=rng)
+    assert np.all(lower <= dense * (1 + LOWER_ROUNDOFF))  # a valid lower bound
+    assert np.allclose(lower, dense, rtol=KRYLOV_MATCH_RTOL, atol=0)  # and a tight one
+    assert np.allclose(np.linalg.norm(x.reshape(40, -1), axis=1), 1.0, rtol=1e-14)
+
+
+def test_matrix_free_bound_is_valid_even_with_one_step():
+    """One step is a plain power-iteration Rayleigh quotient: smaller, but still below the norm."""
+    p = paper2011()
+    env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
+    rng = np.random.default_rng(4)
+    t = JacobiTransform(30)
+    psi, u, v, r = random_vertices(rng, env, 20, 30)
+    dense = jacobi_sigma(p, -1.35, t, psi, u, v, r)
+    one, _ = jacobi_sigma_lower(p, -1.35, t, psi, u, v, r, dim=1, rng=rng)
+    full, _ = jacobi_sigma_lower(p, -1.35, t, psi, u, v, r, rng=rng)
+    assert np.all(one <= dense * (1 + LOWER_ROUNDOFF)) and np.all(one < full)
+
+
+@pytest.mark.parametrize("kind", ["paper", "orthonormal"])
+def test_jacobi_bounds_matrix_free_path(kind):
+    """Above DENSE_SIGMA_MAX_N: upper = cond * sigma_vehicle, lower witnessed and re-evaluable."""
+    p = paper2011()
+    env = Envelope(u=(0, 2), v=(-1, 1), r=(-0.5, 0.5))
+    n = DENSE_SIGMA_MAX_N + 18
+    t = JacobiTransform(n, kind)
+    veh = vehicle_sigma(p, env, -1.35, n)
+    jac = jacobi_sigma_bounds(p, env, -1.35, t, samples=60)
+    cond = np.sqrt(2 * n if kind == "paper" else n)
+    assert jac.upper == pytest.approx(cond * veh.upper, rel=1e-9)
+    assert jac.lower <= jac.upper
+    assert "matrix-free" in jac.method and len(jac.witness["vector"]) == 2 * n
+    assert sigma_at_witness(p, jac, t) == pytest.approx(jac.lower, rel=1e-12)
+    w = jac.witness
+    exact = jacobi_sigma(p, -1.35, t, *(np.asarray(w[k]) for k in ("psi", "u", "v", "r")))
+    assert jac.lower <= float(exact) * (1 + LOWER_ROUNDOFF)
+    assert jac.lower == pytest.approx(float(exact), rel=KRYLOV_MATCH_RTOL)

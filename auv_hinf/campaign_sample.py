@@ -1,0 +1,313 @@
+"""Campaign runs: the worker set-up, the reproducible sampling of one run, and one chunk.
+
+See :mod:`auv_hinf.campaign` for the sampling rules. Every function here is a pure function
+of a :class:`CampaignSetup` and run indices, so a chunk computes the same rows on any
+executor.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ._typing import FloatArray
+from .closed_loop import ClosedLoopCertificate
+from .config import FormationConfig
+from .control_law import VehicleLaw
+from .coverage import initial_errors
+from .envelope import Envelope
+from .exceptions import ParameterError
+from .integrators import ATOL, RTOL
+from .plan import closed_loop_for, design_gains, formation_offsets, measured_decay_rate, mission_reference
+from .reference import FleetReference
+from .region import start_bounds
+from .simulation import Scenario, ScenarioBatch, simulate_batch
+from .vehicle import VehicleParams
+
+#: Plant coefficients that the ``[uncertainty]`` box may scale, in sampling order.
+COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+#: Error kinds, in the order of :func:`~auv_hinf.region.start_bounds` (m, m/s, rad, rad/s).
+ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
+#: Output sample interval (s): the measured sup of the errors is taken on these samples.
+SAMPLE_INTERVAL = 0.1
+#: Default chunk: at most this many scenarios per batch ...
+MAX_CHUNK = 64
+#: ... and at most this many bytes of sampled states ``(T, S, N, 6)`` per chunk.
+CHUNK_BYTES = 64 * 2**20
+#: A measured error counts as inside its certified bound ``b`` if it is ``<= b (1 + tol) + tol``
+#: with ``tol`` = this factor times the integrator's tolerance: the trajectory is known to
+#: about rtol/atol = 1e-8, so a larger excess is a real violation, not integration noise.
+BOUND_SLACK = 100.0
+
+
+@dataclass(frozen=True)
+class CampaignSetup:
+    """Everything a worker needs to run chunks of a campaign (picklable, small).
+
+    Attributes
+    ----------
+    name : str
+    law : VehicleLaw
+    nominal : VehicleParams
+        Nominal plant (the controller's model).
+    reference : FleetReference
+        Raw mission reference, shared by every run.
+    start : ndarray, shape (N, 4, 2)
+        Desired position (m), velocity (m/s), and ``(psi, r)`` (rad, rad/s) at ``t = 0``.
+    radii : ndarray, shape (4,)
+        Certified start-region radii (m, m/s, rad, rad/s).
+    p2, q : ndarray, shape (2, 2)
+        Lyapunov matrices of the region (identity when the loop's radii are zero).
+    certificate : ClosedLoopCertificate
+        Its decay Lyapunov matrices give the measured decay rate.
+    box : ndarray, shape (9, 2)
+        Multiplier ranges of :data:`COEFFICIENTS` (``[1, 1]`` when undeclared).
+    current_speed : float
+        Bound of the current (m/s).
+    envelope : Envelope
+    horizon : float
+        s.
+    samples : int
+    seed : int
+    certificate_applies : bool
+        False when the certified thrust exceeds the configured limit (saturation voids it).
+    """
+
+    name: str
+    law: VehicleLaw
+    nominal: VehicleParams
+    reference: FleetReference
+    start: FloatArray
+    radii: FloatArray
+    p2: FloatArray
+    q: FloatArray
+    certificate: ClosedLoopCertificate
+    box: FloatArray
+    current_speed: float
+    envelope: Envelope
+    horizon: float
+    samples: int
+    seed: int
+    certificate_applies: bool
+
+    @property
+    def n(self) -> int:
+        """Number of vehicles."""
+        return int(self.start.shape[0])
+
+
+def _uniform_disc_radius(rng: np.random.Generator, radius: float, size: int) -> FloatArray:
+    """``size`` planar vectors, magnitude uniform on ``[0, radius)``, direction uniform."""
+    mag = radius * rng.random(size)
+    ang = 2.0 * math.pi * rng.random(size)
+    return np.stack([mag * np.cos(ang), mag * np.sin(ang)], axis=-1)
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """Sampled inputs of one run.
+
+    Attributes
+    ----------
+    errors : tuple of ndarray
+        Start errors ``e (N, 2)`` m, ``e' (N, 2)`` m/s, ``e_psi (N,)`` rad, ``e_psi' (N,)`` rad/s.
+    multipliers : ndarray, shape (9,)
+        Plant multipliers of :data:`COEFFICIENTS`.
+    current : ndarray, shape (2,)
+        Inertial current (m/s).
+    """
+
+    errors: tuple[FloatArray, FloatArray, FloatArray, FloatArray]
+    multipliers: FloatArray
+    current: FloatArray
+
+
+def sample_run(setup: CampaignSetup, index: int) -> RunInputs:
+    """Inputs of run ``index``, from ``SeedSequence(setup.seed, spawn_key=(index,))`` alone."""
+    rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
+    n, r = setup.n, setup.radii
+    e = _uniform_disc_radius(rng, float(r[0]), n)
+    de = _uniform_disc_radius(rng, float(r[1]), n)
+    epsi = float(r[2]) * rng.uniform(-1.0, 1.0, n)
+    depsi = float(r[3]) * rng.uniform(-1.0, 1.0, n)
+    lo, hi = setup.box[:, 0], setup.box[:, 1]
+    mult = lo + (hi - lo) * rng.random(lo.size)
+    c_mag = setup.current_speed * math.sqrt(rng.random())  # uniform in the disc
+    c_ang = 2.0 * math.pi * rng.random()
+    current = np.array([c_mag * math.cos(c_ang), c_mag * math.sin(c_ang)]) + 0.0  # no -0.0 in the table
+    return RunInputs((e, de, epsi, depsi), mult, current)
+
+
+def initial_state(setup: CampaignSetup, inputs: RunInputs) -> FloatArray:
+    """``[x, y, psi, u, v, r]`` per vehicle: the mission's motion at ``t = 0`` plus the errors."""
+    e, de, epsi, depsi = inputs.errors
+    p, v, hr = setup.start[:, 0], setup.start[:, 1], setup.start[:, 2]
+    psi = hr[:, 0] + epsi
+    vel = v + de
+    c, s = np.cos(psi), np.sin(psi)
+    return np.column_stack(
+        [p + e, psi, c * vel[:, 0] + s * vel[:, 1], -s * vel[:, 0] + c * vel[:, 1], hr[:, 1] + depsi]
+    )
+
+
+def _plant(setup: CampaignSetup, mult: FloatArray) -> VehicleParams:
+    if np.all(mult == 1.0):
+        return setup.nominal
+    base = setup.nominal
+    return VehicleParams(**{k: getattr(base, k) * float(m) for k, m in zip(COEFFICIENTS, mult)}, name="sampled")
+
+
+def run_chunk(setup: CampaignSetup, lo: int, hi: int) -> pd.DataFrame:
+    """Sample, integrate (one batch) and measure runs ``lo .. hi - 1``: one row per run.
+
+    Columns: ``run``, ``seed``; inputs ``<coef>_mult`` (nine plant multipliers), ``current_x``,
+    ``current_y`` (m/s), ``nominal`` (plant nominal and no current), ``start_<kind>_error``
+    (largest start error over the vehicles); metrics ``stayed_in_envelope``,
+    ``first_exit_time`` (s, NaN if none), ``max_<kind>_error`` (sup over samples and
+    vehicles), ``final_position_error`` (m), ``measured_decay_rate`` (1/s, NaN if none),
+    ``bound_<kind>_error`` (largest per-start certified bound), ``ratio_<kind>_error``
+    (largest measured / certified over the vehicles), ``inside_bounds`` (NA when the nominal
+    certificate does not apply) and ``n_steps``. ``<kind>`` is one of :data:`ERROR_KINDS`
+    (m, m/s, rad, rad/s).
+    """
+    inputs = [sample_run(setup, i) for i in range(lo, hi)]
+    scns = tuple(
+        Scenario(
+            law=setup.law,
+            reference=setup.reference,
+            plant=_plant(setup, x.multipliers),
+            initial=initial_state(setup, x),
+            horizon=setup.horizon,
+            current=(float(x.current[0]), float(x.current[1])),
+            envelope=setup.envelope,
+            samples=setup.samples,
+            name=f"{setup.name}[{i}]",
+        )
+        for i, x in zip(range(lo, hi), inputs)
+    )
+    results = simulate_batch(ScenarioBatch(scns))
+    rows = []
+    for i, x, res in zip(range(lo, hi), inputs, results):
+        rows.append(_row(setup, i, x, res))
+    return pd.DataFrame(rows)
+
+
+def _row(setup: CampaignSetup, index: int, x: RunInputs, res: Any) -> dict[str, Any]:
+    scn = res.scenario
+    e0 = initial_errors(setup.reference, scn.initial, scn.current)
+    tr = res.tracking
+    measured = np.stack(
+        [
+            np.linalg.norm(tr.e, axis=-1).max(0),
+            np.linalg.norm(tr.e_dot, axis=-1).max(0),
+            np.abs(tr.e_psi).max(0),
+            np.abs(tr.e_psi_dot).max(0),
+        ],
+        axis=-1,
+    )  # (N, 4)
+    bound = start_bounds(setup.p2, setup.q, *e0)  # (N, 4)
+    stayed = res.exit_time is None
+    nominal = bool(np.all(x.multipliers == 1.0) and not np.any(x.current))
+    row: dict[str, Any] = {"run": index, "seed": setup.seed}
+    row.update({f"{k}_mult": float(m) for k, m in zip(COEFFICIENTS, x.multipliers)})
+    row.update({"current_x": float(x.current[0]), "current_y": float(x.current[1]), "nominal": nominal})
+    starts = (np.linalg.norm(e0[0], axis=-1), np.linalg.norm(e0[1], axis=-1), np.abs(e0[2]), np.abs(e0[3]))
+    row.update({f"start_{k}_error": float(s.max()) for k, s in zip(ERROR_KINDS, starts)})
+    row.update({"stayed_in_envelope": stayed, "first_exit_time": math.nan if stayed else float(res.exit_time)})
+    row.update({f"max_{k}_error": float(m) for k, m in zip(ERROR_KINDS, measured.max(0))})
+    row["final_position_error"] = float(res.mission_error[-1].max())
+    rate = measured_decay_rate(res, setup.certificate)
+    row["measured_decay_rate"] = math.nan if rate is None else float(rate)
+    row.update({f"bound_{k}_error": float(b) for k, b in zip(ERROR_KINDS, bound.max(0))})
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(bound > 0, measured / bound, np.where(measured > 0, math.inf, 0.0))
+    row.update({f"ratio_{k}_error": float(r) for k, r in zip(ERROR_KINDS, ratio.max(0))})
+    tol = BOUND_SLACK * max(RTOL, ATOL)
+    inside = bool(np.all(measured <= bound * (1.0 + tol) + tol)) and stayed
+    row["inside_bounds"] = inside if (nominal and setup.certificate_applies) else pd.NA
+    row["n_steps"] = int(res.n_steps)
+    return row
+
+
+def prepare(
+    cfg: FormationConfig, *, seed: int = 0, horizon: float | None = None
+) -> tuple[CampaignSetup, ClosedLoopCertificate]:
+    """Gains, closed-loop certificate and the worker set-up of a campaign on ``cfg``.
+
+    Raises
+    ------
+    DesignError
+        If the design has no gain or no closed-loop certificate (no start region to sample).
+    ParameterError
+        For a negative seed or a non-positive horizon.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError(f"seed must be an integer >= 0, got {seed!r}")
+    hor = float(cfg.simulation.horizon if horizon is None else horizon)
+    if not (math.isfinite(hor) and hor > 0):
+        raise ParameterError(f"horizon must be > 0 s, got {horizon!r}")
+    gains = design_gains(cfg)
+    cert = closed_loop_for(cfg, gains)
+    reg = cert.region
+    ref = FleetReference(mission_reference(cfg), formation_offsets(cfg))
+    m0 = ref.motion(0.0)
+    start = np.stack([m0.p, m0.v, np.column_stack([m0.psi, m0.r])], axis=1)
+    box = np.ones((len(COEFFICIENTS), 2))
+    for k, (lo, hi) in cfg.uncertainty.box:
+        box[COEFFICIENTS.index(k)] = (lo, hi)
+    limit = cfg.simulation.thrust_limit
+    t = cert.thrust
+    applies = limit is None or (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2])
+    law = VehicleLaw(params=cfg.vehicle, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi, thrust_limit=limit)
+    setup = CampaignSetup(
+        name=cfg.name,
+        law=law,
+        nominal=cfg.vehicle,
+        reference=ref,
+        start=start,
+        radii=reg.region.as_array(),
+        p2=np.eye(2) if reg.p2 is None else reg.p2,
+        q=np.eye(2) if reg.q is None else reg.q,
+        certificate=cert,
+        box=box,
+        current_speed=float(cfg.disturbance.current_speed or 0.0),
+        envelope=cfg.envelope,
+        horizon=hor,
+        samples=round(hor / SAMPLE_INTERVAL) + 1,
+        seed=int(seed),
+        certificate_applies=bool(applies),
+    )
+    return setup, cert
+
+
+def default_chunk(setup: CampaignSetup) -> int:
+    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the samples would exceed :data:`CHUNK_BYTES`."""
+    per_run = setup.samples * setup.n * 6 * 8
+    return max(1, min(MAX_CHUNK, CHUNK_BYTES // per_run))
+
+
+def chunks(runs: int, chunk: int) -> list[tuple[int, int]]:
+    """``[lo, hi)`` index ranges of ``runs`` runs in chunks of ``chunk``."""
+    return [(lo, min(runs, lo + chunk)) for lo in range(0, runs, chunk)]
+
+
+__all__ = [
+    "BOUND_SLACK",
+    "CHUNK_BYTES",
+    "COEFFICIENTS",
+    "ERROR_KINDS",
+    "MAX_CHUNK",
+    "SAMPLE_INTERVAL",
+    "CampaignSetup",
+    "RunInputs",
+    "chunks",
+    "default_chunk",
+    "initial_state",
+    "prepare",
+    "run_chunk",
+    "sample_run",
+]

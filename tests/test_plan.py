@@ -1,0 +1,206 @@
+"""From a configuration to a certified run (:mod:`auv_hinf.plan`).
+
+The report's measured numbers are recomputed from the raw trajectory and the reference,
+the measured decay rate from its documented definition, and the gains against the full
+certificate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from auv_hinf.certificate import certify
+from auv_hinf.config import FormationConfig
+from auv_hinf.envelope import Envelope
+from auv_hinf.plan import (
+    DECAY_MEASURE_DROP,
+    closed_loop_for,
+    design_gains,
+    formation_offsets,
+    initial_states,
+    measured_decay_rate,
+    mission_reference,
+    plan_run,
+    run_report,
+    with_start,
+)
+from auv_hinf.presets import TRIANGLE_SHAPE, preset_config
+from auv_hinf.reference import FleetReference
+from auv_hinf.region import start_bounds
+from auv_hinf.settings import ReferenceConfig, SimulationConfig
+from auv_hinf.simulation import simulate
+from auv_hinf.vehicle import remus100
+
+REPORT_KEYS = {
+    "stayed_in_envelope",
+    "first_exit_time",
+    "start",
+    "blend_time",
+    "turn_time",
+    "certificate_covers_run",
+    "coverage_reason",
+    "measured_decay_rate",
+    "certified_decay_rate",
+    "measured_errors",
+    "certified_errors",
+    "certified_thrust",
+    "alpha",
+    "k1",
+    "k_psi",
+    "final_shape_error",
+    "max_sway",
+    "horizon",
+}
+ERROR_KEYS = {"position_error", "velocity_error", "heading_error", "yaw_rate_error"}
+
+
+@pytest.fixture(scope="module")
+def triangle():
+    cfg = preset_config("paper-triangle")
+    return cfg, closed_loop_for(cfg, design_gains(cfg))
+
+
+def inside_start(cfg: FormationConfig, cert, rng: np.random.Generator, scale: float = 0.9) -> np.ndarray:
+    """A start whose errors against the raw mission are ``scale`` times the region's radii."""
+    fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg))
+    m = fleet.motion(0.0)
+    reg = cert.region.region
+    th = rng.uniform(0, 2 * np.pi, (2, cfg.n))
+    e = scale * reg.position * np.stack([np.cos(th[0]), np.sin(th[0])], -1)
+    de = scale * reg.velocity * np.stack([np.cos(th[1]), np.sin(th[1])], -1)
+    psi = m.psi + scale * reg.heading * rng.choice([-1.0, 1.0], cfg.n)
+    vel = m.v + de
+    c, s = np.cos(psi), np.sin(psi)
+    r = m.r + scale * reg.yaw_rate * rng.choice([-1.0, 1.0], cfg.n)
+    return np.column_stack([m.p + e, psi, c * vel[:, 0] + s * vel[:, 1], -s * vel[:, 0] + c * vel[:, 1], r])
+
+
+def test_run_report_keys_and_measured_errors(triangle, rng):
+    cfg, cert = triangle
+    x = inside_start(cfg, cert, rng)
+    plan = plan_run(with_start(cfg, x), start="paper", horizon=20.0, samples=401)
+    res = simulate(plan.scenario)
+    rep = run_report(plan, res)
+    assert REPORT_KEYS <= set(rep)
+    assert set(rep["measured_errors"]) == ERROR_KEYS == set(rep["certified_errors"])
+    assert rep["start"] == "paper" and rep["blend_time"] is None and rep["certificate_covers_run"] is True
+    assert rep["stayed_in_envelope"] is True and rep["first_exit_time"] is None
+    assert rep["alpha"] == plan.gains.alpha and rep["k1"] == cfg.k1
+    # measured errors recomputed from the states and the raw mission
+    motion = FleetReference(mission_reference(cfg), formation_offsets(cfg)).motion(res.t)
+    st = res.states
+    vel = np.stack(
+        [
+            np.cos(st[..., 2]) * st[..., 3] - np.sin(st[..., 2]) * st[..., 4],
+            np.sin(st[..., 2]) * st[..., 3] + np.cos(st[..., 2]) * st[..., 4],
+        ],
+        -1,
+    )
+    dpsi = np.angle(np.exp(1j * (st[..., 2] - motion.psi)))
+    want = {
+        "position_error": np.linalg.norm(st[..., :2] - motion.p, axis=-1).max(),
+        "velocity_error": np.linalg.norm(vel - motion.v, axis=-1).max(),
+        "heading_error": np.abs(dpsi).max(),
+        "yaw_rate_error": np.abs(st[..., 5] - motion.r).max(),
+    }
+    for k, v in want.items():
+        assert rep["measured_errors"][k] == pytest.approx(v, rel=1e-9, abs=1e-12)
+    # certified errors: the start's own ellipsoid bounds (largest over the vehicles)
+    e0 = x[:, :2] - motion.p[0]
+    de0 = vel[0] - motion.v[0]
+    bounds = start_bounds(cert.region.p2, cert.region.q, e0, de0, dpsi[0], x[:, 5] - motion.r[0]).max(axis=0)
+    for k, b in zip(("position_error", "velocity_error", "heading_error", "yaw_rate_error"), bounds):
+        assert rep["certified_errors"][k] == pytest.approx(b, rel=1e-9)
+        assert rep["measured_errors"][k] <= rep["certified_errors"][k] + 1e-6
+    assert rep["certified_thrust"] == plan.coverage.thrust.to_dict()
+
+
+def test_measured_decay_rate_matches_its_definition(triangle, rng):
+    cfg, cert = triangle
+    plan = plan_run(with_start(cfg, inside_start(cfg, cert, rng)), start="paper", horizon=40.0, samples=801)
+    res = simulate(plan.scenario)
+    cert = plan.certificate
+    rate = measured_decay_rate(res, cert)
+    p, q = cert.position.matrix, cert.heading.matrix
+    tr = res.tracking
+    rates = []
+    for i in range(cfg.n):
+        x = np.concatenate([tr.e[:, i], tr.e_dot[:, i]], -1)  # (T, 4) = (e, e')
+        big_p = np.kron(p, np.eye(2))
+        z = np.stack([tr.e_psi[:, i], tr.e_psi_dot[:, i]], -1)
+        v = np.einsum("ti,ij,tj->t", x, big_p, x) + np.einsum("ti,ij,tj->t", z, q, z)
+        k = int(np.argmax(v <= DECAY_MEASURE_DROP * v[0]))
+        assert k > 0, "the run is too short to see the drop"
+        rates.append(0.5 * math.log(v[0] / v[k]) / res.t[k])
+    assert rate == pytest.approx(min(rates), rel=1e-9)
+    assert rate >= cert.rate
+    assert run_report(plan, res)["measured_decay_rate"] == rate
+
+
+def test_measured_decay_is_none_for_the_shaped_start(triangle):
+    cfg, cert = triangle
+    plan = plan_run(cfg, horizon=30.0, samples=301)
+    assert plan.start == "shaped" and plan.coverage is not None and plan.coverage.blend_time is not None
+    res = simulate(plan.scenario)
+    rep = run_report(plan, res)
+    assert measured_decay_rate(res, cert) is None and rep["measured_decay_rate"] is None
+    assert rep["certified_decay_rate"] == cert.rate
+    assert rep["certificate_covers_run"] is True and rep["stayed_in_envelope"] is True
+    assert rep["measured_errors"]["position_error"] < 1e-4
+
+
+@pytest.mark.parametrize(
+    "change, note",
+    [
+        ({"plant": {"d11_lin": 1.2, "m22": 0.9}}, "plant differs"),
+        ({"current": (0.05, -0.02)}, "current"),
+    ],
+)
+def test_plant_mismatch_or_current_is_not_covered(triangle, rng, change, note):
+    cfg, cert = triangle
+    x = inside_start(cfg, cert, rng)
+    sim = SimulationConfig(initial=tuple(map(tuple, x.tolist())), start="paper", **change)
+    plan = plan_run(replace(cfg, simulation=sim), horizon=10.0, samples=101)
+    assert plan.coverage is not None and plan.coverage.covered  # the start alone would be covered
+    assert not plan.covered
+    assert any(note in n for n in plan.notes)
+    rep = run_report(plan, simulate(plan.scenario))
+    assert rep["certificate_covers_run"] is False and note in rep["coverage_reason"]
+
+
+@pytest.mark.parametrize("which", ["paper-triangle", "paper-hexagon", "remus-line"])
+def test_design_gains_agree_with_certify(which):
+    if which == "remus-line":
+        cfg = FormationConfig(
+            name="remus",
+            vehicle=remus100(),
+            n=3,
+            jacobi="paper",
+            shape=TRIANGLE_SHAPE,
+            envelope=Envelope(u=(0.5, 2.5), v=(-0.3, 0.3), r=(-0.3, 0.3)),
+            reference=ReferenceConfig("line", {"speed": 1.5}),
+        )
+    else:
+        cfg = preset_config(which)
+    gains = design_gains(cfg)
+    cert = certify(cfg)
+    assert gains.alpha == pytest.approx(cert.alpha_used, rel=1e-12)
+    assert gains.lam == pytest.approx(cert.lam, rel=1e-12)
+    assert gains.sigma == pytest.approx(cert.sigma.upper, rel=1e-12)
+    assert gains.gamma == pytest.approx(cert.gamma, rel=1e-12)
+    assert cert.closed_loop is not None and cert.closed_loop.certificate is not None
+    assert cert.closed_loop.certificate.rate == pytest.approx(closed_loop_for(cfg, gains).rate, rel=1e-12)
+
+
+def test_initial_states_and_offsets(triangle):
+    cfg, _ = triangle
+    np.testing.assert_array_equal(initial_states(cfg), np.asarray(cfg.simulation.initial))
+    off = formation_offsets(cfg)
+    # paper Jacobi convention: rho_j = mean(p_1..p_j) - p_{j+1}, centroid at zero
+    np.testing.assert_allclose(off.mean(axis=0), 0.0, atol=1e-12)
+    np.testing.assert_allclose(off[0] - off[1], TRIANGLE_SHAPE[0], atol=1e-12)
+    np.testing.assert_allclose(0.5 * (off[0] + off[1]) - off[2], TRIANGLE_SHAPE[1], atol=1e-12)
