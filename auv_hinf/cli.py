@@ -14,6 +14,7 @@ import math
 import sys
 import tempfile
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -74,6 +75,24 @@ def _numeric(p: argparse.ArgumentParser, flag: str, kind: type[int] | type[float
     p.add_argument(flag, type=_number(kind, *bounds), **kw)
 
 
+def _vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
+    """argparse type: ``size`` finite comma-separated numbers (``-0.1,0``)."""
+
+    def parse(text: str) -> tuple[float, ...]:
+        parts = text.split(",")
+        try:
+            values = tuple(float(p) for p in parts)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected {size} comma-separated numbers ({unit}), got {text!r}"
+            ) from None
+        if len(values) != size or not all(math.isfinite(v) for v in values):
+            raise argparse.ArgumentTypeError(f"expected {size} finite comma-separated numbers ({unit}), got {text!r}")
+        return values
+
+    return parse
+
+
 def _join_numbers(argv: Sequence[str]) -> list[str]:
     """Write ``--lam -1e-3`` as ``--lam=-1e-3``.
 
@@ -87,7 +106,7 @@ def _join_numbers(argv: Sequence[str]) -> list[str]:
         tok = argv[i]
         if tok in _NUMERIC_OPTIONS and i + 1 < len(argv) and argv[i + 1].startswith("-"):
             try:
-                float(argv[i + 1])
+                [float(part) for part in argv[i + 1].split(",")]
             except ValueError:
                 pass
             else:
@@ -153,9 +172,25 @@ def build_parser() -> argparse.ArgumentParser:
         c.add_argument("--json", action="store_true", help="print one JSON object")
         c.add_argument("--out", type=Path, help="directory for JSON and PNG outputs (created)")
         if name == "simulate":
-            c.add_argument("--start", choices=("shaped", "paper"),
-                           help="shaped: the reference blends from the actual start (default); paper: raw reference")
+            c.add_argument(
+                "--start",
+                choices=("shaped", "paper"),
+                help="shaped: the reference blends from the actual start (default); paper: raw reference",
+            )
             _numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
+            _NUMERIC_OPTIONS.update(("--current", "--thrust-limit"))
+            c.add_argument(
+                "--current",
+                type=_vector(2, "m/s"),
+                metavar="CX,CY",
+                help="constant current, inertial frame, m/s (e.g. --current 0.1,0)",
+            )
+            c.add_argument(
+                "--thrust-limit",
+                type=_vector(3, "N, N, N m"),
+                metavar="FX,FY,M",
+                help="thrust limits |tau_x|, |tau_y| (N) and |tau_psi| (N m)",
+            )
         if name == "certify":
             c.add_argument("--method", choices=GAIN_METHODS, help="gain method")
             c.add_argument(
@@ -232,6 +267,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     _prepare_out(args.out)
     cfg = _load(args)
+    overrides = {k: v for k, v in (("current", args.current), ("thrust_limit", args.thrust_limit)) if v is not None}
+    if overrides:
+        cfg = replace(cfg, simulation=replace(cfg.simulation, **overrides))
     try:
         plan = plan_run(cfg, start=args.start, horizon=args.horizon)
     except DesignError as exc:
@@ -298,8 +336,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
 
 def _campaign_parser(sub: Any) -> None:
     """The ``campaign`` sub-command's arguments."""
-    c = sub.add_parser("campaign", help="Monte Carlo runs from inside the certified start region",
-                       allow_abbrev=False)
+    c = sub.add_parser("campaign", help="Monte Carlo runs from inside the certified start region", allow_abbrev=False)
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
     src.add_argument("--config", type=Path, help="TOML configuration file")
@@ -322,8 +359,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     cfg = _load(args)
     with dask_client(args.workers, args.scheduler) as client:
         try:
-            camp = run_campaign(cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon,
-                                client=client, progress=True)
+            camp = run_campaign(
+                cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
+            )
         except DesignError as exc:
             raise _Negative(f"no certified start region to sample from: {exc}") from None
     summary = write_outputs(camp, args.out)
@@ -333,8 +371,11 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         for key in ("config", "runs", "executor", "counts", "fraction_inside", "worst_ratio", "throughput", "notes"):
             print(f"{key:>16}: {_short(summary[key])}")
     c = summary["counts"]
-    return _verdict(summary["ok"], f"{c['outside_bounds']} of {c['certificate_applies']} covered runs outside the "
-                                   f"certified bounds, {c['left_envelope']} of {c['runs']} runs left the envelope")
+    return _verdict(
+        summary["ok"],
+        f"{c['outside_bounds']} of {c['certificate_applies']} covered runs outside the "
+        f"certified bounds, {c['left_envelope']} of {c['runs']} runs left the envelope",
+    )
 
 
 _COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {

@@ -6,6 +6,7 @@ import importlib
 import json
 import math
 
+import numpy as np
 import pytest
 
 import auv_hinf
@@ -162,3 +163,32 @@ def test_simulate_short_horizon_from_config(tmp_path, capsys):
     f.write_text("[formation]\nn = 2\npolygon_radius = 5.0\n[simulation]\nhorizon = 2.0\ncurrent = [0.05, 0.0]\n")
     code, out, _ = run(["simulate", "--config", str(f), "--json"], capsys)
     assert code == 0 and isinstance(json.loads(out), dict)
+
+
+def test_simulate_current_and_thrust_limit_options(capsys):
+    """--current and --thrust-limit override the TOML; a current voids the nominal certificate's coverage."""
+    code = main(
+        [
+            "simulate",
+            "--preset",
+            "paper-triangle",
+            "--horizon",
+            "5",
+            "--current",
+            "-0.1,0",
+            "--thrust-limit",
+            "2000,2000,600",
+            "--json",
+        ]
+    )
+    data = json.loads(capsys.readouterr().out)
+    assert code in (0, 1) and code == (0 if data["stayed_in_envelope"] else 1)
+    assert data["certificate_covers_run"] is False and "current" in data["coverage_reason"]
+    assert np.abs(np.asarray(data["max_force"])) <= 2000.0 + 1e-9
+
+
+@pytest.mark.parametrize("bad", [["--current", "1,2,3"], ["--thrust-limit", "1,2"], ["--current", "a,b"]])
+def test_simulate_vector_options_reject_bad_input(bad, capsys):
+    assert main(["simulate", "--preset", "paper-triangle", *bad]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
