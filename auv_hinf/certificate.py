@@ -108,7 +108,7 @@ class Certificate:
                 "lower": self.sigma.lower,
                 "coords": "vehicle",
                 "method": self.sigma.method,
-                "witness": self.sigma.witness,
+                "witness": self.sigma.witness.to_dict(),
             },
             "sigma_jacobi": {
                 "upper": self.sigma_jacobi.upper,

@@ -54,10 +54,10 @@ def _scenario_envelope(res: Any) -> Any:
 
 def _witness_vertex(cert: Certificate) -> tuple[float, float, float] | None:
     """The ``(u, v, r)`` vertex at which the certified vehicle sigma is attained, if recorded."""
-    witness = getattr(cert.sigma, "witness", None) or {}
+    witness = getattr(cert.sigma, "witness", None)
     try:
-        return float(witness["u"][0]), float(witness["v"][0]), float(witness["r"][0])
-    except (KeyError, IndexError, TypeError, ValueError):
+        return float(witness.u[0]), float(witness.v[0]), float(witness.r[0])  # type: ignore[union-attr]
+    except (AttributeError, IndexError, TypeError, ValueError):
         return None
 
 

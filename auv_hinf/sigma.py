@@ -45,7 +45,7 @@ nominal loop ``(lam - alpha) I`` is the same in every coordinate system (item 7)
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -106,14 +106,45 @@ def _signed(value: float, interval: tuple[float, float]) -> float:
     return value if interval[0] <= value <= interval[1] else -value
 
 
-def _witness(envelope: Envelope, psi: ArrayLike, a: ArrayLike, b: ArrayLike, r: ArrayLike) -> dict[str, list[float]]:
-    """Witness dictionary from per-vehicle headings and vertex values of ``|u|, |v|, r``."""
-    return {
-        "u": [_signed(float(x), envelope.u) for x in np.ravel(a)],
-        "v": [_signed(float(x), envelope.v) for x in np.ravel(b)],
-        "r": [float(x) for x in np.ravel(r)],
-        "psi": [float(x) for x in np.ravel(psi)],
-    }
+@dataclass(frozen=True)
+class SigmaWitness:
+    """A configuration of the fleet at which a sigma lower bound is attained.
+
+    Attributes
+    ----------
+    u, v : tuple of float
+        Per-vehicle surge and sway (m/s, body frame).
+    r : tuple of float
+        Per-vehicle yaw rate (rad/s).
+    psi : tuple of float
+        Per-vehicle heading (rad).
+    vector : tuple of float or None
+        For a matrix-free Jacobi bound, the unit vector ``x`` (length 2N) with
+        ``||M x|| = lower``; ``None`` when the bound is an exact norm.
+    """
+
+    u: tuple[float, ...]
+    v: tuple[float, ...]
+    r: tuple[float, ...]
+    psi: tuple[float, ...]
+    vector: tuple[float, ...] | None = None
+
+    def to_dict(self) -> dict[str, list[float]]:
+        """JSON-safe dictionary (``vector`` only when present)."""
+        out = {"u": list(self.u), "v": list(self.v), "r": list(self.r), "psi": list(self.psi)}
+        if self.vector is not None:
+            out["vector"] = list(self.vector)
+        return out
+
+
+def _witness(envelope: Envelope, psi: ArrayLike, a: ArrayLike, b: ArrayLike, r: ArrayLike) -> SigmaWitness:
+    """Witness from per-vehicle headings and vertex values of ``|u|, |v|, r``."""
+    return SigmaWitness(
+        u=tuple(_signed(float(x), envelope.u) for x in np.ravel(a)),
+        v=tuple(_signed(float(x), envelope.v) for x in np.ravel(b)),
+        r=tuple(float(x) for x in np.ravel(r)),
+        psi=tuple(float(x) for x in np.ravel(psi)),
+    )
 
 
 @dataclass(frozen=True)
@@ -129,8 +160,8 @@ class SigmaBounds:
     coords : {"vehicle", "jacobi"}
     method : str
         How the upper bound was obtained.
-    witness : dict
-        Per-vehicle ``u, v`` (m/s), ``r`` (rad/s), ``psi`` (rad) lists reaching ``lower``.
+    witness : SigmaWitness
+        The configuration reaching ``lower``.
     lam : float
         The lambda used (1/s).
     """
@@ -139,7 +170,7 @@ class SigmaBounds:
     lower: float
     coords: str
     method: str
-    witness: dict[str, list[float]] = field(default_factory=dict)
+    witness: SigmaWitness
     lam: float = 0.0
 
     @property
@@ -150,8 +181,13 @@ class SigmaBounds:
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
         return {
-            "upper": self.upper, "lower": self.lower, "gap": self.gap, "coords": self.coords,
-            "method": self.method, "witness": self.witness, "lambda": self.lam,
+            "upper": self.upper,
+            "lower": self.lower,
+            "gap": self.gap,
+            "coords": self.coords,
+            "method": self.method,
+            "witness": self.witness.to_dict(),
+            "lambda": self.lam,
         }
 
 
@@ -163,22 +199,25 @@ def _vehicle_bounds(params: VehicleParams, envelope: Envelope, lam: float, n: in
     k = int(np.argmax(norms))
     best = float(norms[k])
     a, b, r = verts[k]
-    witness = {
-        "u": [_signed(float(a), envelope.u)] * n,
-        "v": [_signed(float(b), envelope.v)] * n,
-        "r": [float(r)] * n,
-        "psi": [0.0] * n,
-    }
+    witness = _witness(envelope, np.zeros(n), np.full(n, a), np.full(n, b), np.full(n, r))
     return SigmaBounds(
-        upper=best * (1.0 + ROUNDOFF_RTOL) + 1e-300, lower=best, coords="vehicle",
+        upper=best * (1.0 + ROUNDOFF_RTOL) + 1e-300,
+        lower=best,
+        coords="vehicle",
         method="exact: convex norm of an affine block, maximised at the 8 box vertices",
-        witness=witness, lam=lam,
+        witness=witness,
+        lam=lam,
     )
 
 
 def jacobi_sigma(
-    params: VehicleParams, lam: float, transform: JacobiTransform,
-    psi: ArrayLike, u: ArrayLike, v: ArrayLike, r: ArrayLike,
+    params: VehicleParams,
+    lam: float,
+    transform: JacobiTransform,
+    psi: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike,
+    r: ArrayLike,
 ) -> FloatArray:
     """``||Phi blockdiag(G_i - lam I) Phi^-1||_2`` at stacked states ``(..., N)``."""
     g = inertial_block(params, psi, u, v, r) - lam * np.eye(2)
@@ -186,8 +225,9 @@ def jacobi_sigma(
     return np.linalg.svd(a, compute_uv=False)[..., 0]
 
 
-def _shifted_blocks(params: VehicleParams, lam: float, psi: ArrayLike, u: ArrayLike, v: ArrayLike,
-                    r: ArrayLike) -> FloatArray:
+def _shifted_blocks(
+    params: VehicleParams, lam: float, psi: ArrayLike, u: ArrayLike, v: ArrayLike, r: ArrayLike
+) -> FloatArray:
     """``G_i - lam I`` at stacked states ``(..., N)``: shape ``(..., N, 2, 2)`` (1/s)."""
     out: FloatArray = inertial_block(params, psi, u, v, r) - lam * np.eye(2)
     return out
@@ -196,8 +236,10 @@ def _shifted_blocks(params: VehicleParams, lam: float, psi: ArrayLike, u: ArrayL
 def _block_mul(blocks: FloatArray, y: FloatArray, transpose: bool) -> FloatArray:
     """``blocks_i y_i`` (or ``blocks_i^T y_i``) for stacks ``(..., N, 2, 2)`` and ``(..., N, 2)``."""
     b = blocks.swapaxes(-1, -2) if transpose else blocks
-    out: FloatArray = np.stack([b[..., 0, 0] * y[..., 0] + b[..., 0, 1] * y[..., 1],
-                                b[..., 1, 0] * y[..., 0] + b[..., 1, 1] * y[..., 1]], axis=-1)
+    out: FloatArray = np.stack(
+        [b[..., 0, 0] * y[..., 0] + b[..., 0, 1] * y[..., 1], b[..., 1, 0] * y[..., 0] + b[..., 1, 1] * y[..., 1]],
+        axis=-1,
+    )
     return out
 
 
@@ -226,9 +268,16 @@ def jacobi_apply(blocks: FloatArray, kind: JacobiKind, x: FloatArray, *, transpo
 
 
 def jacobi_sigma_lower(
-    params: VehicleParams, lam: float, transform: JacobiTransform,
-    psi: ArrayLike, u: ArrayLike, v: ArrayLike, r: ArrayLike,
-    *, dim: int = KRYLOV_DIM, rng: np.random.Generator | None = None,
+    params: VehicleParams,
+    lam: float,
+    transform: JacobiTransform,
+    psi: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike,
+    r: ArrayLike,
+    *,
+    dim: int = KRYLOV_DIM,
+    rng: np.random.Generator | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Matrix-free lower bounds of ``||Phi blockdiag(G_i - lam I) Phi^-1||_2`` with witness vectors.
 
@@ -261,8 +310,9 @@ def jacobi_sigma_lower(
     vectors : ndarray, shape (m, N, 2)
         The unit witness vectors ``x``.
     """
-    blocks = _shifted_blocks(params, float(lam), *np.broadcast_arrays(*(np.asarray(a, dtype=float)
-                                                                        for a in (psi, u, v, r))))
+    blocks = _shifted_blocks(
+        params, float(lam), *np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (psi, u, v, r)))
+    )
     if blocks.ndim != 4 or blocks.shape[1] != transform.n:
         raise FormationError(f"configurations must have shape (m, {transform.n}), got {blocks.shape[:-2]}")
     gen = rng if rng is not None else np.random.default_rng(0)
@@ -369,8 +419,7 @@ def jacobi_sigma_bounds(
     else:
         chunk = max(1, min(samples, KRYLOV_BATCH_FLOATS // (2 * nv * (KRYLOV_DIM + 3))))
     done = 0
-    with tqdm(total=samples, disable=not progress, desc="Jacobi sigma search", unit="cfg",
-              delay=PROGRESS_DELAY) as bar:
+    with tqdm(total=samples, disable=not progress, desc="Jacobi sigma search", unit="cfg", delay=PROGRESS_DELAY) as bar:
         while done < samples:
             m = min(chunk, samples - done)
             a = np.asarray(a_rng)[rng.integers(0, 2, (m, nv))]
@@ -392,10 +441,12 @@ def jacobi_sigma_bounds(
     witness = _witness(envelope, *best_x)
     how = "exact dense SVD" if dense else f"matrix-free Krylov lower bound, {KRYLOV_DIM} steps"
     if best_vec is not None:
-        witness["vector"] = [float(x) for x in best_vec.ravel()]
+        witness = replace(witness, vector=tuple(float(x) for x in best_vec.ravel()))
     upper = transform.cond * veh.upper * (1.0 + ROUNDOFF_RTOL)
-    method = (f"cond(Phi) * sigma_vehicle (cond = {transform.cond:.4g}, closed form); lower from {samples} "
-              f"random vertex configurations ({how})")
+    method = (
+        f"cond(Phi) * sigma_vehicle (cond = {transform.cond:.4g}, closed form); lower from {samples} "
+        f"random vertex configurations ({how})"
+    )
     full_circle = envelope.psi[1] - envelope.psi[0] >= 2.0 * np.pi
     if refine_jacobi and nv <= BNB_MAX_N and full_circle:
         bnb = jacobi_branch_and_bound(
@@ -403,14 +454,21 @@ def jacobi_sigma_bounds(
         )
         if bnb.upper < upper:
             upper = bnb.upper
-            method = (f"Lipschitz branch-and-bound over relative headings x 8^{nv} vertices "
-                      f"({bnb.levels} levels, {bnb.evaluations} evaluations); "
-                      f"cond(Phi) bound {transform.cond * veh.upper:.4g}")
+            method = (
+                f"Lipschitz branch-and-bound over relative headings x 8^{nv} vertices "
+                f"({bnb.levels} levels, {bnb.evaluations} evaluations); "
+                f"cond(Phi) bound {transform.cond * veh.upper:.4g}"
+            )
         if bnb.lower > best:
             best = bnb.lower
             witness = _witness(envelope, *bnb.witness)
     return SigmaBounds(
-        upper=max(upper, best), lower=best, coords="jacobi", method=method, witness=witness, lam=float(lam),
+        upper=max(upper, best),
+        lower=best,
+        coords="jacobi",
+        method=method,
+        witness=witness,
+        lam=float(lam),
     )
 
 
@@ -426,8 +484,15 @@ class JacobiBnbResult:
 
 
 def jacobi_branch_and_bound(
-    params: VehicleParams, envelope: Envelope, lam: float, transform: JacobiTransform,
-    sigma_vehicle: float, *, tol: float = 1e-3, initial_cells: int = 16, budget: int = BNB_BUDGET,
+    params: VehicleParams,
+    envelope: Envelope,
+    lam: float,
+    transform: JacobiTransform,
+    sigma_vehicle: float,
+    *,
+    tol: float = 1e-3,
+    initial_cells: int = 16,
+    budget: int = BNB_BUDGET,
     progress: bool = False,
 ) -> JacobiBnbResult:
     """Certified Lipschitz branch-and-bound of the Jacobi sigma over relative headings.
@@ -478,34 +543,40 @@ def jacobi_branch_and_bound(
             offsets = np.array(list(itertools.product((-h, h), repeat=d)))
             centres = (centres[keep][:, None, :] + offsets[None]).reshape(-1, d)
     assert best_w is not None
-    return JacobiBnbResult(upper=upper * (1.0 + ROUNDOFF_RTOL), lower=best, witness=best_w, levels=levels,
-                      evaluations=evaluations)
+    return JacobiBnbResult(
+        upper=upper * (1.0 + ROUNDOFF_RTOL), lower=best, witness=best_w, levels=levels, evaluations=evaluations
+    )
 
 
 def sigma_at_witness(params: VehicleParams, bounds: SigmaBounds, transform: JacobiTransform | None = None) -> float:
     """Re-evaluate ``||A_Delta||`` at the witness of ``bounds`` (1/s).
 
     A matrix-free Jacobi witness (large fleets) also stores the unit vector ``x`` that
-    attained it (key ``"vector"``); its value is then ``||M x||``, recomputed in O(N), which is
+    attained it (:attr:`SigmaWitness.vector`); its value is then ``||M x||``, recomputed in O(N), which is
     what :attr:`SigmaBounds.lower` records (a lower bound of the norm at that configuration).
     """
     w = bounds.witness
-    psi, u, v, r = (np.asarray(w[k], dtype=float) for k in ("psi", "u", "v", "r"))
+    psi, u, v, r = (np.asarray(x, dtype=float) for x in (w.psi, w.u, w.v, w.r))
     if bounds.coords == "vehicle":
         g = inertial_block(params, psi, u, v, r) - bounds.lam * np.eye(2)
         return float(sigma_max_2x2(g).max())
     if transform is None:
         raise FormationError("a Jacobi witness needs its JacobiTransform")
-    if "vector" in w:
-        x = np.asarray(w["vector"], dtype=float).reshape(transform.n, 2)
+    if w.vector is not None:
+        x = np.asarray(w.vector, dtype=float).reshape(transform.n, 2)
         mx = jacobi_apply(_shifted_blocks(params, bounds.lam, psi, u, v, r), transform.kind, x)
         return float(np.linalg.norm(mx) / np.linalg.norm(x))
     return float(jacobi_sigma(params, bounds.lam, transform, psi, u, v, r))
 
 
 def sigma_grid(
-    params: VehicleParams, lam: float, x_values: ArrayLike, r_values: ArrayLike,
-    *, axis: Literal["u", "v"] = "u", other: float = 0.0,
+    params: VehicleParams,
+    lam: float,
+    x_values: ArrayLike,
+    r_values: ArrayLike,
+    *,
+    axis: Literal["u", "v"] = "u",
+    other: float = 0.0,
 ) -> FloatArray:
     """Vehicle-coordinate sigma on a slice, shape ``(len(r_values), len(x_values))``.
 

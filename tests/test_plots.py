@@ -172,7 +172,7 @@ def figure_legend_texts(fig: plt.Figure) -> list[str]:
 def test_sigma_heatmap_marks_vertex_and_explains_contour(heatmap_inputs):
     cfg, cert = heatmap_inputs
     fig = plots.sigma_heatmap(cfg, cert, resolution=41)
-    u_w, v_w, r_w = (cert.sigma.witness[k][0] for k in ("u", "v", "r"))
+    u_w, v_w, r_w = (getattr(cert.sigma.witness, k)[0] for k in ("u", "v", "r"))
     for ax, at in zip(fig.axes[:2], (u_w, v_w)):
         stars = [line for line in ax.get_lines() if line.get_marker() == "*"]
         assert len(stars) == 1

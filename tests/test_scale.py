@@ -39,7 +39,7 @@ def test_certify_ten_thousand_vehicles(big_config):
     # the closed-form cond(Phi) = sqrt(2N) of the paper transform scales the exact vehicle sigma
     assert sj.upper == pytest.approx(np.sqrt(2.0 * N) * cert.sigma.upper, rel=1e-9)
     assert 0.0 < cert.sigma.lower <= sj.lower <= sj.upper
-    assert len(sj.witness["psi"]) == N
+    assert len(sj.witness.psi) == N
     # the default start of so large a fleet is not evaluated, and so cannot be claimed covered
     loop = cert.to_dict()["closed_loop"]
     assert loop is None or (loop["covers_shaped_start"] is False and loop["shaped_start"] is None)
