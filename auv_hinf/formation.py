@@ -283,9 +283,7 @@ class JacobiTransform:
     def _check_stack(self, a: ArrayLike, name: str) -> FloatArray:
         arr = np.asarray(a, dtype=float)
         if arr.ndim < 2 or arr.shape[-2:] != (self.n, 2):
-            raise FormationError(
-                f"{name} must have shape (..., {self.n}, 2), got {arr.shape}"
-            )
+            raise FormationError(f"{name} must have shape (..., {self.n}, 2), got {arr.shape}")
         return arr
 
 
@@ -348,9 +346,7 @@ def formation_matrices(
     """
     psi_, u_, v_, r_ = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (psi, u, v, r)))
     if psi_.ndim == 0 or psi_.shape[-1] != transform.n:
-        raise FormationError(
-            f"per-vehicle states must have last axis {transform.n}, got shape {psi_.shape}"
-        )
+        raise FormationError(f"per-vehicle states must have last axis {transform.n}, got shape {psi_.shape}")
     g = inertial_block(params, psi_, u_, v_, r_)
     big_g = block_diag_stack(g)
     a = transform.matrix @ big_g @ transform.matrix_inv

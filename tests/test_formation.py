@@ -56,7 +56,7 @@ def test_orthonormal_rows(n):
 def test_shapes_translation_invariant(rng):
     t = JacobiTransform(4, "paper")
     off = rng.normal(size=(4, 2))
-    assert_allclose(shape_from_offsets(off, t), shape_from_offsets(off + [3.0, -7.0], t), atol=1e-12)
+    assert_allclose(shape_from_offsets(off, t), shape_from_offsets(off + [3.0, -7.0], t), atol=1e-12)  # noqa: RUF005
     back = offsets_from_shape(shape_from_offsets(off, t), t)
     assert_allclose(back, off - off.mean(axis=0), atol=1e-12)
 
@@ -181,8 +181,12 @@ def test_linear_maps_match_dense_products(kind, n, rng):
     inv = np.linalg.inv(phi)
     x = rng.normal(scale=30.0, size=(3, n, 2))
     scale = np.abs(x).max() * np.linalg.cond(phi)
-    for got, mat in ((t.to_jacobi(x), phi), (t.to_positions(x), inv), (t.transpose(x), phi.T),
-                     (t.inverse_transpose(x), inv.T)):
+    for got, mat in (
+        (t.to_jacobi(x), phi),
+        (t.to_positions(x), inv),
+        (t.transpose(x), phi.T),
+        (t.inverse_transpose(x), inv.T),
+    ):
         assert_allclose(got, np.einsum("jk,mkd->mjd", mat, x), rtol=0, atol=DENSE_RTOL * scale)
     assert_allclose(t.phi_inv, inv, rtol=0, atol=DENSE_RTOL * np.abs(inv).max())
     assert_allclose(t.matrix_inv @ t.matrix, np.eye(2 * n), rtol=0, atol=1e-12)
