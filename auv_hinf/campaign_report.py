@@ -8,13 +8,13 @@ envelope; or, when the certificate does not apply, when it merely stayed in the 
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .campaign_sample import COEFFICIENTS, ERROR_KINDS
+from .persist import json_safe
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -131,22 +131,12 @@ def save_histograms(camp: Campaign, out: Path) -> list[Path]:
     return paths
 
 
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    return obj
-
-
 def write_outputs(camp: Campaign, out: Path) -> dict[str, Any]:
     """Write ``runs.parquet``, ``summary.json`` and the PNG histograms to ``out``; return the summary."""
     out.mkdir(parents=True, exist_ok=True)
     summary = summarize(camp)
     camp.table.to_parquet(out / "runs.parquet", index=False)
-    (out / "summary.json").write_text(json.dumps(_json_safe(summary), indent=2))
+    (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=2))
     save_histograms(camp, out)
     return summary
 

@@ -21,6 +21,7 @@ from typing import Any
 from . import __version__
 from ._typing import GAIN_METHODS
 from .exceptions import AuvHinfError, DesignError, SolverError
+from .persist import json_safe
 from .presets import PRESETS
 
 EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
@@ -118,18 +119,8 @@ def _join_numbers(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    return obj
-
-
 def _dump(obj: Any) -> str:
-    return json.dumps(_json_safe(obj), indent=2)
+    return json.dumps(json_safe(obj), indent=2)
 
 
 def _prepare_out(path: Path | None) -> None:
