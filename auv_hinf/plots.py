@@ -17,6 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from ._typing import FloatArray
 from .sigma import sigma_grid
 
 if TYPE_CHECKING:
@@ -238,25 +239,34 @@ def velocities(res: SimulationResult) -> Figure:
     matplotlib.figure.Figure
         Three stacked axes; the top one carries one legend entry per vehicle.
     """
-    t = np.asarray(res.t, dtype=float)
-    states = np.asarray(res.states, dtype=float)
-    n = states.shape[1]
+    env = _scenario_envelope(res)
+    fig, axes = _per_vehicle_axes(
+        res.t,
+        np.asarray(res.states, dtype=float)[:, :, 3:6],
+        ("u [m/s]", "v [m/s]", "r [rad/s]"),
+        _envelope_ranges(env),
+    )
+    envelope_note = "" if env is None else " (dotted: certified envelope)"
+    axes[0].set_title(f"{_scenario_name(res)}: surge, sway and yaw rate{envelope_note}")
+    return fig
+
+
+def _per_vehicle_axes(
+    t: Any, data: FloatArray, labels: tuple[str, str, str], ranges: Any = (None, None, None)
+) -> tuple[Figure, Any]:
+    """Three stacked axes of ``data[:, i, k]`` (one line per vehicle i, axis k), bounds dotted."""
+    n = data.shape[1]
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
-    for ax, k, label, rng in zip(
-        axes, (3, 4, 5), ("u [m/s]", "v [m/s]", "r [rad/s]"), _envelope_ranges(_scenario_envelope(res))
-    ):
-        lines = ax.plot(t, states[:, :, k], lw=1)
+    for ax, k, label, rng in zip(axes, range(3), labels, ranges):
+        lines = ax.plot(np.asarray(t, dtype=float), data[:, :, k], lw=1)
         for line, name in zip(lines, _vehicle_labels(n)):
             line.set_label(name)
-        if rng is not None:
-            for b in rng:
-                ax.axhline(b, color="r", ls=":", lw=0.8)
+        for b in rng or ():
+            ax.axhline(b, color="r", ls=":", lw=0.8)
         ax.set_ylabel(label)
     _vehicle_legend(axes[0], n)
     axes[-1].set_xlabel("t [s]")
-    envelope_note = "" if _scenario_envelope(res) is None else " (dotted: certified envelope)"
-    axes[0].set_title(f"{_scenario_name(res)}: surge, sway and yaw rate{envelope_note}")
-    return fig
+    return fig, axes
 
 
 def errors(res: SimulationResult) -> Figure:
@@ -296,17 +306,9 @@ def forces(res: SimulationResult) -> Figure:
     matplotlib.figure.Figure
         Three stacked axes; the top one carries one legend entry per vehicle.
     """
-    t = np.asarray(res.t, dtype=float)
-    f = np.asarray(res.forces, dtype=float)
-    n = f.shape[1]
-    fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
-    for ax, k, label in zip(axes, range(3), ("tau_x [N]", "tau_y [N]", "tau_psi [N m]")):
-        lines = ax.plot(t, f[:, :, k], lw=1)
-        for line, name in zip(lines, _vehicle_labels(n)):
-            line.set_label(name)
-        ax.set_ylabel(label)
-    _vehicle_legend(axes[0], n)
-    axes[-1].set_xlabel("t [s]")
+    fig, axes = _per_vehicle_axes(
+        res.t, np.asarray(res.forces, dtype=float), ("tau_x [N]", "tau_y [N]", "tau_psi [N m]")
+    )
     axes[0].set_title(f"{_scenario_name(res)}: thrust and yaw moment (body frame)")
     return fig
 
