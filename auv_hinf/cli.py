@@ -398,6 +398,8 @@ def _classify(exc: BaseException) -> tuple[int, str]:
         return EXIT_BAD_INPUT, "error"  # parameter, formation, envelope, design or config input
     if isinstance(exc, OSError):
         return EXIT_BAD_INPUT, "error"
+    if isinstance(exc, ArithmeticError):  # overflow or division by zero from an extreme input value
+        return EXIT_BAD_INPUT, "error: numbers out of range"
     return EXIT_NEGATIVE, "internal error"
 
 

@@ -258,18 +258,20 @@ def thrust_bounds(
     ``|tau_x| <= m11 (alpha E_v + k1 E_p + ||row_1 B|| S_hi + |p_d''|)`` (likewise y); the
     rows of ``B(|u|, |v|, r)`` are affine, so their norms peak at the 8 box vertices.
     ``tau_psi = m33 V - (m11 - m22) u v`` with
-    ``|V| <= |psi_d''| + d33_max/m33 |psi_d'| + k1psi E_psi + k2psi E_r``.
+    ``|V| <= |psi_d''| + d33_max/m33 |psi_d'| + |k1psi| E_psi + |k2psi| E_r`` (``k2psi`` is
+    negative when the heading poles are slower than the yaw damping).
     """
     a_rng, b_rng = abs_range(*envelope.u), abs_range(*envelope.v)
     verts = np.array(list(itertools.product(a_rng, b_rng, envelope.r)))
     rows = np.linalg.norm(body_block(params, verts[:, 0], verts[:, 1], verts[:, 2]), axis=-1).max(axis=0)
-    err = alpha * bounds.velocity + k1 * bounds.position
+    err = abs(alpha) * bounds.velocity + abs(k1) * bounds.position
     drift = tube.speed[:, 1][:, None] * rows[None, :] + tube.accel[:, None]
     fx, fy = np.array([params.m11, params.m22]) * (err + drift.max(axis=0))
     d33_max = params.d33_lin + params.d33_quad * abs_range(*envelope.r)[1]
     yaw = np.abs(tube.yaw_rate).max(axis=1)
     big_v = float(np.max(tube.yaw_accel + d33_max / params.m33 * yaw))
-    big_v += k_psi[0] * bounds.heading + k_psi[1] * bounds.yaw_rate
+    # |k1psi e + k2psi e'| <= |k1psi| E_psi + |k2psi| E_r: k2psi is negative for slow heading poles
+    big_v += abs(k_psi[0]) * bounds.heading + abs(k_psi[1]) * bounds.yaw_rate
     moment = params.m33 * big_v + abs(params.m11 - params.m22) * a_rng[1] * b_rng[1]
     k = 1.0 + BOUND_RTOL
     return ThrustBounds(k * float(fx), k * float(fy), k * moment)

@@ -37,6 +37,9 @@ from .tubes import mission_tube
 #: ``t = 0`` until it has fallen by this factor (six decades of error), far above the
 #: integrator's noise (rtol 1e-8 of errors of order 1) and far enough to average out transients.
 DECAY_MEASURE_DROP = 1e-6
+#: A heading range counts as the full circle when its width is 2 pi up to this relative
+#: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
+FULL_CIRCLE_RTOL = 1e-12
 #: Vehicles whose initial Lyapunov norm is below this (about 1e-6 m or m/s of error) have
 #: nothing measurable to decay: their errors start at the integrator's noise level.
 DECAY_MEASURE_FLOOR = 1e-6
@@ -111,6 +114,12 @@ def closed_loop_for(cfg: FormationConfig, gains: Gains) -> ClosedLoopCertificate
         If the small-gain condition fails or the mission leaves the envelope even at zero
         error.
     """
+    width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
+    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+        raise DesignError(
+            f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
+            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
+        )
     tube = mission_tube(mission_reference(cfg))
     return closed_loop_certificate(
         gains.lam, gains.alpha, gains.k1, gains.sigma, cfg.vehicle, cfg.envelope, gains.k_psi, tube

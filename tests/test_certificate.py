@@ -184,3 +184,66 @@ def test_certify_json_closed_loop_keys_and_thrust_bound(capsys):
     res = simulate(plan.scenario)
     assert np.abs(res.forces[..., :2]).max() <= loop["max_force"]
     assert np.abs(res.forces[..., 2]).max() <= loop["max_moment"]
+
+
+SLOW_HEADING = {
+    "vehicle": {
+        "m11": 200.0,
+        "m22": 200.0,
+        "m33": 10.0,
+        "d11_lin": 70.0,
+        "d11_quad": 100.0,
+        "d22_lin": 100.0,
+        "d22_quad": 200.0,
+        "d33_lin": 1000.0,
+        "d33_quad": 0.0,
+    },
+    "formation": {"n": 2, "offsets": [[0.0, 0.0], [0.0, -10.0]]},
+    "envelope": {"u": [0.0, 3.5], "v": [-1.5, 1.5], "r": [-0.5, 0.5]},
+    "design": {"k1": 0.5, "heading_poles": [-0.5, -1.0]},
+    "reference": {"kind": "circle", "speed": 1.0, "radius": 20.0},
+    "simulation": {
+        "horizon": 40.0,
+        "start": "paper",
+        "initial": [[0.0, -15.0, 0.0, 1.0, 0.0, 0.26], [0.0, -25.0, 0.0, 1.0, 0.0, 0.26]],
+    },
+}
+
+
+def test_moment_bound_with_negative_k2psi_covers_the_run():
+    """Slow heading poles give k2psi < 0; the yaw-moment bound must still dominate the moment the run needs
+    (regression: the bound once added k2psi * E_r without abs and came out negative)."""
+    from auv_hinf.config import config_from_dict
+    from auv_hinf.plan import plan_run, run_report
+    from auv_hinf.simulation import simulate
+
+    cfg = config_from_dict(SLOW_HEADING)
+    plan = plan_run(cfg)
+    assert plan.gains.k_psi[1] < 0
+    report = run_report(plan, simulate(plan.scenario))
+    assert plan.covered and report["stayed_in_envelope"]
+    assert report["certified_thrust"]["moment"] >= report["max_moment"] > 0
+    assert report["certified_thrust"]["force_x"] >= report["max_force"]
+    # a thrust limit below the moment the run needs can never be covered
+    tight = replace(cfg, simulation=replace(cfg.simulation, thrust_limit=(1e5, 1e5, 5.0)))
+    assert not plan_run(tight).covered
+    assert not certify(tight).certified
+
+
+def test_narrow_heading_range_is_not_certified():
+    """The closed-loop certificate bounds u, v and r, not psi: a narrower heading range is refused, not ignored."""
+    cfg = replace(
+        preset_config("paper-triangle"), envelope=Envelope(u=(0.0, 3.5), v=(-1.5, 1.5), r=(-0.5, 0.5), psi=(0.0, 0.01))
+    )
+    c = certify(cfg)
+    assert not c.certified and any("psi" in r for r in c.reasons)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["design", "--lam=-1e308", "--gamma", "1e-308"], ["design", "--lam", "-2.1", "--gamma", "0.5", "--k1", "1e308"]],
+)
+def test_extreme_numbers_are_bad_input(argv, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "internal error" not in err
