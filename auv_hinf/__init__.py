@@ -38,6 +38,7 @@ from .formation import (
     regular_polygon,
     shape_from_offsets,
 )
+from .jacobi_sigma import jacobi_sigma_bounds
 from .lmi import lmi_hinf_norm
 from .loops import hinf_norm, hinf_norm_peak, position_block, velocity_block
 from .plan import Gains, RunPlan, design_gains, plan_run, run_report
@@ -51,7 +52,7 @@ from .reference import (
     shaped_start,
 )
 from .region import ErrorBounds, Region
-from .sigma import SigmaBounds, jacobi_sigma_bounds, sigma_grid, sigma_max_2x2, vehicle_sigma
+from .sigma import SigmaBounds, sigma_grid, sigma_max_2x2, vehicle_sigma
 from .simulation import Scenario, ScenarioBatch, SimulationResult, simulate, simulate_batch
 from .vehicle import (
     VehicleParams,

@@ -14,8 +14,9 @@ from .crosscheck import CrosscheckReport, crosscheck
 from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop
 from .envelope import envelope_lambda
 from .exceptions import DesignError
+from .jacobi_sigma import jacobi_sigma_bounds
 from .plan import ClosedLoopSummary, Gains, closed_loop_summary
-from .sigma import SigmaBounds, jacobi_sigma_bounds, vehicle_sigma
+from .sigma import SigmaBounds, vehicle_sigma
 from .theorem1 import Theorem1Conditions, theorem1_conditions
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
@@ -237,7 +238,7 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         transform,
         samples=jacobi_samples,
         refine_jacobi=refine_jacobi,
-        progress=True,  # the bar appears only after sigma.PROGRESS_DELAY
+        progress=True,  # the bar appears only after jacobi_sigma.PROGRESS_DELAY
     )
     gamma = config.gamma if config.gamma is not None else 1.0 / sig.upper
     cond = theorem1_conditions(lam, gamma)
