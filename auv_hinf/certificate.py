@@ -15,7 +15,8 @@ from .design import GAIN_METHODS, GainDesign, design_alpha, position_loop
 from .envelope import envelope_lambda
 from .exceptions import DesignError
 from .jacobi_sigma import jacobi_sigma_bounds
-from .plan import ClosedLoopSummary, Gains, closed_loop_summary
+from .loop_summary import ClosedLoopSummary, closed_loop_summary
+from .plan import Gains
 from .sigma import SigmaBounds, vehicle_sigma
 from .theorem1 import Theorem1Conditions, theorem1_conditions
 
