@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import tempfile
 from collections.abc import Callable, Sequence
@@ -20,6 +19,16 @@ from typing import Any
 
 from . import __version__
 from ._typing import GAIN_METHODS
+from .cli_args import (
+    NUMERIC_OPTIONS,
+    BadInput,
+    Negative,
+    Parser,
+    UsageError,
+    join_numbers,
+    numeric,
+    vector,
+)
 from .exceptions import AuvHinfError, DesignError, SolverError
 from .persist import json_safe
 from .presets import PRESETS
@@ -28,95 +37,6 @@ EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
 PROG = "auv-hinf"
 #: Largest ``design --n``: the full-size LMI cross-check grows as (2N)^2 (25 s at N = 20).
 DESIGN_MAX_N = 20
-
-
-class _UsageError(Exception):
-    """Bad command-line arguments (exit 2)."""
-
-
-class _BadInput(Exception):
-    """Bad input detected by the CLI itself, e.g. an unwritable ``--out`` (exit 2)."""
-
-
-class _Negative(Exception):
-    """A negative verdict that is not a certificate, e.g. no gain to simulate with (exit 1)."""
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one exception (one line, exit code 2)."""
-
-    def error(self, message: str) -> Any:
-        raise _UsageError(message)
-
-
-def _number(kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf) -> Callable[[str], float]:
-    """argparse type: a finite int or float in ``[lo, hi]``, negative and scientific forms included."""
-
-    def parse(text: str) -> float:
-        try:
-            value = kind(text)
-        except ValueError:
-            what = "an integer" if kind is int else "a number"
-            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:g}], got {text!r}")
-        return value
-
-    return parse
-
-
-#: Options taking a number; their values may look like options (``-1e-3``), see :func:`_join_numbers`.
-_NUMERIC_OPTIONS: set[str] = set()
-
-
-def _numeric(p: argparse.ArgumentParser, flag: str, kind: type[int] | type[float], *bounds: float, **kw: Any) -> None:
-    _NUMERIC_OPTIONS.add(flag)
-    p.add_argument(flag, type=_number(kind, *bounds), **kw)
-
-
-def _vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
-    """argparse type: ``size`` finite comma-separated numbers (``-0.1,0``)."""
-
-    def parse(text: str) -> tuple[float, ...]:
-        parts = text.split(",")
-        try:
-            values = tuple(float(p) for p in parts)
-        except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"expected {size} comma-separated numbers ({unit}), got {text!r}"
-            ) from None
-        if len(values) != size or not all(math.isfinite(v) for v in values):
-            raise argparse.ArgumentTypeError(f"expected {size} finite comma-separated numbers ({unit}), got {text!r}")
-        return values
-
-    return parse
-
-
-def _join_numbers(argv: Sequence[str]) -> list[str]:
-    """Write ``--lam -1e-3`` as ``--lam=-1e-3``.
-
-    argparse reads a token that starts with ``-`` as an option unless it matches its
-    negative-number pattern, which misses scientific notation (``-1e-3``) and ``-inf``.
-    The ``--opt=value`` form is always read as a value, so numeric options get it.
-    """
-    out: list[str] = []
-    i = 0
-    while i < len(argv):
-        tok = argv[i]
-        if tok in _NUMERIC_OPTIONS and i + 1 < len(argv) and argv[i + 1].startswith("-"):
-            try:
-                [float(part) for part in argv[i + 1].split(",")]
-            except ValueError:
-                pass
-            else:
-                out.append(f"{tok}={argv[i + 1]}")
-                i += 2
-                continue
-        out.append(tok)
-        i += 1
-    return out
 
 
 def _dump(obj: Any) -> str:
@@ -132,7 +52,7 @@ def _prepare_out(path: Path | None) -> None:
         with tempfile.TemporaryFile(dir=path):
             pass
     except OSError as exc:
-        raise _BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
+        raise BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
 
 
 def _load(args: argparse.Namespace) -> Any:
@@ -143,16 +63,16 @@ def _load(args: argparse.Namespace) -> Any:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``auv-hinf`` argument parser."""
-    parser = _Parser(prog=PROG, description="Certified H-infinity formation control for AUV fleets", allow_abbrev=False)
+    parser = Parser(prog=PROG, description="Certified H-infinity formation control for AUV fleets", allow_abbrev=False)
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     parser.add_argument("--debug", action="store_true", help="re-raise errors with their traceback")
-    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", parser_class=Parser)
 
     d = sub.add_parser("design", help="Theorem 1 gains three ways, cross-checked four ways", allow_abbrev=False)
-    _numeric(d, "--lam", float, required=True, help="nominal lambda < 0 (1/s)")
-    _numeric(d, "--gamma", float, required=True, help="H-infinity bound gamma > 0")
-    _numeric(d, "--n", int, 2, DESIGN_MAX_N, default=3, help=f"number of vehicles, 2..{DESIGN_MAX_N} (default 3)")
-    _numeric(d, "--k1", float, default=0.2, help="Theorem 2 position gain (1/s^2), default 0.2")
+    numeric(d, "--lam", float, required=True, help="nominal lambda < 0 (1/s)")
+    numeric(d, "--gamma", float, required=True, help="H-infinity bound gamma > 0")
+    numeric(d, "--n", int, 2, DESIGN_MAX_N, default=3, help=f"number of vehicles, 2..{DESIGN_MAX_N} (default 3)")
+    numeric(d, "--k1", float, default=0.2, help="Theorem 2 position gain (1/s^2), default 0.2")
     d.add_argument("--json", action="store_true", help="print one JSON object")
 
     for name, text in (("certify", "certify a formation design"), ("simulate", "simulate a scenario")):
@@ -168,17 +88,17 @@ def build_parser() -> argparse.ArgumentParser:
                 choices=("shaped", "paper"),
                 help="shaped: the reference blends from the actual start (default); paper: raw reference",
             )
-            _numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
-            _NUMERIC_OPTIONS.update(("--current", "--thrust-limit"))
+            numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
+            NUMERIC_OPTIONS.update(("--current", "--thrust-limit"))
             c.add_argument(
                 "--current",
-                type=_vector(2, "m/s"),
+                type=vector(2, "m/s"),
                 metavar="CX,CY",
                 help="constant current, inertial frame, m/s (e.g. --current 0.1,0)",
             )
             c.add_argument(
                 "--thrust-limit",
-                type=_vector(3, "N, N, N m"),
+                type=vector(3, "N, N, N m"),
                 metavar="FX,FY,M",
                 help="thrust limits |tau_x|, |tau_y| (N) and |tau_psi| (N m)",
             )
@@ -264,7 +184,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     try:
         plan = plan_run(cfg, start=args.start, horizon=args.horizon)
     except DesignError as exc:
-        raise _Negative(f"no gain to simulate with: {exc}") from None
+        raise Negative(f"no gain to simulate with: {exc}") from None
     result = simulate(plan.scenario)
     summary = run_report(plan, result)
     if args.out:
@@ -311,7 +231,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
 
     out: Path | None = args.out
     if out is not None and out.exists() and not args.force:
-        raise _BadInput(f"{str(out)!r} exists; use --force to overwrite it")
+        raise BadInput(f"{str(out)!r} exists; use --force to overwrite it")
     text = annotated_toml(preset_config(args.preset))
     if out is None:
         print(text, end="")
@@ -320,7 +240,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(text, encoding="utf-8")
     except OSError as exc:
-        raise _BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
+        raise BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
     print(f"wrote {out} (from preset {args.preset}); check it with: {PROG} certify --config {out}")
     return EXIT_OK
 
@@ -331,13 +251,13 @@ def _campaign_parser(sub: Any) -> None:
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
     src.add_argument("--config", type=Path, help="TOML configuration file")
-    _numeric(c, "--runs", int, 1, 10**7, required=True, help="number of runs K")
-    _numeric(c, "--seed", int, 0, 2**63 - 1, default=0, help="root seed (default 0)")
+    numeric(c, "--runs", int, 1, 10**7, required=True, help="number of runs K")
+    numeric(c, "--seed", int, 0, 2**63 - 1, default=0, help="root seed (default 0)")
     ex = c.add_mutually_exclusive_group()
-    _numeric(ex, "--workers", int, 1, 1024, help="local Dask cluster of W single-threaded worker processes")
+    numeric(ex, "--workers", int, 1, 1024, help="local Dask cluster of W single-threaded worker processes")
     ex.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
-    _numeric(c, "--chunk", int, 1, 10**6, help="scenarios per batch (default: up to 64, memory-bounded)")
-    _numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
+    numeric(c, "--chunk", int, 1, 10**6, help="scenarios per batch (default: up to 64, memory-bounded)")
+    numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
     c.add_argument("--out", type=Path, required=True, help="directory for runs.parquet, summary.json, PNGs")
     c.add_argument("--json", action="store_true", help="print the summary as one JSON object")
 
@@ -354,7 +274,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                 cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
             )
         except DesignError as exc:
-            raise _Negative(f"no certified start region to sample from: {exc}") from None
+            raise Negative(f"no certified start region to sample from: {exc}") from None
     summary = write_outputs(camp, args.out)
     if args.json:
         print(_dump(summary))
@@ -388,9 +308,9 @@ def _report(kind: str, exc: BaseException) -> None:
 
 def _classify(exc: BaseException) -> tuple[int, str]:
     """Exit code and label of an exception that reached the boundary."""
-    if isinstance(exc, (_UsageError, _BadInput)):
+    if isinstance(exc, (UsageError, BadInput)):
         return EXIT_BAD_INPUT, "error"
-    if isinstance(exc, _Negative):
+    if isinstance(exc, Negative):
         return EXIT_NEGATIVE, "not certified"
     if isinstance(exc, SolverError) or type(exc).__name__ == "SolverError":
         return EXIT_NEGATIVE, "solver failure"
@@ -416,7 +336,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         try:
-            args = parser.parse_args(_join_numbers(args_list))
+            args = parser.parse_args(join_numbers(args_list))
         except SystemExit as exc:  # --help and --version
             return exc.code if isinstance(exc.code, int) else EXIT_OK
         if args.command is None:
@@ -425,7 +345,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _COMMANDS[args.command](args)
     except Exception as exc:  # the one error boundary: every failure becomes an exit code
         code, kind = _classify(exc)
-        if debug and not isinstance(exc, _UsageError):
+        if debug and not isinstance(exc, UsageError):
             raise
         if kind == "internal error":
             first = (str(exc).splitlines() or [""])[0]

@@ -1,0 +1,103 @@
+"""Argument parsing of the ``auv-hinf`` command: one-line usage errors and numbers that look like options.
+
+argparse reads a token that starts with ``-`` as an option unless it matches its own
+negative-number pattern, which misses scientific notation (``-1e-3``), ``-inf`` and
+comma-separated vectors (``-0.1,0``); :func:`join_numbers` rewrites those values as
+``--opt=value`` for the options registered with :func:`numeric` or :data:`NUMERIC_OPTIONS`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+
+class UsageError(Exception):
+    """Bad command-line arguments (exit 2)."""
+
+
+class BadInput(Exception):
+    """Bad input detected by the CLI itself, e.g. an unwritable ``--out`` (exit 2)."""
+
+
+class Negative(Exception):
+    """A negative verdict that is not a certificate, e.g. no gain to simulate with (exit 1)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as one exception (one line, exit code 2)."""
+
+    def error(self, message: str) -> Any:
+        raise UsageError(message)
+
+
+def number(kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf) -> Callable[[str], float]:
+    """argparse type: a finite int or float in ``[lo, hi]``, negative and scientific forms included."""
+
+    def parse(text: str) -> float:
+        try:
+            value = kind(text)
+        except ValueError:
+            what = "an integer" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:g}], got {text!r}")
+        return value
+
+    return parse
+
+
+#: Options taking a number; their values may look like options (``-1e-3``), see :func:`join_numbers`.
+NUMERIC_OPTIONS: set[str] = set()
+
+
+def numeric(p: argparse.ArgumentParser, flag: str, kind: type[int] | type[float], *bounds: float, **kw: Any) -> None:
+    NUMERIC_OPTIONS.add(flag)
+    p.add_argument(flag, type=number(kind, *bounds), **kw)
+
+
+def vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
+    """argparse type: ``size`` finite comma-separated numbers (``-0.1,0``)."""
+
+    def parse(text: str) -> tuple[float, ...]:
+        parts = text.split(",")
+        try:
+            values = tuple(float(p) for p in parts)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected {size} comma-separated numbers ({unit}), got {text!r}"
+            ) from None
+        if len(values) != size or not all(math.isfinite(v) for v in values):
+            raise argparse.ArgumentTypeError(f"expected {size} finite comma-separated numbers ({unit}), got {text!r}")
+        return values
+
+    return parse
+
+
+def join_numbers(argv: Sequence[str]) -> list[str]:
+    """Write ``--lam -1e-3`` as ``--lam=-1e-3``.
+
+    argparse reads a token that starts with ``-`` as an option unless it matches its
+    negative-number pattern, which misses scientific notation (``-1e-3``) and ``-inf``.
+    The ``--opt=value`` form is always read as a value, so numeric options get it.
+    """
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok in NUMERIC_OPTIONS and i + 1 < len(argv) and argv[i + 1].startswith("-"):
+            try:
+                [float(part) for part in argv[i + 1].split(",")]
+            except ValueError:
+                pass
+            else:
+                out.append(f"{tok}={argv[i + 1]}")
+                i += 2
+                continue
+        out.append(tok)
+        i += 1
+    return out
