@@ -11,7 +11,6 @@ from typing import get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.spatial import cKDTree
 
 from ._typing import FloatArray, JacobiKind
 from .exceptions import FormationError
@@ -158,6 +157,8 @@ def closest_pair(points: ArrayLike) -> tuple[int, int, float]:
         raise FormationError(f"points must have shape (N >= 2, 2), got {pts.shape}")
     if not np.all(np.isfinite(pts)):
         raise FormationError("points must be finite")
+    from scipy.spatial import cKDTree  # local: keeps the k-d tree out of the module's public names
+
     dist, idx = cKDTree(pts).query(pts, k=2)
     own = np.arange(len(pts))
     # with exact duplicates the point itself may be listed second: take the other one
