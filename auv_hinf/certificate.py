@@ -16,7 +16,8 @@ from .envelope import envelope_lambda
 from .exceptions import DesignError
 from .jacobi_sigma import jacobi_sigma_bounds
 from .loop_summary import ClosedLoopSummary, closed_loop_summary
-from .plan import Gains
+from .plan import Gains, design_gains
+from .robust_summary import RobustSummary, robust_summary
 from .sigma import SigmaBounds, vehicle_sigma
 from .theorem1 import Theorem1Conditions, theorem1_conditions
 
@@ -81,6 +82,9 @@ class Certificate:
     closed_loop : ClosedLoopSummary or None
         Decay rate, start region, thrust and start coverage of the full error loop along the
         configured mission (``None`` when the small-gain test already fails).
+    robust : RobustSummary or None
+        The robust certificate for the declared ``[uncertainty]`` box and ``[disturbance]``
+        current (:mod:`auv_hinf.robust_summary`); the nominal loop's values when nothing is declared.
     """
 
     config: FormationConfig
@@ -97,6 +101,7 @@ class Certificate:
     certified: bool
     reasons: tuple[str, ...] = field(default_factory=tuple)
     closed_loop: ClosedLoopSummary | None = None
+    robust: RobustSummary | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary (the ``auv-hinf certify --json`` layout)."""
@@ -138,6 +143,7 @@ class Certificate:
             "envelope": self.config.envelope.to_dict(),
             "vehicle": self.config.vehicle.to_dict(),
             "closed_loop": None if self.closed_loop is None else self.closed_loop.to_dict(),
+            "robust": None if self.robust is None else self.robust.to_dict(),
         }
 
     def save(self, path: str | Path) -> Path:
@@ -281,7 +287,12 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     if not report.ok:
         reasons.append(f"cross-check disagrees (max rel diff {report.max_rel_diff:.3g})")
     loop = None
-    if not reasons and alpha is not None:
+    if config.robust:
+        # the robust design replaces Theorem 1's gain: its verdict is the robust certificate's
+        reasons = [r for r in reasons if r.startswith("cross-check")]
+        loop = closed_loop_summary(config, design_gains(config))
+        reasons.extend(loop.reasons)
+    elif not reasons and alpha is not None:
         gains = Gains(
             lam,
             sig.upper,
@@ -292,6 +303,14 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         )
         loop = closed_loop_summary(config, gains)
         reasons.extend(loop.reasons)
+    rob = robust_summary(
+        config, nominal_rate=None if loop is None or loop.certificate is None else loop.certificate.rate
+    )
+    if rob.declared and not rob.covers:
+        reasons.append(
+            "robust certificate does not cover the declared [uncertainty] box and [disturbance] current: "
+            + ("; ".join(rob.to_dict()["reasons"]) or "see robust")
+        )
     return Certificate(
         config=config,
         lam=lam,
@@ -307,6 +326,7 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         certified=not reasons,
         reasons=tuple(reasons),
         closed_loop=loop,
+        robust=rob,
     )
 
 

@@ -82,6 +82,11 @@ def build_parser() -> argparse.ArgumentParser:
         src.add_argument("--config", type=Path, help="TOML configuration file")
         c.add_argument("--json", action="store_true", help="print one JSON object")
         c.add_argument("--out", type=Path, help="directory for JSON and PNG outputs (created)")
+        c.add_argument(
+            "--design",
+            choices=("nominal", "robust"),
+            help="robust: gains chosen for the [uncertainty] box and [disturbance] current (config: [design] robust)",
+        )
         if name == "simulate":
             c.add_argument(
                 "--start",
@@ -161,6 +166,8 @@ def _cmd_certify(args: argparse.Namespace) -> int:
     cfg = _load(args)
     if args.method:
         cfg = cfg.with_method(args.method)
+    if args.design:
+        cfg = replace(cfg, robust=args.design == "robust")
     cert = certify(cfg, refine_jacobi=args.refine_jacobi)
     data = cert.to_dict()
     if args.out:
@@ -181,6 +188,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     overrides = {k: v for k, v in (("current", args.current), ("thrust_limit", args.thrust_limit)) if v is not None}
     if overrides:
         cfg = replace(cfg, simulation=replace(cfg.simulation, **overrides))
+    if args.design:
+        cfg = replace(cfg, robust=args.design == "robust")
     try:
         plan = plan_run(cfg, start=args.start, horizon=args.horizon)
     except DesignError as exc:

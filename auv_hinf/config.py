@@ -59,6 +59,9 @@ class FormationConfig:
         Theorem 2 position gain (1/s^2, > 0).
     heading_poles : tuple of float
         Two distinct negative poles of the heading loop (1/s).
+    robust : bool
+        Use the robust design (:mod:`auv_hinf.robust_design`) instead of the Theorem 1 gain,
+        ``k1`` and ``heading_poles``.
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
 
@@ -80,6 +83,7 @@ class FormationConfig:
     lam: float | None = None
     k1: float = 0.5
     heading_poles: tuple[float, float] = (-1.0, -1.5)
+    robust: bool = False
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
@@ -106,6 +110,7 @@ class FormationConfig:
             "heading_poles": self.heading_poles,
             "gamma": self.gamma,
             "lambda": self.lam,
+            "robust": self.robust,
         }
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
         init = self.simulation.initial
@@ -144,6 +149,7 @@ class FormationConfig:
             "lambda": self.lam,
             "k1": self.k1,
             "heading_poles": list(self.heading_poles),
+            "robust": self.robust,
             "reference": self.reference.to_dict(),
             "simulation": self.simulation.to_dict(),
             "uncertainty": self.uncertainty.to_dict(),
@@ -162,6 +168,7 @@ class FormationConfig:
             "lambda": self.lam,
             "k1": self.k1,
             "heading_poles": list(self.heading_poles),
+            "robust": self.robust,
         }
         sim = {k: v for k, v in self.simulation.to_dict().items() if v not in (None, {})}
         out = {
@@ -207,6 +214,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
         lam=cf.design.lam,
         k1=cf.design.k1,
         heading_poles=(cf.design.heading_poles[0], cf.design.heading_poles[1]),
+        robust=cf.design.robust,
         reference=ReferenceConfig(cf.reference.kind, tuple(cf.reference.model_dump(exclude={"kind"}).items())),
         simulation=SimulationConfig(
             horizon=sim.horizon,

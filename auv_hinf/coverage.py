@@ -273,6 +273,7 @@ def cover_start(
     start: StartMode = "shaped",
     blend_time: float | None = None,
     thrust_limit: tuple[float, float, float] | None = None,
+    current: tuple[float, float] = (0.0, 0.0),
 ) -> Coverage:
     """Choose the reference for a run and decide whether the certificate covers it.
 
@@ -292,6 +293,10 @@ def cover_start(
         Fixed ``T_b`` (s) of the shaped start; by default the candidates :data:`BLEND_TIMES`.
     thrust_limit : tuple of float, optional
         Thrust limits (N, N, N m).
+    current : tuple of float
+        Water current of the run (m/s, inertial): the shaped start matches the actual ground
+        velocity ``R(psi) [u, v] + current``. A run with a current is covered only by the
+        robust certificate (:mod:`auv_hinf.robust_summary`).
 
     Returns
     -------
@@ -310,7 +315,7 @@ def cover_start(
     for tb in blends:
         for th in [t for t in TURN_TIMES if t <= tb] or [tb]:
             try:
-                fleet = shaped_start(mission, offsets, initial, tb, turn_time=th)
+                fleet = shaped_start(mission, offsets, initial, tb, turn_time=th, current=current)
             except AuvHinfError as exc:
                 return Coverage(
                     False, start, raw, base.bounds, base.margins, base.thrust, None, None, f"no shaped start: {exc}"

@@ -73,7 +73,7 @@ def heading_c_range(params: VehicleParams, envelope: Envelope, k_psi: tuple[floa
     return base + params.d33_quad * lo / params.m33, base + params.d33_quad * hi / params.m33
 
 
-def _cos_range(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+def cos_range(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Exact range of ``cos`` over ``[lo, hi]`` (elementwise)."""
     two_pi = 2.0 * math.pi
     top = np.floor(hi / two_pi) >= np.ceil(lo / two_pi)
@@ -143,9 +143,9 @@ def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelop
     if np.any(s_lo <= 0):
         raise DesignError("the reference tube's speed must be > 0 in every cell")
     th_lo, th_hi = tube.offset[:, 0] - bounds.heading, tube.offset[:, 1] + bounds.heading
-    u_lo, u_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo, th_hi))
+    u_lo, u_hi = _scaled_range(s_lo, s_hi, *cos_range(th_lo, th_hi))
     # -sin(theta) = cos(theta + pi/2)
-    v_lo, v_hi = _scaled_range(s_lo, s_hi, *_cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
+    v_lo, v_hi = _scaled_range(s_lo, s_hi, *cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
     ev, er = bounds.velocity, bounds.yaw_rate
     return Margins(
         u_hi=float(np.min(envelope.u[1] - (u_hi + ev))),

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,6 +28,9 @@ from .postprocess import positions_from_jacobi
 from .presets import spread_start
 from .reference import FleetReference, reference_from_dict
 from .results import SimulationResult
+
+if TYPE_CHECKING:
+    from .robust_summary import RobustRunCheck
 from .sigma import vehicle_sigma
 from .simulation import Scenario
 from .tubes import mission_tube
@@ -70,7 +73,11 @@ class Gains:
 
 
 def design_gains(cfg: FormationConfig) -> Gains:
-    """Theorem 1 gains of ``cfg`` on its envelope (no cross-checks).
+    """Gains of ``cfg``: Theorem 1's on its envelope (no cross-checks), or the robust design's.
+
+    With ``cfg.robust`` the gain ``alpha``, ``k1`` and the heading gains come from
+    :func:`~auv_hinf.robust_summary.robust_design_for` (``lam``, ``sigma`` and ``gamma`` stay
+    the nominal envelope's).
 
     Raises
     ------
@@ -80,6 +87,11 @@ def design_gains(cfg: FormationConfig) -> Gains:
     lam = cfg.lam if cfg.lam is not None else envelope_lambda(cfg.vehicle, cfg.envelope)
     sigma = vehicle_sigma(cfg.vehicle, cfg.envelope, lam, cfg.n).upper
     gamma = cfg.gamma if cfg.gamma is not None else 1.0 / sigma
+    if cfg.robust:
+        from .robust_summary import robust_design_for
+
+        rg = robust_design_for(cfg).gains
+        return Gains(lam, sigma, gamma, rg.alpha, rg.k1, rg.k_psi)
     alpha = float(design_alpha(lam, gamma, cfg.method).alpha)
     if not math.isfinite(alpha):
         raise DesignError(f"no finite gain for method {cfg.method!r} at lambda={lam:g}, gamma={gamma:g}")
@@ -141,6 +153,7 @@ def coverage_for(
         start=start,
         blend_time=cfg.simulation.blend_time,
         thrust_limit=cfg.simulation.thrust_limit,
+        current=cfg.simulation.current,
     )
 
 
@@ -163,6 +176,8 @@ class RunPlan:
         One line per reason the run is not covered.
     start : {"shaped", "paper"}
         The start mode of the run.
+    robust : RobustRunCheck or None
+        The robust certificate's verdict when the configuration declares a box or a current.
     """
 
     gains: Gains
@@ -172,6 +187,7 @@ class RunPlan:
     scenario: Scenario
     notes: tuple[str, ...]
     start: str = "shaped"
+    robust: RobustRunCheck | None = None
 
 
 def plan_run(
@@ -225,7 +241,13 @@ def plan_run(
         name=cfg.name,
         jacobi=cfg.jacobi,
     )
-    return RunPlan(gains, cert, cov, cov is not None and cov.covered and not notes, scn, tuple(notes), mode)
+    nominal = cov is not None and cov.covered and not notes
+    rob = None
+    if cfg.uncertainty.box or cfg.disturbance.current_speed:
+        from .robust_summary import check_robust_run
+
+        rob = check_robust_run(cfg, reference, initial)
+    return RunPlan(gains, cert, cov, nominal or (rob is not None and rob.covered), scn, tuple(notes), mode, rob)
 
 
 def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:
@@ -293,6 +315,9 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "measured_errors": measured,
             "certified_errors": certified,
             "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
+            "robust_covers_run": None if plan.robust is None else plan.robust.covered,
+            "robust_bounds": None if plan.robust is None else plan.robust.bounds,
+            "robust_reason": None if plan.robust is None else plan.robust.reason,
             "alpha": plan.gains.alpha,
             "k1": plan.gains.k1,
             "k_psi": list(plan.gains.k_psi),

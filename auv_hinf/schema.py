@@ -180,6 +180,11 @@ class DesignTable(_Table):
         alias="lambda",
     )
     k1: float = _field(0.5, "Theorem 2 position gain", "1/s^2", gt=0.0)
+    robust: bool = _field(
+        False,
+        "use the robust design: alpha, k1 and the heading gains chosen for the [uncertainty] box and "
+        "[disturbance] current (certify, simulate and campaign all run these gains)",
+    )
     heading_poles: NegativePair = _field(
         list(DEFAULT_HEADING_POLES),
         "two distinct negative closed-loop poles of the heading loop",
