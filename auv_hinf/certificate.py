@@ -303,9 +303,7 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         )
         loop = closed_loop_summary(config, gains)
         reasons.extend(loop.reasons)
-    rob = robust_summary(
-        config, nominal_rate=None if loop is None or loop.certificate is None else loop.certificate.rate
-    )
+    rob = robust_summary(config, nominal=None if loop is None else loop.certificate)
     if rob.declared and not rob.covers:
         reasons.append(
             "robust certificate does not cover the declared [uncertainty] box and [disturbance] current: "

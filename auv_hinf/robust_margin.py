@@ -125,10 +125,8 @@ def certified_scale(check: Callable[[float], bool], cap: float, steps: int = LOW
     if check(cap):
         return cap
     lo, hi = 0.0, cap
-    if check(1.0) if cap > 1.0 else False:
-        lo = 1.0
-    elif cap > 1.0:
-        hi = 1.0
+    if cap > 1.0:  # the declared box (scale 1) first: it splits the search where it matters
+        lo, hi = (1.0, cap) if check(1.0) else (0.0, 1.0)
     for _ in range(steps):
         mid = 0.5 * (lo + hi)
         if check(mid):
@@ -180,6 +178,18 @@ def trim_max_real(law: VehicleLaw, plant: VehicleParams, speed: float, current: 
     return float(eig.real.max())
 
 
+def _law(box: ParameterBox, gains: RobustGains) -> VehicleLaw:
+    """The law of ``gains`` on the controller's (nominal) model."""
+    return VehicleLaw(params=box.nominal, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi)
+
+
+def _current_directions(current: float) -> list[FloatArray]:
+    """Unit directions of the candidate currents (head, tail, both crosses); none without a current."""
+    if current <= 0:
+        return [np.zeros(2)]
+    return [np.array(d) for d in ((-1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0))]
+
+
 def _corners(box: ParameterBox) -> list[FloatArray]:
     """Directions ``m_corner - 1`` of the mass corners with all damping low or all high."""
     masses = box.vertices(("m11", "m22", "m33"))
@@ -200,8 +210,8 @@ def exhibited_scale(
     ``guess`` (e.g. :func:`linearised_scale`) only narrows the search: the candidates bisected
     are those unstable at ``min(cap, 1.25 guess)`` (all those unstable at ``cap`` if none is).
     """
-    law = VehicleLaw(params=box.nominal, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi)
-    dirs = [np.array(d) for d in ((-1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0))] if current > 0 else [np.zeros(2)]
+    law = _law(box, gains)
+    dirs = _current_directions(current)
 
     def unstable(u: FloatArray, d: FloatArray, s: float) -> float | None:
         plant = box.plant(1.0 + s * u)
@@ -268,8 +278,8 @@ def robust_margin(
 
 def weakest_corner(box: ParameterBox, gains: RobustGains, speed: float, current: float) -> Witness | None:
     """The corner plant and current (scale 1) whose linearised trim has the largest real part."""
-    law = VehicleLaw(params=box.nominal, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi)
-    dirs = [np.array(d) for d in ((-1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0))] if current > 0 else [np.zeros(2)]
+    law = _law(box, gains)
+    dirs = _current_directions(current)
     best: Witness | None = None
     for u in _corners(box):
         for d in dirs:

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._typing import FloatArray
+from .closed_loop import ClosedLoopCertificate
 from .config import FormationConfig
 from .coverage import initial_errors
 from .exceptions import AuvHinfError
@@ -139,11 +140,15 @@ def _tube_and_speed(cfg: FormationConfig) -> tuple[ReferenceTube, float]:
     return tube, TubeSummary.of(tube).speed[1]
 
 
-def robust_summary(cfg: FormationConfig, *, margins: bool = True, nominal_rate: float | None = None) -> RobustSummary:
+def robust_summary(
+    cfg: FormationConfig, *, margins: bool = True, nominal: ClosedLoopCertificate | None = None
+) -> RobustSummary:
     """Certify ``cfg``'s gains for its declared box and current (see the module docstring).
 
-    With nothing declared the summary is the nominal closed loop's: ``nominal_rate`` (its
-    decay rate, computed here when not given), errors converging to zero, no margins.
+    ``nominal`` is the nominal closed-loop certificate of ``cfg``'s gains along the mission
+    (``closed_loop_for(cfg, design_gains(cfg))``) when the caller has it already; otherwise it
+    is computed here. It supplies the envelope and heading-range checks and, with nothing
+    declared, the whole summary: its decay rate, errors converging to zero, no margins.
     """
     from .plan import closed_loop_for, design_gains
 
@@ -153,13 +158,12 @@ def robust_summary(cfg: FormationConfig, *, margins: bool = True, nominal_rate: 
     try:
         gains = robust_gains(cfg)
         tube, speed = _tube_and_speed(cfg)
-        if not declared:
-            if nominal_rate is None:
-                nominal_rate = closed_loop_for(cfg, design_gains(cfg)).rate
-            return RobustSummary(False, None, None, None, design, nominal_rate, (), gains)
-        closed_loop_for(cfg, design_gains(cfg))  # the same envelope and heading-range checks
+        if nominal is None:
+            nominal = closed_loop_for(cfg, design_gains(cfg))
     except AuvHinfError as exc:
         return RobustSummary(declared, None, None, None, design, None, (f"not certified: {exc}",))
+    if not declared:
+        return RobustSummary(False, None, None, None, design, nominal.rate, (), gains)
     reasons: list[str] = []
     if cfg.disturbance.current_rate:
         reasons.append(

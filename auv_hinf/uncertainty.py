@@ -282,8 +282,7 @@ def position_disturbance(
     mismatch = tube.speed[1] * math.hypot(x, y)
     centre, spread = box.input_gain()
     drift = (sigma + spread * abs(lam) / centre) * current
-    gain = max(abs(1.0 / box.lo[k] - 1.0) for k in (0, 1))
-    gain = max(gain, *(abs(1.0 / box.hi[k] - 1.0) for k in (0, 1)))
+    gain = max(abs(1.0 / end[k] - 1.0) for end in (box.lo, box.hi) for k in (0, 1))
     return mismatch + drift + gain * tube.accel
 
 
