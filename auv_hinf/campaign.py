@@ -8,7 +8,7 @@ exactly on the raw mission at ``t = 0``) and integrates them in chunks, each chu
   simultaneous start region (:attr:`RegionCertificate.region <auv_hinf.region.RegionCertificate>`):
   position and velocity errors with magnitude uniform on ``[0, radius)`` and direction
   uniform on the circle, heading and yaw-rate errors uniform on ``(-radius, radius)``; the
-  state is built from the mission's motion at ``t = 0`` (body velocities ``R(psi)^T v``);
+  state is built from the mission's motion at ``t = 0`` (body velocities ``R(psi)^T (v - c)``);
 * plant multipliers uniform in the ``[uncertainty]`` box (1 for undeclared parameters);
 * a constant current uniform in the disc ``|c| <= [disturbance] current_speed`` (default 0).
 
@@ -18,13 +18,17 @@ nor the executor. The integrated numbers are identical for the same chunk size o
 executor; with another chunk size they agree to round-off (the integrator's per-system
 step control does not couple the scenarios of a batch, only BLAS round-off may differ).
 
-The nominal certificate bounds a run only when its plant is nominal and there is no
-current; elsewhere ``inside_bounds`` is NA (a robust certificate does not exist yet).
+When a box or a current is declared and the robust certificate covers them, the start errors,
+plants and currents are drawn as :mod:`auv_hinf.campaign_robust` says (inside the robust
+invariant sets, the box's vertices first) and every run is checked against the robust bounds.
+Otherwise the nominal certificate bounds a run only when its plant is nominal and there is no
+current; elsewhere ``inside_bounds`` is NA.
 :mod:`auv_hinf.campaign_report` writes the table, the summary and the histograms.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -97,7 +101,8 @@ def run_campaign(
     seed : int
         Root seed (>= 0).
     chunk : int, optional
-        Scenarios per batch (default :func:`default_chunk`).
+        Scenarios per batch (default :func:`default_chunk`, reduced on Dask so that every worker
+        gets a chunk).
     horizon : float, optional
         Simulated time (s); default ``cfg.simulation.horizon``.
     client : distributed.Client, optional
@@ -117,7 +122,7 @@ def run_campaign(
             raise ParameterError(f"{name} must be an integer >= 1, got {val!r}")
     t0 = time.perf_counter()
     setup, cert = prepare(cfg, seed=seed, horizon=horizon)
-    size = int(chunk) if chunk is not None else default_chunk(setup)
+    size = int(chunk) if chunk is not None else _balanced(default_chunk(setup), int(runs), client)
     t1 = time.perf_counter()
     parts = _execute(setup, chunks(int(runs), size), client, progress)
     wall = time.perf_counter() - t1
@@ -125,6 +130,14 @@ def run_campaign(
     table["inside_bounds"] = table["inside_bounds"].astype("boolean")
     executor = "serial" if client is None else f"dask {getattr(client.scheduler, 'address', client)}"
     return Campaign(table, setup, cert, size, executor, t1 - t0, wall)
+
+
+def _balanced(size: int, runs: int, client: Any) -> int:
+    """``size``, reduced so that every worker of ``client`` gets at least one chunk."""
+    if client is None:
+        return size
+    workers = max(1, len(client.scheduler_info().get("workers", {})))
+    return max(1, min(size, math.ceil(runs / workers)))
 
 
 def _execute(setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, progress: bool) -> list[pd.DataFrame]:

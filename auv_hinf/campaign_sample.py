@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from ._typing import FloatArray
+from .campaign_robust import RobustStart, robust_start, vertex_current
 from .closed_loop import ClosedLoopCertificate
 from .config import FormationConfig
 from .control_law import VehicleLaw
@@ -35,7 +36,7 @@ ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
 #: Output sample interval (s): the measured sup of the errors is taken on these samples.
 SAMPLE_INTERVAL = 0.1
 #: Default chunk: at most this many scenarios per batch ...
-MAX_CHUNK = 64
+MAX_CHUNK = 512
 #: ... and at most this many bytes of sampled states ``(T, S, N, 6)`` per chunk.
 CHUNK_BYTES = 64 * 2**20
 #: A measured error counts as inside its certified bound ``b`` if it is ``<= b (1 + tol) + tol``
@@ -75,6 +76,12 @@ class CampaignSetup:
     seed : int
     certificate_applies : bool
         False when the certified thrust exceeds the configured limit (saturation voids it).
+    robust : RobustStart or None
+        Start sets and bounds of the robust certificate, when a box or a current is declared
+        and it covers them (:mod:`auv_hinf.campaign_robust`); then every run is checked
+        against it.
+    robust_reason : str or None
+        Why a declared box or current is not checked (the robust certificate does not cover).
     """
 
     name: str
@@ -93,6 +100,8 @@ class CampaignSetup:
     samples: int
     seed: int
     certificate_applies: bool
+    robust: RobustStart | None = None
+    robust_reason: str | None = None
 
     @property
     def n(self) -> int:
@@ -129,25 +138,33 @@ class RunInputs:
 def sample_run(setup: CampaignSetup, index: int) -> RunInputs:
     """Inputs of run ``index``, from ``SeedSequence(setup.seed, spawn_key=(index,))`` alone."""
     rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
+    rob = setup.robust
+    if rob is not None and index < rob.vertices:
+        mult, current = rob.vertex(setup.box, index), vertex_current(rng, setup.current_speed)
+    else:
+        lo, hi = setup.box[:, 0], setup.box[:, 1]
+        mult = lo + (hi - lo) * rng.random(lo.size)
+        c_mag = setup.current_speed * math.sqrt(rng.random())  # uniform in the disc
+        current = vertex_current(rng, c_mag)
+    if rob is not None:
+        return RunInputs(rob.sample_errors(rng, setup.n, current), mult, current)
     n, r = setup.n, setup.radii
     e = _uniform_disc_radius(rng, float(r[0]), n)
     de = _uniform_disc_radius(rng, float(r[1]), n)
     epsi = float(r[2]) * rng.uniform(-1.0, 1.0, n)
     depsi = float(r[3]) * rng.uniform(-1.0, 1.0, n)
-    lo, hi = setup.box[:, 0], setup.box[:, 1]
-    mult = lo + (hi - lo) * rng.random(lo.size)
-    c_mag = setup.current_speed * math.sqrt(rng.random())  # uniform in the disc
-    c_ang = 2.0 * math.pi * rng.random()
-    current = np.array([c_mag * math.cos(c_ang), c_mag * math.sin(c_ang)]) + 0.0  # no -0.0 in the table
     return RunInputs((e, de, epsi, depsi), mult, current)
 
 
 def initial_state(setup: CampaignSetup, inputs: RunInputs) -> FloatArray:
-    """``[x, y, psi, u, v, r]`` per vehicle: the mission's motion at ``t = 0`` plus the errors."""
+    """``[x, y, psi, u, v, r]`` per vehicle: the mission's motion at ``t = 0`` plus the errors.
+
+    The velocity error is in ground velocity: the body velocity is ``R(psi)^T (v_d + e' - c)``.
+    """
     e, de, epsi, depsi = inputs.errors
     p, v, hr = setup.start[:, 0], setup.start[:, 1], setup.start[:, 2]
     psi = hr[:, 0] + epsi
-    vel = v + de
+    vel = v + de - inputs.current
     c, s = np.cos(psi), np.sin(psi)
     return np.column_stack(
         [p + e, psi, c * vel[:, 0] + s * vel[:, 1], -s * vel[:, 0] + c * vel[:, 1], hr[:, 1] + depsi]
@@ -168,10 +185,12 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int) -> pd.DataFrame:
     ``current_y`` (m/s), ``nominal`` (plant nominal and no current), ``start_<kind>_error``
     (largest start error over the vehicles); metrics ``stayed_in_envelope``,
     ``first_exit_time`` (s, NaN if none), ``max_<kind>_error`` (sup over samples and
-    vehicles), ``final_position_error`` (m), ``measured_decay_rate`` (1/s, NaN if none),
+    vehicles), ``final_position_error`` (m), ``tail_position_error`` (m, sup over the second
+    half of the horizon) and its ``ratio_tail_position_error`` to the certified bound,
+    ``measured_decay_rate`` (1/s, NaN if none),
     ``bound_<kind>_error`` (largest per-start certified bound), ``ratio_<kind>_error``
-    (largest measured / certified over the vehicles), ``inside_bounds`` (NA when the nominal
-    certificate does not apply) and ``n_steps``. ``<kind>`` is one of :data:`ERROR_KINDS`
+    (largest measured / certified over the vehicles), ``inside_bounds`` (NA when no
+    certificate applies: see :mod:`auv_hinf.campaign_report`) and ``n_steps``. ``<kind>`` is one of :data:`ERROR_KINDS`
     (m, m/s, rad, rad/s).
     """
     inputs = [sample_run(setup, i) for i in range(lo, hi)]
@@ -209,9 +228,14 @@ def _row(setup: CampaignSetup, index: int, x: RunInputs, res: Any) -> dict[str, 
         ],
         axis=-1,
     )  # (N, 4)
-    bound = start_bounds(setup.p2, setup.q, *e0)  # (N, 4)
     stayed = res.exit_time is None
     nominal = bool(np.all(x.multipliers == 1.0) and not np.any(x.current))
+    if setup.robust is not None:
+        bound = np.broadcast_to(setup.robust.bounds, measured.shape)
+        applies = True
+    else:
+        bound = start_bounds(setup.p2, setup.q, *e0)  # (N, 4)
+        applies = nominal and setup.certificate_applies
     row: dict[str, Any] = {"run": index, "seed": setup.seed}
     row.update({f"{k}_mult": float(m) for k, m in zip(COEFFICIENTS, x.multipliers)})
     row.update({"current_x": float(x.current[0]), "current_y": float(x.current[1]), "nominal": nominal})
@@ -220,15 +244,19 @@ def _row(setup: CampaignSetup, index: int, x: RunInputs, res: Any) -> dict[str, 
     row.update({"stayed_in_envelope": stayed, "first_exit_time": math.nan if stayed else float(res.exit_time)})
     row.update({f"max_{k}_error": float(m) for k, m in zip(ERROR_KINDS, measured.max(0))})
     row["final_position_error"] = float(res.mission_error[-1].max())
+    tail = np.linalg.norm(tr.e[tr.e.shape[0] // 2 :], axis=-1).max(0)  # (N,): sup over the second half
+    row["tail_position_error"] = float(tail.max())
     rate = measured_decay_rate(res, setup.certificate)
     row["measured_decay_rate"] = math.nan if rate is None else float(rate)
     row.update({f"bound_{k}_error": float(b) for k, b in zip(ERROR_KINDS, bound.max(0))})
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(bound > 0, measured / bound, np.where(measured > 0, math.inf, 0.0))
     row.update({f"ratio_{k}_error": float(r) for k, r in zip(ERROR_KINDS, ratio.max(0))})
+    with np.errstate(divide="ignore", invalid="ignore"):
+        row["ratio_tail_position_error"] = float(np.max(np.where(bound[:, 0] > 0, tail / bound[:, 0], math.inf)))
     tol = BOUND_SLACK * max(RTOL, ATOL)
     inside = bool(np.all(measured <= bound * (1.0 + tol) + tol)) and stayed
-    row["inside_bounds"] = inside if (nominal and setup.certificate_applies) else pd.NA
+    row["inside_bounds"] = inside if applies else pd.NA
     row["n_steps"] = int(res.n_steps)
     return row
 
@@ -259,6 +287,7 @@ def prepare(
     box = np.ones((len(COEFFICIENTS), 2))
     for k, (lo, hi) in cfg.uncertainty.box:
         box[COEFFICIENTS.index(k)] = (lo, hi)
+    rob, why = robust_start(cfg, box, cert)
     limit = cfg.simulation.thrust_limit
     t = cert.thrust
     applies = limit is None or (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2])
@@ -280,6 +309,8 @@ def prepare(
         samples=round(hor / SAMPLE_INTERVAL) + 1,
         seed=int(seed),
         certificate_applies=bool(applies),
+        robust=rob,
+        robust_reason=why,
     )
     return setup, cert
 

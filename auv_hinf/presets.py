@@ -36,8 +36,9 @@ from .schema import (
     UncertaintyTable,
     VehicleTable,
 )
+from .settings import DisturbanceConfig, ReferenceConfig, UncertaintyConfig
 from .vehicle import PRESETS as VEHICLE_PRESETS
-from .vehicle import paper2011
+from .vehicle import paper2011, remus100
 
 #: Demo envelope of the paper presets (u, v in m/s, r in rad/s). The paper's envelope has
 #: ``|v| <= 1 m/s``, but its Section V vehicles start with sway exactly 1 m/s, on the edge, so
@@ -105,10 +106,51 @@ def _paper_hexagon() -> FormationConfig:
     )
 
 
+#: Envelope of ``remus-line`` (m/s, m/s, rad/s): chosen with the robust certificate so that a
+#: 0.2 m/s current plus the certified velocity error still fits the sway range.
+REMUS_ENVELOPE: Envelope = Envelope(u=(0.5, 2.5), v=(-0.3, 0.3), r=(-0.3, 0.3))
+#: Declared box of ``remus-line``: masses +-10 %, every damping coefficient +-20 %.
+REMUS_BOX: tuple[tuple[str, tuple[float, float]], ...] = tuple(
+    [(k, (0.9, 1.1)) for k in ("m11", "m22", "m33")]
+    + [(k, (0.8, 1.2)) for k in ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")]
+)
+#: Mission speed of ``remus-line`` (m/s), the REMUS-100's nominal cruise.
+REMUS_SPEED = 1.5
+#: The simulated current (m/s, inertial) and plant corner of ``remus-line``: the corner whose
+#: Munk-moment residual makes the nominal heading gains unstable (docs/derivations/robust.md).
+REMUS_CURRENT = (-0.1, 0.15)
+REMUS_PLANT = (("m11", 0.9), ("m22", 1.1), ("m33", 0.9))
+
+
+def _remus_line() -> FormationConfig:
+    t = JacobiTransform(3, "paper")
+    off = offsets_from_shape(np.asarray(TRIANGLE_SHAPE), t)
+    cx, cy = REMUS_CURRENT
+    # on the raw mission at t = 0 (the line starts at the origin, heading 0), with the body
+    # velocity that gives the mission's ground velocity in the current
+    initial = tuple((float(x), float(y), 0.0, REMUS_SPEED - cx, -cy, 0.0) for x, y in off)
+    return FormationConfig(
+        name="remus-line",
+        vehicle=remus100(),
+        n=3,
+        jacobi="paper",
+        shape=TRIANGLE_SHAPE,
+        envelope=REMUS_ENVELOPE,
+        robust=True,
+        reference=ReferenceConfig("line", (("speed", REMUS_SPEED), ("heading", 0.0))),
+        simulation=SimulationConfig(
+            horizon=60.0, start="paper", initial=initial, current=REMUS_CURRENT, plant=REMUS_PLANT
+        ),
+        uncertainty=UncertaintyConfig(REMUS_BOX),
+        disturbance=DisturbanceConfig(current_speed=0.2),
+    )
+
+
 #: The registry: preset name -> factory of the complete configuration.
 PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "paper-triangle": _paper_triangle,
     "paper-hexagon": _paper_hexagon,
+    "remus-line": _remus_line,
 }
 #: Names of the built-in presets (the CLI's ``--preset`` choices).
 PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)
@@ -231,6 +273,8 @@ __all__ = [
     "PAPER_TRIANGLE_INITIAL",
     "PRESETS",
     "PRESET_REGISTRY",
+    "REMUS_BOX",
+    "REMUS_ENVELOPE",
     "TRIANGLE_ENVELOPE",
     "TRIANGLE_SHAPE",
     "annotated_toml",

@@ -19,14 +19,17 @@ from ._typing import FloatArray
 from .closed_loop import ClosedLoopCertificate
 from .config import FormationConfig
 from .coverage import initial_errors
+from .envelope import Envelope
 from .exceptions import AuvHinfError
 from .margins import ErrorBounds
-from .reference import FleetReference, ReferenceTube
+from .reference import FleetReference, ReferenceTube, reference_from_dict
 from .robust import RobustCertificate, RobustGains, robust_certificate
 from .robust_design import RobustDesign, design_robust
 from .robust_margin import RobustMargin, Witness, robust_margin, weakest_corner
+from .settings import ReferenceConfig
 from .tubes import fleet_tube, mission_tube
 from .uncertainty import PARAMETERS, ParameterBox, TubeSummary, current_offset
+from .vehicle import VehicleParams
 
 #: Largest fleet whose own shaped tube is built to check a run (the tube costs ~0.1-1 s a vehicle).
 RUN_TUBE_MAX_N = 16
@@ -45,22 +48,35 @@ def declared_current(cfg: FormationConfig) -> float:
 
 
 @lru_cache(maxsize=32)
-def _design(cfg: FormationConfig) -> RobustDesign:
-    from .plan import mission_reference
-
+def _design(
+    vehicle: VehicleParams,
+    box: tuple[tuple[str, tuple[float, float]], ...],
+    current: float,
+    envelope: Envelope,
+    reference: ReferenceConfig,
+    thrust_limit: tuple[float, float, float] | None,
+) -> RobustDesign:
     return design_robust(
-        declared_box(cfg),
-        cfg.envelope,
-        mission_tube(mission_reference(cfg)),
-        declared_current(cfg),
-        cfg.simulation.thrust_limit,
+        ParameterBox.from_ranges(vehicle, box),
+        envelope,
+        mission_tube(reference_from_dict(reference.kind, **reference.kwargs())),
+        current,
+        thrust_limit,
         progress=True,
     )
 
 
 def robust_design_for(cfg: FormationConfig) -> RobustDesign:
-    """The robust design of ``cfg`` (cached per configuration)."""
-    return _design(cfg)
+    """The robust design of ``cfg``, cached on what it depends on (vehicle, box, current, envelope,
+    mission and thrust limit), so runs that differ only in their start or plant share it."""
+    return _design(
+        cfg.vehicle,
+        cfg.uncertainty.box,
+        declared_current(cfg),
+        cfg.envelope,
+        cfg.reference,
+        cfg.simulation.thrust_limit,
+    )
 
 
 @dataclass(frozen=True)
