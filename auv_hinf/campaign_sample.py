@@ -35,10 +35,12 @@ COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad
 ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
 #: Output sample interval (s): the measured sup of the errors is taken on these samples.
 SAMPLE_INTERVAL = 0.1
-#: Default chunk: at most this many scenarios per batch ...
-MAX_CHUNK = 512
-#: ... and at most this many bytes of sampled states ``(T, S, N, 6)`` per chunk.
-CHUNK_BYTES = 64 * 2**20
+#: Default chunk: at most this many scenarios per batch (the per-step Python overhead of the
+#: batched integrator is amortised over the chunk; beyond ~1000 the numpy work dominates) ...
+MAX_CHUNK = 1024
+#: ... and at most this many bytes of sampled states ``(T, S, N, 6)`` per chunk (the
+#: post-processing holds a few arrays of that size: about 1 GB per worker at this cap).
+CHUNK_BYTES = 256 * 2**20
 #: A measured error counts as inside its certified bound ``b`` if it is ``<= b (1 + tol) + tol``
 #: with ``tol`` = this factor times the integrator's tolerance: the trajectory is known to
 #: about rtol/atol = 1e-8, so a larger excess is a real violation, not integration noise.

@@ -24,7 +24,7 @@ from ._typing import FloatArray, OrientationLaw
 from .exceptions import DesignError, ParameterError, require_finite
 from .formation import JacobiTransform
 from .paths import MissionReference, SineReference, heading_from_velocity
-from .reference import Motion, wrap_angle
+from .reference import Motion, rigid_motion, wrap_angle
 from .vehicle import VehicleParams, inertial_block, rotation
 
 
@@ -102,8 +102,8 @@ class RigidReference:
 
     def motion(self, t: float | FloatArray) -> Motion:
         """Motion at ``t`` (scalar or shape ``(S,)``), all vehicles at the same time."""
-        tt = np.asarray(t, dtype=float)
-        return self.motion_per_vehicle(np.broadcast_to(tt[..., None], (*tt.shape, len(self.offsets))))
+        q, qd, qdd, qddd = self.trajectory(np.asarray(t, dtype=float))
+        return rigid_motion(self.offsets, q, qd, qdd, *heading_from_velocity(qd, qdd, qddd))
 
     def motion_per_vehicle(self, t: FloatArray) -> Motion:
         """Motion of vehicle ``i`` at ``t[..., i]`` (s)."""
@@ -193,7 +193,9 @@ class VehicleLaw:
                 raise ParameterError(f"thrust_limit must be three positive numbers, got {self.thrust_limit!r}")
             object.__setattr__(self, "thrust_limit", lim)
 
-    def unsaturated(self, states: FloatArray, p_dot: FloatArray, motion: Motion) -> FloatArray:
+    def unsaturated(
+        self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
         """Commanded body-frame thrust before saturation, shape ``(..., N, 3)`` (N, N, N m).
 
         Parameters
@@ -204,10 +206,12 @@ class VehicleLaw:
             Measured inertial (ground) velocity (m/s).
         motion : Motion
             Desired motion, broadcastable to the same leading shape.
+        cs : tuple of ndarray, optional
+            ``(cos psi, sin psi)`` of the measured headings, when the caller has them.
         """
         par = self.params
         psi, u, v, r = states[..., 2], states[..., 3], states[..., 4], states[..., 5]
-        c, s = np.cos(psi), np.sin(psi)
+        c, s = (np.cos(psi), np.sin(psi)) if cs is None else cs
         # inertial part of w_i without the drift term: -alpha e' - k1 e + p_id''
         w = -self.alpha * (p_dot - motion.v) - self.k1 * (states[..., 0:2] - motion.p) + motion.a
         # everything in the body frame: R^T w and R^T G v_d = B R^T v_d
@@ -222,9 +226,11 @@ class VehicleLaw:
         tau_psi = heading_torque(par, self.k_psi, self.orientation, states, motion.psi, motion.r, motion.r_dot)
         return np.stack([par.m11 * (wx - bx), par.m22 * (wy - by), tau_psi], -1)
 
-    def forces(self, states: FloatArray, p_dot: FloatArray, motion: Motion) -> FloatArray:
+    def forces(
+        self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
         """Applied body-frame thrust (after saturation), shape ``(..., N, 3)``; see :meth:`unsaturated`."""
-        return saturate(self.unsaturated(states, p_dot, motion), self.thrust_limit)[0]
+        return saturate(self.unsaturated(states, p_dot, motion, cs), self.thrust_limit)[0]
 
 
 @dataclass(frozen=True)

@@ -37,12 +37,15 @@ def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
     return margin
 
 
-def ground_velocity(states: FloatArray, current: FloatArray | tuple[float, float]) -> FloatArray:
+def ground_velocity(
+    states: FloatArray, current: FloatArray | tuple[float, float], cs: tuple[FloatArray, FloatArray] | None = None
+) -> FloatArray:
     """Inertial velocity ``R(psi) [u, v] + current`` of states ``(..., N, 6)`` (m/s).
 
-    ``current`` (inertial, m/s) broadcasts against ``(..., N, 2)``.
+    ``current`` (inertial, m/s) broadcasts against ``(..., N, 2)``; ``cs`` is
+    ``(cos psi, sin psi)`` when the caller has them.
     """
-    c, s = np.cos(states[..., 2]), np.sin(states[..., 2])
+    c, s = (np.cos(states[..., 2]), np.sin(states[..., 2])) if cs is None else cs
     u, v = states[..., 3], states[..., 4]
     out: FloatArray = np.stack([c * u - s * v, s * u + c * v], -1) + np.asarray(current, dtype=float)
     return out

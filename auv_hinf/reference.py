@@ -261,9 +261,43 @@ class FleetReference:
         ParameterError
             If a desired velocity is zero (heading undefined) or a time is not finite.
         """
+        if self.shaping is None:  # every vehicle moves with the centre: evaluate it once per time
+            tt = times(t)
+            q, qd, qdd, qddd = self.mission(tt)
+            chi, chi1, chi2 = heading_from_velocity(qd, qdd, qddd)
+            return rigid_motion(self.offsets, q, qd, qdd, chi, chi1, chi2)
         (p, v, a, j), (d0, d1, d2) = self.kinematics(t)
         chi, chi1, chi2 = heading_from_velocity(v, a, j)
         return Motion(p=p, v=v, a=a, psi=chi + d0, r=chi1 + d1, r_dot=chi2 + d2)
+
+
+def rigid_motion(
+    offsets: FloatArray,
+    q: FloatArray,
+    qd: FloatArray,
+    qdd: FloatArray,
+    chi: FloatArray,
+    chi1: FloatArray,
+    chi2: FloatArray,
+) -> Motion:
+    """Motion of vehicles on fixed ``offsets (N, 2)`` (m) around a centre moving as ``q`` (..., 2).
+
+    The centre's velocity, acceleration (m/s, m/s^2) and course ``chi``, ``chi'``, ``chi''``
+    (rad, rad/s, rad/s^2, shape (...)) are shared by every vehicle: they are broadcast (read-only
+    views), not copied.
+    """
+    n = offsets.shape[0]
+    lead = chi.shape
+
+    def each(x: FloatArray) -> FloatArray:
+        return np.broadcast_to(x[..., None, :], (*lead, n, 2))
+
+    def scalar(x: FloatArray) -> FloatArray:
+        return np.broadcast_to(x[..., None], (*lead, n))
+
+    return Motion(
+        p=offsets + q[..., None, :], v=each(qd), a=each(qdd), psi=scalar(chi), r=scalar(chi1), r_dot=scalar(chi2)
+    )
 
 
 def wrap_angle(angle: ArrayLike) -> FloatArray:
@@ -386,6 +420,7 @@ __all__ = [
     "SineReference",
     "heading_from_velocity",
     "reference_from_dict",
+    "rigid_motion",
     "shaped_start",
     "wrap_angle",
 ]

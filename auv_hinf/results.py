@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -12,6 +13,7 @@ from numpy.typing import NDArray
 from ._typing import FloatArray
 from .control_law import saturate
 from .postprocess import TrackingErrors, formation_errors, ground_velocity, tracking_errors
+from .reference import Motion
 
 if TYPE_CHECKING:
     from .simulation import Scenario
@@ -108,28 +110,71 @@ def build_result(
     scn: Scenario, t: FloatArray, states: FloatArray, exit_time: float | None, n_steps: int
 ) -> SimulationResult:
     """Post-process the samples ``states (T, N, 6)`` at times ``t (T,)`` in whole-array calls."""
-    p_dot = ground_velocity(states, scn.current)
-    motion = scn.reference.motion(t)
-    forces, active = saturate(scn.law.unsaturated(states, p_dot, motion), scn.law.thrust_limit)
-    target = motion.p if scn.mission is None else scn.mission.motion(t).p
-    form = formation_errors(states[..., 0:2], target, scn.jacobi)
-    track = tracking_errors(states, p_dot, motion)
-    return SimulationResult(
-        t=t,
-        states=states,
-        forces=forces,
-        jacobi=form.jacobi,
-        shape_error=form.shape_error,
-        center_error=form.center_error,
-        desired_center=form.desired_center,
-        saturated=np.asarray(active.any(axis=-1), dtype=bool),
-        position_error=np.linalg.norm(track.e, axis=-1),
-        mission_error=form.position_error,
-        tracking=track,
-        exit_time=exit_time,
-        n_steps=n_steps,
-        scenario=scn,
+    return build_results((scn,), t, states[:, None], [exit_time], [n_steps])[0]
+
+
+def _expand(m: Motion) -> Motion:
+    """``m`` with a scenario axis inserted after the time axis: ``(T, N, .)`` -> ``(T, 1, N, .)``."""
+    return Motion(*(x[:, None] for x in (m.p, m.v, m.a, m.psi, m.r, m.r_dot)))
+
+
+def build_results(
+    scns: Sequence[Scenario],
+    t: FloatArray,
+    states: FloatArray,
+    exit_times: Sequence[float | None],
+    n_steps: Sequence[int],
+) -> list[SimulationResult]:
+    """Post-process ``S`` scenarios sampled as ``states (T, S, N, 6)`` at times ``t (T,)``.
+
+    Scenarios that share their reference, mission, law and Jacobi convention (a campaign's
+    chunk) are processed together in whole-array calls, with the desired motion evaluated
+    once; the others one at a time. Each result holds views of the batched arrays.
+    """
+    first = scns[0]
+    shared = all(
+        x.reference is first.reference and x.mission is first.mission and x.jacobi == first.jacobi for x in scns
     )
+    shared = shared and all(x.law == first.law for x in scns)
+    if not shared and len(scns) > 1:
+        return [
+            build_results((x,), t, states[:, k : k + 1], [exit_times[k]], [n_steps[k]])[0] for k, x in enumerate(scns)
+        ]
+    current = np.array([x.current for x in scns], dtype=float)[None, :, None, :]  # (1, S, 1, 2)
+    p_dot = ground_velocity(states, current)
+    motion = _expand(first.reference.motion(t))
+    forces, active = saturate(first.law.unsaturated(states, p_dot, motion), first.law.thrust_limit)
+    target = motion.p if first.mission is None else first.mission.motion(t).p[:, None]
+    form = formation_errors(states[..., 0:2], target, first.jacobi)
+    track = tracking_errors(states, p_dot, motion)
+    saturated = np.asarray(active.any(axis=-1), dtype=bool)
+    position_error = np.linalg.norm(track.e, axis=-1)
+    out = []
+    for k, scn in enumerate(scns):
+        out.append(
+            SimulationResult(
+                t=t,
+                states=states[:, k],
+                forces=forces[:, k],
+                jacobi=form.jacobi[:, k],
+                shape_error=form.shape_error[:, k],
+                center_error=form.center_error[:, k],
+                desired_center=np.broadcast_to(form.desired_center, (*form.jacobi.shape[:2], 2))[:, k],
+                saturated=saturated[:, k],
+                position_error=position_error[:, k],
+                mission_error=form.position_error[:, k],
+                tracking=TrackingErrors(
+                    e=track.e[:, k],
+                    e_dot=track.e_dot[:, k],
+                    e_psi=track.e_psi[:, k],
+                    e_psi_dot=track.e_psi_dot[:, k],
+                ),
+                exit_time=exit_times[k],
+                n_steps=int(n_steps[k]),
+                scenario=scn,
+            )
+        )
+    return out
 
 
-__all__ = ["SimulationResult", "build_result"]
+__all__ = ["SimulationResult", "build_result", "build_results"]

@@ -17,10 +17,10 @@ from ._typing import FloatArray, JacobiKind
 from .control_law import MotionSource, VehicleLaw, VehicleMotionSource
 from .envelope import Envelope
 from .exceptions import ParameterError, require_finite
-from .integrators import ATOL, RTOL, BatchSolution, EventFn, dopri5, rk45_reference
+from .integrators import ATOL, RTOL, BatchSolution, EventBound, EventFn, dopri5, rk45_reference
 from .postprocess import envelope_margin, ground_velocity
 from .reference import FleetReference, Motion
-from .results import SimulationResult, build_result
+from .results import SimulationResult, build_results
 from .vehicle import VehicleParams, rhs
 
 Method = Literal["dopri", "rk45"]
@@ -209,9 +209,10 @@ def fleet_derivative(
     law: VehicleLaw, plant: VehicleParams, current: FloatArray, states: FloatArray, motion: Motion
 ) -> FloatArray:
     """Closed-loop ``d/dt`` of states ``(..., N, 6)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s)."""
-    p_dot = ground_velocity(states, current)
-    d = rhs(plant, states, law.forces(states, p_dot, motion))
-    d[..., 0:2] += current
+    cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))  # shared by the law and the plant
+    p_dot = ground_velocity(states, current, cs)
+    d = rhs(plant, states, law.forces(states, p_dot, motion, cs), cs)
+    d[..., 0:2] = p_dot
     return d
 
 
@@ -257,6 +258,22 @@ def batch_system(
         return margin
 
     return f_scenario, (None if env is None else ev_scenario)
+
+
+def envelope_bound(envelope: Envelope, n: int) -> EventBound:
+    """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
+
+    Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
+    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
+    vehicles per system (1 for vehicle systems).
+    """
+
+    def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
+        s, rad = y.reshape(*y.shape[:-1], n, 6), radius.reshape(*radius.shape[:-1], n, 6)
+        low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
+        return low
+
+    return bound
 
 
 def simulate_batch(
@@ -305,18 +322,17 @@ def simulate_batch(
     elif method == "dopri":
         f, event = batch_system(batch, systems)
         y0 = batch.initial.reshape(n_s * n, 6) if systems == "vehicle" else batch.initial.reshape(n_s, 6 * n)
-        sol = dopri5(f, span, y0, first.times, rtol=rtol, atol=atol, event=event, subdivisions=subdivisions)
+        screen = None if first.envelope is None else envelope_bound(first.envelope, 1 if systems == "vehicle" else n)
+        sol = dopri5(
+            f, span, y0, first.times, rtol=rtol, atol=atol, event=event, subdivisions=subdivisions, event_bound=screen
+        )
     else:
         raise ParameterError(f"method must be 'dopri', or 'rk45' with scenario systems, got {method!r}/{systems!r}")
     states = sol.y.reshape(sol.t.size, n_s, n, 6)
     exits = sol.event_time.reshape(n_s, -1)
     steps = sol.n_steps.reshape(n_s, -1).max(axis=1)
-    out = []
-    for s, scn in enumerate(batch.scenarios):
-        exit_s = exits[s][~np.isnan(exits[s])]
-        exit_time = float(exit_s.min()) if exit_s.size else None
-        out.append(build_result(scn, sol.t, states[:, s], exit_time, int(steps[s])))
-    return out
+    first_exits = [float(e[~np.isnan(e)].min()) if np.any(~np.isnan(e)) else None for e in exits]
+    return build_results(batch.scenarios, sol.t, states, first_exits, [int(x) for x in steps])
 
 
 def simulate(

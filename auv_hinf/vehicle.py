@@ -237,7 +237,9 @@ def input_matrix(params: VehicleParams, psi: ArrayLike) -> FloatArray:
     return rotation(psi) @ np.diag([1.0 / params.m11, 1.0 / params.m22])
 
 
-def rhs(params: VehicleParams, state: ArrayLike, tau: ArrayLike) -> FloatArray:
+def rhs(
+    params: VehicleParams, state: ArrayLike, tau: ArrayLike, cs: tuple[FloatArray, FloatArray] | None = None
+) -> FloatArray:
     """Time derivative of vehicle states (eqs. 1-6), vectorised over leading axes.
 
     Parameters
@@ -248,6 +250,8 @@ def rhs(params: VehicleParams, state: ArrayLike, tau: ArrayLike) -> FloatArray:
         ``[x, y, psi, u, v, r]`` in m, m, rad, m/s, m/s, rad/s.
     tau : array_like, shape (..., 3)
         ``[tau_x, tau_y, tau_psi]`` in N, N, N m (body frame).
+    cs : tuple of ndarray, optional
+        ``(cos psi, sin psi)`` when the caller has them already.
 
     Returns
     -------
@@ -258,7 +262,7 @@ def rhs(params: VehicleParams, state: ArrayLike, tau: ArrayLike) -> FloatArray:
     f = np.asarray(tau, dtype=float)
     psi, u, v, r = s[..., 2], s[..., 3], s[..., 4], s[..., 5]
     d11, d22, d33 = params.damping(u, v, r)
-    c, sn = np.cos(psi), np.sin(psi)
+    c, sn = (np.cos(psi), np.sin(psi)) if cs is None else cs
     m11, m22, m33 = params.m11, params.m22, params.m33
     return np.stack(
         [
