@@ -28,6 +28,9 @@ import numpy as np
 from ._typing import FloatArray
 from .closed_loop import ClosedLoopCertificate
 from .config import FormationConfig
+from .exceptions import ParameterError
+from .lmi.robust import Ellipsoid
+from .robust import RobustCertificate
 from .robust_summary import robust_summary
 
 #: The start sets are shrunk by this relative factor so that round-off in building the initial
@@ -37,37 +40,64 @@ START_SHRINK = 1e-9
 
 @dataclass(frozen=True)
 class RobustStart:
-    """Start sets and bounds of a covering robust certificate, per vehicle.
+    """A covering robust certificate as a campaign samples from it and checks against it.
 
     Attributes
     ----------
-    position : ndarray, shape (2, 2)
-        ``P`` of the position ellipsoid (per unit disturbance) on ``[e~, e']`` per axis.
-    position_level : float
-        Its level ``d`` (m/s^2): the set is ``V <= d^2``.
-    heading : ndarray, shape (2, 2)
-        ``Q`` of the heading ellipsoid on ``[e_psi, e_psi']``.
-    heading_level : float
-        Its level ``h`` (rad/s^2).
-    shift_gain : float
-        ``-lam/(l k1)`` (s): the shifted equilibrium is ``e_c = shift_gain * current`` (m).
-    bounds : ndarray, shape (4,)
-        Certified per-vehicle bounds of position (m), velocity (m/s), heading (rad) and yaw-rate
-        (rad/s) errors.
+    certificate : RobustCertificate
+        Covers the declared box and current: it has both invariant sets and the bounds.
     declared : tuple of int
         Indices of the box parameters with a non-degenerate range (the vertex bits).
-    decay_rate : float
-        Certified decay rate of the robust Lyapunov functions towards the invariant sets (1/s).
     """
 
-    position: FloatArray
-    position_level: float
-    heading: FloatArray
-    heading_level: float
-    shift_gain: float
-    bounds: FloatArray
+    certificate: RobustCertificate
     declared: tuple[int, ...]
-    decay_rate: float
+
+    def _sets(self) -> tuple[Ellipsoid, Ellipsoid, float, float]:
+        c = self.certificate
+        pos, head, hp, d = c.position_ellipsoid, c.heading_ellipsoid, c.heading, c.position_disturbance
+        if pos is None or head is None or hp is None or d is None:  # pragma: no cover - a covering one has them
+            raise ParameterError("a robust campaign needs a certificate with both invariant sets")
+        return pos, head, float(d), float(hp.disturbance)
+
+    @property
+    def position(self) -> FloatArray:
+        """``P`` of the position ellipsoid (per unit disturbance) on ``[e~, e']`` per axis."""
+        return self._sets()[0].matrix
+
+    @property
+    def position_level(self) -> float:
+        """Its level ``d`` (m/s^2): the set is ``V <= d^2``."""
+        return self._sets()[2]
+
+    @property
+    def heading(self) -> FloatArray:
+        """``Q`` of the heading ellipsoid on ``[e_psi, e_psi']``."""
+        return self._sets()[1].matrix
+
+    @property
+    def heading_level(self) -> float:
+        """Its level ``h`` (rad/s^2)."""
+        return self._sets()[3]
+
+    @property
+    def shift_gain(self) -> float:
+        """``-lam/(l k1)`` (s): the shifted equilibrium is ``e_c = shift_gain * current`` (m)."""
+        c = self.certificate
+        return -c.lam / (c.gain_centre * c.gains.k1)
+
+    @property
+    def bounds(self) -> FloatArray:
+        """Certified per-vehicle bounds of position (m), velocity (m/s), heading (rad), yaw rate (rad/s)."""
+        b = self.certificate.bounds
+        if b is None:  # pragma: no cover - a covering certificate has bounds
+            raise ParameterError("a robust campaign needs a certificate with bounds")
+        return np.array([b.position, b.velocity, b.heading, b.yaw_rate])
+
+    @property
+    def decay_rate(self) -> float:
+        """Certified decay rate of the robust Lyapunov functions towards the invariant sets (1/s)."""
+        return float(self.certificate.decay_rate or 0.0)
 
     @property
     def vertices(self) -> int:
@@ -81,22 +111,19 @@ class RobustStart:
 
         Returns ``e (n, 2)`` m, ``e' (n, 2)`` m/s, ``e_psi (n,)`` rad, ``e_psi' (n,)`` rad/s.
         """
+        pos, head, d, h = self._sets()
         scale = 1.0 - START_SHRINK
-        w = _ball(rng, n, 4) * (self.position_level * scale)  # (n, 4): [x-axis pair, y-axis pair]
-        li = np.linalg.inv(np.linalg.cholesky(self.position).T)  # z = L^-T w gives z^T P z = |w|^2
+        w = _ball(rng, n, 4) * (d * scale)  # (n, 4): [x-axis pair, y-axis pair]
+        li = np.linalg.inv(np.linalg.cholesky(pos.matrix).T)  # z = L^-T w gives z^T P z = |w|^2
         xa, ya = w[:, :2] @ li.T, w[:, 2:] @ li.T
-        e = np.column_stack([xa[:, 0], ya[:, 0]]) + self.shift_gain * np.asarray(current, dtype=float)
+        e = np.column_stack([xa[:, 0], ya[:, 0]]) + self.certificate.equilibrium_shift(current)
         de = np.column_stack([xa[:, 1], ya[:, 1]])
-        h = _ball(rng, n, 2) * (self.heading_level * scale) @ np.linalg.inv(np.linalg.cholesky(self.heading).T).T
-        return e, de, h[:, 0], h[:, 1]
+        hv = _ball(rng, n, 2) * (h * scale) @ np.linalg.inv(np.linalg.cholesky(head.matrix).T).T
+        return e, de, hv[:, 0], hv[:, 1]
 
     def inside(self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: FloatArray) -> bool:
         """Every vehicle's start errors lie in both certified sets (the test of :meth:`sample_errors`)."""
-        et = e - self.shift_gain * np.asarray(current, dtype=float)
-        p, q = self.position, self.heading
-        vp = p[0, 0] * (et**2).sum(-1) + 2 * p[0, 1] * (et * de).sum(-1) + p[1, 1] * (de**2).sum(-1)
-        vh = q[0, 0] * epsi**2 + 2 * q[0, 1] * epsi * depsi + q[1, 1] * depsi**2
-        return bool(np.all(vp <= self.position_level**2) and np.all(vh <= self.heading_level**2))
+        return self.certificate.start_inside(e, de, epsi, depsi, current)
 
     def vertex(self, box: FloatArray, index: int) -> FloatArray:
         """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)): bit ``k`` picks the upper end."""
@@ -129,26 +156,8 @@ def robust_start(
     if not summ.covers or c is None or c.bounds is None:
         why = "; ".join(summ.to_dict()["reasons"]) or "the robust certificate does not cover the declared box"
         return None, why
-    pos, head, hp = c.position_ellipsoid, c.heading_ellipsoid, c.heading
-    if (
-        pos is None or head is None or hp is None or c.position_disturbance is None
-    ):  # pragma: no cover - covers implies them
-        return None, "the robust certificate has no invariant set"
-    b = c.bounds
     declared = tuple(k for k in range(box.shape[0]) if box[k, 0] < box[k, 1])
-    return (
-        RobustStart(
-            position=pos.matrix,
-            position_level=float(c.position_disturbance),
-            heading=head.matrix,
-            heading_level=float(hp.disturbance),
-            shift_gain=-c.lam / (c.gain_centre * c.gains.k1),
-            bounds=np.array([b.position, b.velocity, b.heading, b.yaw_rate]),
-            declared=declared,
-            decay_rate=float(c.decay_rate or 0.0),
-        ),
-        None,
-    )
+    return RobustStart(c, declared), None
 
 
 def vertex_current(rng: np.random.Generator, speed: float) -> FloatArray:

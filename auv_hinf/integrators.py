@@ -258,22 +258,16 @@ def dopri5(
             raise SolverError(f"step size below round-off near t = {float(t[active].min()):.6g} s")
         n_rej += active & ~accept
         was_rejected = active & ~accept
-        if accept.all():  # the common case: no fancy-index copies of the stages
-            q = _coefficients(k)
-            b = np.arange(n_sys)
-            _sample(out, te, next_idx, b, t, step, t_new, y, q)
-            if event is not None:
-                _events(event, event_time, b, t, step, y, q, subdivisions, event_bound)
-            t, y, f = t_new, y_new, k[6].copy()
-            n_steps += 1
-        elif accept.any():
+        if accept.any():
             b = np.flatnonzero(accept)
-            q = _coefficients(k[:, b])
-            _sample(out, te, next_idx, b, t[b], step[b], t_new[b], y[b], q)
+            # when every system accepts (the common case) a slice selects them without copying the stages
+            sel: slice | NDArray[np.int_] = slice(None) if b.size == n_sys else b
+            q = _coefficients(k[:, sel])
+            _sample(out, te, next_idx, b, t[sel], step[sel], t_new[sel], y[sel], q)
             if event is not None:
-                _events(event, event_time, b, t[b], step[b], y[b], q, subdivisions, event_bound)
-            t[b], y[b], f[b] = t_new[b], y_new[b], k[6, b]
-            n_steps[b] += 1
+                _events(event, event_time, b, t[sel], step[sel], y[sel], q, subdivisions, event_bound)
+            t[sel], y[sel], f[sel] = t_new[sel], y_new[sel], k[6, sel]
+            n_steps[sel] += 1
     else:
         raise SolverError(f"dopri5 did not reach t = {t1} s within {max_steps} steps")
     return BatchSolution(t=te, y=out, event_time=event_time, n_steps=n_steps, n_rejected=n_rej)

@@ -46,8 +46,7 @@ def jacobi_sigma(
     r: ArrayLike,
 ) -> FloatArray:
     """``||Phi blockdiag(G_i - lam I) Phi^-1||_2`` at stacked states ``(..., N)``."""
-    g = inertial_block(params, psi, u, v, r) - lam * np.eye(2)
-    a = transform.matrix @ block_diag_stack(g) @ transform.matrix_inv
+    a = transform.matrix @ block_diag_stack(_shifted_blocks(params, lam, psi, u, v, r)) @ transform.matrix_inv
     return np.linalg.svd(a, compute_uv=False)[..., 0]
 
 

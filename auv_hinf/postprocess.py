@@ -106,9 +106,13 @@ class FormationErrors:
 
 
 def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind = "paper") -> FormationErrors:
-    """:class:`FormationErrors` of positions ``(T, N, 2)`` against target positions (m)."""
+    """:class:`FormationErrors` of positions ``(T, N, 2)`` against target positions (m).
+
+    Leading axes broadcast: positions ``(T, S, N, 2)`` of ``S`` scenarios against one target
+    ``(T, 1, N, 2)`` transform the target once (``desired_center`` then has the target's shape).
+    """
     jac = jacobi_coordinates(positions, kind)
-    jac_d = jacobi_coordinates(np.broadcast_to(target, positions.shape), kind)
+    jac_d = jacobi_coordinates(target, kind)
     diff = jac - jac_d
     return FormationErrors(
         jacobi=jac,

@@ -22,7 +22,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ._typing import FloatArray
 from .closed_loop import ThrustBounds, thrust_bounds
 from .envelope import Envelope
 from .exceptions import AuvHinfError
@@ -135,6 +137,33 @@ class RobustCertificate:
     thrust: ThrustBounds | None = None
     reasons: tuple[str, ...] = field(default=())
     method: str = METHOD
+
+    def equilibrium_shift(self, current: ArrayLike) -> FloatArray:
+        """``e_c = -lam c/(l k1)`` (m): the current-shifted equilibrium the position ellipsoid is about.
+
+        ``current`` is the inertial current (m/s), shape ``(..., 2)``.
+        """
+        out: FloatArray = -self.lam * np.asarray(current, dtype=float) / (self.gain_centre * self.gains.k1)
+        return out
+
+    def start_inside(
+        self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: ArrayLike
+    ) -> bool:
+        """Every vehicle's start errors lie in both certified sets (False when there are none).
+
+        ``e (N, 2)`` m and ``de (N, 2)`` m/s are the position and ground-velocity errors,
+        ``epsi``, ``depsi`` ``(N,)`` the heading (rad) and yaw-rate (rad/s) errors, ``current``
+        the inertial current (m/s). The sets are ``V(e - e_c, e') <= d^2`` (position ellipsoid
+        on each axis pair) and ``W(e_psi, e_psi') <= h^2``.
+        """
+        pos, head, hp, d = self.position_ellipsoid, self.heading_ellipsoid, self.heading, self.position_disturbance
+        if pos is None or head is None or hp is None or d is None:
+            return False
+        et = e - self.equilibrium_shift(current)
+        p, q = pos.matrix, head.matrix
+        vp = p[0, 0] * (et**2).sum(-1) + 2 * p[0, 1] * (et * de).sum(-1) + p[1, 1] * (de**2).sum(-1)
+        vh = q[0, 0] * epsi**2 + 2 * q[0, 1] * epsi * depsi + q[1, 1] * depsi**2
+        return bool(np.all(vp <= d**2) and np.all(vh <= hp.disturbance**2))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe summary."""

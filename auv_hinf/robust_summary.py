@@ -229,21 +229,6 @@ def _in_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
     return None
 
 
-def _start_inside(cert: RobustCertificate, fleet: FleetReference, initial: FloatArray, current: FloatArray) -> bool:
-    """Every vehicle's initial errors lie in both certified ellipsoids (shifted by the current)."""
-    pos, head = cert.position_ellipsoid, cert.heading_ellipsoid
-    if pos is None or head is None or cert.position_disturbance is None or cert.heading is None:
-        return False
-    e, de, ep, dep = initial_errors(fleet, initial, (float(current[0]), float(current[1])))
-    lc = cert.gain_centre
-    shift = -cert.lam * np.asarray(current, dtype=float) / (lc * cert.gains.k1)
-    et = e - shift
-    p, q = pos.matrix, head.matrix
-    vp = p[0, 0] * (et**2).sum(-1) + 2 * p[0, 1] * (et * de).sum(-1) + p[1, 1] * (de**2).sum(-1)
-    vh = q[0, 0] * ep**2 + 2 * q[0, 1] * ep * dep + q[1, 1] * dep**2
-    return bool(np.all(vp <= cert.position_disturbance**2) and np.all(vh <= cert.heading.disturbance**2))
-
-
 def check_robust_run(cfg: FormationConfig, fleet: FleetReference, initial: FloatArray) -> RobustRunCheck:
     """Is the run of ``cfg`` tracking ``fleet`` from ``initial`` covered by the robust certificate?
 
@@ -275,7 +260,8 @@ def check_robust_run(cfg: FormationConfig, fleet: FleetReference, initial: Float
         return RobustRunCheck(False, None, "; ".join(cert.reasons) or "the robust certificate does not cover")
     b = cert.bounds
     bounds = {"position": b.position, "velocity": b.velocity, "heading": b.heading, "yaw_rate": b.yaw_rate}
-    if not _start_inside(cert, fleet, initial, cur):
+    e, de, epsi, depsi = initial_errors(fleet, initial, (float(cur[0]), float(cur[1])))
+    if not cert.start_inside(e, de, epsi, depsi, cur):
         return RobustRunCheck(False, bounds, "the start is outside the certified invariant set")
     return RobustRunCheck(True, bounds, "covered: plant and current declared, start inside the certified set")
 
