@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from ._typing import FloatArray
 from .campaign_robust import RobustStart, robust_start, vertex_current
@@ -23,10 +24,11 @@ from .coverage import initial_errors
 from .envelope import Envelope
 from .exceptions import ParameterError
 from .integrators import ATOL, RTOL
-from .plan import closed_loop_for, design_gains, formation_offsets, measured_decay_rate, mission_reference
+from .plan import closed_loop_for, design_gains, formation_offsets, mission_reference
 from .reference import FleetReference
 from .region import start_bounds
-from .simulation import Scenario, ScenarioBatch, simulate_batch
+from .run_metrics import ErrorSink, RunMetrics
+from .simulation import Scenario, ScenarioBatch, first_exits, integrate_batch
 from .vehicle import VehicleParams
 
 #: Plant coefficients that the ``[uncertainty]`` box may scale, in sampling order.
@@ -35,12 +37,19 @@ COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad
 ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
 #: Output sample interval (s): the measured sup of the errors is taken on these samples.
 SAMPLE_INTERVAL = 0.1
-#: Default chunk: at most this many scenarios per batch (the per-step Python overhead of the
-#: batched integrator is amortised over the chunk; beyond ~1000 the numpy work dominates) ...
-MAX_CHUNK = 1024
-#: ... and at most this many bytes of sampled states ``(T, S, N, 6)`` per chunk (the
-#: post-processing holds a few arrays of that size: about 1 GB per worker at this cap).
+#: Default chunk: at most this many scenarios per batch. The per-step Python overhead of the
+#: batched integrator is amortised over the chunk; measured on the paper triangle (one core,
+#: 100 s runs): 1024 runs 40k, 2048 runs 48k, 4096 runs 56k vehicle-seconds per second, and
+#: 8192 no faster than 4096 (50 s runs: 45.9k against 45.7k): beyond it the numpy work
+#: dominates and larger chunks only coarsen the progress bar ...
+MAX_CHUNK = 4096
+#: ... and at most this many bytes of working set per chunk. The samples are not stored (the
+#: metrics are accumulated as they are produced, :class:`~auv_hinf.run_metrics.ErrorSink`), so
+#: the working set is the integrator's stages and the right-hand side's temporaries: measured
+#: peak about 49 arrays of the batch state ``(S, 6 N)``, budgeted as :data:`WORKING_ARRAYS`.
 CHUNK_BYTES = 256 * 2**20
+#: Arrays of the batch state's size held at the peak of a chunk (measured 49, with margin).
+WORKING_ARRAYS = 64
 #: A measured error counts as inside its certified bound ``b`` if it is ``<= b (1 + tol) + tol``
 #: with ``tol`` = this factor times the integrator's tolerance: the trajectory is known to
 #: about rtol/atol = 1e-8, so a larger excess is a real violation, not integration noise.
@@ -180,6 +189,21 @@ def _plant(setup: CampaignSetup, mult: FloatArray) -> VehicleParams:
     return VehicleParams(**{k: getattr(base, k) * float(m) for k, m in zip(COEFFICIENTS, mult)}, name="sampled")
 
 
+def run_scenario(setup: CampaignSetup, index: int, inputs: RunInputs) -> Scenario:
+    """The scenario of run ``index`` with its sampled ``inputs`` (see :func:`sample_run`)."""
+    return Scenario(
+        law=setup.law,
+        reference=setup.reference,
+        plant=_plant(setup, inputs.multipliers),
+        initial=initial_state(setup, inputs),
+        horizon=setup.horizon,
+        current=(float(inputs.current[0]), float(inputs.current[1])),
+        envelope=setup.envelope,
+        samples=setup.samples,
+        name=f"{setup.name}[{index}]",
+    )
+
+
 def run_chunk(setup: CampaignSetup, lo: int, hi: int) -> pd.DataFrame:
     """Sample, integrate (one batch) and measure runs ``lo .. hi - 1``: one row per run.
 
@@ -192,75 +216,66 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int) -> pd.DataFrame:
     ``measured_decay_rate`` (1/s, NaN if none),
     ``bound_<kind>_error`` (largest per-start certified bound), ``ratio_<kind>_error``
     (largest measured / certified over the vehicles), ``inside_bounds`` (NA when no
-    certificate applies: see :mod:`auv_hinf.campaign_report`) and ``n_steps``. ``<kind>`` is one of :data:`ERROR_KINDS`
-    (m, m/s, rad, rad/s).
+    certificate applies: see :mod:`auv_hinf.campaign_report`) and ``n_steps``. ``<kind>`` is one
+    of :data:`ERROR_KINDS` (m, m/s, rad, rad/s).
+
+    The samples are not stored: :class:`~auv_hinf.run_metrics.ErrorSink` folds each one into
+    the metrics as the integrator produces it (the same numbers as post-processing stored
+    samples, bit for bit; ``tests/test_run_metrics.py``).
     """
     inputs = [sample_run(setup, i) for i in range(lo, hi)]
-    scns = tuple(
-        Scenario(
-            law=setup.law,
-            reference=setup.reference,
-            plant=_plant(setup, x.multipliers),
-            initial=initial_state(setup, x),
-            horizon=setup.horizon,
-            current=(float(x.current[0]), float(x.current[1])),
-            envelope=setup.envelope,
-            samples=setup.samples,
-            name=f"{setup.name}[{i}]",
-        )
-        for i, x in zip(range(lo, hi), inputs)
+    batch = ScenarioBatch(tuple(run_scenario(setup, i, x) for i, x in zip(range(lo, hi), inputs)))
+    cert = setup.certificate
+    sink = ErrorSink(
+        setup.reference, batch.scenarios[0].times, batch.current, setup.n, cert.position.matrix, cert.heading.matrix
     )
-    results = simulate_batch(ScenarioBatch(scns))
-    rows = []
-    for i, x, res in zip(range(lo, hi), inputs, results):
-        rows.append(_row(setup, i, x, res))
-    return pd.DataFrame(rows)
+    sol = integrate_batch(batch, sink=sink)
+    return _rows(setup, lo, inputs, batch, sink.result(), first_exits(sol, hi - lo), sol.n_steps)
 
 
-def _row(setup: CampaignSetup, index: int, x: RunInputs, res: Any) -> dict[str, Any]:
-    scn = res.scenario
-    e0 = initial_errors(setup.reference, scn.initial, scn.current)
-    tr = res.tracking
-    measured = np.stack(
-        [
-            np.linalg.norm(tr.e, axis=-1).max(0),
-            np.linalg.norm(tr.e_dot, axis=-1).max(0),
-            np.abs(tr.e_psi).max(0),
-            np.abs(tr.e_psi_dot).max(0),
-        ],
-        axis=-1,
-    )  # (N, 4)
-    stayed = res.exit_time is None
-    nominal = bool(np.all(x.multipliers == 1.0) and not np.any(x.current))
+def _rows(
+    setup: CampaignSetup,
+    lo: int,
+    inputs: list[RunInputs],
+    batch: ScenarioBatch,
+    met: RunMetrics,
+    exits: list[float | None],
+    n_steps: NDArray[np.int_],
+) -> pd.DataFrame:
+    """The table of :func:`run_chunk`, computed for all runs of the chunk at once."""
+    e0 = initial_errors(setup.reference, batch.initial, batch.current[:, None, :])
+    measured = met.max_errors  # (S, N, 4)
+    mult = np.array([x.multipliers for x in inputs])
+    nominal = np.all(mult == 1.0, axis=1) & ~np.any(batch.current != 0.0, axis=1)
     if setup.robust is not None:
         bound = np.broadcast_to(setup.robust.bounds, measured.shape)
-        applies = True
+        applies = np.ones(len(inputs), dtype=bool)
     else:
-        bound = start_bounds(setup.p2, setup.q, *e0)  # (N, 4)
-        applies = nominal and setup.certificate_applies
-    row: dict[str, Any] = {"run": index, "seed": setup.seed}
-    row.update({f"{k}_mult": float(m) for k, m in zip(COEFFICIENTS, x.multipliers)})
-    row.update({"current_x": float(x.current[0]), "current_y": float(x.current[1]), "nominal": nominal})
+        bound = start_bounds(setup.p2, setup.q, *e0)  # (S, N, 4)
+        applies = nominal & setup.certificate_applies
+    stayed = np.array([e is None for e in exits])
     starts = (np.linalg.norm(e0[0], axis=-1), np.linalg.norm(e0[1], axis=-1), np.abs(e0[2]), np.abs(e0[3]))
-    row.update({f"start_{k}_error": float(s.max()) for k, s in zip(ERROR_KINDS, starts)})
-    row.update({"stayed_in_envelope": stayed, "first_exit_time": math.nan if stayed else float(res.exit_time)})
-    row.update({f"max_{k}_error": float(m) for k, m in zip(ERROR_KINDS, measured.max(0))})
-    row["final_position_error"] = float(res.mission_error[-1].max())
-    tail = np.linalg.norm(tr.e[tr.e.shape[0] // 2 :], axis=-1).max(0)  # (N,): sup over the second half
-    row["tail_position_error"] = float(tail.max())
-    rate = measured_decay_rate(res, setup.certificate)
-    row["measured_decay_rate"] = math.nan if rate is None else float(rate)
-    row.update({f"bound_{k}_error": float(b) for k, b in zip(ERROR_KINDS, bound.max(0))})
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(bound > 0, measured / bound, np.where(measured > 0, math.inf, 0.0))
-    row.update({f"ratio_{k}_error": float(r) for k, r in zip(ERROR_KINDS, ratio.max(0))})
-    with np.errstate(divide="ignore", invalid="ignore"):
-        row["ratio_tail_position_error"] = float(np.max(np.where(bound[:, 0] > 0, tail / bound[:, 0], math.inf)))
+        tail = np.where(bound[..., 0] > 0, met.tail_position / bound[..., 0], math.inf)
     tol = BOUND_SLACK * max(RTOL, ATOL)
-    inside = bool(np.all(measured <= bound * (1.0 + tol) + tol)) and stayed
-    row["inside_bounds"] = inside if applies else pd.NA
-    row["n_steps"] = int(res.n_steps)
-    return row
+    inside = np.all(measured <= bound * (1.0 + tol) + tol, axis=(1, 2)) & stayed
+    cols: dict[str, Any] = {"run": np.arange(lo, lo + len(inputs)), "seed": setup.seed}
+    cols.update({f"{k}_mult": mult[:, j] for j, k in enumerate(COEFFICIENTS)})
+    cols.update({"current_x": batch.current[:, 0], "current_y": batch.current[:, 1], "nominal": nominal})
+    cols.update({f"start_{k}_error": x.max(axis=1) for k, x in zip(ERROR_KINDS, starts)})
+    cols["stayed_in_envelope"] = stayed
+    cols["first_exit_time"] = np.array([math.nan if e is None else e for e in exits])
+    cols.update({f"max_{k}_error": measured[..., j].max(axis=1) for j, k in enumerate(ERROR_KINDS)})
+    cols["final_position_error"] = met.final_position.max(axis=1)
+    cols["tail_position_error"] = met.tail_position.max(axis=1)
+    cols["measured_decay_rate"] = met.decay_rate
+    cols.update({f"bound_{k}_error": bound[..., j].max(axis=1) for j, k in enumerate(ERROR_KINDS)})
+    cols.update({f"ratio_{k}_error": ratio[..., j].max(axis=1) for j, k in enumerate(ERROR_KINDS)})
+    cols["ratio_tail_position_error"] = tail.max(axis=1)
+    cols["inside_bounds"] = [bool(x) if a else pd.NA for x, a in zip(inside, applies)]
+    cols["n_steps"] = n_steps.astype(np.int64)
+    return pd.DataFrame(cols)
 
 
 def prepare(
@@ -318,8 +333,8 @@ def prepare(
 
 
 def default_chunk(setup: CampaignSetup) -> int:
-    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the samples would exceed :data:`CHUNK_BYTES`."""
-    per_run = setup.samples * setup.n * 6 * 8
+    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the working set would exceed :data:`CHUNK_BYTES`."""
+    per_run = WORKING_ARRAYS * setup.n * 6 * 8
     return max(1, min(MAX_CHUNK, CHUNK_BYTES // per_run))
 
 
@@ -335,6 +350,7 @@ __all__ = [
     "ERROR_KINDS",
     "MAX_CHUNK",
     "SAMPLE_INTERVAL",
+    "WORKING_ARRAYS",
     "CampaignSetup",
     "RunInputs",
     "chunks",
@@ -342,5 +358,6 @@ __all__ = [
     "initial_state",
     "prepare",
     "run_chunk",
+    "run_scenario",
     "sample_run",
 ]

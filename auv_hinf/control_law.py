@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._typing import FloatArray, OrientationLaw
+from .arrays import stack_last
 from .exceptions import DesignError, ParameterError, require_finite
 from .formation import JacobiTransform
 from .paths import MissionReference, SineReference, heading_from_velocity
@@ -224,7 +225,7 @@ class VehicleLaw:
         bx = -d11 / par.m11 * vx + dm / par.m11 * vy  # eq. (8) body block times R^T v_d
         by = dm / par.m22 * vx - d22 / par.m22 * vy
         tau_psi = heading_torque(par, self.k_psi, self.orientation, states, motion.psi, motion.r, motion.r_dot)
-        return np.stack([par.m11 * (wx - bx), par.m22 * (wy - by), tau_psi], -1)
+        return stack_last([par.m11 * (wx - bx), par.m22 * (wy - by), tau_psi])
 
     def forces(
         self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None

@@ -97,7 +97,7 @@ class Coverage:
 
 
 def initial_errors(
-    fleet: FleetReference, initial: ArrayLike, current: tuple[float, float] = (0.0, 0.0)
+    fleet: FleetReference, initial: ArrayLike, current: ArrayLike = (0.0, 0.0)
 ) -> tuple[FloatArray, ...]:
     """Errors of each vehicle at ``t = 0`` against ``fleet``.
 
@@ -105,24 +105,26 @@ def initial_errors(
     ----------
     fleet : FleetReference
         The reference tracked.
-    initial : array_like, shape (N, 6)
-        ``[x, y, psi, u, v, r]`` per vehicle (m, m, rad, m/s, m/s body frame, rad/s).
-    current : tuple of float
-        Water current (m/s, inertial); the ground velocity is ``R(psi) [u, v] + current``.
+    initial : array_like, shape (..., N, 6)
+        ``[x, y, psi, u, v, r]`` per vehicle (m, m, rad, m/s, m/s body frame, rad/s); leading
+        axes are independent starts (scenarios).
+    current : array_like
+        Water current (m/s, inertial), broadcastable to ``(..., N, 2)``; the ground velocity
+        is ``R(psi) [u, v] + current``.
 
     Returns
     -------
-    e, de : ndarray, shape (N, 2)
+    e, de : ndarray, shape (..., N, 2)
         Position (m) and ground-velocity (m/s) errors, inertial frame.
-    epsi, depsi : ndarray, shape (N,)
+    epsi, depsi : ndarray, shape (..., N)
         Heading error wrapped to (-pi, pi] (rad) and yaw-rate error (rad/s).
     """
     init = np.asarray(initial, dtype=float)
     m = fleet.motion(0.0)
-    psi, u, v, r = init[:, 2], init[:, 3], init[:, 4], init[:, 5]
+    psi, u, v, r = init[..., 2], init[..., 3], init[..., 4], init[..., 5]
     c, s = np.cos(psi), np.sin(psi)
     vel = np.stack([c * u - s * v, s * u + c * v], axis=-1) + np.asarray(current, dtype=float)
-    return init[:, :2] - m.p, vel - m.v, wrap_angle(psi - m.psi), r - m.r
+    return init[..., :2] - m.p, vel - m.v, wrap_angle(psi - m.psi), r - m.r
 
 
 def _merge_margins(parts: list[Margins]) -> Margins:

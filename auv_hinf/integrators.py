@@ -7,8 +7,8 @@ and the right-hand side ``rhs(t, y)`` takes per-system times ``t`` of shape ``(B
   (Dormand-Prince 5(4), FSAL, the same tableau, error norm and step control as scipy's
   ``RK45``). Outputs are sampled from the continuous extension, and the first time an
   event function turns negative is located by root finding on that interpolant.
-* :func:`rk45_reference` runs scipy's ``solve_ivp`` (RK45) on one system; it is the
-  reference the vectorised integrator is tested against.
+* :func:`~auv_hinf.rk45.rk45_reference` (its own module) runs scipy's ``solve_ivp`` on one
+  system with the same interface; it is the reference this integrator is tested against.
 
 Limitation of the event location: the event function is checked on ``subdivisions``
 equally spaced points per step; an excursion that enters and leaves between two
@@ -19,10 +19,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from ._typing import FloatArray
@@ -41,6 +41,10 @@ EventFn = Callable[[FloatArray, FloatArray], FloatArray]
 #: ``|y' - y| <= radius`` componentwise. Steps whose bound is positive cannot cross zero and
 #: skip the sub-grid check.
 EventBound = Callable[[FloatArray, FloatArray], FloatArray]
+#: Receiver of output samples: ``(sample indices (m,), systems (m,), states (m, d)) -> None``.
+#: One call holds at most one sample per system, and each system's samples arrive in
+#: increasing time order.
+SampleSink = Callable[[NDArray[np.int_], NDArray[np.int_], FloatArray], None]
 
 # Dormand-Prince 5(4) tableau, error weights and dense-output polynomial (Hairer, Norsett &
 # Wanner, Solving ODEs I, Sec. II.5-6; Shampine's continuous extension, as in scipy's RK45).
@@ -78,8 +82,8 @@ class BatchSolution:
     ----------
     t : ndarray, shape (T,)
         Output times (s).
-    y : ndarray, shape (T, B, d)
-        States at the output times.
+    y : ndarray, shape (T, B, d), or None
+        States at the output times; None when they went to a sink.
     event_time : ndarray, shape (B,)
         First time (s) the event function is negative; NaN if never (or no event given).
     n_steps, n_rejected : ndarray of int, shape (B,)
@@ -87,7 +91,7 @@ class BatchSolution:
     """
 
     t: FloatArray
-    y: FloatArray
+    y: FloatArray | None
     event_time: FloatArray
     n_steps: NDArray[np.int_]
     n_rejected: NDArray[np.int_]
@@ -98,7 +102,7 @@ def _rms(x: FloatArray) -> FloatArray:
     return out
 
 
-def _check(y0: FloatArray, t_span: tuple[float, float], t_eval: FloatArray) -> tuple[FloatArray, FloatArray]:
+def check_span(y0: FloatArray, t_span: tuple[float, float], t_eval: FloatArray) -> tuple[FloatArray, FloatArray]:
     y = np.array(y0, dtype=float)
     te = np.asarray(t_eval, dtype=float)
     t0, t1 = t_span
@@ -180,6 +184,7 @@ def dopri5(
     subdivisions: int = 8,
     max_steps: int = 1_000_000,
     event_bound: EventBound | None = None,
+    sink: SampleSink | None = None,
 ) -> BatchSolution:
     """Integrate ``B`` independent systems with per-system Dormand-Prince 5(4) steps.
 
@@ -207,6 +212,10 @@ def dopri5(
         the interpolant stays within ``h (|q_0| + |q_1| + |q_2| + |q_3|)`` of the step's start
         (``0 <= theta <= 1``), so a step whose bound over that box is positive cannot reach an
         exit and skips the sub-grid check. It changes no result, only the cost.
+    sink : callable, optional
+        Receives the output samples as they are produced (:data:`SampleSink`) instead of
+        storing them: memory stays ``O(B d)`` for any number of samples, and the solution's
+        ``y`` is None.
 
     Raises
     ------
@@ -214,13 +223,15 @@ def dopri5(
         On a non-finite derivative that step-size reduction cannot avoid, a step size
         below round-off, or more than ``max_steps`` iterations.
     """
-    y, te = _check(y0, t_span, t_eval)
+    y, te = check_span(y0, t_span, t_eval)
     t0, t1 = float(t_span[0]), float(t_span[1])
     n_sys, dim = y.shape
-    out = np.empty((te.size, n_sys, dim))
-    at_start = te <= t0
-    out[at_start] = y
-    next_idx = np.full(n_sys, int(at_start.sum()))
+    out = np.empty((te.size, n_sys, dim)) if sink is None else None
+    write: SampleSink = _store(out) if out is not None else cast(SampleSink, sink)
+    everyone = np.arange(n_sys)
+    for j in range(int(np.sum(te <= t0))):
+        write(np.full(n_sys, j), everyone, y)
+    next_idx = np.full(n_sys, int(np.sum(te <= t0)))
     t = np.full(n_sys, t0)
     f = rhs(t, y)
     if not np.all(np.isfinite(f)):
@@ -263,7 +274,7 @@ def dopri5(
             # when every system accepts (the common case) a slice selects them without copying the stages
             sel: slice | NDArray[np.int_] = slice(None) if b.size == n_sys else b
             q = _coefficients(k[:, sel])
-            _sample(out, te, next_idx, b, t[sel], step[sel], t_new[sel], y[sel], q)
+            _sample(write, te, next_idx, b, t[sel], step[sel], t_new[sel], y[sel], q)
             if event is not None:
                 _events(event, event_time, b, t[sel], step[sel], y[sel], q, subdivisions, event_bound)
             t[sel], y[sel], f[sel] = t_new[sel], y_new[sel], k[6, sel]
@@ -273,8 +284,17 @@ def dopri5(
     return BatchSolution(t=te, y=out, event_time=event_time, n_steps=n_steps, n_rejected=n_rej)
 
 
+def _store(out: FloatArray) -> SampleSink:
+    """The default sink: samples written into ``out (T, B, d)``."""
+
+    def write(idx: NDArray[np.int_], systems: NDArray[np.int_], values: FloatArray) -> None:
+        out[idx, systems] = values
+
+    return write
+
+
 def _sample(
-    out: FloatArray,
+    write: SampleSink,
     te: FloatArray,
     next_idx: NDArray[np.int_],
     b: NDArray[np.int_],
@@ -284,7 +304,7 @@ def _sample(
     y_old: FloatArray,
     q: FloatArray,
 ) -> None:
-    """Write the output samples that fall in each accepted step ``(t_old, t_new]``."""
+    """Send the output samples that fall in each accepted step ``(t_old, t_new]`` to ``write``."""
     n_out = te.size
     while True:
         idx = next_idx[b]
@@ -293,7 +313,7 @@ def _sample(
             return
         sel = np.flatnonzero(due)
         theta = (te[idx[sel]] - t_old[sel]) / h[sel]
-        out[idx[sel], b[sel]] = _dense(y_old[sel], h[sel], q[:, sel], theta)
+        write(idx[sel], b[sel], _dense(y_old[sel], h[sel], q[:, sel], theta))
         next_idx[b[sel]] += 1
 
 
@@ -327,61 +347,4 @@ def _events(
         event_time[b[i]] = _locate(event, float(t_old[i]), float(h[i]), y_old[i], q[:, i], lo, float(grid[first]))
 
 
-def rk45_reference(
-    rhs: BatchRhs,
-    t_span: tuple[float, float],
-    y0: FloatArray,
-    t_eval: FloatArray,
-    *,
-    rtol: float = RTOL,
-    atol: float = ATOL,
-    event: EventFn | None = None,
-) -> BatchSolution:
-    """scipy ``solve_ivp`` (RK45) on one system (``B = 1``); same interface as :func:`dopri5`.
-
-    The reference the vectorised integrator is tested against. Events use scipy's own
-    location (sign changes between step end points, then a root search on its dense
-    output), so an excursion inside one step is missed.
-
-    Raises
-    ------
-    ParameterError
-        If ``y0`` holds more than one system.
-    SolverError
-        If ``solve_ivp`` reports a failure.
-    """
-    y, te = _check(y0, t_span, t_eval)
-    if y.shape[0] != 1:
-        raise ParameterError(f"rk45_reference integrates one system, got {y.shape[0]}")
-
-    def fun(t: float, x: FloatArray) -> FloatArray:
-        out: FloatArray = rhs(np.array([t]), x[None])[0]
-        return out
-
-    event_time = np.full(1, np.nan)
-    events = []
-    if event is not None:
-        ev = event
-
-        def g(t: float, x: FloatArray) -> float:
-            return float(ev(np.array([t]), x[None])[0])
-
-        g.direction = -1  # type: ignore[attr-defined]
-        events.append(g)
-        if g(t_span[0], y[0]) < 0:
-            event_time[0] = t_span[0]
-    try:
-        sol = solve_ivp(fun, t_span, y[0], method="RK45", t_eval=te, rtol=rtol, atol=atol, events=events or None)
-    except ValueError as exc:
-        raise SolverError(f"solve_ivp failed: {exc}") from exc
-    if not sol.success:
-        raise SolverError(f"solve_ivp failed: {sol.message}")
-    if event is not None and np.isnan(event_time[0]) and sol.t_events[0].size:
-        event_time[0] = float(sol.t_events[0][0])
-    n_steps = np.array([max(sol.nfev - 2, 0) // 6])  # 6 evaluations per step (FSAL) + 2 for the first step
-    return BatchSolution(
-        t=te, y=sol.y.T[:, None, :], event_time=event_time, n_steps=n_steps, n_rejected=np.zeros(1, dtype=int)
-    )
-
-
-__all__ = ["ATOL", "RTOL", "BatchRhs", "BatchSolution", "EventFn", "dopri5", "rk45_reference"]
+__all__ = ["ATOL", "RTOL", "BatchRhs", "BatchSolution", "EventFn", "SampleSink", "check_span", "dopri5"]

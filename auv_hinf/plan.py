@@ -28,6 +28,7 @@ from .postprocess import positions_from_jacobi
 from .presets import spread_start
 from .reference import FleetReference, reference_from_dict
 from .results import SimulationResult
+from .run_metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
 
 if TYPE_CHECKING:
     from .robust_summary import RobustRunCheck
@@ -35,16 +36,9 @@ from .sigma import vehicle_sigma
 from .simulation import Scenario
 from .tubes import mission_tube
 
-#: The measured decay rate is the average rate of the per-vehicle Lyapunov norm from
-#: ``t = 0`` until it has fallen by this factor (six decades of error), far above the
-#: integrator's noise (rtol 1e-8 of errors of order 1) and far enough to average out transients.
-DECAY_MEASURE_DROP = 1e-6
 #: A heading range counts as the full circle when its width is 2 pi up to this relative
 #: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
 FULL_CIRCLE_RTOL = 1e-12
-#: Vehicles whose initial Lyapunov norm is below this (about 1e-6 m or m/s of error) have
-#: nothing measurable to decay: their errors start at the integrator's noise level.
-DECAY_MEASURE_FLOOR = 1e-6
 
 
 @dataclass(frozen=True)
@@ -256,30 +250,17 @@ def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -
     ``V_i = x_i^T (P2 kron I2) x_i + z_i^T Q z_i`` with the decay matrices of ``cert``;
     ``sqrt(V_i)`` must decay at least at ``cert.rate``. The rate is
     ``ln(sqrt(V_i(0)/V_i(t*)))/t*`` with ``t*`` the first sample where ``V_i`` has fallen by
-    :data:`DECAY_MEASURE_DROP` (or the end), minimised over the vehicles whose initial norm
-    exceeds :data:`DECAY_MEASURE_FLOOR`; ``None`` when no vehicle starts with an error.
+    :data:`~auv_hinf.run_metrics.DECAY_MEASURE_DROP` (or the end), minimised over the vehicles
+    whose initial norm exceeds :data:`~auv_hinf.run_metrics.DECAY_MEASURE_FLOOR`; ``None`` when
+    no vehicle starts with an error.
     """
-    tr = result.tracking
-    p, q = cert.position.matrix, cert.heading.matrix
-    v = (
-        p[0, 0] * (tr.e**2).sum(-1)
-        + 2 * p[0, 1] * (tr.e * tr.e_dot).sum(-1)
-        + p[1, 1] * (tr.e_dot**2).sum(-1)
-        + q[0, 0] * tr.e_psi**2
-        + 2 * q[0, 1] * tr.e_psi * tr.e_psi_dot
-        + q[1, 1] * tr.e_psi_dot**2
-    )
-    rates = []
-    for i in range(v.shape[1]):
-        v0 = v[0, i]
-        if not math.sqrt(max(v0, 0.0)) > DECAY_MEASURE_FLOOR:
-            continue
-        below = np.nonzero(v[:, i] <= DECAY_MEASURE_DROP * v0)[0]
-        k = int(below[0]) if below.size else v.shape[0] - 1
-        if k == 0 or result.t[k] <= 0:
-            continue
-        rates.append(0.5 * math.log(v0 / max(v[k, i], 1e-300)) / float(result.t[k]))
-    return min(rates) if rates else None
+    v = lyapunov_values(result.tracking, cert.position.matrix, cert.heading.matrix)  # (T, N)
+    below = v <= DECAY_MEASURE_DROP * v[0]
+    k = np.where(below.any(axis=0), below.argmax(axis=0), v.shape[0] - 1)  # first drop, else the end
+    cols = np.arange(v.shape[1])
+    tk = np.where(k == 0, 0.0, result.t[k])
+    rate = float(decay_rates(v[0], v[k, cols], tk))
+    return None if math.isnan(rate) else rate
 
 
 def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:

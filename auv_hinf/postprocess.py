@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._typing import FloatArray, JacobiKind
+from .arrays import stack_last
 from .control_law import wrap_angle
 from .envelope import Envelope
 from .formation import jacobi_coordinates, positions_from_jacobi
@@ -47,7 +48,7 @@ def ground_velocity(
     """
     c, s = (np.cos(states[..., 2]), np.sin(states[..., 2])) if cs is None else cs
     u, v = states[..., 3], states[..., 4]
-    out: FloatArray = np.stack([c * u - s * v, s * u + c * v], -1) + np.asarray(current, dtype=float)
+    out: FloatArray = stack_last([c * u - s * v, s * u + c * v]) + np.asarray(current, dtype=float)
     return out
 
 

@@ -288,6 +288,8 @@ def rigid_motion(
     """
     n = offsets.shape[0]
     lead = chi.shape
+    # leading (time or scenario) axis fastest in memory, as the batched law wants (auv_hinf.arrays)
+    q, qd, qdd = np.asfortranarray(q), np.asfortranarray(qd), np.asfortranarray(qdd)
 
     def each(x: FloatArray) -> FloatArray:
         return np.broadcast_to(x[..., None, :], (*lead, n, 2))

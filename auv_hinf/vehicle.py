@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._typing import FloatArray
+from .arrays import stack_last
 from .exceptions import ParameterError, require_finite
 
 _MASS_FIELDS = ("m11", "m22", "m33")
@@ -264,7 +265,7 @@ def rhs(
     d11, d22, d33 = params.damping(u, v, r)
     c, sn = (np.cos(psi), np.sin(psi)) if cs is None else cs
     m11, m22, m33 = params.m11, params.m22, params.m33
-    return np.stack(
+    return stack_last(
         [
             c * u - sn * v,
             sn * u + c * v,
@@ -272,8 +273,7 @@ def rhs(
             (f[..., 0] + m22 * v * r - d11 * u) / m11,
             (f[..., 1] - m11 * u * r - d22 * v) / m22,
             (f[..., 2] - (m22 - m11) * u * v - d33 * r) / m33,
-        ],
-        -1,
+        ]
     )
 
 

@@ -149,3 +149,21 @@ def test_cli_campaign_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFi
         )
         == 2
     )
+
+
+def test_local_workers_get_the_allocator_settings_and_even_chunks() -> None:
+    """Dask's default trims the heap so hard that every temporary is re-mapped (page faults)."""
+    pytest.importorskip("distributed")
+    import os
+
+    from auv_hinf.campaign import WORKER_MALLOC, _balanced, dask_client
+
+    with dask_client(workers=2) as client:
+        env = client.run(lambda: {k: os.environ.get(k) for k in WORKER_MALLOC})
+        assert len(env) == 2
+        for got in env.values():
+            assert got == {k: str(v) for k, v in WORKER_MALLOC.items()}
+        # 10,000 runs with chunks of at most 4096 on 2 workers: 4 chunks of 2500, not 4096 + 4096 + 1808
+        size = _balanced(4096, 10_000, client)
+        assert size == 2500 and len(chunks(10_000, size)) % 2 == 0
+        assert _balanced(4096, 3, client) == 2  # both workers get a chunk

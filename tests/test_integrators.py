@@ -7,7 +7,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from auv_hinf.exceptions import ParameterError, SolverError
-from auv_hinf.integrators import dopri5, rk45_reference
+from auv_hinf.integrators import dopri5
+from auv_hinf.rk45 import rk45_reference
 
 #: Damped oscillators x'' = -2 zeta w x' - w^2 x with per-system (w, zeta): 1/s and 1.
 PARAMS = np.array([[1.0, 0.05], [3.0, 0.2], [0.3, 0.0], [8.0, 0.5]])
@@ -103,3 +104,20 @@ def test_errors():
         rk45_reference(_osc, (0.0, 1.0), Y0, np.array([1.0]))
     with pytest.raises(SolverError, match="within 3 steps"):
         dopri5(_osc, (0.0, 100.0), Y0[:1], np.array([1.0]), max_steps=3)
+
+
+def test_a_sink_receives_exactly_the_stored_samples_in_order():
+    stored = dopri5(_osc, (0.0, 10.0), Y0, T_EVAL)
+    got = np.full_like(stored.y, np.nan)
+    last = np.full(len(PARAMS), -1)
+
+    def sink(idx: np.ndarray, systems: np.ndarray, values: np.ndarray) -> None:
+        assert len(set(systems.tolist())) == systems.size  # at most one sample per system per call
+        assert np.all(idx > last[systems])  # each system's samples in increasing time order
+        last[systems] = idx
+        got[idx, systems] = values
+
+    sol = dopri5(_osc, (0.0, 10.0), Y0, T_EVAL, sink=sink)
+    assert sol.y is None
+    np.testing.assert_array_equal(got, stored.y)  # every sample, bit for bit
+    np.testing.assert_array_equal(sol.n_steps, stored.n_steps)

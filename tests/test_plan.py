@@ -17,7 +17,6 @@ from auv_hinf.certificate import certify
 from auv_hinf.config import FormationConfig
 from auv_hinf.envelope import Envelope
 from auv_hinf.plan import (
-    DECAY_MEASURE_DROP,
     closed_loop_for,
     design_gains,
     formation_offsets,
@@ -31,6 +30,7 @@ from auv_hinf.plan import (
 from auv_hinf.presets import TRIANGLE_SHAPE, preset_config
 from auv_hinf.reference import FleetReference
 from auv_hinf.region import start_bounds
+from auv_hinf.run_metrics import DECAY_MEASURE_DROP
 from auv_hinf.settings import ReferenceConfig, SimulationConfig
 from auv_hinf.simulation import simulate
 from auv_hinf.vehicle import remus100
