@@ -154,8 +154,13 @@ def _execute(setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, p
         if client is None:
             out = []
             for lo, hi in ranges:
-                out.append(run_chunk(setup, lo, hi))
-                bar.update(hi - lo)
+                start = bar.n
+
+                def advance(done: float, lo: int = lo, hi: int = hi, start: int = start) -> None:
+                    bar.update(start + int(done * (hi - lo)) - bar.n)  # a chunk moves the bar as it runs
+
+                out.append(run_chunk(setup, lo, hi, progress=advance))
+                bar.update(start + (hi - lo) - bar.n)
             return out
         from distributed import as_completed
 

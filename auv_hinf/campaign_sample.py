@@ -8,6 +8,7 @@ executor.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -204,7 +205,7 @@ def run_scenario(setup: CampaignSetup, index: int, inputs: RunInputs) -> Scenari
     )
 
 
-def run_chunk(setup: CampaignSetup, lo: int, hi: int) -> pd.DataFrame:
+def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float], None] | None = None) -> pd.DataFrame:
     """Sample, integrate (one batch) and measure runs ``lo .. hi - 1``: one row per run.
 
     Columns: ``run``, ``seed``; inputs ``<coef>_mult`` (nine plant multipliers), ``current_x``,
@@ -221,13 +222,20 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int) -> pd.DataFrame:
 
     The samples are not stored: :class:`~auv_hinf.run_metrics.ErrorSink` folds each one into
     the metrics as the integrator produces it (the same numbers as post-processing stored
-    samples, bit for bit; ``tests/test_run_metrics.py``).
+    samples, to a few units in the last place; ``tests/test_run_metrics.py``). ``progress``, if given, is called with
+    the fraction of the chunk's samples produced so far (0 to 1), about once per percent.
     """
     inputs = [sample_run(setup, i) for i in range(lo, hi)]
     batch = ScenarioBatch(tuple(run_scenario(setup, i, x) for i, x in zip(range(lo, hi), inputs)))
     cert = setup.certificate
     sink = ErrorSink(
-        setup.reference, batch.scenarios[0].times, batch.current, setup.n, cert.position.matrix, cert.heading.matrix
+        setup.reference,
+        batch.scenarios[0].times,
+        batch.current,
+        setup.n,
+        cert.position.matrix,
+        cert.heading.matrix,
+        progress=progress,
     )
     sol = integrate_batch(batch, sink=sink)
     return _rows(setup, lo, inputs, batch, sink.result(), first_exits(sol, hi - lo), sol.n_steps)

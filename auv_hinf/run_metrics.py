@@ -13,12 +13,14 @@ samples, and the post-processing is done while the samples are hot in the cache.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ._typing import FloatArray
+from .arrays import stack_last
 from .control_law import MotionSource
 from .exceptions import SolverError
 from .postprocess import TrackingErrors, ground_velocity, tracking_errors
@@ -38,10 +40,11 @@ def lyapunov_values(tr: TrackingErrors, p2: FloatArray, q: FloatArray) -> FloatA
     ``x = (e, e')`` (m, m/s) and ``z = (e_psi, e_psi')`` (rad, rad/s); ``p2`` and ``q`` are the
     (2, 2) decay matrices of the position and heading loops.
     """
+    (ex, ey), (dx, dy) = (tr.e[..., 0], tr.e[..., 1]), (tr.e_dot[..., 0], tr.e_dot[..., 1])  # no length-2 reductions
     v: FloatArray = (
-        p2[0, 0] * (tr.e**2).sum(-1)
-        + 2 * p2[0, 1] * (tr.e * tr.e_dot).sum(-1)
-        + p2[1, 1] * (tr.e_dot**2).sum(-1)
+        p2[0, 0] * (ex * ex + ey * ey)
+        + 2 * p2[0, 1] * (ex * dx + ey * dy)
+        + p2[1, 1] * (dx * dx + dy * dy)
         + q[0, 0] * tr.e_psi**2
         + 2 * q[0, 1] * tr.e_psi * tr.e_psi_dot
         + q[1, 1] * tr.e_psi_dot**2
@@ -103,10 +106,20 @@ class ErrorSink:
         Vehicles per run (the flat state of a run is ``6 n`` long).
     p2, q : ndarray, shape (2, 2)
         Decay matrices of the certified Lyapunov function.
+    progress : callable, optional
+        Called with the fraction of all samples received (0 to 1) each time it has grown by
+        a percent or more (for a progress bar).
     """
 
     def __init__(
-        self, reference: MotionSource, t_eval: FloatArray, current: FloatArray, n: int, p2: FloatArray, q: FloatArray
+        self,
+        reference: MotionSource,
+        t_eval: FloatArray,
+        current: FloatArray,
+        n: int,
+        p2: FloatArray,
+        q: FloatArray,
+        progress: Callable[[float], None] | None = None,
     ) -> None:
         s = current.shape[0]
         self._ref, self._t, self._current, self._n = reference, np.asarray(t_eval, dtype=float), current, n
@@ -118,14 +131,15 @@ class ErrorSink:
         self._vk = np.full((s, n), np.nan)  # V at the measuring sample, once found
         self._tk = np.full((s, n), np.nan)
         self._seen = np.zeros(s, dtype=int)
+        self._progress, self._reported = progress, 0.0
 
     def __call__(self, idx: NDArray[np.int_], systems: NDArray[np.int_], values: FloatArray) -> None:
         """Fold samples ``idx`` of runs ``systems`` (flat states ``values (m, 6 N)``) in."""
         states = np.asfortranarray(values.reshape(-1, self._n, 6))  # run axis fastest (auv_hinf.arrays)
         motion = self._ref.motion(self._t[idx])
         tr = tracking_errors(states, ground_velocity(states, self._current[systems, None, :]), motion)
-        pos = np.linalg.norm(tr.e, axis=-1)
-        now = np.stack([pos, np.linalg.norm(tr.e_dot, axis=-1), np.abs(tr.e_psi), np.abs(tr.e_psi_dot)], -1)
+        pos = np.hypot(tr.e[..., 0], tr.e[..., 1])
+        now = stack_last([pos, np.hypot(tr.e_dot[..., 0], tr.e_dot[..., 1]), np.abs(tr.e_psi), np.abs(tr.e_psi_dot)])
         self._max[systems] = np.maximum(self._max[systems], now)
         tail = idx >= self._t.size // 2
         self._tail[systems[tail]] = np.maximum(self._tail[systems[tail]], pos[tail])
@@ -141,6 +155,11 @@ class ErrorSink:
         self._vk[systems[rows], veh] = v[rows, veh]
         self._tk[systems[rows], veh] = np.where(idx[rows] == 0, 0.0, self._t[idx[rows]])
         self._seen[systems] += 1
+        if self._progress is not None:
+            done = float(self._seen.sum()) / self._seen.size / self._t.size
+            if done >= self._reported + 0.01:
+                self._reported = done
+                self._progress(done)
 
     def result(self) -> RunMetrics:
         """The metrics; every run must have received all ``T`` samples."""

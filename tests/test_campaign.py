@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from dataclasses import replace
@@ -13,7 +14,7 @@ import pytest
 
 from auv_hinf.campaign import chunks, prepare, run_campaign, sample_run
 from auv_hinf.campaign_report import passed, summarize
-from auv_hinf.campaign_sample import initial_state
+from auv_hinf.campaign_sample import initial_state, run_chunk
 from auv_hinf.cli import main
 from auv_hinf.config import preset_config
 from auv_hinf.coverage import initial_errors
@@ -167,3 +168,12 @@ def test_local_workers_get_the_allocator_settings_and_even_chunks() -> None:
         size = _balanced(4096, 10_000, client)
         assert size == 2500 and len(chunks(10_000, size)) % 2 == 0
         assert _balanced(4096, 3, client) == 2  # both workers get a chunk
+
+
+def test_a_chunk_reports_its_progress_as_it_runs() -> None:
+    setup, _ = prepare(preset_config("paper-triangle"), seed=SEED, horizon=HORIZON)
+    seen: list[float] = []
+    table = run_chunk(setup, 0, 3, progress=seen.append)
+    assert len(table) == 3
+    assert 50 <= len(seen) <= 101 and all(b >= a + 0.01 for a, b in itertools.pairwise(seen))
+    assert 0.0 < seen[0] <= 0.02 and 0.99 <= seen[-1] <= 1.0
