@@ -14,7 +14,8 @@ import numpy as np
 from ._typing import FloatArray
 from .exceptions import ParameterError, require_finite
 from .paths import MissionBounds, MissionReference, heading_from_velocity
-from .reference import H0_SUP, H1_SUP, FleetReference, ReferenceTube, Shaping
+from .reference import FleetReference, ReferenceTube
+from .shaping import H0_SUP, H1_SUP, Shaping
 
 #: Cap on the cells per vehicle in :func:`shaped_tube` (each array holds cells x N x 2 floats).
 MAX_CELLS = 200_000
@@ -74,7 +75,7 @@ def shaped_tube(fleet: FleetReference, *, cells: int | None = None, resolution: 
       ``D2 = |dpsi| sup|h0''|/T_h^2 + |dr| sup|h1''|/T_h >= |delta''|``.
 
     That sum also bounds ``|psi''|`` in the cell, and ``min(A, |p''(centre)| + w J)`` bounds
-    ``|p''|``. The sup norms are :data:`H0_SUP`, :data:`H1_SUP`. The mission tail
+    ``|p''|``. The sup norms are :data:`~auv_hinf.shaping.H0_SUP`, :data:`~auv_hinf.shaping.H1_SUP`. The mission tail
     (:func:`mission_tube`) covers ``t >= T_b``.
 
     Parameters
