@@ -81,12 +81,6 @@ class RobustStart:
         return self._sets()[3]
 
     @property
-    def shift_gain(self) -> float:
-        """``-lam/(l k1)`` (s): the shifted equilibrium is ``e_c = shift_gain * current`` (m)."""
-        c = self.certificate
-        return -c.lam / (c.gain_centre * c.gains.k1)
-
-    @property
     def bounds(self) -> FloatArray:
         """Certified per-vehicle bounds of position (m), velocity (m/s), heading (rad), yaw rate (rad/s)."""
         b = self.certificate.bounds

@@ -228,10 +228,10 @@ def dopri5(
     n_sys, dim = y.shape
     out = np.empty((te.size, n_sys, dim)) if sink is None else None
     write: SampleSink = _store(out) if out is not None else cast(SampleSink, sink)
-    everyone = np.arange(n_sys)
-    for j in range(int(np.sum(te <= t0))):
-        write(np.full(n_sys, j), everyone, y)
-    next_idx = np.full(n_sys, int(np.sum(te <= t0)))
+    at_start = int(np.sum(te <= t0))
+    for j in range(at_start):
+        write(np.full(n_sys, j), np.arange(n_sys), y)
+    next_idx = np.full(n_sys, at_start)
     t = np.full(n_sys, t0)
     f = rhs(t, y)
     if not np.all(np.isfinite(f)):

@@ -104,6 +104,23 @@ def ellipsoid_extent(m: FloatArray, r1: float, r2: float) -> tuple[float, float]
     return k * math.sqrt(rho * m22 / det), k * math.sqrt(rho * m11 / det)
 
 
+def pair_level(m: FloatArray, x: ArrayLike, dx: ArrayLike, planar: bool = False) -> FloatArray:
+    """Level ``[x, x']^T (M kron I) [x, x']`` of error pairs in the ellipse of the (2, 2) ``m``.
+
+    ``planar``: ``x`` and ``dx`` are inertial vectors ``(..., 2)`` (e.g. m and m/s) and the form is
+    summed over both axes; otherwise they are scalars ``(...)`` (e.g. rad and rad/s). The planar
+    products are written out, not reduced over the length-2 axis (cheaper in the hot path).
+    """
+    a, b = np.asarray(x, dtype=float), np.asarray(dx, dtype=float)
+    if planar:
+        a0, a1, b0, b1 = a[..., 0], a[..., 1], b[..., 0], b[..., 1]
+        xx, xd, dd = a0 * a0 + a1 * a1, a0 * b0 + a1 * b1, b0 * b0 + b1 * b1
+    else:
+        xx, xd, dd = a * a, a * b, b * b
+    out: FloatArray = m[0, 0] * xx + 2.0 * m[0, 1] * xd + m[1, 1] * dd
+    return out
+
+
 def start_bounds(
     p2: FloatArray, q: FloatArray, e0: ArrayLike, de0: ArrayLike, epsi0: ArrayLike, depsi0: ArrayLike
 ) -> FloatArray:
@@ -124,10 +141,7 @@ def start_bounds(
         Bounds of ``sup_t ||e||, ||e'||, |e_psi|, |e_psi'|`` (m, m/s, rad, rad/s) with
         ``rho = x0^T P x0``.
     """
-    e, de = np.asarray(e0, dtype=float), np.asarray(de0, dtype=float)
-    h, dh = np.asarray(epsi0, dtype=float), np.asarray(depsi0, dtype=float)
-    rho_p = p2[0, 0] * (e * e).sum(-1) + 2.0 * p2[0, 1] * (e * de).sum(-1) + p2[1, 1] * (de * de).sum(-1)
-    rho_q = q[0, 0] * h * h + 2.0 * q[0, 1] * h * dh + q[1, 1] * dh * dh
+    rho_p, rho_q = pair_level(p2, e0, de0, planar=True), pair_level(q, epsi0, depsi0)
     ip, iq = np.linalg.inv(p2), np.linalg.inv(q)
     k = 1.0 + BOUND_RTOL
     rp, rq = np.maximum(rho_p, 0.0), np.maximum(rho_q, 0.0)
@@ -368,5 +382,6 @@ __all__ = [
     "envelope_margins",
     "heading_c_range",
     "inflate_envelope",
+    "pair_level",
     "start_bounds",
 ]

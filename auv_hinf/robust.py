@@ -31,6 +31,7 @@ from .exceptions import AuvHinfError
 from .lmi.robust import Ellipsoid, best_ellipsoid, heading_ellipsoid, position_ellipsoid
 from .margins import MAX_HEADING_ERROR, ErrorBounds, Margins, envelope_margins, inflate_envelope
 from .reference import ReferenceTube
+from .region import pair_level
 from .uncertainty import (
     HeadingPerturbation,
     ParameterBox,
@@ -159,10 +160,8 @@ class RobustCertificate:
         pos, head, hp, d = self.position_ellipsoid, self.heading_ellipsoid, self.heading, self.position_disturbance
         if pos is None or head is None or hp is None or d is None:
             return False
-        et = e - self.equilibrium_shift(current)
-        p, q = pos.matrix, head.matrix
-        vp = p[0, 0] * (et**2).sum(-1) + 2 * p[0, 1] * (et * de).sum(-1) + p[1, 1] * (de**2).sum(-1)
-        vh = q[0, 0] * epsi**2 + 2 * q[0, 1] * epsi * depsi + q[1, 1] * depsi**2
+        vp = pair_level(pos.matrix, e - self.equilibrium_shift(current), de, planar=True)
+        vh = pair_level(head.matrix, epsi, depsi)
         return bool(np.all(vp <= d**2) and np.all(vh <= hp.disturbance**2))
 
     def to_dict(self) -> dict[str, Any]:

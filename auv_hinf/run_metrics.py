@@ -24,6 +24,7 @@ from .arrays import stack_last
 from .control_law import MotionSource
 from .exceptions import SolverError
 from .postprocess import TrackingErrors, ground_velocity, tracking_errors
+from .region import pair_level
 
 #: The measured decay rate is the average rate of the per-vehicle Lyapunov norm from
 #: ``t = 0`` until it has fallen by this factor (six decades of error), far above the
@@ -40,15 +41,7 @@ def lyapunov_values(tr: TrackingErrors, p2: FloatArray, q: FloatArray) -> FloatA
     ``x = (e, e')`` (m, m/s) and ``z = (e_psi, e_psi')`` (rad, rad/s); ``p2`` and ``q`` are the
     (2, 2) decay matrices of the position and heading loops.
     """
-    (ex, ey), (dx, dy) = (tr.e[..., 0], tr.e[..., 1]), (tr.e_dot[..., 0], tr.e_dot[..., 1])  # no length-2 reductions
-    v: FloatArray = (
-        p2[0, 0] * (ex * ex + ey * ey)
-        + 2 * p2[0, 1] * (ex * dx + ey * dy)
-        + p2[1, 1] * (dx * dx + dy * dy)
-        + q[0, 0] * tr.e_psi**2
-        + 2 * q[0, 1] * tr.e_psi * tr.e_psi_dot
-        + q[1, 1] * tr.e_psi_dot**2
-    )
+    v: FloatArray = pair_level(p2, tr.e, tr.e_dot, planar=True) + pair_level(q, tr.e_psi, tr.e_psi_dot)
     return v
 
 

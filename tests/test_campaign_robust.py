@@ -64,7 +64,7 @@ def test_starts_fill_the_certified_sets(remus_setup) -> None:
     rng = np.random.default_rng(0)
     cur = np.array([0.1, -0.1])
     e, de, ep, dep = rob.sample_errors(rng, 4000, cur)
-    et = e - rob.shift_gain * cur
+    et = e - rob.certificate.equilibrium_shift(cur)
     p = rob.position
     v = p[0, 0] * (et**2).sum(1) + 2 * p[0, 1] * (et * de).sum(1) + p[1, 1] * (de**2).sum(1)
     assert v.max() <= rob.position_level**2 and v.max() >= 0.95 * rob.position_level**2

@@ -38,7 +38,7 @@ from auv_hinf.envelope import Envelope
 from auv_hinf.exceptions import DesignError
 from auv_hinf.loops import hinf_norm
 from auv_hinf.reference import ReferenceTube
-from auv_hinf.region import ellipsoid_extent, inflate_envelope
+from auv_hinf.region import ellipsoid_extent, inflate_envelope, pair_level
 from auv_hinf.sigma import vehicle_sigma
 from auv_hinf.vehicle import body_block, inertial_block, paper2011, rotation
 
@@ -450,3 +450,17 @@ def test_certificate_to_dict_is_json(triangle: dict) -> None:
     text = json.dumps(d, allow_nan=False)
     assert json.loads(text)["rate"] == triangle["cert"].rate
     assert isinstance(d["method"], str) and "\n" not in d["method"]
+
+
+def test_pair_level_is_the_kronecker_quadratic_form(rng: np.random.Generator) -> None:
+    """``[x, x']^T (M kron I2) [x, x']`` written out, against the matrix product with np.kron."""
+    a = rng.normal(size=(2, 2))
+    m = a @ a.T
+    x, dx = rng.normal(size=(7, 2)), rng.normal(size=(7, 2))
+    z = np.concatenate([x, dx], axis=1)  # [x1, x2, x1', x2'] = (M kron I2) ordering
+    want = np.einsum("si,ij,sj->s", z, np.kron(m, np.eye(2)), z)
+    np.testing.assert_allclose(pair_level(m, x, dx, planar=True), want, rtol=1e-13)
+    h, dh = rng.normal(size=7), rng.normal(size=7)
+    np.testing.assert_allclose(
+        pair_level(m, h, dh), np.einsum("si,ij,sj->s", np.c_[h, dh], m, np.c_[h, dh]), rtol=1e-13
+    )
