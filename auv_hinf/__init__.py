@@ -4,24 +4,22 @@ Implements and extends Yang & Zhang, *Robust Control of Horizontal Formation Dyn
 for Autonomous Underwater Vehicles*. See the README for a tour.
 """
 
-from .certificate import Certificate, certify
-from .closed_loop import ClosedLoopCertificate, closed_loop_certificate
-from .config import FormationConfig, load_config, preset_config
-from .control_law import FormationController, SineTrajectory, VehicleLaw, heading_gains
-from .coverage import Coverage, cover_start
-from .crosscheck import CrosscheckReport, crosscheck
-from .design import (
-    GainDesign,
-    Theorem1Conditions,
-    alpha_minimal,
-    alpha_paper,
-    alpha_stabilizing,
-    design_alpha,
-    position_loop,
-    theorem1_conditions,
-)
-from .envelope import Envelope, envelope_lambda
-from .exceptions import (
+from auv_hinf._version import __version__
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
+from auv_hinf.certification.coverage import Coverage, cover_start
+from auv_hinf.certification.margins import ErrorBounds
+from auv_hinf.certification.region import Region
+from auv_hinf.config.formation import FormationConfig, load_config
+from auv_hinf.config.presets import PRESETS, preset_config
+from auv_hinf.design.alpha import GainDesign, alpha_minimal, alpha_paper, alpha_stabilizing, design_alpha, position_loop
+from auv_hinf.design.blocks import hinf_norm, hinf_norm_peak, position_block, velocity_block
+from auv_hinf.design.crosscheck import CrosscheckReport, crosscheck
+from auv_hinf.design.gains import Gains, heading_gains, theorem1_gains
+from auv_hinf.design.jacobi_sigma import jacobi_sigma_bounds
+from auv_hinf.design.lmi.theorem1 import lmi_hinf_norm
+from auv_hinf.design.sigma import SigmaBounds, sigma_grid, sigma_max_2x2, vehicle_sigma
+from auv_hinf.design.theorem1 import Theorem1Conditions, theorem1_conditions
+from auv_hinf.exceptions import (
     AuvHinfError,
     ConfigError,
     DesignError,
@@ -30,7 +28,8 @@ from .exceptions import (
     ParameterError,
     SolverError,
 )
-from .formation import (
+from auv_hinf.models.envelope import Envelope, envelope_lambda
+from auv_hinf.models.formation import (
     FormationMatrices,
     JacobiTransform,
     formation_matrices,
@@ -38,23 +37,10 @@ from .formation import (
     regular_polygon,
     shape_from_offsets,
 )
-from .jacobi_sigma import jacobi_sigma_bounds
-from .lmi import lmi_hinf_norm
-from .loops import hinf_norm, hinf_norm_peak, position_block, velocity_block
-from .plan import Gains, RunPlan, design_gains, plan_run, run_report
-from .presets import PRESETS
-from .reference import (
-    CircleReference,
-    FleetReference,
-    LawnmowerReference,
-    LineReference,
-    SineReference,
-    shaped_start,
-)
-from .region import ErrorBounds, Region
-from .sigma import SigmaBounds, sigma_grid, sigma_max_2x2, vehicle_sigma
-from .simulation import Scenario, ScenarioBatch, SimulationResult, simulate, simulate_batch
-from .vehicle import (
+from auv_hinf.models.lawnmower import LawnmowerReference
+from auv_hinf.models.paths import CircleReference, LineReference, SineReference
+from auv_hinf.models.reference import FleetReference, shaped_start
+from auv_hinf.models.vehicle import (
     VehicleParams,
     body_block,
     inertial_block,
@@ -64,8 +50,13 @@ from .vehicle import (
     rhs,
     vehicle_nlsys,
 )
-
-__version__ = "0.2.0"
+from auv_hinf.simulation.engine import simulate, simulate_batch
+from auv_hinf.simulation.law import FormationController, VehicleLaw
+from auv_hinf.simulation.results import SimulationResult
+from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
+from auv_hinf.workflow.certificate import Certificate, certify
+from auv_hinf.workflow.design_point import DesignPoint, design_point
+from auv_hinf.workflow.run_plan import RunPlan, plan_run, run_report
 
 __all__ = [
     "PRESETS",
@@ -77,6 +68,7 @@ __all__ = [
     "Coverage",
     "CrosscheckReport",
     "DesignError",
+    "DesignPoint",
     "Envelope",
     "EnvelopeError",
     "ErrorBounds",
@@ -98,7 +90,6 @@ __all__ = [
     "SigmaBounds",
     "SimulationResult",
     "SineReference",
-    "SineTrajectory",
     "SolverError",
     "Theorem1Conditions",
     "VehicleLaw",
@@ -113,7 +104,7 @@ __all__ = [
     "cover_start",
     "crosscheck",
     "design_alpha",
-    "design_gains",
+    "design_point",
     "envelope_lambda",
     "formation_matrices",
     "heading_gains",
@@ -141,6 +132,7 @@ __all__ = [
     "simulate",
     "simulate_batch",
     "theorem1_conditions",
+    "theorem1_gains",
     "vehicle_nlsys",
     "vehicle_sigma",
     "velocity_block",

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._typing import FloatArray
+from auv_hinf._typing import FloatArray
 
 
 def stack_last(parts: Sequence[FloatArray]) -> FloatArray:

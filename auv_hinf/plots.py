@@ -17,15 +17,15 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ._typing import FloatArray
-from .sigma import sigma_grid
+from auv_hinf._typing import FloatArray
+from auv_hinf.design.sigma import sigma_grid
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from .certificate import Certificate
-    from .config import FormationConfig
-    from .simulation import SimulationResult
+    from auv_hinf.config.formation import FormationConfig
+    from auv_hinf.simulation.results import SimulationResult
+    from auv_hinf.workflow.certificate import Certificate
 
 #: Level of the contour drawn on the sigma heatmap, as a fraction of the certified sigma.
 SIGMA_CONTOUR_FRACTION = 0.9

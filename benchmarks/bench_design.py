@@ -7,12 +7,13 @@ import numpy as np
 import scipy.linalg as sla
 from common import REPEATS, fleet, table, timed
 
-from auv_hinf.config import preset_config
-from auv_hinf.design import alpha_stabilizing, riccati_c
-from auv_hinf.lmi import lmi_stabilizing_alpha
-from auv_hinf.plan import design_gains
-from auv_hinf.reference import Motion
-from auv_hinf.simulation import fleet_derivative
+from auv_hinf.config.presets import preset_config
+from auv_hinf.design.alpha import alpha_stabilizing
+from auv_hinf.design.lmi.theorem1 import lmi_stabilizing_alpha
+from auv_hinf.design.theorem1 import riccati_c
+from auv_hinf.models.reference import Motion
+from auv_hinf.simulation.engine import fleet_derivative
+from auv_hinf.workflow.design_point import design_point
 
 #: Estimated floating-point work of one vehicle-rhs (law + reference + plant), counting a
 #: sin/cos/atan2 as ~20 flops: law ~70, heading law ~25, plant ~45, sine mission + course ~60,
@@ -31,7 +32,7 @@ def _inner(fn: object, calls: int) -> float:
 
 
 def gains() -> str:
-    g = design_gains(preset_config("paper-triangle"))
+    g = design_point(preset_config("paper-triangle"))
     lam, gamma = g.lam, g.gamma
     c = riccati_c(gamma)
     exact = alpha_stabilizing(lam, gamma).alpha

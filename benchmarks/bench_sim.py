@@ -20,12 +20,14 @@ from common import (
     timed,
 )
 
-from auv_hinf.campaign import dask_client
-from auv_hinf.campaign_sample import default_chunk, prepare, run_chunk, run_scenario, sample_run
-from auv_hinf.certificate import certify
-from auv_hinf.config import preset_config
-from auv_hinf.plan import closed_loop_for, design_gains, plan_run
-from auv_hinf.simulation import simulate
+from auv_hinf.campaign.runner import dask_client
+from auv_hinf.campaign.sampling import default_chunk, prepare, run_chunk, run_scenario, sample_run
+from auv_hinf.config.presets import preset_config
+from auv_hinf.simulation.engine import simulate
+from auv_hinf.workflow.certificate import certify
+from auv_hinf.workflow.design_point import design_point
+from auv_hinf.workflow.nominal import closed_loop_for
+from auv_hinf.workflow.run_plan import plan_run
 
 #: Old dense path: horizon actually run (s) per N (absent: not run); shorter ones are
 #: extrapolated linearly to 300 s.
@@ -44,7 +46,7 @@ def end_to_end(sizes: tuple[int, ...] = (3, 30, 300, 1000, 10_000)) -> str:
     rows = []
     for n in sizes:
         cfg = fleet_config(n)
-        t_cert, _ = timed(lambda: closed_loop_for(cfg, design_gains(cfg)))  # noqa: B023
+        t_cert, _ = timed(lambda: closed_loop_for(design_point(cfg)))  # noqa: B023
         t_certify, _ = timed(lambda: certify(cfg))  # noqa: B023
         fl = fleet(n)
         scn = fl.scenario()

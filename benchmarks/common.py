@@ -15,17 +15,19 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-import auv_hinf.simulation as simulation
-from auv_hinf.campaign_sample import CampaignSetup, initial_state, prepare, sample_run
-from auv_hinf.config import FormationConfig, config_from_dict, preset_config
-from auv_hinf.control_law import FormationController
-from auv_hinf.formation import JacobiTransform
-from auv_hinf.integrators import ATOL, RTOL
-from auv_hinf.postprocess import ground_velocity
-from auv_hinf.reference import FleetReference
-from auv_hinf.results import SimulationResult, build_result
-from auv_hinf.simulation import Scenario, simulate
-from auv_hinf.vehicle import rhs
+import auv_hinf.simulation.engine as simulation
+from auv_hinf.campaign.sampling import CampaignSetup, initial_state, prepare, sample_run
+from auv_hinf.config.formation import FormationConfig, config_from_dict
+from auv_hinf.config.presets import preset_config
+from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.reference import FleetReference
+from auv_hinf.models.vehicle import rhs
+from auv_hinf.simulation.engine import simulate
+from auv_hinf.simulation.integrators import ATOL, RTOL
+from auv_hinf.simulation.law import FormationController
+from auv_hinf.simulation.postprocess import ground_velocity
+from auv_hinf.simulation.results import SimulationResult, build_result
+from auv_hinf.simulation.scenario import Scenario
 
 #: The paper's horizon (s) and the product's default accuracy.
 HORIZON = 300.0
@@ -141,9 +143,7 @@ def old_path(scn: Scenario, rtol: float = RTOL, atol: float = ATOL) -> tuple[Sim
         params=law.params,
         transform=JacobiTransform(scn.n, "paper"),
         reference=scn.reference,
-        alpha=law.alpha,
-        k1=law.k1,
-        k_psi=law.k_psi,
+        gains=law.gains,
     )
     plant, cur = scn.plant, np.asarray(scn.current)
 

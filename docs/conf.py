@@ -54,12 +54,14 @@ myst_heading_anchors = 3
 
 # -- API reference ---------------------------------------------------------------------
 # One page per public module, found by walking the package, so a new module is documented
-# without editing the docs. (autosummary is not used: it resolves ``auv_hinf.crosscheck``
+# without editing the docs. (autosummary is not used: it resolves ``auv_hinf.design.crosscheck``
 # to the function the package re-exports under that name, not to the module.)
 _API = DOCS / "api" / "generated"
 _API.mkdir(parents=True, exist_ok=True)
 _modules = sorted(
-    m.name for m in pkgutil.iter_modules(auv_hinf.__path__, "auv_hinf.") if not m.name.split(".")[-1].startswith("_")
+    m.name
+    for m in pkgutil.walk_packages(auv_hinf.__path__, "auv_hinf.")
+    if not any(part.startswith("_") for part in m.name.split("."))
 )
 for _stale in _API.glob("*.rst"):
     if _stale.stem not in _modules:

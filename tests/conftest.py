@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
-from auv_hinf.vehicle import VehicleParams, paper2011, remus100
+from auv_hinf.models.vehicle import VehicleParams, paper2011, remus100
 
 settings.register_profile("ci", max_examples=40, deadline=None)
 settings.load_profile("ci")

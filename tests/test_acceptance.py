@@ -3,7 +3,7 @@
 The certificate (``docs/derivations/closed_loop.md``) claims that from every start in the
 reported simultaneous region, tracking the raw mission, each vehicle stays inside the
 envelope, its errors stay below the invariant-ellipsoid bounds of its own start
-(:func:`auv_hinf.region.start_bounds`) and its Lyapunov norm decays at the certified rate.
+(:func:`auv_hinf.certification.region.start_bounds`) and its Lyapunov norm decays at the certified rate.
 Here those three claims are checked on batched simulations of many sampled starts (the
 1000-start test on the paper triangle, fewer starts on other vehicles, missions and
 envelopes), on shaped starts, through the CLI, and the region's tightness is measured.
@@ -25,30 +25,24 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from auv_hinf.certificate import certify
-from auv_hinf.cli import main
-from auv_hinf.closed_loop import ClosedLoopCertificate
-from auv_hinf.config import FormationConfig
-from auv_hinf.coverage import check_run, cover_start, initial_errors
-from auv_hinf.envelope import Envelope
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.certification.coverage import check_run, cover_start, initial_errors
+from auv_hinf.certification.region import Region, start_bounds
+from auv_hinf.cli.main import main
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.config.presets import DEMO_ENVELOPE, TRIANGLE_SHAPE, preset_config
+from auv_hinf.config.tables import ReferenceConfig
 from auv_hinf.exceptions import DesignError
-from auv_hinf.plan import (
-    RunPlan,
-    closed_loop_for,
-    design_gains,
-    formation_offsets,
-    measured_decay_rate,
-    mission_reference,
-    plan_run,
-    with_start,
-)
-from auv_hinf.presets import DEMO_ENVELOPE, TRIANGLE_SHAPE, preset_config
-from auv_hinf.reference import FleetReference, shaped_start
-from auv_hinf.region import Region, start_bounds
-from auv_hinf.results import SimulationResult
-from auv_hinf.settings import ReferenceConfig
-from auv_hinf.simulation import ScenarioBatch, simulate_batch
-from auv_hinf.vehicle import paper2011, remus100
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.reference import FleetReference, shaped_start
+from auv_hinf.models.vehicle import paper2011, remus100
+from auv_hinf.simulation.engine import simulate_batch
+from auv_hinf.simulation.results import SimulationResult
+from auv_hinf.simulation.scenario import ScenarioBatch
+from auv_hinf.workflow.certificate import certify
+from auv_hinf.workflow.design_point import design_point, formation_offsets, mission_reference
+from auv_hinf.workflow.nominal import closed_loop_for
+from auv_hinf.workflow.run_plan import RunPlan, measured_decay_rate, plan_run, with_start
 
 #: Absolute allowance (m, m/s, rad, rad/s) on every measured error for the integration
 #: error: ten times the measured disagreement between rtol/atol 1e-8 and 1e-11 runs (see the
@@ -158,8 +152,7 @@ class Loop:
 
 
 def make_loop(cfg: FormationConfig, horizon: float, samples: int) -> Loop:
-    gains = design_gains(cfg)
-    cert = closed_loop_for(cfg, gains)
+    cert = closed_loop_for(design_point(cfg))
     # with_start + plan_run(start="paper"): the raw mission reference of the configuration
     plan = plan_run(with_start(cfg, np.array(mission_states(cfg))), start="paper", horizon=horizon, samples=samples)
     assert plan.covered and plan.certificate is not None
@@ -168,7 +161,7 @@ def make_loop(cfg: FormationConfig, horizon: float, samples: int) -> Loop:
 
 def mission_states(cfg: FormationConfig) -> np.ndarray:
     """States exactly on the raw mission at ``t = 0`` (zero errors)."""
-    fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg))
+    fleet = design_point(cfg).fleet()
     return starts_from_errors(fleet, np.zeros((cfg.n, 6)))
 
 
@@ -284,9 +277,9 @@ def test_thousand_starts_in_the_region(triangle):
         np.concatenate([e, de, ep[:, None], dep[:, None]], -1), errors.reshape(-1, 6), atol=1e-12
     )
     # every start is covered by the certificate (raw reference)
-    g = loop.plan.gains
+    g = loop.plan.design.require_gains()
     for x in initial[:: max(1, count // 100)]:
-        cov = check_run(loop.cert, loop.cfg.vehicle, loop.cfg.envelope, (g.alpha, g.k1), g.k_psi, loop.fleet, x)
+        cov = check_run(loop.cert, loop.cfg.vehicle, loop.cfg.envelope, g, loop.fleet, x)
         assert cov.covered, cov.reason
 
     results = run_batch(loop, initial)
@@ -328,9 +321,9 @@ def test_random_starts_in_the_region(case):
 def test_configuration_that_does_not_certify_says_why():
     # a circle whose turn rate (1/1.5 rad/s) exceeds the envelope's |r| <= 0.5 rad/s
     cfg = triangle_config(paper2011(), DEMO_ENVELOPE, "circle", "tight-circle", speed=1.0, radius=1.5)
-    gains = design_gains(cfg)
+    design_point(cfg).require_gains()
     with pytest.raises(DesignError, match="leaves the envelope"):
-        closed_loop_for(cfg, gains)
+        closed_loop_for(design_point(cfg))
     cert = certify(cfg)
     loop = cert.closed_loop
     assert loop is not None and not loop.ok and not cert.certified
@@ -369,16 +362,15 @@ def far_starts(rng: np.random.Generator, cfg: FormationConfig, count: int, hard:
 @pytest.mark.parametrize("case", ["paper-triangle", *sorted(CASES)])
 def test_shaped_far_starts(case):
     cfg = preset_config(case) if case == "paper-triangle" else CASES[case]()
-    gains = design_gains(cfg)
-    cert = closed_loop_for(cfg, gains)
+    point = design_point(cfg)
+    gains = point.require_gains()
+    cert = closed_loop_for(point)
     rng = np.random.default_rng(sorted(CASES).index(case) + 100 if case in CASES else 99)
     mission, offsets = mission_reference(cfg), formation_offsets(cfg)
     covered: dict[tuple[float, float], list[np.ndarray]] = {}
     verdicts = []
     for x in far_starts(rng, cfg, 3):
-        cov = cover_start(
-            cert, cfg.vehicle, cfg.envelope, (gains.alpha, gains.k1), gains.k_psi, mission, offsets, x, start="shaped"
-        )
+        cov = cover_start(cert, cfg.vehicle, cfg.envelope, gains, mission, offsets, x, start="shaped")
         verdicts.append(cov.covered)
         if cov.covered:
             assert cov.blend_time is not None and cov.turn_time is not None
@@ -538,7 +530,7 @@ def first_leaving_scale(
 def test_region_tightness(triangle):
     loop = triangle
     short = replace(loop, plan=replace(loop.plan, scenario=replace(loop.plan.scenario, horizon=25.0, samples=251)))
-    g = short.plan.gains
+    g = short.plan.design.require_gains()
     found = {}
     for dynamic in (False, True):
         k, direction = first_leaving_scale(short, np.random.default_rng(11), dynamic=dynamic)
@@ -547,7 +539,7 @@ def test_region_tightness(triangle):
             continue
         # the leaving start is one the certificate does not cover (consistency of check_run)
         x = starts_from_errors(short.fleet, direction * radii(short.cert.region.region) * k)
-        cov = check_run(short.cert, short.cfg.vehicle, short.cfg.envelope, (g.alpha, g.k1), g.k_psi, short.fleet, x)
+        cov = check_run(short.cert, short.cfg.vehicle, short.cfg.envelope, g, short.fleet, x)
         assert not cov.covered
         exit_time = run_batch(short, x[None])[0].exit_time
         assert exit_time is not None and (exit_time > 0 or not dynamic)

@@ -12,14 +12,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from auv_hinf.campaign import chunks, prepare, run_campaign, sample_run
-from auv_hinf.campaign_report import passed, summarize
-from auv_hinf.campaign_sample import initial_state, run_chunk
-from auv_hinf.cli import main
-from auv_hinf.config import preset_config
-from auv_hinf.coverage import initial_errors
+from auv_hinf.campaign.report import passed, summarize
+from auv_hinf.campaign.runner import run_campaign
+from auv_hinf.campaign.sampling import chunks, initial_state, prepare, run_chunk, sample_run
+from auv_hinf.certification.coverage import initial_errors
+from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.settings import DisturbanceConfig, UncertaintyConfig
 
 RUNS, HORIZON, SEED = 8, 20.0, 7
 
@@ -157,7 +157,7 @@ def test_local_workers_get_the_allocator_settings_and_even_chunks() -> None:
     pytest.importorskip("distributed")
     import os
 
-    from auv_hinf.campaign import WORKER_MALLOC, _balanced, dask_client
+    from auv_hinf.campaign.runner import WORKER_MALLOC, _balanced, dask_client
 
     with dask_client(workers=2) as client:
         env = client.run(lambda: {k: os.environ.get(k) for k in WORKER_MALLOC})

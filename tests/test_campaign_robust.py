@@ -8,12 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from auv_hinf.campaign import prepare, run_campaign, sample_run
-from auv_hinf.campaign_report import summarize
-from auv_hinf.campaign_sample import COEFFICIENTS, initial_state
-from auv_hinf.config import preset_config
-from auv_hinf.robust_summary import check_robust_run, declared_current
-from auv_hinf.settings import SimulationConfig
+from auv_hinf.campaign.report import summarize
+from auv_hinf.campaign.runner import run_campaign
+from auv_hinf.campaign.sampling import COEFFICIENTS, initial_state, prepare, sample_run
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.tables import SimulationConfig
+from auv_hinf.workflow.design_point import design_point
+from auv_hinf.workflow.robust_part import check_robust_run
 
 RUNS, HORIZON, SEED = 12, 12.0, 5
 
@@ -30,7 +31,7 @@ def test_vertex_runs_enumerate_the_box_corners(remus_setup) -> None:
     for i in range(s.robust.vertices):
         x = sample_run(s, i)
         assert np.all((x.multipliers == s.box[:, 0]) | (x.multipliers == s.box[:, 1]))
-        assert np.hypot(*x.current) == pytest.approx(declared_current(preset_config("remus-line")), rel=1e-12)
+        assert np.hypot(*x.current) == pytest.approx(design_point(preset_config("remus-line")).current, rel=1e-12)
         corners.add(tuple(x.multipliers))
     assert len(corners) == 2**9
     inner = sample_run(s, s.robust.vertices + 3)
@@ -54,7 +55,7 @@ def test_sampled_starts_are_covered_by_the_robust_certificate(remus_setup, index
             plant=dict(zip(COEFFICIENTS, x.multipliers.tolist())),
         ),
     )
-    verdict = check_robust_run(cfg, s.reference, init)
+    verdict = check_robust_run(design_point(cfg), s.reference, init)
     assert verdict.covered, verdict.reason
 
 

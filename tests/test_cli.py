@@ -10,9 +10,11 @@ import numpy as np
 import pytest
 
 import auv_hinf
-from auv_hinf.cli import main
-from auv_hinf.config import load_config, preset_config
+from auv_hinf.cli.main import main
+from auv_hinf.config.formation import load_config
+from auv_hinf.config.presets import preset_config
 from auv_hinf.exceptions import SolverError
+from auv_hinf.workflow.certificate import Certificate, certify
 
 
 def run(argv, capsys):
@@ -39,7 +41,7 @@ def test_scientific_gamma_and_equals_form(capsys):
 
 
 def test_unwritable_out_exits_2_before_computing(tmp_path, monkeypatch, capsys):
-    certificate_module = importlib.import_module("auv_hinf.certificate")
+    certificate_module = importlib.import_module("auv_hinf.workflow.certificate")
 
     def forbidden(*args, **kwargs):
         raise AssertionError("certify must not run")
@@ -55,7 +57,10 @@ def test_unwritable_out_exits_2_before_computing(tmp_path, monkeypatch, capsys):
 def test_out_directory_is_created(tmp_path, capsys):
     out = tmp_path / "a" / "b"
     code, _, _ = run(["certify", "--preset", "paper-triangle", "--out", str(out)], capsys)
-    assert code == 0 and json.loads((out / "certificate.json").read_text())["certified"] is True
+    assert code == 0 and json.loads((out / "certificate.json").read_text())["certificate"]["certified"] is True
+    # the file certify --out writes is the file Certificate.load reads
+    loaded = Certificate.load(out / "certificate.json")
+    assert loaded.certified and loaded.gains == certify(preset_config("paper-triangle")).gains
 
 
 def test_unknown_preset_lists_valid_names(capsys):
@@ -113,7 +118,7 @@ def test_negative_verdict_exit_1_with_reason(tmp_path, capsys):
 
 
 def test_internal_error_is_one_line_exit_1_and_debug_reraises(monkeypatch, capsys):
-    crosscheck_module = importlib.import_module("auv_hinf.crosscheck")
+    crosscheck_module = importlib.import_module("auv_hinf.design.crosscheck")
 
     def boom(*args, **kwargs):
         raise KeyError("boom\nsecond line")
@@ -131,7 +136,7 @@ def test_internal_error_is_one_line_exit_1_and_debug_reraises(monkeypatch, capsy
 
 @pytest.mark.parametrize("exc", [SolverError("no optimum"), type("SolverError", (Exception,), {})("cvxpy failed")])
 def test_solver_failure_exit_1(exc, monkeypatch, capsys):
-    crosscheck_module = importlib.import_module("auv_hinf.crosscheck")
+    crosscheck_module = importlib.import_module("auv_hinf.design.crosscheck")
 
     def fail(*args, **kwargs):
         raise exc

@@ -18,29 +18,28 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from auv_hinf.closed_loop import (
+from auv_hinf.certification.closed_loop import (
     ClosedLoopCertificate,
-    ErrorBounds,
     closed_loop_certificate,
-    envelope_margins,
     heading_decay_rate,
     heading_decay_upper,
     lmi_position_decay_rate,
     position_decay_certificate,
     position_decay_rate,
     shifted_peak,
-    start_bounds,
     thrust_bounds,
 )
-from auv_hinf.control_law import heading_gains
-from auv_hinf.design import alpha_stabilizing
-from auv_hinf.envelope import Envelope
+from auv_hinf.certification.margins import ErrorBounds, envelope_margins, inflate_envelope
+from auv_hinf.certification.region import ellipsoid_extent, pair_level, start_bounds
+from auv_hinf.config.schema import DEFAULT_POLES
+from auv_hinf.design.alpha import alpha_stabilizing
+from auv_hinf.design.blocks import hinf_norm
+from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.design.sigma import vehicle_sigma
 from auv_hinf.exceptions import DesignError
-from auv_hinf.loops import hinf_norm
-from auv_hinf.reference import ReferenceTube
-from auv_hinf.region import ellipsoid_extent, inflate_envelope, pair_level
-from auv_hinf.sigma import vehicle_sigma
-from auv_hinf.vehicle import body_block, inertial_block, paper2011, rotation
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.reference import ReferenceTube
+from auv_hinf.models.vehicle import body_block, inertial_block, paper2011, rotation
 
 LAM, K1 = -2.1, 0.5
 ENV = Envelope(u=(0.0, 3.5), v=(-1.0, 1.0), r=(-0.5, 0.5))
@@ -74,9 +73,9 @@ def triangle() -> dict[str, object]:
     params = paper2011()
     sigma = vehicle_sigma(params, ENV, LAM).upper
     alpha = alpha_stabilizing(LAM, 1.0 / sigma).alpha
-    k_psi = heading_gains(params)
+    k_psi = heading_gains(params, DEFAULT_POLES)
     tube = sine_tube()
-    cert = closed_loop_certificate(LAM, alpha, K1, sigma, params, ENV, k_psi, tube)
+    cert = closed_loop_certificate(params, ENV, tube, Gains(alpha, K1, k_psi), lam=LAM, sigma=sigma)
     return {"params": params, "sigma": sigma, "alpha": alpha, "k_psi": k_psi, "tube": tube, "cert": cert}
 
 
@@ -439,7 +438,7 @@ def test_thrust_bounds_by_sampling(triangle: dict, rng: np.random.Generator) -> 
     assert np.abs(tau_psi).max() <= t.moment
     assert np.abs(tau_xy[:, 0]).max() >= 0.5 * t.force_x  # not vacuous
     # same as calling thrust_bounds directly; the body-block rows are what is maximised
-    direct = thrust_bounds(params, inflate_envelope(ENV), tube, b, alpha, K1, triangle["k_psi"])
+    direct = thrust_bounds(params, inflate_envelope(ENV), tube, b, Gains(alpha, K1, triangle["k_psi"]))
     assert direct == t
     assert body_block(params, 3.5, 1.0, 0.5).shape == (2, 2)
     print(f"\nthrust bounds {t.to_dict()}")

@@ -9,22 +9,15 @@ import numpy as np
 import pytest
 import tomllib
 
-from auv_hinf.config import (
-    DisturbanceConfig,
-    FormationConfig,
-    ReferenceConfig,
-    SimulationConfig,
-    UncertaintyConfig,
-    config_from_dict,
-    load_config,
-    preset_config,
-)
-from auv_hinf.envelope import Envelope
+from auv_hinf.config.fields import PARAMETERS, VehiclePreset
+from auv_hinf.config.formation import FormationConfig, config_from_dict, load_config
+from auv_hinf.config.presets import PAPER_TRIANGLE_INITIAL, PRESETS, annotated_toml, preset_config, spread_start
+from auv_hinf.config.schema import json_schema
+from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.presets import PAPER_TRIANGLE_INITIAL, PRESETS, annotated_toml, spread_start
-from auv_hinf.schema import PARAMETERS, VehiclePreset, json_schema
-from auv_hinf.vehicle import PRESETS as VEHICLE_PRESETS
-from auv_hinf.vehicle import paper2011
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
+from auv_hinf.models.vehicle import paper2011
 
 NINE = {"m11": 200, "m22": 250, "m33": 80, "d11_lin": 70, "d11_quad": 100, "d22_lin": 100, "d22_quad": 200,
         "d33_lin": 50, "d33_quad": 100}  # fmt: skip
@@ -230,7 +223,7 @@ def test_demo_envelope_keeps_the_paper_gains():
     computed independently by brute force over the vertices, are those of the paper's envelope."""
     from itertools import product
 
-    from auv_hinf.envelope import PAPER_ENVELOPE
+    from auv_hinf.models.envelope import PAPER_ENVELOPE
 
     p = paper2011()
 

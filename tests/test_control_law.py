@@ -8,13 +8,16 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from auv_hinf.control_law import FormationController, RigidReference, VehicleLaw, heading_gains, saturate
+from auv_hinf.config.schema import DEFAULT_POLES
+from auv_hinf.design.gains import Gains, heading_gains
 from auv_hinf.exceptions import DesignError, ParameterError
-from auv_hinf.formation import JacobiTransform, inertial_block
-from auv_hinf.paths import SineReference
-from auv_hinf.postprocess import ground_velocity, jacobi_coordinates, positions_from_jacobi
-from auv_hinf.reference import FleetReference, Motion
-from auv_hinf.vehicle import paper2011, rhs
+from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.jacobi_maps import jacobi_coordinates, positions_from_jacobi
+from auv_hinf.models.paths import SineReference
+from auv_hinf.models.reference import FleetReference, Motion
+from auv_hinf.models.vehicle import inertial_block, paper2011, rhs
+from auv_hinf.simulation.law import FormationController, RigidReference, VehicleLaw, saturate
+from auv_hinf.simulation.postprocess import ground_velocity
 
 #: Forces are sums of terms up to ~1e4 N; dense Phi^-1 products at N = 50 (cond(Phi) ~ 50)
 #: lose a few more digits than the per-vehicle form, so 1e-9 relative is the agreement asked for.
@@ -59,7 +62,7 @@ def _random_states(rng: np.random.Generator, n: int) -> np.ndarray:
 
 def _law(**kw: object) -> VehicleLaw:
     par = paper2011()
-    return VehicleLaw(params=par, alpha=0.26, k1=0.5, k_psi=heading_gains(par), **kw)  # type: ignore[arg-type]
+    return VehicleLaw(params=par, gains=Gains(0.26, 0.5, heading_gains(par, DEFAULT_POLES)), **kw)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("n", [2, 3, 7, 50])
@@ -74,9 +77,7 @@ def test_vehicle_law_equals_jacobi_form(rng, n, orientation):
             params=law.params,
             transform=JacobiTransform(n),
             reference=source,
-            alpha=law.alpha,
-            k1=law.k1,
-            k_psi=law.k_psi,
+            gains=law.gains,
             orientation=law.orientation,
         )
         for t in (0.0, 7.3):
@@ -115,9 +116,9 @@ def test_perfect_model_error_dynamics(rng):
     )
     e, e_dot = s[:, :2] - m.p, pdot - m.v
     g = inertial_block(par, psi, u, v, r)
-    expected = np.einsum("nij,nj->ni", g, e_dot) - law.alpha * e_dot - law.k1 * e + m.a
+    expected = np.einsum("nij,nj->ni", g, e_dot) - law.gains.alpha * e_dot - law.gains.k1 * e + m.a
     assert_allclose(pdd, expected, rtol=0, atol=ROUND_TOL * np.abs(expected).max())
-    k1p, k2p = law.k_psi
+    k1p, k2p = law.gains.k_psi
     d33 = par.d33_lin + par.d33_quad * np.abs(r)
     e_psi, e_psi_dot = s[:, 2] - m.psi, r - m.r
     assert_allclose(d[:, 5] - m.r_dot, -k1p * e_psi - (k2p + d33 / par.m33) * e_psi_dot, atol=ROUND_TOL)
@@ -159,10 +160,12 @@ def test_saturation_flags():
 def test_bad_gains():
     par = paper2011()
     with pytest.raises(DesignError, match="k1 must be > 0"):
-        VehicleLaw(params=par, alpha=0.3, k1=0.0, k_psi=(1.0, 1.0))
+        Gains(0.3, 0.0, (1.0, 1.0))
+    with pytest.raises(ParameterError, match="alpha must be finite"):
+        Gains(float("nan"), 0.5, (1.0, 1.0))
     with pytest.raises(DesignError, match="orientation"):
-        VehicleLaw(params=par, alpha=0.3, k1=0.5, k_psi=(1.0, 1.0), orientation="sideways")  # type: ignore[arg-type]
+        VehicleLaw(params=par, gains=Gains(0.3, 0.5, (1.0, 1.0)), orientation="sideways")  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match="thrust_limit"):
-        VehicleLaw(params=par, alpha=0.3, k1=0.5, k_psi=(1.0, 1.0), thrust_limit=(1.0, -1.0, 1.0))
+        VehicleLaw(params=par, gains=Gains(0.3, 0.5, (1.0, 1.0)), thrust_limit=(1.0, -1.0, 1.0))
     with pytest.raises(ParameterError, match="offsets"):
         RigidReference(SineReference(), np.zeros((3, 3)))

@@ -1,4 +1,4 @@
-"""Coverage of one run by the closed-loop certificate (:mod:`auv_hinf.coverage`).
+"""Coverage of one run by the closed-loop certificate (:mod:`auv_hinf.certification.coverage`).
 
 The verdicts are checked against independent computations: the ellipsoid extents by
 sampling the ellipsoid's boundary, the envelope margins of the sine mission in closed
@@ -14,25 +14,20 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-import auv_hinf.coverage as coverage
-from auv_hinf.closed_loop import ClosedLoopCertificate
-from auv_hinf.config import FormationConfig
-from auv_hinf.coverage import BLEND_TIMES, TURN_TIMES, check_run, cover_start, initial_errors
-from auv_hinf.formation import regular_polygon
-from auv_hinf.plan import (
-    Gains,
-    closed_loop_for,
-    design_gains,
-    formation_offsets,
-    mission_reference,
-    plan_run,
-    with_start,
-)
-from auv_hinf.presets import preset_config
-from auv_hinf.reference import FleetReference, shaped_start
-from auv_hinf.region import envelope_margins
-from auv_hinf.simulation import simulate
-from auv_hinf.tubes import shaped_tube
+import auv_hinf.certification.coverage as coverage
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.certification.coverage import BLEND_TIMES, TURN_TIMES, check_run, cover_start, initial_errors
+from auv_hinf.certification.margins import envelope_margins
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.config.presets import preset_config
+from auv_hinf.design.gains import Gains
+from auv_hinf.models.formation import regular_polygon
+from auv_hinf.models.reference import FleetReference, shaped_start
+from auv_hinf.models.tubes import shaped_tube
+from auv_hinf.simulation.engine import simulate
+from auv_hinf.workflow.design_point import design_point
+from auv_hinf.workflow.nominal import closed_loop_for
+from auv_hinf.workflow.run_plan import plan_run, with_start
 
 
 @dataclass(frozen=True)
@@ -48,8 +43,7 @@ class Setup:
             self.cert,
             self.cfg.vehicle,
             self.cfg.envelope,
-            (g.alpha, g.k1),
-            g.k_psi,
+            g,
             self.fleet if fleet is None else fleet,
             initial,
             **kw,
@@ -61,8 +55,7 @@ class Setup:
             self.cert,
             self.cfg.vehicle,
             self.cfg.envelope,
-            (g.alpha, g.k1),
-            g.k_psi,
+            g,
             self.fleet.mission,
             self.fleet.offsets,
             initial,
@@ -73,9 +66,10 @@ class Setup:
 @pytest.fixture(scope="module")
 def tri() -> Setup:
     cfg = preset_config("paper-triangle")
-    gains = design_gains(cfg)
-    cert = closed_loop_for(cfg, gains)
-    return Setup(cfg, gains, cert, FleetReference(mission_reference(cfg), formation_offsets(cfg)))
+    point = design_point(cfg)
+    gains = point.require_gains()
+    cert = closed_loop_for(point)
+    return Setup(cfg, gains, cert, design_point(cfg).fleet())
 
 
 def start_with_errors(fleet: FleetReference, e, de, ep, dep) -> np.ndarray:

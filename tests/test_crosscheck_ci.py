@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from auv_hinf.crosscheck import crosscheck
+from auv_hinf.design.crosscheck import crosscheck
 
 GRID = [(lam, g) for lam in (-2.1, -1.2, -0.4) for g in (0.45, 0.6, 2**-0.5, 0.9, 2.86)]
 

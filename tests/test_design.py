@@ -9,15 +9,8 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from auv_hinf.design import (
-    alpha_minimal,
-    alpha_paper,
-    alpha_stabilizing,
-    design_alpha,
-    gamma_min,
-    position_loop,
-    theorem1_conditions,
-)
+from auv_hinf.design.alpha import alpha_minimal, alpha_paper, alpha_stabilizing, design_alpha, position_loop
+from auv_hinf.design.theorem1 import gamma_min, theorem1_conditions
 
 INV_SQRT2 = 2**-0.5
 # Closed forms are evaluated in a handful of flops: round-off tolerance.
@@ -142,7 +135,7 @@ def test_property_designs(lam, gamma):
 
 
 def test_regimes_and_gamma_ok_share_the_discriminant_tolerance():
-    from auv_hinf.design import DOUBLE_ROOT_RTOL, discriminant, discriminant_scale, riccati_regime
+    from auv_hinf.design.theorem1 import DOUBLE_ROOT_RTOL, discriminant, discriminant_scale, riccati_regime
 
     for lam in (-1e-3, -1.2, -1e3):
         gmin = gamma_min(lam)

@@ -121,7 +121,7 @@ def equation_numbers(text: str) -> set[int]:
 
 def test_every_cited_equation_is_on_the_equation_map():
     cited = set()
-    for path in PACKAGE.glob("*.py"):
+    for path in PACKAGE.rglob("*.py"):
         cited |= equation_numbers(path.read_text(encoding="utf-8"))
     assert {8, 32, 37} <= cited
     mapped = set()

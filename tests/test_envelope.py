@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from auv_hinf.envelope import PAPER_ENVELOPE, Envelope, check_interval
 from auv_hinf.exceptions import EnvelopeError
+from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope, check_interval
 
 
 def test_psi_wider_than_a_turn_rejected():

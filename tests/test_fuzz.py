@@ -17,10 +17,10 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from auv_hinf.cli import main
-from auv_hinf.config import FormationConfig, config_from_dict
-from auv_hinf.envelope import Envelope
+from auv_hinf.cli.main import main
+from auv_hinf.config.formation import FormationConfig, config_from_dict
 from auv_hinf.exceptions import ConfigError, EnvelopeError
+from auv_hinf.models.envelope import Envelope
 
 
 def fuzz(examples: int) -> settings:

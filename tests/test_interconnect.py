@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from auv_hinf import plan
-from auv_hinf.certificate import Certificate, certify
-from auv_hinf.config import preset_config
-from auv_hinf.control_law import FormationController
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.tables import ReferenceConfig
 from auv_hinf.exceptions import DesignError
-from auv_hinf.interconnect import certified_law, mission_fleet_reference
-from auv_hinf.settings import ReferenceConfig
-from auv_hinf.simulation import simulate
+from auv_hinf.simulation.engine import simulate
+from auv_hinf.simulation.law import FormationController
+from auv_hinf.workflow import run_plan as plan
+from auv_hinf.workflow.certificate import Certificate, certify
+from auv_hinf.workflow.design_point import design_point
 
 #: Straight-line mission of the linearisation test: surge speed (m/s) and course (rad).
 LINE_SPEED, LINE_HEADING = 1.5, 0.3
@@ -47,7 +47,7 @@ def region_start(c: Certificate, fraction: float = 0.6) -> np.ndarray:
     radius of the certified simultaneous start region, in varied directions and signs."""
     assert c.closed_loop is not None and c.closed_loop.certificate is not None
     reg = c.closed_loop.certificate.region.region
-    m = mission_fleet_reference(c.config).motion(0.0)
+    m = design_point(c.config).fleet().motion(0.0)
     n = c.config.n
     ang = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False) + 0.3
     sign = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
@@ -72,11 +72,9 @@ def test_controller_is_static_with_fleet_signals(cert):
 
 def test_controller_matches_the_paper_jacobi_form(cert, rng):
     """The nlsys output equals the independent O(N^2) Jacobi-coordinate law of eqs. (39), (41)."""
-    cfg, law = cert.config, certified_law(cert)
-    ref = mission_fleet_reference(cfg)
-    jac = FormationController(
-        params=cfg.vehicle, transform=cfg.transform, reference=ref, alpha=law.alpha, k1=law.k1, k_psi=law.k_psi
-    )
+    cfg, law = cert.config, cert.law()
+    ref = design_point(cfg).fleet()
+    jac = FormationController(params=cfg.vehicle, transform=cfg.transform, reference=ref, gains=law.gains)
     ctrl = cert.controller()
     for t in (0.0, 7.3, 41.0):
         m = ref.motion(t)
@@ -123,17 +121,17 @@ def test_closed_loop_matches_simulate(cert):
     assert pos_err < 1e-6, pos_err
     assert np.abs(states[..., 2:] - ours.states[..., 2:]).max() < 1e-6
     # and the fleet converged towards the mission (errors shrink by the certified decay)
-    m = mission_fleet_reference(cfg).motion(run.scenario.times[-1])
+    m = design_point(cfg).fleet().motion(run.scenario.times[-1])
     assert (
         np.linalg.norm(states[-1, :, :2] - m.p, axis=1).max()
-        < np.linalg.norm(x0[:, :2] - mission_fleet_reference(cfg).motion(0.0).p, axis=1).max()
+        < np.linalg.norm(x0[:, :2] - design_point(cfg).fleet().motion(0.0).p, axis=1).max()
     )
 
 
 def test_closed_loop_keeps_the_line_reference_exactly(line_cert):
     """On the reference the closed-loop vector field is the reference's own derivative."""
     sys = line_cert.closed_loop_system()
-    ref = mission_fleet_reference(line_cert.config)
+    ref = design_point(line_cert.config).fleet()
     n = line_cert.config.n
     for t in (0.0, 12.5, 100.0):
         m = ref.motion(t)
@@ -147,18 +145,18 @@ def test_linearisation_on_a_line_mission(line_cert):
     """ct.linearize about the reference at t = 0 has, per vehicle, the poles of the exact
     linearisation: along-track ``s^2 + (alpha + d11(U)/m11) s + k1``, cross-track
     ``s^2 + (alpha + d22_lin/m22) s + k1`` and the heading poles (placed at r = 0)."""
-    cfg, law, par = line_cert.config, certified_law(line_cert), line_cert.config.vehicle
+    cfg, law, par = line_cert.config, line_cert.law(), line_cert.config.vehicle
     n = cfg.n
-    m = mission_fleet_reference(cfg).motion(0.0)
+    m = design_point(cfg).fleet().motion(0.0)
     x0 = np.column_stack([m.p, m.psi, np.full(n, LINE_SPEED), np.zeros(n), np.zeros(n)])
     lin = ct.linearize(line_cert.closed_loop_system(), x0.ravel(), np.zeros(0), t=0.0)
     assert lin.A.shape == (6 * n, 6 * n) and np.all(np.isfinite(lin.A))
     eig = np.linalg.eigvals(lin.A)
     d11 = par.d11_lin + par.d11_quad * LINE_SPEED
     polys = [
-        [1.0, law.alpha + d11 / par.m11, law.k1],
-        [1.0, law.alpha + par.d22_lin / par.m22, law.k1],
-        [1.0, law.k_psi[1] + par.d33_lin / par.m33, law.k_psi[0]],
+        [1.0, law.gains.alpha + d11 / par.m11, law.gains.k1],
+        [1.0, law.gains.alpha + par.d22_lin / par.m22, law.gains.k1],
+        [1.0, law.gains.k_psi[1] + par.d33_lin / par.m33, law.gains.k_psi[0]],
     ]
     expected = np.concatenate([np.roots(p) for p in polys] * n)
     np.testing.assert_allclose(np.sort(np.roots(polys[2]).real), np.sort(cfg.heading_poles), rtol=1e-9)
@@ -169,6 +167,6 @@ def test_linearisation_on_a_line_mission(line_cert):
 
 
 def test_controller_needs_a_gain(cert):
-    no_gain = replace(cert, alpha_used=None, certified=False)
-    with pytest.raises(DesignError, match="no gain alpha"):
+    no_gain = replace(cert, gains=None, certified=False)
+    with pytest.raises(DesignError, match="has no gains"):
         no_gain.controller()

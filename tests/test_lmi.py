@@ -7,11 +7,13 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from auv_hinf.design import alpha_minimal, alpha_stabilizing, gamma_min
+from auv_hinf.design.alpha import alpha_minimal, alpha_stabilizing
+from auv_hinf.design.blocks import hinf_norm_peak, velocity_block
+from auv_hinf.design.lmi.core import LMI_RTOL, solve
+from auv_hinf.design.lmi.theorem1 import lmi_hinf_norm, lmi_minimal_alpha, lmi_stabilizing_alpha
+from auv_hinf.design.riccati import root_condition
+from auv_hinf.design.theorem1 import gamma_min
 from auv_hinf.exceptions import DesignError, SolverError
-from auv_hinf.lmi import LMI_RTOL, lmi_hinf_norm, lmi_minimal_alpha, lmi_stabilizing_alpha, solve
-from auv_hinf.loops import hinf_norm_peak, velocity_block
-from auv_hinf.riccati import root_condition
 
 INV_SQRT2 = 2**-0.5
 

@@ -5,26 +5,25 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 from dataclasses import replace
 from datetime import datetime, timezone
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import auv_hinf
-from auv_hinf.certificate import Certificate, certify
-from auv_hinf.config import config_from_dict, preset_config
-from auv_hinf.envelope import Envelope
+from auv_hinf.config.formation import config_from_dict
+from auv_hinf.config.presets import preset_config
+from auv_hinf.design.sigma import SigmaBounds
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.persist import (
-    FORMAT,
-    VERSION,
-    certificate_document,
-    certificate_from_document,
-    decode_value,
-    encode_value,
-    load_certificate,
-)
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.workflow.certificate import Certificate, certify
+from auv_hinf.workflow.codec import STORED_TYPES, decode_value, encode_value
+from auv_hinf.workflow.persist import FORMAT, VERSION, certificate_document, certificate_from_document
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
 
 
 @pytest.fixture(scope="module")
@@ -111,10 +110,10 @@ def test_second_save_is_byte_identical_apart_from_the_time_stamp(cert, tmp_path)
     assert strip(first) == strip(second)
     assert len(first.splitlines()) == len(strip(first)) + 1
     stamp = datetime(2030, 1, 2, 3, 4, 5, tzinfo=timezone.utc)
-    from auv_hinf.persist import save_certificate
+    from auv_hinf.workflow.persist import save_certificate
 
     a = save_certificate(cert, tmp_path / "x.json", created=stamp).read_bytes()
-    b = save_certificate(load_certificate(tmp_path / "x.json"), tmp_path / "y.json", created=stamp).read_bytes()
+    b = save_certificate(Certificate.load(tmp_path / "x.json"), tmp_path / "y.json", created=stamp).read_bytes()
     assert a == b
 
 
@@ -126,7 +125,7 @@ def test_document_header_and_complete_config(cert, tmp_path):
 
     doc = json.loads(text, parse_constant=no_constants)
     assert list(doc) == ["format", "version", "tool_version", "created", "config", "certificate", "state"]
-    assert doc["format"] == FORMAT == "auv-hinf-certificate" and doc["version"] == VERSION == 1
+    assert doc["format"] == FORMAT == "auv-hinf-certificate" and doc["version"] == VERSION == 2
     assert doc["tool_version"] == auv_hinf.__version__
     created = datetime.fromisoformat(doc["created"])
     assert created.utcoffset() is not None and created.utcoffset().total_seconds() == 0
@@ -204,14 +203,14 @@ def _doc(cert: Certificate) -> dict:
 def test_load_refuses_wrong_format_and_version(cert, tmp_path):
     doc = _doc(cert)
     with pytest.raises(ConfigError, match="not an auv-hinf certificate file"):
-        certificate_from_document({**doc, "format": "something-else"})
+        certificate_from_document({**doc, "format": "something-else"}, Certificate)
     with pytest.raises(ConfigError, match="not an auv-hinf certificate file"):
-        certificate_from_document([doc])
-    for bad in (2, 0, "1", True, None):
+        certificate_from_document([doc], Certificate)
+    for bad in (3, 0, "1", True, None):
         with pytest.raises(ConfigError, match="unsupported certificate version"):
-            certificate_from_document({**doc, "version": bad})
+            certificate_from_document({**doc, "version": bad}, Certificate)
     with pytest.raises(ConfigError, match="lacks"):
-        certificate_from_document({k: v for k, v in doc.items() if k != "state"})
+        certificate_from_document({k: v for k, v in doc.items() if k != "state"}, Certificate)
     # the bare `auv-hinf certify --json` output is not a certificate file
     p = tmp_path / "record.json"
     p.write_text(json.dumps(doc["certificate"]), encoding="utf-8")
@@ -224,23 +223,23 @@ def test_load_refuses_edited_files(cert, tmp_path):
     edited = json.loads(json.dumps(doc))
     edited["certificate"]["gamma"] = 1.0
     with pytest.raises(ConfigError, match=r"disagrees with its stored state in \['gamma'\]"):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
     edited = json.loads(json.dumps(doc))
     edited["state"]["alpha_used"] = 0.5
     with pytest.raises(ConfigError, match="disagrees"):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
     edited = json.loads(json.dumps(doc))
     edited["config"]["design"]["k1"] = 0.25  # the record says k1 = 0.5
     with pytest.raises(ConfigError, match="disagrees"):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
     edited = json.loads(json.dumps(doc))
     edited["config"]["design"]["k1"] = -1.0
     with pytest.raises(ConfigError, match="config: "):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
     edited = json.loads(json.dumps(doc))
     del edited["state"]["gamma"]
     with pytest.raises(ConfigError, match="missing \\['gamma'\\]"):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
 
 
 def test_load_rebuilds_only_package_dataclasses(cert):
@@ -248,21 +247,57 @@ def test_load_rebuilds_only_package_dataclasses(cert):
     edited = json.loads(json.dumps(doc))
     edited["state"]["crosscheck"]["$dataclass"] = "pathlib:PurePath"
     with pytest.raises(ConfigError, match="not part of auv_hinf"):
-        certificate_from_document(edited)
-    edited["state"]["crosscheck"]["$dataclass"] = "auv_hinf.certificate:certify"
-    with pytest.raises(ConfigError, match="not a dataclass"):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
+    edited["state"]["crosscheck"]["$dataclass"] = "auv_hinf.workflow.certificate:certify"
+    with pytest.raises(ConfigError, match="does not exist in this version"):
+        certificate_from_document(edited, Certificate)
     edited["state"]["crosscheck"] = {"$evil": 1}
     with pytest.raises(ConfigError, match="unknown tagged value"):
-        certificate_from_document(edited)
+        certificate_from_document(edited, Certificate)
 
 
-def test_class_moved_between_modules_is_still_found(cert):
+def test_types_are_stored_by_stable_name(cert):
     doc = _doc(cert)
     sigma = doc["state"]["sigma"]
-    assert sigma["$dataclass"] == "auv_hinf.sigma:SigmaBounds"
-    sigma["$dataclass"] = "auv_hinf.old_module:SigmaBounds"
-    assert_identical(certificate_from_document(doc), cert)
+    assert sigma["$dataclass"] == "SigmaBounds"  # no module path: moving the class breaks nothing
+    assert STORED_TYPES["SigmaBounds"] is SigmaBounds
+    sigma["$dataclass"] = "NoSuchType"
+    with pytest.raises(ConfigError, match="does not exist in this version"):
+        certificate_from_document(doc, Certificate)
+
+
+def test_stored_type_names_are_unique_and_cover_the_certificate(cert):
+    names = [cls.__name__ for cls in STORED_TYPES.values()]
+    assert len(names) == len(set(names))
+    text = json.dumps(_doc(cert)["state"])
+    assert set(re.findall(r'"\$dataclass": "([^"]+)"', text)) <= set(STORED_TYPES)
+
+
+@pytest.mark.parametrize("preset", ["paper-triangle", "remus-line"])
+def test_version_1_files_of_0_2_0_still_load(preset):
+    path = FIXTURES / f"certificate-v0.2.0-{preset}.json"
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    assert doc["version"] == 1 and doc["tool_version"] == "0.2.0"
+    old = Certificate.load(path)
+    now = certify(preset_config(preset))
+    assert old.certified is doc["certificate"]["certified"] is True
+    assert old.alpha_used == doc["certificate"]["alpha"]["used"] == now.alpha_used
+    # the gains that ran in 0.2.0 are restored: the robust design's, or the Theorem 1 gains
+    assert old.gain_source == now.gain_source
+    assert old.gains is not None and now.gains is not None
+    np.testing.assert_allclose(
+        [old.gains.alpha, old.gains.k1, *old.gains.k_psi], [now.gains.alpha, now.gains.k1, *now.gains.k_psi], rtol=1e-9
+    )
+    # an old file saved again is a version 2 file that loads to the same certificate
+    again = certificate_from_document(_doc(old), Certificate)
+    assert again.gains == old.gains and again.to_dict() == old.to_dict()
+
+
+def test_version_1_file_with_an_edited_record_is_refused():
+    doc = json.loads((FIXTURES / "certificate-v0.2.0-paper-triangle.json").read_text(encoding="utf-8"))
+    doc["certificate"]["gamma"] = 1.0
+    with pytest.raises(ConfigError, match="disagrees"):
+        certificate_from_document(doc, Certificate)
 
 
 def test_unreadable_files(tmp_path):

@@ -1,4 +1,4 @@
-"""From a configuration to a certified run (:mod:`auv_hinf.plan`).
+"""From a configuration to a certified run (:mod:`auv_hinf.workflow.run_plan`).
 
 The report's measured numbers are recomputed from the raw trajectory and the reference,
 the measured decay rate from its documented definition, and the gains against the full
@@ -13,27 +13,18 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from auv_hinf.certificate import certify
-from auv_hinf.config import FormationConfig
-from auv_hinf.envelope import Envelope
-from auv_hinf.plan import (
-    closed_loop_for,
-    design_gains,
-    formation_offsets,
-    initial_states,
-    measured_decay_rate,
-    mission_reference,
-    plan_run,
-    run_report,
-    with_start,
-)
-from auv_hinf.presets import TRIANGLE_SHAPE, preset_config
-from auv_hinf.reference import FleetReference
-from auv_hinf.region import start_bounds
-from auv_hinf.run_metrics import DECAY_MEASURE_DROP
-from auv_hinf.settings import ReferenceConfig, SimulationConfig
-from auv_hinf.simulation import simulate
-from auv_hinf.vehicle import remus100
+from auv_hinf.certification.region import start_bounds
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.config.presets import TRIANGLE_SHAPE, preset_config
+from auv_hinf.config.tables import ReferenceConfig, SimulationConfig
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.vehicle import remus100
+from auv_hinf.simulation.engine import simulate
+from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP
+from auv_hinf.workflow.certificate import certify
+from auv_hinf.workflow.design_point import design_point, formation_offsets, initial_states
+from auv_hinf.workflow.nominal import closed_loop_for
+from auv_hinf.workflow.run_plan import measured_decay_rate, plan_run, run_report, with_start
 
 REPORT_KEYS = {
     "stayed_in_envelope",
@@ -61,12 +52,12 @@ ERROR_KEYS = {"position_error", "velocity_error", "heading_error", "yaw_rate_err
 @pytest.fixture(scope="module")
 def triangle():
     cfg = preset_config("paper-triangle")
-    return cfg, closed_loop_for(cfg, design_gains(cfg))
+    return cfg, closed_loop_for(design_point(cfg))
 
 
 def inside_start(cfg: FormationConfig, cert, rng: np.random.Generator, scale: float = 0.9) -> np.ndarray:
     """A start whose errors against the raw mission are ``scale`` times the region's radii."""
-    fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg))
+    fleet = design_point(cfg).fleet()
     m = fleet.motion(0.0)
     reg = cert.region.region
     th = rng.uniform(0, 2 * np.pi, (2, cfg.n))
@@ -89,9 +80,9 @@ def test_run_report_keys_and_measured_errors(triangle, rng):
     assert set(rep["measured_errors"]) == ERROR_KEYS == set(rep["certified_errors"])
     assert rep["start"] == "paper" and rep["blend_time"] is None and rep["certificate_covers_run"] is True
     assert rep["stayed_in_envelope"] is True and rep["first_exit_time"] is None
-    assert rep["alpha"] == plan.gains.alpha and rep["k1"] == cfg.k1
+    assert rep["alpha"] == plan.design.require_gains().alpha and rep["k1"] == cfg.k1
     # measured errors recomputed from the states and the raw mission
-    motion = FleetReference(mission_reference(cfg), formation_offsets(cfg)).motion(res.t)
+    motion = design_point(cfg).fleet().motion(res.t)
     st = res.states
     vel = np.stack(
         [
@@ -186,14 +177,16 @@ def test_design_gains_agree_with_certify(which):
         )
     else:
         cfg = preset_config(which)
-    gains = design_gains(cfg)
+    point = design_point(cfg)
     cert = certify(cfg)
-    assert gains.alpha == pytest.approx(cert.alpha_used, rel=1e-12)
-    assert gains.lam == pytest.approx(cert.lam, rel=1e-12)
-    assert gains.sigma == pytest.approx(cert.sigma.upper, rel=1e-12)
-    assert gains.gamma == pytest.approx(cert.gamma, rel=1e-12)
+    assert point.gains == cert.gains and point.source == cert.gain_source
+    if point.source == "theorem1":
+        assert point.require_gains().alpha == pytest.approx(cert.alpha_used, rel=1e-12)
+    assert point.lam == pytest.approx(cert.lam, rel=1e-12)
+    assert point.sigma.upper == pytest.approx(cert.sigma.upper, rel=1e-12)
+    assert point.gamma == pytest.approx(cert.gamma, rel=1e-12)
     assert cert.closed_loop is not None and cert.closed_loop.certificate is not None
-    assert cert.closed_loop.certificate.rate == pytest.approx(closed_loop_for(cfg, gains).rate, rel=1e-12)
+    assert cert.closed_loop.certificate.rate == pytest.approx(closed_loop_for(design_point(cfg)).rate, rel=1e-12)
 
 
 def test_initial_states_and_offsets(triangle):

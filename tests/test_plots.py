@@ -17,9 +17,9 @@ from matplotlib.contour import ContourSet
 from matplotlib.quiver import Quiver
 
 from auv_hinf import plots
-from auv_hinf.envelope import Envelope, envelope_lambda
-from auv_hinf.sigma import vehicle_sigma
-from auv_hinf.vehicle import VehicleParams, paper2011
+from auv_hinf.design.sigma import vehicle_sigma
+from auv_hinf.models.envelope import Envelope, envelope_lambda
+from auv_hinf.models.vehicle import VehicleParams, paper2011
 
 N_VEHICLES = 4
 HORIZON = 120.0

@@ -11,26 +11,19 @@ from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.formation import JacobiTransform
-from auv_hinf.lawnmower import SMOOTHSTEP_D1_MAX, SMOOTHSTEP_D2_MAX
-from auv_hinf.paths import GL_NODES, SMOOTHSTEP
-from auv_hinf.reference import (
-    BLEND_H0,
-    BLEND_H1,
-    H0_SUP,
-    H1_SUP,
-    REFERENCES,
+from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.lawnmower import SMOOTHSTEP_D1_MAX, SMOOTHSTEP_D2_MAX, LawnmowerReference
+from auv_hinf.models.paths import (
+    GL_NODES,
+    SMOOTHSTEP,
     CircleReference,
-    FleetReference,
-    LawnmowerReference,
     LineReference,
     SineReference,
     heading_from_velocity,
-    reference_from_dict,
-    shaped_start,
-    wrap_angle,
 )
-from auv_hinf.tubes import TUBE_RTOL, fleet_tube, mission_tube, shaped_tube
+from auv_hinf.models.reference import REFERENCES, FleetReference, reference_from_dict, shaped_start, wrap_angle
+from auv_hinf.models.shaping import BLEND_H0, BLEND_H1, H0_SUP, H1_SUP
+from auv_hinf.models.tubes import TUBE_RTOL, fleet_tube, mission_tube, shaped_tube
 
 MISSIONS = {
     "sine-paper": SineReference(),

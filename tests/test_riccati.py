@@ -7,10 +7,11 @@ import math
 import numpy as np
 import pytest
 
-import auv_hinf.riccati as riccati
-from auv_hinf.design import (
+import auv_hinf.design.riccati as riccati
+from auv_hinf.design.alpha import alpha_stabilizing
+from auv_hinf.design.riccati import ARE_RTOL, riccati_alpha, root_condition
+from auv_hinf.design.theorem1 import (
     DOUBLE_ROOT_RTOL,
-    alpha_stabilizing,
     discriminant,
     discriminant_scale,
     gamma_min,
@@ -19,7 +20,6 @@ from auv_hinf.design import (
     theorem1_conditions,
 )
 from auv_hinf.exceptions import DesignError, SolverError
-from auv_hinf.riccati import ARE_RTOL, riccati_alpha, root_condition
 
 INV_SQRT2 = 2**-0.5
 

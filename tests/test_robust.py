@@ -10,24 +10,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.control_law import VehicleLaw, heading_gains
-from auv_hinf.envelope import Envelope
-from auv_hinf.paths import LineReference
-from auv_hinf.reference import FleetReference
-from auv_hinf.robust import RobustGains, robust_certificate
-from auv_hinf.robust_design import family_gains
-from auv_hinf.robust_margin import exhibited_scale, linearised_scale, trim_max_real
-from auv_hinf.simulation import Scenario, simulate
-from auv_hinf.tubes import mission_tube
-from auv_hinf.uncertainty import (
-    PARAMETERS,
-    ParameterBox,
-    TubeSummary,
-    box_lambda,
-    box_sigma,
-    heading_perturbation,
-)
-from auv_hinf.vehicle import body_block, paper2011, remus100
+from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.paths import LineReference
+from auv_hinf.models.reference import FleetReference
+from auv_hinf.models.tubes import mission_tube
+from auv_hinf.models.vehicle import body_block, paper2011, remus100
+from auv_hinf.robust.bandwidth import family_gains
+from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary, box_lambda, box_sigma, heading_perturbation
+from auv_hinf.robust.certificate import robust_certificate
+from auv_hinf.robust.margin import exhibited_scale, linearised_scale, trim_max_real
+from auv_hinf.simulation.engine import simulate
+from auv_hinf.simulation.law import VehicleLaw
+from auv_hinf.simulation.scenario import Scenario
 
 #: Relative slack of a sampled maximum against a certified bound: pure round-off.
 SAMPLE_RTOL = 1e-12
@@ -67,7 +62,7 @@ def test_box_sigma_bounds_sampled_plants_and_states(vehicle) -> None:
 
 
 def test_degenerate_box_sigma_equals_nominal_vertex_sigma() -> None:
-    from auv_hinf.sigma import vehicle_sigma
+    from auv_hinf.design.sigma import vehicle_sigma
 
     nom = paper2011()
     env = Envelope(u=(0.0, 3.5), v=(-1.5, 1.5), r=(-0.5, 0.5))
@@ -97,13 +92,13 @@ def test_heading_stiffness_range_contains_sampled_values() -> None:
 def test_linearised_heading_margin_agrees_with_simulator_jacobian(poles, current) -> None:
     """Closed-form vertex scale (heading stiffness) vs eigenvalues of the simulator's Jacobian."""
     box = _box()
-    gains = RobustGains(0.5, 0.5, heading_gains(box.nominal, poles))
+    gains = Gains(0.5, 0.5, heading_gains(box.nominal, poles))
     lin = linearised_scale(box, gains, 1.5, current, 4.99)
     w = exhibited_scale(box, gains, 1.5, current, 4.99, lin)
     assert w is not None
     assert w.scale == pytest.approx(lin, rel=0.10)
     # the witness really is unstable, and the same corner just inside the scale is not
-    law = VehicleLaw(params=box.nominal, alpha=0.5, k1=0.5, k_psi=gains.k_psi)
+    law = VehicleLaw(params=box.nominal, gains=Gains(0.5, 0.5, gains.k_psi))
     mult = np.array([w.multipliers[n] for n in PARAMETERS])
     assert trim_max_real(law, box.plant(mult), 1.5, np.array(w.current)) > 0
     inner = 1.0 + 0.95 * (mult - 1.0)
@@ -113,7 +108,7 @@ def test_linearised_heading_margin_agrees_with_simulator_jacobian(poles, current
 def test_nominal_heading_gains_lose_the_issue_vertex() -> None:
     """The REMUS corner m11 x0.9, m22 x1.1 is unstable with poles (-1, -1.5) at scale 1 (issue 10)."""
     box = _box()
-    law = VehicleLaw(params=box.nominal, alpha=0.5, k1=0.5, k_psi=heading_gains(box.nominal, (-1.0, -1.5)))
+    law = VehicleLaw(params=box.nominal, gains=Gains(0.5, 0.5, heading_gains(box.nominal, (-1.0, -1.5))))
     mult = np.array([0.9, 1.1, 0.9, 1, 1, 1, 1, 1, 1], dtype=float)
     assert trim_max_real(law, box.plant(mult), 1.5, np.zeros(2)) > 0
 
@@ -132,7 +127,7 @@ def test_remus_certificate_covers_and_reverifies(remus_certificate) -> None:
     assert cert.stable and cert.covers, cert.reasons
     b = cert.bounds
     assert b is not None and 0 < b.position < 1.0 and 0 < b.heading < 0.1
-    from auv_hinf.lmi.robust import heading_matrix, heading_vertices
+    from auv_hinf.design.lmi.ellipsoid import heading_matrix, heading_vertices
 
     q = cert.heading_ellipsoid.matrix
     for a in heading_vertices(cert.heading.stiffness, cert.heading.damping):
@@ -153,7 +148,7 @@ def test_sampled_plants_and_currents_stay_inside_the_certified_bounds(remus_cert
         c = 0.2 * np.sqrt(rng.uniform()) * np.array([np.cos(ang), np.sin(ang)])
         init = np.array([[0.0, 0.0, 0.0, 1.5 - c[0], -c[1], 0.0], [0.0, 10.0, 0.0, 1.5 - c[0], -c[1], 0.0]])
         scn = Scenario(
-            law=VehicleLaw(params=box.nominal, alpha=gains.alpha, k1=gains.k1, k_psi=gains.k_psi),
+            law=VehicleLaw(params=box.nominal, gains=Gains(gains.alpha, gains.k1, gains.k_psi)),
             reference=FleetReference(ref, offsets),
             plant=box.plant(mult),
             initial=init,

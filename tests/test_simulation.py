@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import replace
 
@@ -9,16 +10,19 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from auv_hinf._typing import OrientationLaw
 from auv_hinf.arrays import stack_last
-from auv_hinf.control_law import FormationController, RigidReference, wrap_angle
-from auv_hinf.envelope import Envelope
-from auv_hinf.formation import JacobiTransform, regular_polygon
-from auv_hinf.paths import SineReference
-from auv_hinf.postprocess import envelope_margin, ground_velocity
-from auv_hinf.reference import shaped_start
-from auv_hinf.scenarios import paper_scenario
-from auv_hinf.simulation import ScenarioBatch, batch_system, closed_loop_rhs, simulate, simulate_batch
-from auv_hinf.vehicle import paper2011, rhs
+from auv_hinf.config.presets import preset_config
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.formation import JacobiTransform, regular_polygon
+from auv_hinf.models.paths import SineReference
+from auv_hinf.models.reference import shaped_start, wrap_angle
+from auv_hinf.models.vehicle import VehicleParams, paper2011, rhs
+from auv_hinf.simulation.engine import batch_system, closed_loop_rhs, simulate, simulate_batch
+from auv_hinf.simulation.law import FormationController, RigidReference
+from auv_hinf.simulation.postprocess import envelope_margin, ground_velocity
+from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
+from auv_hinf.workflow.run_plan import plan_run
 
 #: DOPRI and scipy's RK45 share the tableau and step control, but the error estimate is a
 #: massive cancellation (relative rounding noise ~1e-5), so last-bit differences (BLAS
@@ -27,6 +31,20 @@ from auv_hinf.vehicle import paper2011, rhs
 #: of the raw paper start (rtol = atol = 1e-8).
 INTEGRATOR_AGREEMENT_M = 1e-6
 TRANSIENT_AGREEMENT_M = 2e-5
+
+
+def paper_scenario(
+    name: str,
+    *,
+    horizon: float | None = None,
+    samples: int = 3001,
+    orientation: OrientationLaw = "corrected",
+    plant: VehicleParams | None = None,
+) -> Scenario:
+    """The preset's run from its raw (paper) reference: the paper's Section V set-up."""
+    scn = plan_run(preset_config(name), start="paper", horizon=horizon, samples=samples).scenario
+    law = dataclasses.replace(scn.law, orientation=orientation)
+    return dataclasses.replace(scn, law=law, plant=plant or scn.plant)
 
 
 @pytest.fixture(scope="module")
@@ -205,9 +223,7 @@ def test_rhs_cost_at_n1000(rng):
         params=scn.law.params,
         transform=JacobiTransform(n),
         reference=scn.reference,
-        alpha=scn.law.alpha,
-        k1=scn.law.k1,
-        k_psi=scn.law.k_psi,
+        gains=scn.law.gains,
     )
     s = scn.initial
 

@@ -13,9 +13,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from auv_hinf.envelope import Envelope, envelope_lambda
-from auv_hinf.sigma import vehicle_sigma
-from auv_hinf.vehicle import (
+from auv_hinf.design.sigma import vehicle_sigma
+from auv_hinf.models.envelope import Envelope, envelope_lambda
+from auv_hinf.models.vehicle import (
     VehicleParams,
     body_block,
     coriolis_damping_matrix,

@@ -1,0 +1,1 @@
+"""Monte Carlo campaigns: sampling, batched runs on Dask, robust start sets and reports."""

@@ -1,0 +1,160 @@
+"""Campaign outputs: the verdict, ``summary.json``, ``runs.parquet`` and the histograms.
+
+A run *passes* when a certificate applies to it and every measured error stayed within its
+certified bound and the velocities in the envelope; or, when no certificate applies, when it
+merely stayed in the envelope. The robust certificate applies to every run when a box or a
+current is declared and it covers them; otherwise the nominal one applies to the runs with
+the nominal plant and no current.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from auv_hinf.campaign.sampling import COEFFICIENTS, ERROR_KINDS
+from auv_hinf.workflow.codec import json_safe
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from auv_hinf.campaign.runner import Campaign
+
+#: Units of the error kinds of :data:`~auv_hinf.campaign.sampling.ERROR_KINDS`.
+UNITS = {"position": "m", "velocity": "m/s", "heading": "rad", "yaw_rate": "rad/s"}
+#: Note added to the summary when some runs are outside the nominal certificate's scope.
+ROBUST_NOTE = (
+    "runs with a perturbed plant or a current have inside_bounds = NA: the robust certificate "
+    "does not cover the declared box and current, and the nominal one assumes a known plant, no current"
+)
+
+
+def passed(table: pd.DataFrame) -> pd.Series:
+    """Per-run verdict: ``inside_bounds`` where it applies, else ``stayed_in_envelope``."""
+    inside = table["inside_bounds"]
+    return inside.fillna(table["stayed_in_envelope"]).astype(bool)
+
+
+def summarize(camp: Campaign) -> dict[str, Any]:
+    """The ``summary.json`` object: counts, fractions, worst ratios, throughput (s, runs/s)."""
+    t, s, cert = camp.table, camp.setup, camp.certificate
+    k = len(t)
+    applicable = t["inside_bounds"].notna()
+    n_app = int(applicable.sum())
+    inside = int(t["inside_bounds"].fillna(False).astype(bool).sum())
+    worst: dict[str, float | None] = {}
+    for kind in ERROR_KINDS:
+        col = t.loc[applicable, f"ratio_{kind}_error"]
+        worst[f"{kind}_error"] = float(col.max()) if n_app else None
+    # the measured rate is that of the nominal Lyapunov function towards zero error: with a
+    # perturbed plant or a current the errors settle at an offset, so it says nothing there
+    rates = t.loc[applicable & t["nominal"], "measured_decay_rate"].dropna()
+    notes = []
+    if n_app < k:
+        notes.append(ROBUST_NOTE + (f" ({s.robust_reason})" if s.robust_reason else ""))
+    if not s.certificate_applies:
+        notes.append("the certified thrust exceeds the configured thrust limit: the certificate covers no run")
+    veh_s = k * s.n * s.horizon
+    wall = camp.wall_time
+    return {
+        "config": s.name,
+        "n": s.n,
+        "runs": k,
+        "seed": s.seed,
+        "horizon": s.horizon,
+        "chunk": camp.chunk,
+        "executor": camp.executor,
+        "certificate": "nominal" if s.robust is None else "robust",
+        "start_region": cert.region.region.to_dict() if s.robust is None else "robust invariant ellipsoids",
+        "region_error_bounds": certified_bounds(camp),
+        "box_vertex_runs": 0 if s.robust is None else min(k, s.robust.vertices),
+        "uncertainty_box": {c: list(b) for c, b in zip(COEFFICIENTS, s.box.tolist()) if b != [1.0, 1.0]},
+        "current_speed": s.current_speed,
+        "counts": {
+            "runs": k,
+            "certificate_applies": n_app,
+            "not_applicable": k - n_app,
+            "inside_bounds": inside,
+            "outside_bounds": n_app - inside,
+            "left_envelope": int((~t["stayed_in_envelope"].astype(bool)).sum()),
+            "passed": int(passed(t).sum()),
+        },
+        "fraction_inside": inside / n_app if n_app else None,
+        "worst_ratio": worst,
+        "worst_tail_position_ratio": float(t.loc[applicable, "ratio_tail_position_error"].max()) if n_app else None,
+        "certified_decay_rate": cert.rate if s.robust is None else s.robust.decay_rate,
+        "min_measured_decay_rate": float(rates.min()) if len(rates) else None,
+        "throughput": {
+            "runs_per_second": k / wall if wall > 0 else None,
+            "vehicle_seconds_per_wall_second": veh_s / wall if wall > 0 else None,
+            "wall_time": wall,
+            "setup_time": camp.setup_time,
+        },
+        "ok": bool(passed(t).all()),
+        "notes": notes,
+    }
+
+
+def certified_bounds(camp: Campaign) -> dict[str, float]:
+    """Bounds over every start the campaign draws: the robust certificate's, else the nominal region's."""
+    rob = camp.setup.robust
+    if rob is not None:
+        return {kind: float(b) for kind, b in zip(ERROR_KINDS, rob.bounds)}
+    return dict(camp.certificate.region.bounds.to_dict())
+
+
+def save_histograms(camp: Campaign, out: Path) -> list[Path]:
+    """Histograms of the measured excursions with the certified bounds as vertical lines.
+
+    ``excursions.png``: per error kind, the largest error of each run (over time and
+    vehicles) and the certificate's bound over the whole start region.
+    ``bound_ratios.png``: per kind, measured / per-start certified bound of the runs the
+    certificate applies to, with the line at 1. Returns the paths written.
+    """
+    from matplotlib.figure import Figure  # no pyplot: no backend or display needed
+
+    t = camp.table
+    region = certified_bounds(camp)
+    paths = []
+    fig = Figure(figsize=(14, 3.4), layout="constrained")
+    axes = fig.subplots(1, 4)
+    for ax, kind in zip(axes, ERROR_KINDS):
+        ax.hist(t[f"max_{kind}_error"].to_numpy(float), bins=30, color="tab:blue", alpha=0.8)
+        ax.axvline(region[kind], color="tab:red", lw=1.5, label="certified bound (start set)")
+        ax.set_xlabel(f"max {kind.replace('_', ' ')} error [{UNITS[kind]}]")
+        ax.set_ylabel("runs")
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"{camp.setup.name}: {len(t)} runs, measured excursions")
+    paths.append(out / "excursions.png")
+    fig.savefig(paths[-1], dpi=110)
+    app = t[t["inside_bounds"].notna()]
+    fig = Figure(figsize=(14, 3.4), layout="constrained")
+    axes = fig.subplots(1, 4)
+    for ax, kind in zip(axes, ERROR_KINDS):
+        vals = app[f"ratio_{kind}_error"].to_numpy(float)
+        ax.hist(vals[np.isfinite(vals)], bins=30, color="tab:green", alpha=0.8)
+        ax.axvline(1.0, color="tab:red", lw=1.5, label="certified bound of the start")
+        ax.set_xlabel(f"{kind.replace('_', ' ')}: measured / certified")
+        ax.set_ylabel("runs")
+    axes[0].legend(fontsize=7)
+    which = "nominal" if camp.setup.robust is None else "robust"
+    fig.suptitle(f"{camp.setup.name}: {len(app)} runs covered by the {which} certificate")
+    paths.append(out / "bound_ratios.png")
+    fig.savefig(paths[-1], dpi=110)
+    return paths
+
+
+def write_outputs(camp: Campaign, out: Path) -> dict[str, Any]:
+    """Write ``runs.parquet``, ``summary.json`` and the PNG histograms to ``out``; return the summary."""
+    out.mkdir(parents=True, exist_ok=True)
+    summary = summarize(camp)
+    camp.table.to_parquet(out / "runs.parquet", index=False)
+    (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=2))
+    save_histograms(camp, out)
+    return summary
+
+
+__all__ = ["ROBUST_NOTE", "UNITS", "certified_bounds", "passed", "save_histograms", "summarize", "write_outputs"]

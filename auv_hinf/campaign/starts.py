@@ -1,0 +1,163 @@
+"""The robust certificate as a campaign samples and checks it: start sets, box vertices, bounds.
+
+When a configuration declares an ``[uncertainty]`` box or a ``[disturbance]`` current and its
+robust certificate (:func:`~auv_hinf.workflow.robust_part.robust_summary`) covers them, a campaign
+draws every run inside what that certificate is about, and checks every vehicle of every run
+against its bounds:
+
+* **Starts.** Per vehicle, ``(e - e_c, e')`` uniform in the 4-D position ellipsoid
+  ``sum_axes [e~, e'] P [e~, e']^T <= d^2`` (``e_c = -lam c/(l k1)``, the certificate's
+  current-shifted equilibrium) and ``(e_psi, e_psi')`` uniform in the heading ellipse
+  ``[e_psi, e_psi'] Q [e_psi, e_psi']^T <= h^2``. Uniform in volume puts most starts near the
+  boundary, where the bounds are tight.
+* **Plants.** The first ``2^d`` runs (``d`` declared parameters) are the box's vertices, run
+  ``i`` taking the upper end of parameter ``k`` when bit ``k`` of ``i`` is set, with a current
+  of the full declared speed in a random direction; the others are uniform in the box, with a
+  current uniform in the disc.
+* **Check.** Each vehicle's sup over the samples of ``||e||``, ``||e'||``, ``|e_psi|`` and
+  ``|e_psi'|`` must lie within the certified bounds, and the run must stay in the envelope.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.design.lmi.ellipsoid import Ellipsoid
+from auv_hinf.exceptions import ParameterError
+from auv_hinf.robust.certificate import RobustCertificate
+from auv_hinf.workflow.design_point import DesignPoint
+from auv_hinf.workflow.robust_part import robust_summary
+
+#: The start sets are shrunk by this relative factor so that round-off in building the initial
+#: state (rotations of the body velocity) cannot put a start outside the verified ellipsoid.
+START_SHRINK = 1e-9
+
+
+@dataclass(frozen=True)
+class RobustStart:
+    """A covering robust certificate as a campaign samples from it and checks against it.
+
+    Attributes
+    ----------
+    certificate : RobustCertificate
+        Covers the declared box and current: it has both invariant sets and the bounds.
+    declared : tuple of int
+        Indices of the box parameters with a non-degenerate range (the vertex bits).
+    """
+
+    certificate: RobustCertificate
+    declared: tuple[int, ...]
+
+    def _sets(self) -> tuple[Ellipsoid, Ellipsoid, float, float]:
+        c = self.certificate
+        pos, head, hp, d = c.position_ellipsoid, c.heading_ellipsoid, c.heading, c.position_disturbance
+        if pos is None or head is None or hp is None or d is None:  # pragma: no cover - a covering one has them
+            raise ParameterError("a robust campaign needs a certificate with both invariant sets")
+        return pos, head, float(d), float(hp.disturbance)
+
+    @property
+    def position(self) -> FloatArray:
+        """``P`` of the position ellipsoid (per unit disturbance) on ``[e~, e']`` per axis."""
+        return self._sets()[0].matrix
+
+    @property
+    def position_level(self) -> float:
+        """Its level ``d`` (m/s^2): the set is ``V <= d^2``."""
+        return self._sets()[2]
+
+    @property
+    def heading(self) -> FloatArray:
+        """``Q`` of the heading ellipsoid on ``[e_psi, e_psi']``."""
+        return self._sets()[1].matrix
+
+    @property
+    def heading_level(self) -> float:
+        """Its level ``h`` (rad/s^2)."""
+        return self._sets()[3]
+
+    @property
+    def bounds(self) -> FloatArray:
+        """Certified per-vehicle bounds of position (m), velocity (m/s), heading (rad), yaw rate (rad/s)."""
+        b = self.certificate.bounds
+        if b is None:  # pragma: no cover - a covering certificate has bounds
+            raise ParameterError("a robust campaign needs a certificate with bounds")
+        return np.array([b.position, b.velocity, b.heading, b.yaw_rate])
+
+    @property
+    def decay_rate(self) -> float:
+        """Certified decay rate of the robust Lyapunov functions towards the invariant sets (1/s)."""
+        return float(self.certificate.decay_rate or 0.0)
+
+    @property
+    def vertices(self) -> int:
+        """Number of box vertices, run first."""
+        return int(2 ** len(self.declared))
+
+    def sample_errors(
+        self, rng: np.random.Generator, n: int, current: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Start errors of ``n`` vehicles inside the certified set for ``current`` (m/s, inertial).
+
+        Returns ``e (n, 2)`` m, ``e' (n, 2)`` m/s, ``e_psi (n,)`` rad, ``e_psi' (n,)`` rad/s.
+        """
+        pos, head, d, h = self._sets()
+        scale = 1.0 - START_SHRINK
+        w = _ball(rng, n, 4) * (d * scale)  # (n, 4): [x-axis pair, y-axis pair]
+        li = np.linalg.inv(np.linalg.cholesky(pos.matrix).T)  # z = L^-T w gives z^T P z = |w|^2
+        xa, ya = w[:, :2] @ li.T, w[:, 2:] @ li.T
+        e = np.column_stack([xa[:, 0], ya[:, 0]]) + self.certificate.equilibrium_shift(current)
+        de = np.column_stack([xa[:, 1], ya[:, 1]])
+        hv = _ball(rng, n, 2) * (h * scale) @ np.linalg.inv(np.linalg.cholesky(head.matrix).T).T
+        return e, de, hv[:, 0], hv[:, 1]
+
+    def inside(self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: FloatArray) -> bool:
+        """Every vehicle's start errors lie in both certified sets (the test of :meth:`sample_errors`)."""
+        return self.certificate.start_inside(e, de, epsi, depsi, current)
+
+    def vertex(self, box: FloatArray, index: int) -> FloatArray:
+        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)): bit ``k`` picks the upper end."""
+        mult = box[:, 0].copy()
+        for bit, k in enumerate(self.declared):
+            if (index >> bit) & 1:
+                mult[k] = box[k, 1]
+        return mult
+
+
+def _ball(rng: np.random.Generator, n: int, dim: int) -> FloatArray:
+    """``n`` points uniform in the unit ball of ``R^dim``."""
+    g = rng.standard_normal((n, dim))
+    g /= np.linalg.norm(g, axis=1, keepdims=True)
+    return g * rng.random(n)[:, None] ** (1.0 / dim)
+
+
+def robust_start(
+    point: DesignPoint, box: FloatArray, nominal: ClosedLoopCertificate
+) -> tuple[RobustStart | None, str | None]:
+    """The robust start sets of a design point, or ``None`` with the reason the robust check does not apply.
+
+    ``(None, None)`` when nothing is declared (the nominal certificate applies); ``(None, why)``
+    when something is declared but the robust certificate does not cover it.
+    """
+    summ = robust_summary(point, margins=False, nominal=nominal)
+    if not summ.declared:
+        return None, None
+    c = summ.certificate
+    if not summ.covers or c is None or c.bounds is None:
+        why = "; ".join(summ.to_dict()["reasons"]) or "the robust certificate does not cover the declared box"
+        return None, why
+    declared = tuple(k for k in range(box.shape[0]) if box[k, 0] < box[k, 1])
+    return RobustStart(c, declared), None
+
+
+def vertex_current(rng: np.random.Generator, speed: float) -> FloatArray:
+    """A current of exactly ``speed`` (m/s) in a uniformly random direction."""
+    ang = 2.0 * math.pi * rng.random()
+    return np.array([speed * math.cos(ang), speed * math.sin(ang)]) + 0.0
+
+
+__all__ = ["START_SHRINK", "RobustStart", "robust_start", "vertex_current"]

@@ -1,0 +1,1 @@
+"""The ``auv-hinf`` command line."""

@@ -1,0 +1,5 @@
+"""Configuration.
+
+The strict TOML schema, validation messages, runtime tables, FormationConfig and the
+preset registry.
+"""

@@ -1,0 +1,257 @@
+"""Design configurations: frozen runtime objects, validated from TOML files or from Python.
+
+The TOML format is defined by the strict pydantic models of :mod:`auv_hinf.config.schema`
+(``auv-hinf schema`` prints it as JSON Schema). The objects below are frozen dataclasses
+that validate themselves with the same models at construction, so a bad value raises
+:class:`~auv_hinf.exceptions.ConfigError` whether it comes from a file or from Python.
+The built-in presets live in :mod:`auv_hinf.config.presets`.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, cast
+
+from auv_hinf._typing import GainMethod, JacobiKind
+from auv_hinf.config.messages import parse_config, plain_data, set_fields, validate_table
+from auv_hinf.config.schema import DEFAULT_K1, DEFAULT_METHOD, DEFAULT_POLES, DesignTable, FormationTable
+from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
+from auv_hinf.exceptions import AuvHinfError, ConfigError
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
+from auv_hinf.models.vehicle import VehicleParams
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+@dataclass(frozen=True)
+class FormationConfig:
+    """Everything needed to certify and simulate one formation design.
+
+    Attributes
+    ----------
+    name : str
+        Preset name or file stem.
+    vehicle : VehicleParams
+    n : int
+        Number of vehicles (>= 2).
+    jacobi : {"paper", "orthonormal"}
+    shape : tuple
+        Desired Jacobi shape vectors ``rho_d`` (N-1 pairs, m) in the ``jacobi`` convention;
+        no two vehicles may share a desired position.
+    envelope : Envelope
+    method : {"paper", "stabilizing", "minimal"}
+        Gain method used by the certificate.
+    gamma : float or None
+        Override of ``1/sigma_upper`` (s, > 0).
+    lam : float or None
+        Override of the envelope lambda (1/s, < 0).
+    k1 : float
+        Theorem 2 position gain (1/s^2, > 0).
+    heading_poles : tuple of float
+        Two distinct negative poles of the heading loop (1/s).
+    robust : bool
+        Use the robust design (:mod:`auv_hinf.robust.bandwidth`) instead of the Theorem 1 gain,
+        ``k1`` and ``heading_poles``.
+    reference, simulation, uncertainty, disturbance
+        The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
+
+    Raises
+    ------
+    ConfigError
+        At construction, for any invalid field: e.g. ``len(shape) != n - 1``, coincident
+        vehicles, or ``simulation.initial`` without one row per vehicle.
+    """
+
+    name: str
+    vehicle: VehicleParams
+    n: int
+    jacobi: JacobiKind
+    shape: tuple[tuple[float, float], ...]
+    envelope: Envelope
+    method: GainMethod = DEFAULT_METHOD
+    gamma: float | None = None
+    lam: float | None = None
+    k1: float = DEFAULT_K1
+    heading_poles: tuple[float, float] = DEFAULT_POLES
+    robust: bool = False
+    reference: ReferenceConfig = field(default_factory=ReferenceConfig)
+    simulation: SimulationConfig = field(default_factory=SimulationConfig)
+    uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
+    disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
+
+    def __post_init__(self) -> None:
+        for key, kind in (
+            ("name", str),
+            ("vehicle", VehicleParams),
+            ("envelope", Envelope),
+            ("reference", ReferenceConfig),
+            ("simulation", SimulationConfig),
+            ("uncertainty", UncertaintyConfig),
+            ("disturbance", DisturbanceConfig),
+        ):
+            if not isinstance(getattr(self, key), kind):
+                raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
+        form = validate_table(
+            FormationTable, plain_data({"n": self.n, "jacobi": self.jacobi, "shape": self.shape}), ("formation",)
+        )
+        design = {
+            "method": self.method,
+            "k1": self.k1,
+            "heading_poles": self.heading_poles,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+            "robust": self.robust,
+        }
+        des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
+        init = self.simulation.initial
+        if init is not None and len(init) != form.n:
+            raise ConfigError(f"simulation.initial must have one row per vehicle ({form.n}), got {len(init)}")
+        set_fields(
+            self,
+            n=form.n,
+            shape=form.jacobi_shape(),
+            gamma=des.gamma,
+            lam=des.lam,
+            k1=des.k1,
+            heading_poles=(des.heading_poles[0], des.heading_poles[1]),
+        )
+
+    @property
+    def transform(self) -> JacobiTransform:
+        """The Jacobi transform of this configuration."""
+        return JacobiTransform(self.n, self.jacobi)
+
+    def with_method(self, method: str) -> FormationConfig:
+        """Copy with another gain method (validated)."""
+        return replace(self, method=cast(GainMethod, method))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Full JSON-safe dictionary (absent options are ``None``)."""
+        return {
+            "name": self.name,
+            "vehicle": self.vehicle.to_dict(),
+            "n": self.n,
+            "jacobi": self.jacobi,
+            "shape": [list(s) for s in self.shape],
+            "envelope": self.envelope.to_dict(),
+            "method": self.method,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+            "k1": self.k1,
+            "heading_poles": list(self.heading_poles),
+            "robust": self.robust,
+            "reference": self.reference.to_dict(),
+            "simulation": self.simulation.to_dict(),
+            "uncertainty": self.uncertainty.to_dict(),
+            "disturbance": self.disturbance.to_dict(),
+        }
+
+    def to_toml_dict(self) -> dict[str, Any]:
+        """The configuration as TOML tables (no ``None``): ``config_from_dict`` of it reproduces it."""
+        vehicle: dict[str, Any] = next(
+            ({"preset": key} for key, make in VEHICLE_PRESETS.items() if make() == self.vehicle),
+            {k: v for k, v in self.vehicle.to_dict().items()},
+        )
+        design = {
+            "method": self.method,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+            "k1": self.k1,
+            "heading_poles": list(self.heading_poles),
+            "robust": self.robust,
+        }
+        sim = {k: v for k, v in self.simulation.to_dict().items() if v not in (None, {})}
+        out = {
+            "name": self.name,
+            "vehicle": vehicle,
+            "formation": {"n": self.n, "jacobi": self.jacobi, "shape": [list(s) for s in self.shape]},
+            "envelope": self.envelope.to_dict(),
+            "design": {k: v for k, v in design.items() if v is not None},
+            "reference": self.reference.to_dict(),
+            "simulation": sim,
+            "uncertainty": self.uncertainty.to_dict(),
+            "disturbance": self.disturbance.to_dict(),
+        }
+        return {k: v for k, v in out.items() if v != {}}
+
+
+def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
+    """Build and validate a :class:`FormationConfig` from parsed TOML (a dict of tables).
+
+    ``name`` is used unless the document has a top-level ``name``.
+
+    Raises
+    ------
+    ConfigError
+        With one line per problem, each naming its TOML path.
+    """
+    cf = parse_config(data)
+    label = cf.name or name
+    try:
+        vehicle = cf.vehicle.to_params(label)
+    except AuvHinfError as exc:
+        raise ConfigError(f"vehicle: {exc}") from None
+    sim = cf.simulation
+    return FormationConfig(
+        name=label,
+        vehicle=vehicle,
+        n=cf.formation.n,
+        jacobi=cf.formation.jacobi,
+        shape=cf.formation.jacobi_shape(),
+        envelope=Envelope(**cf.envelope.model_dump()),
+        method=cf.design.method,
+        gamma=cf.design.gamma,
+        lam=cf.design.lam,
+        k1=cf.design.k1,
+        heading_poles=(cf.design.heading_poles[0], cf.design.heading_poles[1]),
+        robust=cf.design.robust,
+        reference=ReferenceConfig(cf.reference.kind, tuple(cf.reference.model_dump(exclude={"kind"}).items())),
+        simulation=SimulationConfig(
+            horizon=sim.horizon,
+            start=sim.start,
+            initial=None if sim.initial is None else tuple(map(tuple, sim.initial)),
+            current=(sim.current[0], sim.current[1]),
+            thrust_limit=None
+            if sim.thrust_limit is None
+            else (sim.thrust_limit[0], sim.thrust_limit[1], sim.thrust_limit[2]),
+            blend_time=sim.blend_time,
+            plant=tuple((k, v) for k, v in sim.plant.model_dump().items() if v is not None),
+        ),
+        uncertainty=UncertaintyConfig(tuple((k, (v[0], v[1])) for k, v in cf.uncertainty.model_dump().items() if v)),
+        disturbance=DisturbanceConfig(cf.disturbance.current_speed, cf.disturbance.current_rate),
+    )
+
+
+def load_config(path: str | Path) -> FormationConfig:
+    """Read and validate a TOML configuration file (the name defaults to the file stem).
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read, is not TOML, or fails validation; every line of the
+        message starts with the file name.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise ConfigError(f"cannot read config {str(p)!r}: {reason}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: invalid TOML: {exc}") from None
+    try:
+        return config_from_dict(data, name=p.stem)
+    except ConfigError as exc:
+        raise ConfigError("\n".join(f"{p}: {line}" for line in str(exc).splitlines())) from None
+
+
+__all__ = ["FormationConfig", "config_from_dict", "load_config"]

@@ -1,0 +1,279 @@
+"""Built-in configurations: one registry from a name to a complete :class:`FormationConfig`.
+
+Each preset carries its vehicle, shape, envelope, reference and initial states, so the
+certificate, the simulation and ``auv-hinf init`` all read the same object.
+:func:`annotated_toml` writes any configuration as a commented TOML file.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from typing import Any, Literal, get_args, get_origin
+
+import numpy as np
+from numpy.typing import ArrayLike
+from pydantic import BaseModel
+from pydantic.fields import FieldInfo
+
+from auv_hinf.config.fields import REFERENCE_MODELS
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.config.schema import (
+    DesignTable,
+    DisturbanceTable,
+    EnvelopeTable,
+    FormationTable,
+    PlantTable,
+    SimulationTable,
+    UncertaintyTable,
+    VehicleTable,
+)
+from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
+from auv_hinf.exceptions import ConfigError
+from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope
+from auv_hinf.models.formation import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
+from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
+from auv_hinf.models.vehicle import paper2011, remus100
+
+#: Demo envelope of the paper presets (u, v in m/s, r in rad/s). The paper's envelope has
+#: ``|v| <= 1 m/s``, but its Section V vehicles start with sway exactly 1 m/s, on the edge, so
+#: no sound check can leave them a margin. Widening sway to 1.5 m/s changes nothing else:
+#: lambda (set by the surge damping at 3.5 m/s), sigma (set by the u = 0 vertex) and every gain
+#: are the same as with the paper's envelope.
+DEMO_ENVELOPE: Envelope = Envelope(u=PAPER_ENVELOPE.u, v=(-1.5, 1.5), r=PAPER_ENVELOPE.r)
+#: Envelope of ``paper-triangle``.
+TRIANGLE_ENVELOPE: Envelope = DEMO_ENVELOPE
+#: Envelope of ``paper-hexagon``.
+HEXAGON_ENVELOPE: Envelope = DEMO_ENVELOPE
+#: Circumradius of the hexagon of Fig. 3 (m): the paper gives no size, so it is chosen here.
+HEXAGON_RADIUS = 15.0
+#: Jacobi shape of the Section V triangle (paper convention, m).
+TRIANGLE_SHAPE = ((0.0, 10.0), (20.0, 0.0))
+#: Section V initial states: positions (m), u = v = 1 m/s, psi = 0.1, 0.4, 0.7 rad,
+#: r1 = r2 = 0.1 rad/s (r3 is not given in the paper: 0).
+PAPER_TRIANGLE_INITIAL = (
+    (25.0, 5.0, 0.1, 1.0, 1.0, 0.1),
+    (-5.0, 10.0, 0.4, 1.0, 1.0, 0.1),
+    (10.0, 8.0, 0.7, 1.0, 1.0, 0.0),
+)
+
+
+def spread_start(
+    shape: ArrayLike,
+    transform: JacobiTransform,
+    scale: float = 1.5,
+    rotation: float = 0.3,
+) -> tuple[tuple[float, ...], ...]:
+    """Initial states on the desired shape scaled by ``scale`` and rotated by ``rotation`` rad.
+
+    Heading 0, surge 1 m/s, sway and yaw rate 0: the start used where the paper gives none.
+    """
+    off = offsets_from_shape(np.asarray(shape, dtype=float), transform)
+    c, s = np.cos(rotation), np.sin(rotation)
+    pos = scale * off @ np.array([[c, s], [-s, c]])
+    return tuple((float(x), float(y), 0.0, 1.0, 0.0, 0.0) for x, y in pos)
+
+
+def _paper_triangle() -> FormationConfig:
+    return FormationConfig(
+        name="paper-triangle",
+        vehicle=paper2011(),
+        n=3,
+        jacobi="paper",
+        shape=TRIANGLE_SHAPE,
+        envelope=TRIANGLE_ENVELOPE,
+        simulation=SimulationConfig(initial=PAPER_TRIANGLE_INITIAL),
+    )
+
+
+def _paper_hexagon() -> FormationConfig:
+    t = JacobiTransform(6, "paper")
+    rho = shape_from_offsets(regular_polygon(6, HEXAGON_RADIUS), t)
+    shape = tuple((float(a), float(b)) for a, b in rho)
+    return FormationConfig(
+        name="paper-hexagon",
+        vehicle=paper2011(),
+        n=6,
+        jacobi="paper",
+        shape=shape,
+        envelope=HEXAGON_ENVELOPE,
+        simulation=SimulationConfig(initial=spread_start(shape, t)),
+    )
+
+
+#: Envelope of ``remus-line`` (m/s, m/s, rad/s): chosen with the robust certificate so that a
+#: 0.2 m/s current plus the certified velocity error still fits the sway range.
+REMUS_ENVELOPE: Envelope = Envelope(u=(0.5, 2.5), v=(-0.3, 0.3), r=(-0.3, 0.3))
+#: Declared box of ``remus-line``: masses +-10 %, every damping coefficient +-20 %.
+REMUS_BOX: tuple[tuple[str, tuple[float, float]], ...] = tuple(
+    [(k, (0.9, 1.1)) for k in ("m11", "m22", "m33")]
+    + [(k, (0.8, 1.2)) for k in ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")]
+)
+#: Mission speed of ``remus-line`` (m/s), the REMUS-100's nominal cruise.
+REMUS_SPEED = 1.5
+#: The simulated current (m/s, inertial) and plant corner of ``remus-line``: the corner whose
+#: Munk-moment residual makes the nominal heading gains unstable (docs/derivations/robust.md).
+REMUS_CURRENT = (-0.1, 0.15)
+REMUS_PLANT = (("m11", 0.9), ("m22", 1.1), ("m33", 0.9))
+
+
+def _remus_line() -> FormationConfig:
+    t = JacobiTransform(3, "paper")
+    off = offsets_from_shape(np.asarray(TRIANGLE_SHAPE), t)
+    cx, cy = REMUS_CURRENT
+    # on the raw mission at t = 0 (the line starts at the origin, heading 0), with the body
+    # velocity that gives the mission's ground velocity in the current
+    initial = tuple((float(x), float(y), 0.0, REMUS_SPEED - cx, -cy, 0.0) for x, y in off)
+    return FormationConfig(
+        name="remus-line",
+        vehicle=remus100(),
+        n=3,
+        jacobi="paper",
+        shape=TRIANGLE_SHAPE,
+        envelope=REMUS_ENVELOPE,
+        robust=True,
+        reference=ReferenceConfig("line", (("speed", REMUS_SPEED), ("heading", 0.0))),
+        simulation=SimulationConfig(
+            horizon=60.0, start="paper", initial=initial, current=REMUS_CURRENT, plant=REMUS_PLANT
+        ),
+        uncertainty=UncertaintyConfig(REMUS_BOX),
+        disturbance=DisturbanceConfig(current_speed=0.2),
+    )
+
+
+#: The registry: preset name -> factory of the complete configuration.
+PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
+    "paper-triangle": _paper_triangle,
+    "paper-hexagon": _paper_hexagon,
+    "remus-line": _remus_line,
+}
+#: Names of the built-in presets (the CLI's ``--preset`` choices).
+PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)
+
+
+def preset_config(name: str) -> FormationConfig:
+    """The built-in configuration ``name`` (one of :data:`PRESETS`).
+
+    Raises
+    ------
+    ConfigError
+        For an unknown name; the message lists the valid ones.
+    """
+    make = PRESET_REGISTRY.get(name) if isinstance(name, str) else None
+    if make is None:
+        raise ConfigError(f"unknown preset {name!r}; expected one of: {', '.join(PRESETS)}")
+    return make()
+
+
+def toml_literal(value: Any) -> str:
+    """A TOML literal for a bool, number, string or (nested) list."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    return "[" + ", ".join(toml_literal(v) for v in value) + "]"
+
+
+def _range(info: FieldInfo) -> str:
+    ops = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
+    parts = [f"{ops[k]} {getattr(m, k):g}" for m in info.metadata for k in ops if hasattr(m, k)]
+    return f"; {', '.join(parts)}" if parts else ""
+
+
+def _choices(info: FieldInfo) -> str:
+    args = [a for u in get_args(info.annotation) or (info.annotation,) for a in get_args(u) or (u,)]
+    if get_origin(info.annotation) is Literal:
+        args = list(get_args(info.annotation))
+    names = [a for a in args if isinstance(a, str)]
+    return f"; one of: {', '.join(names)}" if names else ""
+
+
+def _table(title: str, model: type[BaseModel], values: dict[str, Any], examples: dict[str, Any]) -> list[str]:
+    doc = (model.__doc__ or "").strip().splitlines()[0].replace("``", "").split("]: ", 1)[-1]
+    lines = ["", f"# {doc}", f"[{title}]"]
+    for key, info in sorted(model.model_fields.items(), key=lambda kv: kv[0] != "kind"):
+        name = info.alias or key
+        if info.default_factory is not None:  # a sub-table, written on its own
+            continue
+        choices = _choices(info) if name != "kind" else ""
+        lines.append(f"# {info.description or name}{_range(info)}{choices}")
+        if name in values:
+            lines.append(f"{name} = {toml_literal(values[name])}")
+        else:
+            ex = examples.get(name, info.examples[0] if info.examples else info.default)
+            if ex is not None and not callable(ex) and repr(ex) != "PydanticUndefined":
+                lines.append(f"# {name} = {toml_literal(ex)}")
+    return lines
+
+
+def annotated_toml(cfg: FormationConfig) -> str:
+    """``cfg`` as a TOML file with a comment (meaning, unit, range) above every key.
+
+    Keys that are not set appear commented out with an example value; the text is read
+    back by :func:`~auv_hinf.config.formation.load_config` into an equal configuration (up to the name).
+    """
+    data = cfg.to_toml_dict()
+    vehicle = data["vehicle"]
+    preset_vehicle = VEHICLE_PRESETS[vehicle["preset"]]().to_dict() if "preset" in vehicle else {}
+    lines = [
+        f"# auv-hinf configuration (written by `auv-hinf init` from {cfg.name!r}).",
+        "# Every table is optional; units are in brackets. `auv-hinf schema` prints the full JSON Schema.",
+        "# Unknown keys are errors. Numbers may be integers where a float is expected, never strings.",
+        f"# name = {toml_literal(cfg.name)}  # default: the file name without .toml",
+    ]
+    lines += _table(
+        "vehicle",
+        VehicleTable,
+        vehicle,
+        {k: v for k, v in preset_vehicle.items() if k != "name"},
+    )
+    lines += _table("formation", FormationTable, data["formation"], {"polygon_radius": 15.0})
+    lines += _table("envelope", EnvelopeTable, data["envelope"], {})
+    lines += _table("design", DesignTable, data["design"], {"gamma": 0.5, "lambda": -2.1})
+    lines += _table("reference", REFERENCE_MODELS[cfg.reference.kind], data["reference"], {})
+    sim = data.get("simulation", {})
+    lines += _table(
+        "simulation",
+        SimulationTable,
+        {k: v for k, v in sim.items() if k != "plant"},
+        {"blend_time": 60.0},
+    )
+    lines += _table(
+        "simulation.plant",
+        PlantTable,
+        sim.get("plant", {}),
+        {k: 1.1 for k in PlantTable.model_fields},
+    )
+    lines += _table(
+        "uncertainty",
+        UncertaintyTable,
+        data.get("uncertainty", {}),
+        {k: [0.9, 1.1] for k in UncertaintyTable.model_fields},
+    )
+    lines += _table(
+        "disturbance",
+        DisturbanceTable,
+        data.get("disturbance", {}),
+        {"current_speed": 0.1, "current_rate": 0.0},
+    )
+    return "\n".join(lines) + "\n"
+
+
+__all__ = [
+    "DEMO_ENVELOPE",
+    "HEXAGON_ENVELOPE",
+    "HEXAGON_RADIUS",
+    "PAPER_TRIANGLE_INITIAL",
+    "PRESETS",
+    "PRESET_REGISTRY",
+    "REMUS_BOX",
+    "REMUS_ENVELOPE",
+    "TRIANGLE_ENVELOPE",
+    "TRIANGLE_SHAPE",
+    "annotated_toml",
+    "preset_config",
+    "spread_start",
+    "toml_literal",
+]

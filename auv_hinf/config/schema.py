@@ -1,0 +1,366 @@
+"""The TOML configuration format as strict pydantic models.
+
+Every table is a model with ``extra="forbid"`` and strict types: a string is never read
+as a number, a float never as an integer (an integer is fine where a float is expected),
+NaN and infinities are refused. Each physical field carries its unit (``unit`` in the
+JSON Schema) and its valid range. :func:`auv_hinf.config.messages.parse_config` turns a parsed TOML document into a
+validated :class:`ConfigFile`; every problem becomes one line of a
+:class:`~auv_hinf.exceptions.ConfigError` that names its TOML path (``design.gamma``) and,
+for a misspelled key, the closest valid name.
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any
+
+from pydantic import BaseModel, Field, field_validator, model_validator
+
+from auv_hinf._typing import GainMethod, JacobiKind
+from auv_hinf.config.fields import (
+    DEFAULT_HEADING_POLES,
+    DEFAULT_POLYGON_RADIUS,
+    MAX_COORDINATE,
+    MAX_HORIZON,
+    MAX_VEHICLES,
+    PARAMETERS,
+    REFERENCE_MODELS,
+    NegativePair,
+    Pair,
+    Point,
+    PositiveTriple,
+    ReferenceTable,
+    SineReference,
+    StartKind,
+    StateRow,
+    VehiclePreset,
+    _field,
+    _Table,
+)
+from auv_hinf.models.envelope import PAPER_ENVELOPE, check_interval
+from auv_hinf.models.formation import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
+from auv_hinf.models.jacobi_maps import closest_pair
+from auv_hinf.models.vehicle import VehicleParams
+
+
+def schema_default(table: type[BaseModel], key: str) -> Any:
+    """The default of ``key`` in ``table`` as the schema declares it: the one source of every default.
+
+    Lists come back as tuples (the frozen runtime objects hold tuples).
+    """
+    default = table.model_fields[key].default
+    return tuple(default) if isinstance(default, list) else default
+
+
+class VehicleTable(_Table):
+    """``[vehicle]``: a preset, or all nine parameters of the 3-DOF model.
+
+    See :class:`~auv_hinf.models.vehicle.VehicleParams`.
+    """
+
+    preset: VehiclePreset | None = _field(None, "built-in vehicle; excludes the nine parameters")
+    name: str | None = _field(None, "label of a custom vehicle (default: the configuration name)")
+    m11: float | None = _field(None, "surge inertia m - X_udot", "kg", gt=0.0, examples=[200.0])
+    m22: float | None = _field(None, "sway inertia m - Y_vdot", "kg", gt=0.0, examples=[250.0])
+    m33: float | None = _field(None, "yaw inertia I_z - N_rdot", "kg m^2", gt=0.0, examples=[80.0])
+    d11_lin: float | None = _field(None, "linear surge damping", "kg/s", ge=0.0, examples=[70.0])
+    d11_quad: float | None = _field(None, "quadratic surge damping (times |u|)", "kg/m", ge=0.0, examples=[100.0])
+    d22_lin: float | None = _field(None, "linear sway damping", "kg/s", ge=0.0, examples=[100.0])
+    d22_quad: float | None = _field(None, "quadratic sway damping (times |v|)", "kg/m", ge=0.0, examples=[200.0])
+    d33_lin: float | None = _field(None, "linear yaw damping", "kg m^2/s", ge=0.0, examples=[50.0])
+    d33_quad: float | None = _field(None, "quadratic yaw damping (times |r|)", "kg m^2", ge=0.0, examples=[100.0])
+
+    @model_validator(mode="before")
+    @classmethod
+    def _preset_or_parameters(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in PARAMETERS if k in data]
+        if "preset" in data and given:
+            raise ValueError(
+                f"give either vehicle.preset or the nine parameters, not both "
+                f"(got preset = {data['preset']!r} and {', '.join(given)})"
+            )
+        missing = [k for k in PARAMETERS if k not in data]
+        if "preset" not in data and missing:
+            hint = unknown_key_hints(data, list(cls.model_fields))
+            raise ValueError(f"missing keys {missing} (or give vehicle.preset){hint}")
+        return data
+
+    def to_params(self, default_name: str) -> VehicleParams:
+        """The validated :class:`VehicleParams`."""
+        if self.preset is not None:
+            from auv_hinf.models.vehicle import preset
+
+            return preset(self.preset)
+        values = {k: getattr(self, k) for k in PARAMETERS}
+        return VehicleParams(**values, name=self.name or default_name)
+
+
+def _check_distinct(offsets: Any) -> None:
+    """Raise ``ValueError`` if two desired vehicle positions coincide (or are not finite)."""
+    import numpy as np
+
+    off = np.asarray(offsets, dtype=float)
+    if not np.all(np.isfinite(off)):
+        raise ValueError("desired vehicle positions must be finite")
+    scale = max(1.0, float(np.max(np.abs(off))))
+    a, b, dist = closest_pair(off / scale)  # O(N log N), k-d tree
+    if dist <= 1e-9:
+        raise ValueError(
+            f"vehicles {a + 1} and {b + 1} have the same desired position "
+            f"({off[a, 0]:.6g}, {off[a, 1]:.6g}) m; every vehicle needs its own place"
+        )
+
+
+class FormationTable(_Table):
+    """``[formation]``: fleet size, Jacobi scaling, and at most one way of giving the shape."""
+
+    n: int = _field(3, "number of vehicles", ge=2, le=MAX_VEHICLES)
+    jacobi: JacobiKind = _field("paper", "Jacobi transform scaling (paper: as printed; orthonormal: unit rows)")
+    shape: list[Point] | None = _field(None, "N-1 desired Jacobi vectors [[x, y], ...]", "m")
+    offsets: list[Point] | None = _field(None, "N desired vehicle offsets [[x, y], ...] from any common point", "m")
+    polygon_radius: float | None = _field(
+        None,
+        "regular polygon of this circumradius (the default, with 15 m)",
+        "m",
+        gt=0.0,
+        le=MAX_COORDINATE,
+    )
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> FormationTable:
+        given = [k for k in ("shape", "offsets", "polygon_radius") if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give exactly one of shape, offsets, polygon_radius (got {', '.join(given)})")
+        for key, count in (("shape", self.n - 1), ("offsets", self.n)):
+            rows = getattr(self, key)
+            if rows is not None and len(rows) != count:
+                raise ValueError(f"{key} must have {count} rows [x, y] for n = {self.n}, got {len(rows)}")
+        _check_distinct(offsets_from_shape(self.jacobi_shape(), JacobiTransform(self.n, self.jacobi)))
+        return self
+
+    def jacobi_shape(self) -> tuple[tuple[float, float], ...]:
+        """Desired Jacobi shape vectors (N-1 pairs, m) in this table's convention."""
+        t = JacobiTransform(self.n, self.jacobi)
+        if self.shape is not None:
+            rho = self.shape
+        elif self.offsets is not None:
+            rho = shape_from_offsets(self.offsets, t).tolist()
+        else:
+            rho = shape_from_offsets(
+                regular_polygon(self.n, self.polygon_radius or DEFAULT_POLYGON_RADIUS),
+                t,
+            ).tolist()
+        return tuple((float(a), float(b)) for a, b in rho)
+
+
+class EnvelopeTable(_Table):
+    """``[envelope]``: ranges [min, max] of the body velocities and heading."""
+
+    u: Pair = _field(list(PAPER_ENVELOPE.u), "surge speed range [min, max]", "m/s")
+    v: Pair = _field(list(PAPER_ENVELOPE.v), "sway speed range [min, max]", "m/s")
+    r: Pair = _field(list(PAPER_ENVELOPE.r), "yaw-rate range [min, max]", "rad/s")
+    psi: Pair = _field(list(PAPER_ENVELOPE.psi), "heading range [min, max], at most 2 pi wide", "rad")
+
+    @field_validator("u", "v", "r", "psi")
+    @classmethod
+    def _interval(cls, value: list[float], info: Any) -> list[float]:
+        return list(check_interval(info.field_name, value))
+
+
+class DesignTable(_Table):
+    """``[design]``: Theorem 1 gain method and bounds, Theorem 2 and heading gains."""
+
+    method: GainMethod = _field("stabilizing", "Theorem 1 gain: paper (eq. 32), stabilizing root, or minimal")
+    gamma: float | None = _field(None, "H-infinity bound (default 1/sigma_upper of the envelope)", "s", gt=0.0)
+    lam: float | None = _field(
+        None,
+        "nominal lambda (default: the most negative over the envelope)",
+        "1/s",
+        lt=0.0,
+        alias="lambda",
+    )
+    k1: float = _field(0.5, "Theorem 2 position gain", "1/s^2", gt=0.0)
+    robust: bool = _field(
+        False,
+        "use the robust design: alpha, k1 and the heading gains chosen for the [uncertainty] box and "
+        "[disturbance] current (certify, simulate and campaign all run these gains)",
+    )
+    heading_poles: NegativePair = _field(
+        list(DEFAULT_HEADING_POLES),
+        "two distinct negative closed-loop poles of the heading loop",
+        "1/s",
+    )
+
+    @field_validator("heading_poles")
+    @classmethod
+    def _distinct(cls, value: list[float]) -> list[float]:
+        if value[0] == value[1]:
+            raise ValueError(f"heading poles must be distinct (single-input pole placement), got {value}")
+        return value
+
+
+class PlantTable(_Table):
+    """``[simulation.plant]``: the true plant as multipliers (> 0) of the controller's parameters."""
+
+    m11: float | None = _field(None, "multiplier of m11", gt=0.0)
+    m22: float | None = _field(None, "multiplier of m22", gt=0.0)
+    m33: float | None = _field(None, "multiplier of m33", gt=0.0)
+    d11_lin: float | None = _field(None, "multiplier of d11_lin", gt=0.0)
+    d11_quad: float | None = _field(None, "multiplier of d11_quad", gt=0.0)
+    d22_lin: float | None = _field(None, "multiplier of d22_lin", gt=0.0)
+    d22_quad: float | None = _field(None, "multiplier of d22_quad", gt=0.0)
+    d33_lin: float | None = _field(None, "multiplier of d33_lin", gt=0.0)
+    d33_quad: float | None = _field(None, "multiplier of d33_quad", gt=0.0)
+
+
+class UncertaintyTable(_Table):
+    """``[uncertainty]``: declared box of relative multipliers ``[lo, hi]``, 0 < lo <= 1 <= hi."""
+
+    m11: Pair | None = _field(None, "relative range [lo, hi] of m11")
+    m22: Pair | None = _field(None, "relative range [lo, hi] of m22")
+    m33: Pair | None = _field(None, "relative range [lo, hi] of m33")
+    d11_lin: Pair | None = _field(None, "relative range [lo, hi] of d11_lin")
+    d11_quad: Pair | None = _field(None, "relative range [lo, hi] of d11_quad")
+    d22_lin: Pair | None = _field(None, "relative range [lo, hi] of d22_lin")
+    d22_quad: Pair | None = _field(None, "relative range [lo, hi] of d22_quad")
+    d33_lin: Pair | None = _field(None, "relative range [lo, hi] of d33_lin")
+    d33_quad: Pair | None = _field(None, "relative range [lo, hi] of d33_quad")
+
+    @field_validator(*PARAMETERS)
+    @classmethod
+    def _box(cls, value: list[float] | None, info: Any) -> list[float] | None:
+        if value is not None and not (0.0 < value[0] <= 1.0 <= value[1]):
+            raise ValueError(f"a relative range [lo, hi] must satisfy 0 < lo <= 1 <= hi, got {value}")
+        return value
+
+
+class SimulationTable(_Table):
+    """``[simulation]``: the closed-loop run."""
+
+    horizon: float = _field(300.0, "simulated time", "s", gt=0.0, le=MAX_HORIZON)
+    start: StartKind = _field(
+        "shaped",
+        "shaped: the reference blends from the actual start; paper: raw reference",
+    )
+    initial: list[StateRow] | None = _field(
+        None,
+        "one [x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s); default: a shaped start",
+    )
+    current: Pair = _field([0.0, 0.0], "constant ocean current, inertial frame", "m/s")
+    thrust_limit: PositiveTriple | None = _field(
+        None,
+        "saturation of [tau_x, tau_y, tau_psi] (N, N, N m)",
+        examples=[[500.0, 500.0, 200.0]],
+    )
+    blend_time: float | None = _field(
+        None,
+        "reference blending time (default: chosen by the certificate)",
+        "s",
+        gt=0.0,
+    )
+    plant: PlantTable = Field(
+        default_factory=PlantTable,
+        description="true plant as multipliers of the parameters",
+    )
+
+
+class DisturbanceTable(_Table):
+    """``[disturbance]``: declared bounds of the ocean current."""
+
+    current_speed: float | None = _field(None, "bound on |current|", "m/s", ge=0.0)
+    current_rate: float | None = _field(None, "bound on |d current / dt|", "m/s^2", ge=0.0)
+
+
+#: Defaults that the runtime dataclasses, the design functions and the CLI read (each is the
+#: default its table above declares: the schema is the one source).
+DEFAULT_METHOD: GainMethod = schema_default(DesignTable, "method")
+DEFAULT_K1: float = schema_default(DesignTable, "k1")
+DEFAULT_POLES: tuple[float, float] = schema_default(DesignTable, "heading_poles")
+DEFAULT_HORIZON: float = schema_default(SimulationTable, "horizon")
+DEFAULT_START: StartKind = schema_default(SimulationTable, "start")
+
+
+class ConfigFile(_Table):
+    """A whole configuration file (every table optional)."""
+
+    name: str | None = _field(None, "configuration name (default: the file stem)")
+    vehicle: VehicleTable = Field(default_factory=lambda: VehicleTable(preset="paper2011"))
+    formation: FormationTable = Field(default_factory=FormationTable)
+    envelope: EnvelopeTable = Field(default_factory=EnvelopeTable)
+    design: DesignTable = Field(default_factory=DesignTable)
+    reference: ReferenceTable = Field(default_factory=SineReference)
+    simulation: SimulationTable = Field(default_factory=SimulationTable)
+    uncertainty: UncertaintyTable = Field(default_factory=UncertaintyTable)
+    disturbance: DisturbanceTable = Field(default_factory=DisturbanceTable)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_reference_kind(cls, data: Any) -> Any:
+        ref = data.get("reference") if isinstance(data, dict) else None
+        if isinstance(ref, dict) and "kind" not in ref:
+            data = {**data, "reference": {"kind": "sine", **ref}}
+        return data
+
+    @model_validator(mode="after")
+    def _initial_rows(self) -> ConfigFile:
+        init = self.simulation.initial
+        if init is not None and len(init) != self.formation.n:
+            raise ValueError(f"simulation.initial must have one row per vehicle ({self.formation.n}), got {len(init)}")
+        return self
+
+
+def suggest_key(key: str, names: list[str]) -> str:
+    """``; did you mean 'x'?`` for the closest of ``names``, else the list of valid names."""
+    close = difflib.get_close_matches(key, names, n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else f"; expected one of: {', '.join(names)}"
+
+
+def table_keys(model: type[BaseModel]) -> list[str]:
+    """The TOML keys of a table model (aliases such as ``lambda`` included)."""
+    return [f.alias or name for name, f in model.model_fields.items()]
+
+
+def unknown_key_hints(data: dict[str, Any], allowed: list[str]) -> str:
+    """Text naming the keys of ``data`` that are not in ``allowed``, with a suggestion each."""
+    return "".join(f"; unknown key {k!r}{suggest_key(str(k), allowed)}" for k in data if k not in allowed)
+
+
+TABLES: dict[tuple[str, ...], type[BaseModel]] = {
+    (): ConfigFile,
+    ("vehicle",): VehicleTable,
+    ("formation",): FormationTable,
+    ("envelope",): EnvelopeTable,
+    ("design",): DesignTable,
+    ("simulation",): SimulationTable,
+    ("simulation", "plant"): PlantTable,
+    ("uncertainty",): UncertaintyTable,
+    ("disturbance",): DisturbanceTable,
+    **{("reference", k): m for k, m in REFERENCE_MODELS.items()},
+}
+
+
+def json_schema() -> dict[str, Any]:
+    """JSON Schema of the TOML format (``auv-hinf schema``)."""
+    schema = ConfigFile.model_json_schema(by_alias=True)
+    schema["title"] = "auv-hinf configuration (TOML)"
+    return schema
+
+
+__all__ = [
+    "TABLES",
+    "ConfigFile",
+    "DesignTable",
+    "DisturbanceTable",
+    "EnvelopeTable",
+    "FormationTable",
+    "PlantTable",
+    "SimulationTable",
+    "UncertaintyTable",
+    "VehicleTable",
+    "json_schema",
+    "suggest_key",
+    "table_keys",
+    "unknown_key_hints",
+]

@@ -1,0 +1,139 @@
+"""The gains of the formation law: one type, and the Theorem 1 derivation of it.
+
+:class:`Gains` is the only way gains travel through the package: the design, the
+certificates, the law, the simulator, campaigns, the printed and saved reports and the
+python-control export all take the same object, so the gains that run are the gains that
+are printed, saved and exported.
+
+:func:`theorem1_gains` derives them from the configuration's design table: the velocity gain
+``alpha`` of Theorem 1 (one of the three methods of :mod:`auv_hinf.design.alpha`), the
+position gain ``k1`` as configured, and the heading gains by pole placement
+(:func:`heading_gains`). The robust design (:mod:`auv_hinf.robust.bandwidth`) produces the
+same type.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import control as ct
+import numpy as np
+
+from auv_hinf._typing import GainMethod
+from auv_hinf.design.alpha import design_alpha
+from auv_hinf.exceptions import DesignError, require_finite
+from auv_hinf.models.vehicle import VehicleParams
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Gains of the per-vehicle formation law.
+
+    Attributes
+    ----------
+    alpha : float
+        Velocity gain (1/s): ``mu = -alpha Ze``.
+    k1 : float
+        Position gain ``K1 = k1 I`` (1/s^2), > 0.
+    k_psi : tuple of float
+        Heading gains ``(k1_psi, k2_psi)`` (1/s^2, 1/s).
+
+    Raises
+    ------
+    DesignError
+        If a gain is not finite or ``k1 <= 0``.
+    """
+
+    alpha: float
+    k1: float
+    k_psi: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        alpha = float(require_finite("alpha", self.alpha))
+        k1 = float(require_finite("k1", self.k1))
+        if k1 <= 0.0:
+            raise DesignError(f"k1 must be > 0 (K1 positive definite), got {k1!r}")
+        k_psi = tuple(float(require_finite("k_psi", x)) for x in self.k_psi)
+        if len(k_psi) != 2:
+            raise DesignError(f"k_psi must be two numbers (k1_psi, k2_psi), got {self.k_psi!r}")
+        object.__setattr__(self, "alpha", alpha)
+        object.__setattr__(self, "k1", k1)
+        object.__setattr__(self, "k_psi", k_psi)
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"alpha": 1/s, "k1": 1/s^2, "k_psi": [1/s^2, 1/s]}``."""
+        return {"alpha": self.alpha, "k1": self.k1, "k_psi": list(self.k_psi)}
+
+    def describe(self) -> str:
+        """One line with units, as the reports print it."""
+        return (
+            f"alpha {self.alpha:.6g} 1/s, k1 {self.k1:.6g} 1/s^2, "
+            f"k_psi ({self.k_psi[0]:.6g} 1/s^2, {self.k_psi[1]:.6g} 1/s)"
+        )
+
+
+def heading_gains(params: VehicleParams, poles: tuple[float, float]) -> tuple[float, float]:
+    """``(k1_psi, k2_psi)`` by pole placement (``control.place``) on eq. (27) at ``r = 0``.
+
+    The heading-error model is ``e'' = -(d33_lin/m33) e' + V``.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model of the vehicle.
+    poles : tuple of float
+        The two closed-loop heading poles (1/s), finite and negative.
+
+    Raises
+    ------
+    DesignError
+        If a pole is not finite and negative.
+    """
+    if len(poles) != 2 or any((not np.isfinite(p)) or p >= 0 for p in poles):
+        raise DesignError(f"heading poles must be two finite negative numbers, got {poles!r}")
+    a = np.array([[0.0, 1.0], [0.0, -params.d33_lin / params.m33]])
+    b = np.array([[0.0], [1.0]])
+    k = np.asarray(ct.place(a, b, list(poles))).ravel()
+    return float(k[0]), float(k[1])
+
+
+def theorem1_gains(
+    params: VehicleParams,
+    lam: float,
+    gamma: float,
+    *,
+    method: GainMethod,
+    k1: float,
+    heading_poles: tuple[float, float],
+) -> Gains:
+    """The Theorem 1 gains: ``alpha`` of ``method`` at ``(lam, gamma)``, ``k1``, placed heading poles.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model (for the heading gains).
+    lam : float
+        Envelope lambda (1/s).
+    gamma : float
+        H-infinity bound (s).
+    method : {"paper", "stabilizing", "minimal"}
+        Theorem 1 gain formula.
+    k1 : float
+        Position gain (1/s^2).
+    heading_poles : tuple of float
+        Heading poles (1/s).
+
+    Raises
+    ------
+    DesignError
+        If the method gives no finite gain (e.g. gamma below the Theorem 1 bound).
+    """
+    alpha = float(design_alpha(lam, gamma, method).alpha)
+    if not math.isfinite(alpha):
+        raise DesignError(f"no finite gain for method {method!r} at lambda={lam:g}, gamma={gamma:g}")
+    return Gains(alpha, k1, heading_gains(params, heading_poles))
+
+
+__all__ = ["Gains", "heading_gains", "theorem1_gains"]

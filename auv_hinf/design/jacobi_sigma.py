@@ -1,0 +1,265 @@
+"""Certified bounds on the Jacobi-coordinate sigma ``||Phi blockdiag(G_i - lam I) Phi^-1||_2``.
+
+Jacobi coordinates (bounded)
+----------------------------
+``||Phi B Phi^-1|| <= cond(Phi) ||B||`` gives a certified upper bound
+``cond(Phi) * sigma_vehicle`` . For small fleets (N <= :data:`BNB_MAX_N`, full
+heading circle) :func:`jacobi_branch_and_bound` tightens it:
+
+* a common rotation of all headings commutes with ``Phi kron I2``, so only the N-1
+  headings relative to vehicle N matter;
+* for fixed headings the norm is convex in the per-vehicle ``(|u|, |v|, r)``, so its
+  supremum is at one of the ``8^N`` vertex combinations;
+* in heading ``psi_i`` the matrix moves with derivative ``Phi (e_i e_i^T kron
+  [J, G_i - lam I]) Phi^-1``, whose norm is at most
+  ``L_i = 2 sigma_vehicle ||Phi e_i|| ||e_i^T Phi^-1||``;
+* so on a heading cell with centre ``c`` and half-width ``h`` the supremum is at most
+  ``f(c) + h sum_i L_i``. Cells are split until the bound is within ``tol`` of the best
+  centre value, or a budget runs out; whatever the stopping point, the returned upper
+  bound is valid.
+
+The lower bound is the best evaluated configuration (a witness). Up to
+:data:`DENSE_SIGMA_MAX_N` vehicles each configuration is evaluated exactly by a dense 2N x 2N
+SVD (:func:`jacobi_sigma`). Larger fleets use :func:`jacobi_sigma_lower`: a Krylov
+(Lanczos-type) acceleration of the power iteration on ``M^T M``, ``M = Phi blockdiag(G_i - lam I)
+Phi^-1``, with ``M`` and ``M^T`` applied matrix-free through the O(N) Jacobi maps
+(``Phi^-1 = Phi^T D^-2``, ``Phi^-T = D^-2 Phi``). For any vector ``x`` the ratio
+``||M x|| / ||x||`` is at most ``||M||``, so the value returned, which is that ratio at the
+returned witness vector, is a valid lower bound however far the iteration got. Time and memory
+are O(N) per configuration.
+The small-gain certificate uses vehicle coordinates, which is legitimate because the
+nominal loop ``(lam - alpha) I`` is the same in every coordinate system.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, replace
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.design.jacobi_norm import (
+    KRYLOV_BATCH_FLOATS,
+    KRYLOV_DIM,
+    _shifted_blocks,
+    jacobi_apply,
+    jacobi_sigma,
+    jacobi_sigma_lower,
+)
+from auv_hinf.design.sigma import ROUNDOFF_RTOL, SigmaBounds, _witness, sigma_max_2x2, vehicle_sigma
+from auv_hinf.exceptions import FormationError
+from auv_hinf.models.envelope import Envelope, abs_range
+from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.vehicle import VehicleParams, inertial_block
+
+#: Chunk size (points) of vectorised evaluations: bounds memory for fine grids.
+CHUNK = 200_000
+#: Largest fleet for the Jacobi branch-and-bound (8^N vertex combinations per cell).
+BNB_MAX_N = 3
+#: Largest number of matrix evaluations the branch-and-bound may spend.
+BNB_BUDGET = 6_000_000
+#: Largest fleet whose Jacobi search evaluates each configuration by a dense 2N x 2N SVD
+#: (exact, O(N^3)); larger fleets use the matrix-free :func:`jacobi_sigma_lower` (O(N)).
+DENSE_SIGMA_MAX_N = 12
+#: Seconds before a progress bar appears: only slow searches show one.
+PROGRESS_DELAY = 1.0
+
+
+def jacobi_sigma_bounds(
+    params: VehicleParams,
+    envelope: Envelope,
+    lam: float,
+    transform: JacobiTransform,
+    *,
+    samples: int = 20_000,
+    seed: int = 0,
+    progress: bool = False,
+    refine_jacobi: bool = False,
+    budget: int = BNB_BUDGET,
+) -> SigmaBounds:
+    """Certified upper and witnessed lower bounds on the Jacobi-coordinate ``||A_Delta||``.
+
+    The upper bound is ``cond(Phi) * sigma_vehicle`` (or the branch-and-bound value when
+    ``refine_jacobi`` and it is smaller); the lower bound is the best of ``samples`` random
+    vertex configurations with uniform headings, returned as a witness.
+
+    Parameters
+    ----------
+    params, envelope, lam
+        As in :func:`vehicle_sigma`.
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles.
+    samples : int
+        Random configurations for the lower bound.
+    seed : int
+        Seed of the search (``numpy.random.default_rng``).
+    progress : bool
+        Show a tqdm bar.
+    refine_jacobi : bool
+        Run :func:`jacobi_branch_and_bound` (N <= :data:`BNB_MAX_N`, full heading circle).
+    budget : int
+        Evaluation budget of the branch-and-bound.
+    """
+    veh = vehicle_sigma(params, envelope, lam, transform.n)
+    lam = float(lam)
+    nv = transform.n
+    rng = np.random.default_rng(seed)
+    a_rng, b_rng = abs_range(*envelope.u), abs_range(*envelope.v)
+    best, best_x = -np.inf, None
+    best_vec: FloatArray | None = None
+    dense = nv <= DENSE_SIGMA_MAX_N
+    if dense:
+        chunk = max(1, min(samples, CHUNK // (4 * nv * nv)))
+    else:
+        chunk = max(1, min(samples, KRYLOV_BATCH_FLOATS // (2 * nv * (KRYLOV_DIM + 3))))
+    done = 0
+    with tqdm(total=samples, disable=not progress, desc="Jacobi sigma search", unit="cfg", delay=PROGRESS_DELAY) as bar:
+        while done < samples:
+            m = min(chunk, samples - done)
+            a = np.asarray(a_rng)[rng.integers(0, 2, (m, nv))]
+            b = np.asarray(b_rng)[rng.integers(0, 2, (m, nv))]
+            r = np.asarray(envelope.r)[rng.integers(0, 2, (m, nv))]
+            psi = rng.uniform(envelope.psi[0], envelope.psi[1], (m, nv))
+            if dense:
+                vals = jacobi_sigma(params, lam, transform, psi, a, b, r)
+                vecs = None
+            else:
+                vals, vecs = jacobi_sigma_lower(params, lam, transform, psi, a, b, r, rng=rng)
+            k = int(np.argmax(vals))
+            if vals[k] > best:
+                best, best_x = float(vals[k]), (psi[k], a[k], b[k], r[k])
+                best_vec = None if vecs is None else vecs[k]
+            done += m
+            bar.update(m)
+    assert best_x is not None
+    witness = _witness(envelope, *best_x)
+    how = "exact dense SVD" if dense else f"matrix-free Krylov lower bound, {KRYLOV_DIM} steps"
+    if best_vec is not None:
+        witness = replace(witness, vector=tuple(float(x) for x in best_vec.ravel()))
+    upper = transform.cond * veh.upper * (1.0 + ROUNDOFF_RTOL)
+    method = (
+        f"cond(Phi) * sigma_vehicle (cond = {transform.cond:.4g}, closed form); lower from {samples} "
+        f"random vertex configurations ({how})"
+    )
+    full_circle = envelope.psi[1] - envelope.psi[0] >= 2.0 * np.pi
+    if refine_jacobi and nv <= BNB_MAX_N and full_circle:
+        bnb = jacobi_branch_and_bound(
+            params, envelope, float(lam), transform, veh.upper, progress=progress, budget=budget
+        )
+        if bnb.upper < upper:
+            upper = bnb.upper
+            method = (
+                f"Lipschitz branch-and-bound over relative headings x 8^{nv} vertices "
+                f"({bnb.levels} levels, {bnb.evaluations} evaluations); "
+                f"cond(Phi) bound {transform.cond * veh.upper:.4g}"
+            )
+        if bnb.lower > best:
+            best = bnb.lower
+            witness = _witness(envelope, *bnb.witness)
+    return SigmaBounds(
+        upper=max(upper, best),
+        lower=best,
+        coords="jacobi",
+        method=method,
+        witness=witness,
+        lam=float(lam),
+    )
+
+
+@dataclass(frozen=True)
+class JacobiBnbResult:
+    """Result of :func:`jacobi_branch_and_bound`: certified ``upper``, witnessed ``lower`` (1/s)."""
+
+    upper: float
+    lower: float
+    witness: tuple[FloatArray, FloatArray, FloatArray, FloatArray]
+    levels: int
+    evaluations: int
+
+
+def jacobi_branch_and_bound(
+    params: VehicleParams,
+    envelope: Envelope,
+    lam: float,
+    transform: JacobiTransform,
+    sigma_vehicle: float,
+    *,
+    tol: float = 1e-3,
+    initial_cells: int = 16,
+    budget: int = BNB_BUDGET,
+    progress: bool = False,
+) -> JacobiBnbResult:
+    """Certified Lipschitz branch-and-bound of the Jacobi sigma over relative headings.
+
+    See the module docstring for the argument. ``tol`` is relative to the best value.
+    """
+    nv = transform.n
+    a_rng, b_rng = abs_range(*envelope.u), abs_range(*envelope.v)
+    verts = np.array(list(itertools.product(a_rng, b_rng, envelope.r)))  # (8, 3)
+    combos = np.array(list(itertools.product(range(len(verts)), repeat=nv)))  # (8^N, N)
+    va, vb, vr = (verts[combos, k] for k in range(3))  # each (8^N, N)
+    lip = 2.0 * sigma_vehicle * np.linalg.norm(transform.phi, axis=0) * np.linalg.norm(transform.phi_inv, axis=1)
+    lip_sum = float(lip[:-1].sum())  # heading of vehicle N fixed at 0
+    d = nv - 1
+    h = np.pi / initial_cells
+    grid = -np.pi + h * (2 * np.arange(initial_cells) + 1)
+    centres = np.array(list(itertools.product(grid, repeat=d))).reshape(-1, d)
+    best, best_w = -np.inf, None
+    pruned_upper = -np.inf
+    evaluations, levels = 0, 0
+    upper = np.inf
+    with tqdm(disable=not progress, desc="Jacobi branch-and-bound", unit="level") as bar:
+        while True:
+            m = len(centres)
+            vals = np.empty(m)
+            for start in range(0, m, max(1, CHUNK // len(combos))):
+                cc = centres[start : start + max(1, CHUNK // len(combos))]
+                psi = np.concatenate([cc, np.zeros((len(cc), 1))], axis=1)[:, None, :]
+                psi = np.broadcast_to(psi, (len(cc), len(combos), nv))
+                f = jacobi_sigma(params, lam, transform, psi, va[None], vb[None], vr[None])
+                k = np.argmax(f, axis=1)
+                vals[start : start + len(cc)] = f[np.arange(len(cc)), k]
+                j = int(np.argmax(vals[start : start + len(cc)]))
+                if vals[start + j] > best:
+                    best = float(vals[start + j])
+                    best_w = (psi[j, 0].copy(), va[k[j]], vb[k[j]], vr[k[j]])
+            evaluations += m * len(combos)
+            bounds = vals + h * lip_sum
+            upper = max(float(bounds.max()), pruned_upper)
+            levels += 1
+            bar.update(1)
+            if upper <= best * (1.0 + tol) or evaluations * (1 + 2**d) > budget:
+                break
+            keep = bounds > best * (1.0 + tol)
+            if np.any(~keep):
+                pruned_upper = max(pruned_upper, float(bounds[~keep].max()))
+            h /= 2.0
+            offsets = np.array(list(itertools.product((-h, h), repeat=d)))
+            centres = (centres[keep][:, None, :] + offsets[None]).reshape(-1, d)
+    assert best_w is not None
+    return JacobiBnbResult(
+        upper=upper * (1.0 + ROUNDOFF_RTOL), lower=best, witness=best_w, levels=levels, evaluations=evaluations
+    )
+
+
+def sigma_at_witness(params: VehicleParams, bounds: SigmaBounds, transform: JacobiTransform | None = None) -> float:
+    """Re-evaluate ``||A_Delta||`` at the witness of ``bounds`` (1/s).
+
+    A matrix-free Jacobi witness (large fleets) also stores the unit vector ``x`` that
+    attained it (:attr:`SigmaWitness.vector`); its value is then ``||M x||``, recomputed in O(N), which is
+    what :attr:`SigmaBounds.lower` records (a lower bound of the norm at that configuration).
+    """
+    w = bounds.witness
+    psi, u, v, r = (np.asarray(x, dtype=float) for x in (w.psi, w.u, w.v, w.r))
+    if bounds.coords == "vehicle":
+        g = inertial_block(params, psi, u, v, r) - bounds.lam * np.eye(2)
+        return float(sigma_max_2x2(g).max())
+    if transform is None:
+        raise FormationError("a Jacobi witness needs its JacobiTransform")
+    if w.vector is not None:
+        x = np.asarray(w.vector, dtype=float).reshape(transform.n, 2)
+        mx = jacobi_apply(_shifted_blocks(params, bounds.lam, psi, u, v, r), transform.kind, x)
+        return float(np.linalg.norm(mx) / np.linalg.norm(x))
+    return float(jacobi_sigma(params, bounds.lam, transform, psi, u, v, r))

@@ -1,0 +1,1 @@
+"""Linear matrix inequalities in cvxpy, solved by Clarabel: the only package that imports cvxpy."""

@@ -1,0 +1,130 @@
+"""Operating envelope and the constant lambda of the decomposition A = lam I + A_Delta."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from auv_hinf.exceptions import EnvelopeError
+from auv_hinf.models.vehicle import VehicleParams
+
+#: Names of the envelope ranges, in order: surge, sway (m/s), yaw rate (rad/s), heading (rad).
+ENVELOPE_FIELDS = ("u", "v", "r", "psi")
+#: Widest heading range (rad): a full turn. Wider ranges would count headings twice.
+PSI_MAX_WIDTH = 2.0 * math.pi
+
+
+def check_interval(name: str, value: Any) -> tuple[float, float]:
+    """Validate one envelope range and return it as ``(min, max)`` floats.
+
+    Parameters
+    ----------
+    name : str
+        Range name (``u``, ``v``, ``r`` or ``psi``), used in the message.
+    value : Any
+        A pair of real numbers ``(min, max)``; ints and numpy scalars are accepted,
+        strings and booleans are not.
+
+    Returns
+    -------
+    tuple of float
+
+    Raises
+    ------
+    EnvelopeError
+        If ``value`` is not a pair of real numbers, is not finite, is reversed (empty),
+        or, for ``psi``, is wider than a full turn ``2 pi``.
+    """
+    try:
+        items = list(value)
+    except TypeError:
+        items = []
+    if len(items) != 2 or not all(isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_)) for x in items):
+        raise EnvelopeError(f"envelope {name} must be a pair (min, max) of numbers, got {value!r}")
+    lo, hi = float(items[0]), float(items[1])
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise EnvelopeError(f"envelope {name} must be finite, got ({lo!r}, {hi!r})")
+    if lo > hi:
+        raise EnvelopeError(f"envelope {name} is empty: min {lo!r} > max {hi!r}")
+    if name == "psi" and hi - lo > PSI_MAX_WIDTH:
+        raise EnvelopeError(
+            f"envelope psi must span at most a full turn 2 pi rad, got ({lo!r}, {hi!r}) (width {hi - lo:.6g} rad)"
+        )
+    return lo, hi
+
+
+def abs_range(lo: float, hi: float) -> tuple[float, float]:
+    """Range of ``|x|`` for ``x`` in ``[lo, hi]``; contains 0 when the interval straddles it."""
+    if lo <= 0.0 <= hi:
+        return 0.0, max(-lo, hi)
+    return min(abs(lo), abs(hi)), max(abs(lo), abs(hi))
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """Operating envelope shared by all vehicles.
+
+    Parameters
+    ----------
+    u, v : tuple of float
+        Surge and sway speed ranges (min, max), m/s, body frame.
+    r : tuple of float
+        Yaw-rate range, rad/s.
+    psi : tuple of float
+        Heading range, rad (default the full circle); at most ``2 pi`` wide.
+
+    Raises
+    ------
+    EnvelopeError
+        If a range is reversed (empty), not a pair of numbers, not finite, or (``psi``)
+        wider than a full turn. See :func:`check_interval`, which also validates the
+        ``[envelope]`` table of a configuration file.
+    """
+
+    u: tuple[float, float]
+    v: tuple[float, float]
+    r: tuple[float, float]
+    psi: tuple[float, float] = (-math.pi, math.pi)
+
+    def __post_init__(self) -> None:
+        for name in ENVELOPE_FIELDS:
+            object.__setattr__(self, name, check_interval(name, getattr(self, name)))
+
+    def contains(self, u: Any, v: Any, r: Any) -> np.ndarray:
+        """Boolean mask: is ``(u, v, r)`` inside the envelope (heading ignored: full circle)."""
+        u_, v_, r_ = (np.asarray(a, dtype=float) for a in (u, v, r))
+        return (
+            (u_ >= self.u[0])
+            & (u_ <= self.u[1])
+            & (v_ >= self.v[0])
+            & (v_ <= self.v[1])
+            & (r_ >= self.r[0])
+            & (r_ <= self.r[1])
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary ``{"u": [min, max], ...}`` (also a valid ``[envelope]`` table)."""
+        return {f.name: list(getattr(self, f.name)) for f in fields(self)}
+
+
+#: The envelope of the paper's Section V study: u in [0, 3.5] m/s, v in [-1, 1] m/s,
+#: r in [-0.5, 0.5] rad/s, full heading circle. Also the default of a configuration file.
+PAPER_ENVELOPE = Envelope(u=(0.0, 3.5), v=(-1.0, 1.0), r=(-0.5, 0.5))
+
+
+def envelope_lambda(params: VehicleParams, envelope: Envelope) -> float:
+    """Most negative ``min(-d11/m11, -d22/m22)`` over the envelope (1/s).
+
+    Damping grows with ``|u|`` and ``|v|``, so the minimum is at the largest ``|u|`` and
+    ``|v|`` of the envelope. A constant lambda is what an LTI small-gain certificate needs;
+    lowering lambda by delta raises sigma by at most delta, so the required gain
+    ``sigma + lam`` never gets worse.
+    """
+    umax = abs_range(*envelope.u)[1]
+    vmax = abs_range(*envelope.v)[1]
+    d11, d22, _ = params.damping(umax, vmax, 0.0)
+    return float(min(-d11 / params.m11, -d22 / params.m22))

@@ -1,0 +1,341 @@
+"""Mission references: the centre path ``q(t)`` of a formation, with provable bounds.
+
+Every path is a frozen dataclass, callable on an array of times ``t`` (s) and returning the
+inertial position ``q`` (m), velocity ``q'`` (m/s), acceleration ``q''`` (m/s^2) and jerk
+``q'''`` (m/s^3), each of shape ``np.shape(t) + (2,)``. :meth:`bounds` gives analytic bounds
+valid for every ``t >= 0``; each is widened outward by the relative margin
+:data:`BOUND_RTOL` so that floating-point rounding cannot make a sampled value escape it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+from numpy.polynomial import Polynomial
+from numpy.typing import ArrayLike
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.exceptions import ParameterError, require_finite
+
+#: Outward relative margin on every analytic bound. Evaluating a bound or a sampled
+#: quantity (a few flops, atan2/sin/cos) costs a few ulps (~1e-15 relative); 1e-12 covers
+#: that with a wide margin while staying far below any physical resolution.
+BOUND_RTOL = 1e-12
+#: Gauss-Legendre nodes for positions inside turns. The integrand cos/sin of a degree-7
+#: polynomial of at most pi/2 is entire; 24 nodes reach machine precision (checked in tests
+#: against 64 nodes and adaptive quadrature).
+GL_NODES = 24
+
+#: Septic smoothstep ``b(s) = 35 s^4 - 84 s^5 + 70 s^6 - 20 s^7`` on [0, 1]: ``b(0) = 0``,
+#: ``b(1) = 1``, and ``b', b'', b'''`` vanish at both ends.
+SMOOTHSTEP = Polynomial([0.0, 0.0, 0.0, 0.0, 35.0, -84.0, 70.0, -20.0])
+
+Derivatives = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
+
+
+def poly_sup(p: Polynomial) -> float:
+    """Sound ``sup |p(s)|`` over ``s`` in [0, 1] (dimensionless).
+
+    The maximum of ``|p|`` is at an end point or at a real root of ``p'``. All roots of
+    ``p'`` (real parts, clipped into [0, 1]) are candidates: spurious ones cannot raise the
+    maximum above the true supremum, and multiple roots perturbed off the real axis are not
+    lost. The result is widened by :data:`BOUND_RTOL`.
+    """
+    crit = np.concatenate([[0.0, 1.0], np.clip(p.deriv().roots().real, 0.0, 1.0)])
+    return float(np.max(np.abs(p(crit)))) * (1.0 + BOUND_RTOL)
+
+
+def times(t: ArrayLike) -> FloatArray:
+    """``t`` as a float array (s); raise :class:`ParameterError` if any entry is not finite."""
+    arr = np.asarray(t, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"times t must be finite (s), got non-finite entries in {arr!r}")
+    return arr
+
+
+def _check(obj: object, name: str, unit: str, *, positive: bool = True, nonneg: bool = False) -> None:
+    value = require_finite(f"{type(obj).__name__}.{name}", getattr(obj, name))
+    if (positive and not nonneg and value <= 0) or (nonneg and value < 0):
+        rng = ">= 0" if nonneg else "> 0"
+        raise ParameterError(f"{type(obj).__name__}.{name} must be {rng} ({unit}), got {value!r}")
+    object.__setattr__(obj, name, value)
+
+
+def _check_point(obj: object, name: str) -> None:
+    arr = np.asarray(getattr(obj, name), dtype=float)
+    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{type(obj).__name__}.{name} must be 2 finite numbers (m), got {arr!r}")
+    object.__setattr__(obj, name, (float(arr[0]), float(arr[1])))
+
+
+def _vec(x: FloatArray, y: FloatArray) -> FloatArray:
+    x, y = np.broadcast_arrays(x, y)
+    return np.stack([x, y], axis=-1)
+
+
+@dataclass(frozen=True)
+class MissionBounds:
+    """Bounds of a mission path valid for every ``t >= 0``.
+
+    Attributes
+    ----------
+    speed_min, speed_max : float
+        Range of the ground speed ``|q'|`` (m/s).
+    accel_max, jerk_max : float
+        Upper bounds of ``|q''|`` (m/s^2) and ``|q'''|`` (m/s^3).
+    turn_rate_min, turn_rate_max : float
+        Range of the course rate ``chi' = (x'y'' - y'x'')/|q'|^2`` (rad/s), ``chi = atan2(q')``.
+    turn_accel_max : float
+        Upper bound of ``|chi''|`` (rad/s^2).
+    """
+
+    speed_min: float
+    speed_max: float
+    accel_max: float
+    jerk_max: float
+    turn_rate_min: float
+    turn_rate_max: float
+    turn_accel_max: float
+
+    @staticmethod
+    def widened(**values: float) -> MissionBounds:
+        """Bounds from exact values, widened outward by :data:`BOUND_RTOL` of each one's scale.
+
+        Course terms are computed from ``q', q'', q'''``, so their rounding scales with
+        ``A/S`` (rate) and ``J/S + 2 (A/S)^2`` (its derivative), not with their values, which
+        may be exactly zero (the ``chi''`` of a circle).
+        """
+        v = values
+        s, a = v["speed_min"], v["accel_max"]
+        scale = {k: abs(x) for k, x in v.items()}
+        scale["turn_rate_min"] = scale["turn_rate_max"] = max(abs(v["turn_rate_max"]), abs(v["turn_rate_min"]), a / s)
+        scale["turn_accel_max"] = max(v["turn_accel_max"], v["jerk_max"] / s + 2.0 * (a / s) ** 2)
+        out = {k: x + scale[k] * BOUND_RTOL for k, x in v.items()}
+        for k in ("speed_min", "turn_rate_min"):
+            out[k] = v[k] - scale[k] * BOUND_RTOL
+        return MissionBounds(**out)
+
+
+class MissionReference(Protocol):
+    """A centre path: ``kind``, ``__call__(t) -> (q, q', q'', q''')``, ``bounds()``, ``to_dict()``."""
+
+    kind: ClassVar[str]
+
+    def __call__(self, t: ArrayLike) -> Derivatives: ...
+
+    def bounds(self) -> MissionBounds: ...
+
+    def to_dict(self) -> dict[str, Any]: ...
+
+
+class _Base:
+    kind: ClassVar[str]
+    __dataclass_fields__: ClassVar[dict[str, Any]]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Parameters as plain JSON types, with ``kind``; ``reference_from_dict(**d)`` inverts it."""
+        params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
+        return {"kind": self.kind, **params}
+
+
+@dataclass(frozen=True)
+class SineReference(_Base):
+    """Section V path ``q = [s t, A sin(w t)]``.
+
+    Parameters
+    ----------
+    speed : float
+        Along-track speed ``s`` (m/s), > 0.
+    amplitude : float
+        Cross-track amplitude ``A`` (m), >= 0.
+    omega : float
+        Angular frequency ``w`` (rad/s), > 0.
+
+    Notes
+    -----
+    Bounds (write ``a = A w``, ``c = cos(w t)``, ``k = a^2/s^2``):
+
+    * ``|q'|^2 = s^2 + a^2 c^2``: speed in ``[s, sqrt(s^2 + a^2)]`` exactly (``c = 0, 1``).
+    * ``|q''| = a w |sin| <= A w^2``, ``|q'''| = a w^2 |c| <= A w^3``, both attained.
+    * ``chi' = -s a w sin / (s^2 + a^2 c^2)``. With ``c^2 = 1 - sin^2`` the numerator grows
+      and the denominator shrinks with ``|sin|``, so ``|chi'| <= a w / s = A w^2/s``,
+      attained at ``c = 0``.
+    * ``chi'' = -(a w^2/s) c (1 + 2k - k c^2) / (1 + k c^2)^2 =: -(a w^2/s) h(c)``. With
+      ``z = k c^2`` the sign of ``h'(c)`` is that of ``z^2 - 6(1+k) z + (1+2k)``, positive at
+      ``z = 0`` with smaller root ``z* = (1+2k)/(3(1+k) + sqrt(9(1+k)^2 - 1 - 2k))`` (the
+      larger one exceeds ``k``). So ``h`` rises up to ``c* = sqrt(z*/k)`` and falls after;
+      ``sup|chi''| = (a w^2/s) h(min(c*, 1))`` exactly (``h(1) = 1/(1+k)``).
+    """
+
+    speed: float = 1.0
+    amplitude: float = 30.0
+    omega: float = 0.1
+    kind: ClassVar[str] = "sine"
+
+    def __post_init__(self) -> None:
+        _check(self, "speed", "m/s")
+        _check(self, "amplitude", "m", nonneg=True)
+        _check(self, "omega", "rad/s")
+
+    def __call__(self, t: ArrayLike) -> Derivatives:
+        """Position (m), velocity (m/s), acceleration (m/s^2) and jerk (m/s^3), shape ``t.shape + (2,)``."""
+        tt = times(t)
+        s, a, w = self.speed, self.amplitude, self.omega
+        sn, cs = np.sin(w * tt), np.cos(w * tt)
+        zero = np.zeros_like(tt)
+        return (
+            _vec(s * tt, a * sn),
+            _vec(s + zero, a * w * cs),
+            _vec(zero, -a * w * w * sn),
+            _vec(zero, -a * w**3 * cs),
+        )
+
+    def bounds(self) -> MissionBounds:
+        """Exact bounds (see Notes), widened by :data:`BOUND_RTOL`."""
+        s, w = self.speed, self.omega
+        a = self.amplitude * w
+        k = (a / s) ** 2
+        z = (1 + 2 * k) / (3 * (1 + k) + math.sqrt(9 * (1 + k) ** 2 - 1 - 2 * k))
+        c = 1.0 if z >= k else math.sqrt(z / k)
+        h = c * (1 + 2 * k - k * c * c) / (1 + k * c * c) ** 2
+        return MissionBounds.widened(
+            speed_min=s,
+            speed_max=math.hypot(s, a),
+            accel_max=a * w,
+            jerk_max=a * w * w,
+            turn_rate_min=-a * w / s,
+            turn_rate_max=a * w / s,
+            turn_accel_max=a * w * w / s * h,
+        )
+
+
+@dataclass(frozen=True)
+class LineReference(_Base):
+    """Straight line ``q = start + s t [cos h, sin h]``.
+
+    Parameters
+    ----------
+    speed : float
+        Speed ``s`` (m/s), > 0.
+    heading : float
+        Course ``h`` (rad, inertial frame).
+    start : tuple of float
+        ``q(0)`` (m). Bounds are exact: speed ``s``, everything else zero.
+    """
+
+    speed: float
+    heading: float = 0.0
+    start: tuple[float, float] = (0.0, 0.0)
+    kind: ClassVar[str] = "line"
+
+    def __post_init__(self) -> None:
+        _check(self, "speed", "m/s")
+        _check(self, "heading", "rad", positive=False)
+        _check_point(self, "start")
+
+    def __call__(self, t: ArrayLike) -> Derivatives:
+        """Position (m), velocity (m/s), acceleration, jerk (zero), shape ``t.shape + (2,)``."""
+        tt = times(t)[..., None]
+        d = self.speed * np.array([math.cos(self.heading), math.sin(self.heading)])
+        zero = np.zeros((*tt.shape[:-1], 2))
+        return np.asarray(self.start) + tt * d, d + zero, zero, zero.copy()
+
+    def bounds(self) -> MissionBounds:
+        """Speed ``s``; acceleration, jerk and turn terms zero (exact)."""
+        s = self.speed
+        return MissionBounds.widened(
+            speed_min=s,
+            speed_max=s,
+            accel_max=0.0,
+            jerk_max=0.0,
+            turn_rate_min=0.0,
+            turn_rate_max=0.0,
+            turn_accel_max=0.0,
+        )
+
+
+@dataclass(frozen=True)
+class CircleReference(_Base):
+    """Counter-clockwise circle ``q = center + R [cos th, sin th]``, ``th = -pi/2 + s t / R``.
+
+    The start angle ``-pi/2`` puts ``q(0)`` below the centre with ``q'(0) = [s, 0]``.
+
+    Parameters
+    ----------
+    speed : float
+        Speed ``s`` (m/s), > 0.
+    radius : float
+        ``R`` (m), > 0.
+    center : tuple of float
+        Centre (m).
+
+    Notes
+    -----
+    Exact constants: ``|q'| = s``, ``|q''| = s^2/R``, ``|q'''| = s^3/R^2``, ``chi' = s/R``,
+    ``chi'' = 0``.
+    """
+
+    speed: float
+    radius: float
+    center: tuple[float, float] = (0.0, 0.0)
+    kind: ClassVar[str] = "circle"
+
+    def __post_init__(self) -> None:
+        _check(self, "speed", "m/s")
+        _check(self, "radius", "m")
+        _check_point(self, "center")
+
+    def __call__(self, t: ArrayLike) -> Derivatives:
+        """Position (m), velocity (m/s), acceleration (m/s^2), jerk (m/s^3), shape ``t.shape + (2,)``."""
+        s, rad = self.speed, self.radius
+        th = -0.5 * np.pi + (s / rad) * times(t)
+        e, n = _vec(np.cos(th), np.sin(th)), _vec(-np.sin(th), np.cos(th))
+        return np.asarray(self.center) + rad * e, s * n, -(s * s / rad) * e, -(s**3 / rad**2) * n
+
+    def bounds(self) -> MissionBounds:
+        """Exact constants (see Notes), widened by :data:`BOUND_RTOL`."""
+        s, rad = self.speed, self.radius
+        return MissionBounds.widened(
+            speed_min=s,
+            speed_max=s,
+            accel_max=s * s / rad,
+            jerk_max=s**3 / rad**2,
+            turn_rate_min=s / rad,
+            turn_rate_max=s / rad,
+            turn_accel_max=0.0,
+        )
+
+
+def heading_from_velocity(v: ArrayLike, a: ArrayLike, j: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Course angle of a velocity and its first two time derivatives.
+
+    Parameters
+    ----------
+    v, a, j : array_like, shape (..., 2)
+        Velocity (m/s), acceleration (m/s^2) and jerk (m/s^3), inertial frame.
+
+    Returns
+    -------
+    chi, chi_dot, chi_ddot : ndarray, shape (...)
+        ``atan2(v_y, v_x)`` in (-pi, pi] (rad), ``(v x a)/|v|^2`` (rad/s) and
+        ``(v x j)/|v|^2 - 2 chi' (v . a)/|v|^2`` (rad/s^2).
+
+    Raises
+    ------
+    ParameterError
+        If any ``|v|`` is zero (the course is undefined) or an input is not finite.
+    """
+    vv, aa, jj = (np.asarray(x, dtype=float) for x in (v, a, j))
+    s2 = vv[..., 0] ** 2 + vv[..., 1] ** 2
+    if not np.all(s2 > 0):
+        raise ParameterError("velocity v must be nonzero (m/s) for the course to be defined, got |v| = 0")
+    chi_dot = (vv[..., 0] * aa[..., 1] - vv[..., 1] * aa[..., 0]) / s2
+    cross_j = vv[..., 0] * jj[..., 1] - vv[..., 1] * jj[..., 0]
+    chi_ddot = (cross_j - 2.0 * chi_dot * (vv[..., 0] * aa[..., 0] + vv[..., 1] * aa[..., 1])) / s2
+    if not (np.all(np.isfinite(chi_dot)) and np.all(np.isfinite(chi_ddot))):
+        raise ParameterError("v, a and j must be finite (m/s, m/s^2, m/s^3)")
+    chi: FloatArray = np.arctan2(vv[..., 1], vv[..., 0])
+    return chi, chi_dot, chi_ddot

@@ -1,0 +1,297 @@
+"""3-DOF horizontal AUV model (Yang & Zhang, eqs. 1-10).
+
+Conventions
+-----------
+* State of one vehicle: ``[x, y, psi, u, v, r]`` with ``(x, y)`` the position in the
+  inertial (north-east) frame in m, ``psi`` the heading in rad, ``(u, v)`` the surge and
+  sway speeds in the body frame in m/s and ``r`` the yaw rate in rad/s.
+* Input of one vehicle: ``[tau_x, tau_y, tau_psi]``: surge force (N), sway force (N)
+  and yaw moment (N m), body frame.
+* Every function broadcasts over leading axes, so a fleet of N vehicles is a stack of
+  shape ``(..., N)`` (scalars) or ``(..., N, 6)`` (states).
+
+Equations (the surge, sway and yaw equations behind eqs. 5-6; see ``docs/errata.md``)::
+
+    m11 u' - m22 v r + d11 u = tau_x
+    m22 v' + m11 u r + d22 v = tau_y
+    m33 r' + (m22 - m11) u v + d33 r = tau_psi
+
+with ``d11 = d11_lin + d11_quad |u|`` and likewise for sway (|v|) and yaw (|r|).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+import control as ct
+import numpy as np
+from numpy.typing import ArrayLike
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.arrays import stack_last
+from auv_hinf.exceptions import ParameterError, require_finite
+
+_MASS_FIELDS = ("m11", "m22", "m33")
+_DAMPING_FIELDS = ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+
+
+@dataclass(frozen=True)
+class VehicleParams:
+    """Rigid-body plus added-mass inertia and damping of one AUV, SI units.
+
+    Parameters
+    ----------
+    m11, m22 : float
+        Surge and sway inertia ``m - X_udot``, ``m - Y_vdot`` in kg (> 0).
+    m33 : float
+        Yaw inertia ``I_z - N_rdot`` in kg m^2 (> 0).
+    d11_lin, d11_quad : float
+        Surge damping ``d11 = d11_lin + d11_quad |u|``: kg/s and kg/m (>= 0).
+    d22_lin, d22_quad : float
+        Sway damping ``d22 = d22_lin + d22_quad |v|``: kg/s and kg/m (>= 0).
+    d33_lin, d33_quad : float
+        Yaw damping ``d33 = d33_lin + d33_quad |r|``: kg m^2/s and kg m^2 (>= 0).
+    name : str
+        Label used in reports.
+
+    Raises
+    ------
+    ParameterError
+        If a mass is not strictly positive, a damping coefficient is negative, or any
+        value is NaN or infinite. The message names the field.
+    """
+
+    m11: float
+    m22: float
+    m33: float
+    d11_lin: float
+    d11_quad: float
+    d22_lin: float
+    d22_quad: float
+    d33_lin: float
+    d33_quad: float
+    name: str = "custom"
+
+    def __post_init__(self) -> None:
+        for field in _MASS_FIELDS + _DAMPING_FIELDS:
+            value = require_finite(field, getattr(self, field))
+            object.__setattr__(self, field, value)
+        for field in _MASS_FIELDS:
+            if getattr(self, field) <= 0.0:
+                raise ParameterError(f"{field} must be > 0 (an inertia), got {getattr(self, field)!r}")
+        for field in _DAMPING_FIELDS:
+            if getattr(self, field) < 0.0:
+                raise ParameterError(f"{field} must be >= 0 (damping is dissipative), got {getattr(self, field)!r}")
+
+    def damping(self, u: ArrayLike, v: ArrayLike, r: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Diagonal damping ``(d11, d22, d33)`` at body velocities ``(u, v, r)``.
+
+        Parameters
+        ----------
+        u, v : array_like
+            Surge and sway speed, m/s (body frame).
+        r : array_like
+            Yaw rate, rad/s.
+
+        Returns
+        -------
+        d11, d22, d33 : ndarray
+            kg/s, kg/s and kg m^2/s, broadcast to a common shape.
+        """
+        u_, v_, r_ = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (u, v, r)))
+        return (
+            self.d11_lin + self.d11_quad * np.abs(u_),
+            self.d22_lin + self.d22_quad * np.abs(v_),
+            self.d33_lin + self.d33_quad * np.abs(r_),
+        )
+
+    def with_damping_scale(self, factor: float) -> VehicleParams:
+        """Return a copy whose six damping coefficients are multiplied by ``factor``.
+
+        Used to model a plant/controller mismatch (e.g. ``factor=1.2`` for 20 % more drag).
+        """
+        f = require_finite("damping scale factor", factor)
+        if f < 0:
+            raise ParameterError(f"damping scale factor must be >= 0, got {f!r}")
+        scaled = {k: getattr(self, k) * f for k in _DAMPING_FIELDS}
+        return replace(self, name=f"{self.name} (damping x{f:g})", **scaled)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary of the parameters."""
+        return asdict(self)
+
+
+def paper2011() -> VehicleParams:
+    """Parameters of Yang & Zhang, Section V (adapted there from Cui et al. 2009).
+
+    ``m11 = 200 kg, m22 = 250 kg, m33 = 80 kg m^2``, ``d11 = 70 + 100|u|``,
+    ``d22 = 100 + 200|v|``, ``d33 = 50 + 100|r|``.
+    """
+    return VehicleParams(200.0, 250.0, 80.0, 70.0, 100.0, 100.0, 200.0, 50.0, 100.0, name="paper2011")
+
+
+def remus100(design_speed: float = 1.5) -> VehicleParams:
+    """REMUS 100 torpedo AUV reduced to the paper's diagonal 3-DOF structure.
+
+    Source: T. Prestero, *Verification of a six-degree of freedom simulation model for
+    the REMUS autonomous underwater vehicle*, MSc thesis, MIT/WHOI, 2001
+    (coefficient tables of ch. 4): ``m = 30.48 kg``, ``I_zz = 3.45 kg m^2``,
+    ``X_udot = -0.93 kg``, ``Y_vdot = -35.5 kg``, ``N_rdot = -4.88 kg m^2``,
+    ``X_u|u| = -1.62 kg/m``, ``Y_v|v| = -1310 kg/m``, ``N_r|r| = -94.0 kg m^2``,
+    ``Y_uv = -28.6 kg/m``, ``N_ur = -2.00 kg m``.
+
+    The reduction keeps the quadratic cross-flow drag and turns the lift terms
+    ``Y_uv u v`` and ``N_ur u r`` into linear sway and yaw damping at the design surge
+    speed ``u0``: ``d22_lin = -Y_uv u0``, ``d33_lin = -N_ur u0``. Prestero gives no
+    linear surge damping, so ``d11_lin = 0``. Off-diagonal terms (``Y_r``, ``N_v``) are
+    dropped, as the paper's model assumes.
+
+    Provenance note: Prestero's table gives the sway cross-flow drag ``Y_v|v| = -1310 kg/m``
+    but the heave drag ``Z_w|w| = -131 kg/m``. The hull is axisymmetric, so the two should be
+    equal, and one of them is probably off by a factor of 10. This preset keeps the published
+    1310 kg/m. The choice matters: on ``u in [0.5, 2.5] m/s``, ``|v| <= 0.3 m/s``,
+    ``|r| <= 0.3 rad/s`` the envelope lambda is -6.61 1/s and the vehicle-coordinate sigma
+    6.67 1/s; with 131 kg/m they are -1.25 1/s and 1.31 1/s
+    (``tests/test_vehicle.py::test_remus100_sway_drag_sensitivity``). To study the
+    alternative, use ``dataclasses.replace(remus100(), d22_quad=131.0)``.
+
+    Parameters
+    ----------
+    design_speed : float
+        Surge speed ``u0`` in m/s at which the lift terms are linearised (> 0).
+    """
+    u0 = require_finite("design_speed", design_speed)
+    if u0 <= 0:
+        raise ParameterError(f"design_speed must be > 0 m/s, got {u0!r}")
+    m, izz = 30.48, 3.45
+    return VehicleParams(
+        m11=m + 0.93,
+        m22=m + 35.5,
+        m33=izz + 4.88,
+        d11_lin=0.0,
+        d11_quad=1.62,
+        d22_lin=28.6 * u0,
+        d22_quad=1310.0,
+        d33_lin=2.00 * u0,
+        d33_quad=94.0,
+        name=f"remus100 (u0={u0:g} m/s)",
+    )
+
+
+PRESETS: dict[str, Callable[[], VehicleParams]] = {"paper2011": paper2011, "remus100": remus100}
+
+
+def preset(name: str) -> VehicleParams:
+    """Return the vehicle preset called ``name`` (one of :data:`PRESETS`)."""
+    try:
+        return PRESETS[name]()
+    except KeyError:
+        raise ParameterError(f"unknown vehicle preset {name!r}; expected one of {sorted(PRESETS)}") from None
+
+
+def rotation(psi: ArrayLike) -> FloatArray:
+    """Planar rotation ``R(psi)`` from body to inertial frame, shape ``(..., 2, 2)``."""
+    p = np.asarray(psi, dtype=float)
+    c, s = np.cos(p), np.sin(p)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def coriolis_damping_matrix(params: VehicleParams, u: ArrayLike, v: ArrayLike, r: ArrayLike) -> FloatArray:
+    """``M1^-1 D1(r, |u|, |v|)`` of eq. (5), body frame, shape ``(..., 2, 2)``, in 1/s.
+
+    ``D1 = [[d11, -m22 r], [m11 r, d22]]`` holds the damping and the Coriolis coupling.
+    """
+    d11, d22, _ = params.damping(u, v, r)
+    r_ = np.broadcast_to(np.asarray(r, dtype=float), d11.shape)
+    row0 = np.stack([d11 / params.m11, -params.m22 * r_ / params.m11], -1)
+    row1 = np.stack([params.m11 * r_ / params.m22, d22 / params.m22], -1)
+    return np.stack([row0, row1], -2)
+
+
+def body_block(params: VehicleParams, u: ArrayLike, v: ArrayLike, r: ArrayLike) -> FloatArray:
+    """Body-frame block ``S(r) - M1^-1 D1`` of eq. (8), shape ``(..., 2, 2)``, in 1/s.
+
+    Equal to ``[[-d11/m11, (m22-m11) r/m11], [(m22-m11) r/m22, -d22/m22]]``
+    (eq. 20 equals eq. 8; ``tests/test_vehicle.py::test_eq20_equals_eq8_symbolically``).
+    """
+    md = coriolis_damping_matrix(params, u, v, r)
+    r_ = np.asarray(r, dtype=float)
+    r_ = np.broadcast_to(r_, md.shape[:-2])
+    skew = np.stack([np.stack([np.zeros_like(r_), -r_], -1), np.stack([r_, np.zeros_like(r_)], -1)], -2)
+    return skew - md
+
+
+def inertial_block(params: VehicleParams, psi: ArrayLike, u: ArrayLike, v: ArrayLike, r: ArrayLike) -> FloatArray:
+    """``G(psi, r, |u|, |v|) = R(psi) [S(r) - M1^-1 D1] R(psi)^T`` of eq. (8), in 1/s.
+
+    Maps the inertial velocity ``p'`` (m/s) to its drift acceleration, shape ``(..., 2, 2)``.
+    """
+    rot = rotation(psi)
+    blk = body_block(params, u, v, r)
+    return rot @ blk @ np.swapaxes(rot, -1, -2)
+
+
+def input_matrix(params: VehicleParams, psi: ArrayLike) -> FloatArray:
+    """``H(psi) = R(psi) M1^-1`` of eq. (9), shape ``(..., 2, 2)``, in 1/kg."""
+    return rotation(psi) @ np.diag([1.0 / params.m11, 1.0 / params.m22])
+
+
+def rhs(
+    params: VehicleParams, state: ArrayLike, tau: ArrayLike, cs: tuple[FloatArray, FloatArray] | None = None
+) -> FloatArray:
+    """Time derivative of vehicle states (eqs. 1-6), vectorised over leading axes.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    state : array_like, shape (..., 6)
+        ``[x, y, psi, u, v, r]`` in m, m, rad, m/s, m/s, rad/s.
+    tau : array_like, shape (..., 3)
+        ``[tau_x, tau_y, tau_psi]`` in N, N, N m (body frame).
+    cs : tuple of ndarray, optional
+        ``(cos psi, sin psi)`` when the caller has them already.
+
+    Returns
+    -------
+    ndarray, shape (..., 6)
+        ``[x', y', psi', u', v', r']``.
+    """
+    s = np.asarray(state, dtype=float)
+    f = np.asarray(tau, dtype=float)
+    psi, u, v, r = s[..., 2], s[..., 3], s[..., 4], s[..., 5]
+    d11, d22, d33 = params.damping(u, v, r)
+    c, sn = (np.cos(psi), np.sin(psi)) if cs is None else cs
+    m11, m22, m33 = params.m11, params.m22, params.m33
+    return stack_last(
+        [
+            c * u - sn * v,
+            sn * u + c * v,
+            r,
+            (f[..., 0] + m22 * v * r - d11 * u) / m11,
+            (f[..., 1] - m11 * u * r - d22 * v) / m22,
+            (f[..., 2] - (m22 - m11) * u * v - d33 * r) / m33,
+        ]
+    )
+
+
+def vehicle_nlsys(params: VehicleParams, name: str = "auv") -> ct.NonlinearIOSystem:
+    """One vehicle as a python-control ``nlsys`` with ``updfcn(t, x, u, params)``.
+
+    States ``x, y, psi, u, v, r``; inputs ``tau_x, tau_y, tau_psi``; outputs the full
+    state. Use ``control.linearize(sys, xeq, ueq)`` to linearise at a trim point.
+    """
+
+    def updfcn(t: float, x: FloatArray, u: FloatArray, p: dict[str, Any] | None) -> FloatArray:
+        return rhs(params, x, u)
+
+    return ct.nlsys(
+        updfcn,
+        None,
+        inputs=["tau_x", "tau_y", "tau_psi"],
+        states=["x", "y", "psi", "u", "v", "r"],
+        outputs=["x", "y", "psi", "u", "v", "r"],
+        name=name,
+    )

@@ -1,0 +1,162 @@
+"""Robust design: alpha, k1 and the heading gains chosen for the declared box and current.
+
+One bandwidth ``w`` (rad/s) sets every gain of a family with fixed shape:
+
+* position: nominal loop ``s^2 + 2 zeta w s + w^2`` on the box centre, i.e.
+  ``k1 = w^2/l`` and ``alpha = (2 zeta w + lam)/l`` with :data:`POSITION_DAMPING` ``zeta``:
+  heavy damping keeps velocity excursions (which decide the envelope) small;
+* heading: poles ``(-h w, -1.5 h w)`` placed on the nominal heading model
+  (:func:`~auv_hinf.design.gains.heading_gains`), ``h =`` :data:`HEADING_RATIO`.
+
+Larger ``w`` shrinks every error bound and raises the heading stiffness that the Munk-moment
+mismatch erodes, at the price of thrust. The design takes the *gentlest* ``w`` on the grid
+:data:`BANDWIDTHS` whose robust certificate covers the box scaled by
+:data:`TARGET_MARGIN` (so the certified margin ``lower`` is at least that), refined by
+bisection between grid points; if no ``w`` reaches the target it takes the gentlest that covers
+the declared box (margin >= 1); if none does, it reports the failure and the best attempt.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from tqdm.auto import tqdm
+
+from auv_hinf.certification.margins import inflate_envelope
+from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.reference import ReferenceTube
+from auv_hinf.robust.box import ParameterBox, box_lambda
+from auv_hinf.robust.certificate import RobustCertificate, robust_certificate
+
+#: Damping ratio of the nominal position loop of the family.
+POSITION_DAMPING = 4.0
+#: Heading bandwidth as a fraction of the position bandwidth.
+HEADING_RATIO = 0.8
+#: Bandwidth grid (rad/s): factor-2 steps from 0.25 to 64 rad/s.
+BANDWIDTHS = tuple(0.25 * 2.0**k for k in range(9))
+#: Box scale the design asks the certificate to cover (25 % headroom over the declared box).
+TARGET_MARGIN = 1.25
+#: Bisection steps between the last failing and the first passing grid bandwidth.
+REFINE_STEPS = 3
+
+
+@dataclass(frozen=True)
+class RobustDesign:
+    """What the robust design chose and why.
+
+    Attributes
+    ----------
+    gains : Gains
+    bandwidth : float
+        The chosen ``w`` (rad/s).
+    target : float
+        Box scale the choice covers (``TARGET_MARGIN``, 1, or 0 when nothing covers).
+    certificate : RobustCertificate
+        Certificate of the chosen gains on the declared box.
+    tried : tuple of tuple
+        ``(w, scale, covers)`` of every evaluation, in order.
+    reason : str
+        One sentence: what was chosen and why.
+    """
+
+    gains: Gains
+    bandwidth: float
+    target: float
+    certificate: RobustCertificate
+    tried: tuple[tuple[float, float, bool], ...]
+    reason: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary."""
+        return {
+            "gains": self.gains.to_dict(),
+            "bandwidth": self.bandwidth,
+            "target_scale": self.target,
+            "position_damping": POSITION_DAMPING,
+            "heading_ratio": HEADING_RATIO,
+            "tried": [{"bandwidth": w, "scale": s, "covers": c} for w, s, c in self.tried],
+            "reason": self.reason,
+        }
+
+
+def family_gains(box: ParameterBox, envelope: Envelope, w: float) -> Gains:
+    """Gains of the family at bandwidth ``w`` (rad/s)."""
+    lam, _ = box_lambda(box, inflate_envelope(envelope))
+    lc, _ = box.input_gain()
+    h = HEADING_RATIO * w
+    return Gains(
+        alpha=(2.0 * POSITION_DAMPING * w + lam) / lc,
+        k1=w * w / lc,
+        k_psi=heading_gains(box.nominal, (-h, -1.5 * h)),
+    )
+
+
+def design_robust(
+    box: ParameterBox,
+    envelope: Envelope,
+    tube: ReferenceTube,
+    current: float = 0.0,
+    thrust_limit: tuple[float, float, float] | None = None,
+    *,
+    progress: bool = False,
+) -> RobustDesign:
+    """Choose the robust gains (see the module docstring)."""
+    tried: list[tuple[float, float, bool]] = []
+    cap = box.max_scale if box.declared else math.inf
+
+    def covers(w: float, s: float) -> bool:
+        b = box.scaled(min(s, cap)) if box.declared else box
+        c = robust_certificate(b, envelope, tube, family_gains(box, envelope, w), current * s, thrust_limit)
+        tried.append((w, s, c.covers))
+        return c.covers
+
+    with tqdm(total=len(BANDWIDTHS), disable=not progress, desc="robust design", unit="bandwidth") as bar:
+        for target in (TARGET_MARGIN, 1.0):
+            if target > cap:
+                continue
+            prev: float | None = None
+            for w in BANDWIDTHS:
+                bar.update(1)
+                if covers(w, target):
+                    lo, hi = prev, w
+                    if lo is not None:
+                        for _ in range(REFINE_STEPS):
+                            mid = math.sqrt(lo * hi)
+                            if covers(mid, target):
+                                hi = mid
+                            else:
+                                lo = mid
+                    gains = family_gains(box, envelope, hi)
+                    cert = robust_certificate(box, envelope, tube, gains, current, thrust_limit)
+                    why = (
+                        f"gentlest bandwidth {hi:.4g} rad/s of the family (zeta = {POSITION_DAMPING:g}, heading "
+                        f"{HEADING_RATIO:g} w) whose certificate covers the box scaled by {target:g}"
+                    )
+                    return RobustDesign(gains, hi, target, cert, tuple(tried), why)
+                prev = w
+            bar.reset(total=len(BANDWIDTHS))
+    w = BANDWIDTHS[-1]
+    gains = family_gains(box, envelope, w)
+    cert = robust_certificate(box, envelope, tube, gains, current, thrust_limit)
+    return RobustDesign(
+        gains,
+        w,
+        0.0,
+        cert,
+        tuple(tried),
+        f"no bandwidth up to {w:g} rad/s covers the declared box; showing the largest",
+    )
+
+
+__all__ = [
+    "BANDWIDTHS",
+    "HEADING_RATIO",
+    "POSITION_DAMPING",
+    "TARGET_MARGIN",
+    "RobustDesign",
+    "design_robust",
+    "family_gains",
+]

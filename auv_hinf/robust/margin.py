@@ -1,0 +1,305 @@
+"""``robstab``-style margins: how far the declared box can grow, certified and exhibited.
+
+The box and the current bound are scaled together about the nominal
+(:meth:`~auv_hinf.robust.box.ParameterBox.scaled`, ``current * s``).
+
+* ``lower``: the largest scale at which :func:`~auv_hinf.robust.certificate.robust_certificate` still
+  covers (bisection; every scale reported was itself certified, and a certificate for a box
+  covers every smaller box).
+* ``upper``: the smallest scale at which a destabilising plant is exhibited. The per-vehicle
+  closed loop on a straight line at the tube's top speed is time invariant in error
+  coordinates; its trim is found with ``scipy.optimize.root`` and its Jacobian by central
+  differences of the simulator's own right-hand side. An eigenvalue in the right half plane
+  makes the trim unstable for the nonlinear loop too (Lyapunov's indirect method). Candidates
+  are the mass corners, with all damping low or all high, and head, tail and cross currents.
+* ``linearised``: the largest scale at which the linearised heading stiffness
+  ``m33_hat k1psi + dM (W_par^2 - W_perp^2)`` and damping ``m33_hat k2psi + d33_lin`` stay
+  positive for every plant and current (both are affine in the box corners, so the vertex test
+  is exact), next to the exhibited ``upper``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import root
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.design.gains import Gains
+from auv_hinf.models.reference import Motion
+from auv_hinf.models.vehicle import VehicleParams, rhs
+from auv_hinf.robust.box import PARAMETERS, ParameterBox
+from auv_hinf.simulation.law import VehicleLaw
+from auv_hinf.simulation.postprocess import ground_velocity
+
+#: Bisection steps of the certified scale (resolution ``cap / 2**7``, under 1 % of a cap of 5).
+LOWER_STEPS = 7
+#: Bisection steps of the exhibited scale along one corner direction.
+UPPER_STEPS = 16
+#: Largest scale searched when the box allows more (a 10x box is far beyond any declared one).
+SCALE_CAP = 10.0
+#: A trim is accepted when its residual is below this times the speed scale (m/s, m/s^2).
+TRIM_RTOL = 1e-9
+#: An eigenvalue counts as unstable above this times ``max(1, |eig|_max)`` (1/s): far above the
+#: central-difference error (step 1e-6 relative, error ~1e-10 of the Jacobian's scale).
+UNSTABLE_RTOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Witness:
+    """A destabilising plant and current.
+
+    Attributes
+    ----------
+    scale : float
+        Box scale of the plant (the corner direction times ``scale``).
+    multipliers : dict
+        Plant multipliers of the nine parameters.
+    current : tuple of float
+        Current (m/s, inertial, the line runs along +x).
+    max_real : float
+        Largest real part of the trim's closed-loop eigenvalues (1/s).
+    """
+
+    scale: float
+    multipliers: dict[str, float]
+    current: tuple[float, float]
+    max_real: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary."""
+        return {
+            "scale": self.scale,
+            "multipliers": self.multipliers,
+            "current": list(self.current),
+            "max_real": self.max_real,
+        }
+
+
+@dataclass(frozen=True)
+class RobustMargin:
+    """Certified and exhibited box scales.
+
+    Attributes
+    ----------
+    lower : float
+        Largest certified scale (``cap`` when the whole searched range certifies).
+    upper : float or None
+        Smallest scale with an exhibited destabilising plant (``None``: none up to ``cap``).
+    witness : Witness or None
+    linearised_lower : float
+        Largest scale at which the linearised heading loop is stable for every corner.
+    cap : float
+        Largest scale searched.
+    """
+
+    lower: float
+    upper: float | None
+    witness: Witness | None
+    linearised_lower: float
+    cap: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``margin`` object of ``certify --json``'s ``robust`` part."""
+        up = self.upper
+        return {
+            "lower": self.lower,
+            "upper": up,
+            "ratio": None if up is None else self.lower / up,
+            "witness": None if self.witness is None else self.witness.to_dict(),
+            "linearised": {
+                "lower": self.linearised_lower,
+                "upper": up,
+                "ratio": None if up is None else self.linearised_lower / up,
+            },
+            "scale_cap": self.cap,
+        }
+
+
+def certified_scale(check: Callable[[float], bool], cap: float, steps: int = LOWER_STEPS) -> float:
+    """Largest scale in ``[0, cap]`` found by bisection at which ``check`` holds (0 if none)."""
+    if check(cap):
+        return cap
+    lo, hi = 0.0, cap
+    if cap > 1.0:  # the declared box (scale 1) first: it splits the search where it matters
+        lo, hi = (1.0, cap) if check(1.0) else (0.0, 1.0)
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        if check(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def _error_rhs(
+    law: VehicleLaw, plant: VehicleParams, speed: float, current: FloatArray
+) -> Callable[[FloatArray], FloatArray]:
+    motion = Motion(
+        p=np.zeros((1, 2)),
+        v=np.array([[speed, 0.0]]),
+        a=np.zeros((1, 2)),
+        psi=np.zeros(1),
+        r=np.zeros(1),
+        r_dot=np.zeros(1),
+    )
+
+    def f(z: FloatArray) -> FloatArray:
+        s = np.asarray(z, dtype=float).reshape(1, 6)
+        p_dot = ground_velocity(s, current)
+        d = rhs(plant, s, law.forces(s, p_dot, motion))[0]
+        return np.array([p_dot[0, 0] - speed, p_dot[0, 1], d[2], d[3], d[4], d[5]])
+
+    return f
+
+
+def trim_max_real(law: VehicleLaw, plant: VehicleParams, speed: float, current: FloatArray) -> float | None:
+    """Largest real part (1/s) of the linearised loop at the straight-line trim, or ``None``.
+
+    ``None`` when no trim is found (then nothing is exhibited).
+    """
+    f = _error_rhs(law, plant, speed, current)
+    z0 = np.array([0.0, 0.0, 0.0, speed - current[0], -current[1], 0.0])
+    sol = root(f, z0, method="hybr")
+    if not sol.success or not np.all(np.abs(f(sol.x)) <= TRIM_RTOL * max(1.0, speed)):
+        return None
+    z = sol.x
+    jac = np.empty((6, 6))
+    for k in range(6):
+        h = 1e-6 * max(1.0, abs(z[k]))
+        dz = np.zeros(6)
+        dz[k] = h
+        jac[:, k] = (f(z + dz) - f(z - dz)) / (2.0 * h)
+    eig = np.linalg.eigvals(jac)
+    return float(eig.real.max())
+
+
+def _law(box: ParameterBox, gains: Gains) -> VehicleLaw:
+    """The law of ``gains`` on the controller's (nominal) model."""
+    return VehicleLaw(params=box.nominal, gains=gains)
+
+
+def _current_directions(current: float) -> list[FloatArray]:
+    """Unit directions of the candidate currents (head, tail, both crosses); none without a current."""
+    if current <= 0:
+        return [np.zeros(2)]
+    return [np.array(d) for d in ((-1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0))]
+
+
+def _corners(box: ParameterBox) -> list[FloatArray]:
+    """Directions ``m_corner - 1`` of the mass corners with all damping low or all high."""
+    masses = box.vertices(("m11", "m22", "m33"))
+    out: list[FloatArray] = []
+    for m in masses:
+        for end in (box.lo, box.hi):
+            mult = np.array(end, dtype=float)
+            mult[:3] = m[:3]
+            out.append(mult - 1.0)
+    return out
+
+
+def exhibited_scale(
+    box: ParameterBox, gains: Gains, speed: float, current: float, cap: float, guess: float | None = None
+) -> Witness | None:
+    """Smallest scale with a destabilising corner plant and current (see the module docstring).
+
+    ``guess`` (e.g. :func:`linearised_scale`) only narrows the search: the candidates bisected
+    are those unstable at ``min(cap, 1.25 guess)`` (all those unstable at ``cap`` if none is).
+    """
+    law = _law(box, gains)
+    dirs = _current_directions(current)
+
+    def unstable(u: FloatArray, d: FloatArray, s: float) -> float | None:
+        plant = box.plant(1.0 + s * u)
+        mr = trim_max_real(law, plant, speed, s * current * d)
+        return mr if mr is not None and mr > UNSTABLE_RTOL * max(1.0, abs(mr)) else None
+
+    combos = [(u, d) for u in _corners(box) for d in dirs]
+    top = cap
+    found = [] if guess is None else [(u, d) for u, d in combos if unstable(u, d, min(cap, 1.25 * guess)) is not None]
+    if found:
+        top = min(cap, 1.25 * guess) if guess is not None else cap
+    else:
+        found = [(u, d) for u, d in combos if unstable(u, d, cap) is not None]
+    best: Witness | None = None
+    for u, d in found:
+        lo, hi = 0.0, top
+        for _ in range(UPPER_STEPS):
+            mid = 0.5 * (lo + hi)
+            if unstable(u, d, mid) is None:
+                lo = mid
+            else:
+                hi = mid
+        if best is None or hi < best.scale:
+            mr = unstable(u, d, hi)
+            best = Witness(
+                hi,
+                {n: float(x) for n, x in zip(PARAMETERS, 1.0 + hi * u)},
+                (float(hi * current * d[0]), float(hi * current * d[1])),
+                float(mr if mr is not None else math.nan),
+            )
+    return best
+
+
+def linearised_scale(box: ParameterBox, gains: Gains, speed: float, current: float, cap: float) -> float:
+    """Largest scale at which the linearised heading loop is stable for every plant and current."""
+    m33 = box.nominal.m33
+
+    def stable(s: float) -> bool:
+        b = box.scaled(s)
+        rho = s * current
+        x_max = (speed + rho) ** 2
+        x_min = speed**2 / 2.0 - rho**2 if speed <= 2.0 * rho else (speed - rho) ** 2
+        k = m33 * gains.k_psi[0] + min(a * x for a in b.dm_range() for x in (x_min, x_max))
+        c = m33 * gains.k_psi[1] + b.interval("d33_lin")[0]
+        return k > 0.0 and c > 0.0
+
+    return certified_scale(stable, cap, steps=UPPER_STEPS)
+
+
+def robust_margin(
+    box: ParameterBox,
+    gains: Gains,
+    speed: float,
+    current: float,
+    covers: Callable[[float], bool],
+) -> RobustMargin:
+    """Margins of ``gains``: ``covers(s)`` says whether the certificate covers the ``s``-scaled box."""
+    cap = min(SCALE_CAP, box.max_scale) if box.declared else SCALE_CAP
+    lower = certified_scale(covers, cap)
+    lin = linearised_scale(box, gains, speed, current, cap)
+    witness = exhibited_scale(box, gains, speed, current, cap, lin) if (box.declared or current > 0) else None
+    return RobustMargin(lower, None if witness is None else witness.scale, witness, lin, cap)
+
+
+def weakest_corner(box: ParameterBox, gains: Gains, speed: float, current: float) -> Witness | None:
+    """The corner plant and current (scale 1) whose linearised trim has the largest real part."""
+    law = _law(box, gains)
+    dirs = _current_directions(current)
+    best: Witness | None = None
+    for u in _corners(box):
+        for d in dirs:
+            mr = trim_max_real(law, box.plant(1.0 + u), speed, current * d)
+            if mr is not None and (best is None or mr > best.max_real):
+                mult = {n: float(x) for n, x in zip(PARAMETERS, 1.0 + u)}
+                best = Witness(1.0, mult, (float(current * d[0]), float(current * d[1])), mr)
+    return best
+
+
+__all__ = [
+    "LOWER_STEPS",
+    "SCALE_CAP",
+    "UNSTABLE_RTOL",
+    "RobustMargin",
+    "Witness",
+    "certified_scale",
+    "exhibited_scale",
+    "linearised_scale",
+    "robust_margin",
+    "trim_max_real",
+    "weakest_corner",
+]

@@ -1,0 +1,4 @@
+"""Closed-loop simulation.
+
+The per-vehicle law, batched integrators, scenarios, results and streamed metrics.
+"""

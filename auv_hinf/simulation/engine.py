@@ -1,0 +1,225 @@
+"""Closed-loop simulation of N vehicles under the per-vehicle law, one scenario or a batch.
+
+The closed loop costs O(N) per right-hand-side call. A batch of ``S`` scenarios is one
+vectorised system of shape ``(S, N, 6)``; the integrator treats each scenario (or, for
+the decoupled fleet, each vehicle) as an independent system with its own step size.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Literal, cast
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.exceptions import ParameterError
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.reference import Motion
+from auv_hinf.models.vehicle import VehicleParams, rhs
+from auv_hinf.simulation.integrators import ATOL, RTOL, BatchSolution, EventBound, EventFn, SampleSink, dopri5
+from auv_hinf.simulation.law import VehicleLaw, VehicleMotionSource
+from auv_hinf.simulation.postprocess import envelope_margin, ground_velocity
+from auv_hinf.simulation.results import SimulationResult, build_results
+from auv_hinf.simulation.rk45 import rk45_reference
+from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
+
+Method = Literal["dopri", "rk45"]
+Systems = Literal["scenario", "vehicle"]
+
+
+def fleet_derivative(
+    law: VehicleLaw, plant: VehicleParams, current: FloatArray, states: FloatArray, motion: Motion
+) -> FloatArray:
+    """Closed-loop ``d/dt`` of states ``(..., N, 6)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s)."""
+    cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))  # shared by the law and the plant
+    p_dot = ground_velocity(states, current, cs)
+    d = rhs(plant, states, law.forces(states, p_dot, motion, cs), cs)
+    d[..., 0:2] = p_dot
+    return d
+
+
+def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
+    """Time derivative of the flat state ``y`` (6N,) of one scenario at time ``t`` (s)."""
+    s = np.asarray(y, dtype=float).reshape(-1, 6)
+    return fleet_derivative(scn.law, scn.plant, np.asarray(scn.current), s, scn.reference.motion(t)).ravel()
+
+
+def batch_system(
+    batch: ScenarioBatch, systems: Systems = "scenario"
+) -> tuple[Callable[[FloatArray, FloatArray], FloatArray], EventFn | None]:
+    """Batched rhs ``(t (B,), y (B, d)) -> (B, d)`` and envelope event of ``batch``.
+
+    ``systems="scenario"``: ``B = S``, ``d = 6N``. ``systems="vehicle"``: ``B = S N``,
+    ``d = 6``, each vehicle with its own time (the law has no shared state, so the fleet is
+    decoupled); needs a :class:`VehicleMotionSource`.
+    """
+    n_s, n = batch.initial.shape[:2]
+    law, ref, env = batch.scenarios[0].law, batch.source, batch.scenarios[0].envelope
+    plant = batch.plant.coefficients(1)
+    current = np.asfortranarray(batch.current)[:, None, :]
+    if systems == "vehicle":
+        if not isinstance(ref, VehicleMotionSource):
+            raise ParameterError("per-vehicle systems need a reference with motion_per_vehicle(t)")
+        vref = ref
+
+        def f_vehicle(t: FloatArray, y: FloatArray) -> FloatArray:
+            s = y.reshape(n_s, n, 6)
+            return fleet_derivative(law, plant, current, s, vref.motion_per_vehicle(t.reshape(n_s, n))).reshape(-1, 6)
+
+        ev_v = None if env is None else (lambda t, y: envelope_margin(env, y))
+        return f_vehicle, ev_v
+    if systems != "scenario":
+        raise ParameterError(f"systems must be 'scenario' or 'vehicle', got {systems!r}")
+
+    def f_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
+        states = np.asfortranarray(y.reshape(n_s, n, 6))  # scenario axis fastest: see auv_hinf.arrays
+        return fleet_derivative(law, plant, current, states, ref.motion(t)).reshape(n_s, -1)
+
+    def ev_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
+        assert env is not None
+        margin: FloatArray = envelope_margin(env, y.reshape((*y.shape[:-1], n, 6))).min(axis=-1)
+        return margin
+
+    return f_scenario, (None if env is None else ev_scenario)
+
+
+def envelope_bound(envelope: Envelope, n: int) -> EventBound:
+    """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
+
+    Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
+    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
+    vehicles per system (1 for vehicle systems).
+    """
+
+    def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
+        s, rad = y.reshape(*y.shape[:-1], n, 6), radius.reshape(*radius.shape[:-1], n, 6)
+        low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
+        return low
+
+    return bound
+
+
+def integrate_batch(
+    batch: ScenarioBatch,
+    *,
+    method: Method = "dopri",
+    systems: Systems = "scenario",
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    subdivisions: int = 8,
+    sink: SampleSink | None = None,
+) -> BatchSolution:
+    """Integrate all scenarios of ``batch`` together, without post-processing.
+
+    Parameters
+    ----------
+    method : {"dopri", "rk45"}
+        ``"dopri"``: vectorised Dormand-Prince with per-system step control
+        (:func:`~auv_hinf.simulation.integrators.dopri5`); ``"rk45"``: scipy ``solve_ivp`` per
+        scenario (the reference; scenario systems only).
+    systems : {"scenario", "vehicle"}
+        What one independently step-controlled system is.
+    rtol, atol : float
+        Tolerances (default :data:`~auv_hinf.simulation.integrators.RTOL`, ``ATOL``).
+    subdivisions : int
+        Sub-grid points per step on which the envelope margin is checked before brentq.
+    sink : callable, optional
+        Receives the output samples instead of storing them (``"dopri"`` only; see
+        :data:`~auv_hinf.simulation.integrators.SampleSink`); the solution's ``y`` is then None.
+
+    Returns
+    -------
+    BatchSolution
+        ``y`` of shape ``(T, S, 6 N)`` for scenario systems, ``(T, S N, 6)`` for vehicle systems.
+    """
+    first = batch.scenarios[0]
+    n_s, n = batch.initial.shape[:2]
+    span = (0.0, float(first.horizon))
+    if method == "rk45" and systems == "scenario" and sink is None:
+        singles = [ScenarioBatch((scn,)) for scn in batch.scenarios] if n_s > 1 else [batch]
+        parts = []
+        for one in singles:
+            f1, ev1 = batch_system(one, "scenario")
+            parts.append(
+                rk45_reference(f1, span, one.initial.reshape(1, 6 * n), first.times, rtol=rtol, atol=atol, event=ev1)
+            )
+        return BatchSolution(
+            t=first.times,
+            y=np.concatenate([cast(FloatArray, p.y) for p in parts], axis=1),
+            event_time=np.concatenate([p.event_time for p in parts]),
+            n_steps=np.concatenate([p.n_steps for p in parts]),
+            n_rejected=np.concatenate([p.n_rejected for p in parts]),
+        )
+    if method != "dopri":
+        raise ParameterError(
+            f"method must be 'dopri', or 'rk45' with scenario systems and no sink, got {method!r}/{systems!r}"
+        )
+    f, event = batch_system(batch, systems)
+    y0 = batch.initial.reshape(n_s * n, 6) if systems == "vehicle" else batch.initial.reshape(n_s, 6 * n)
+    screen = None if first.envelope is None else envelope_bound(first.envelope, 1 if systems == "vehicle" else n)
+    return dopri5(
+        f,
+        span,
+        y0,
+        first.times,
+        rtol=rtol,
+        atol=atol,
+        event=event,
+        subdivisions=subdivisions,
+        event_bound=screen,
+        sink=sink,
+    )
+
+
+def first_exits(sol: BatchSolution, n_scenarios: int) -> list[float | None]:
+    """Each scenario's first envelope exit (s) over its systems, None if it stayed in."""
+    exits = sol.event_time.reshape(n_scenarios, -1)
+    return [float(e[~np.isnan(e)].min()) if np.any(~np.isnan(e)) else None for e in exits]
+
+
+def simulate_batch(
+    batch: ScenarioBatch,
+    *,
+    method: Method = "dopri",
+    systems: Systems = "scenario",
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    subdivisions: int = 8,
+) -> list[SimulationResult]:
+    """Integrate all scenarios of ``batch`` together and post-process each.
+
+    The integration is :func:`integrate_batch` (same parameters); every result holds the
+    samples and the metrics of :class:`~auv_hinf.simulation.results.SimulationResult`.
+    """
+    sol = integrate_batch(batch, method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions)
+    n_s, n = batch.initial.shape[:2]
+    states = cast(FloatArray, sol.y).reshape(sol.t.size, n_s, n, 6)
+    steps = sol.n_steps.reshape(n_s, -1).max(axis=1)
+    return build_results(batch.scenarios, sol.t, states, first_exits(sol, n_s), [int(x) for x in steps])
+
+
+def simulate(
+    scn: Scenario,
+    *,
+    method: Method = "dopri",
+    systems: Systems = "scenario",
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    subdivisions: int = 8,
+) -> SimulationResult:
+    """Integrate one scenario and compute its metrics; see :func:`simulate_batch`."""
+    return simulate_batch(
+        ScenarioBatch((scn,)), method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions
+    )[0]
+
+
+__all__ = [
+    "batch_system",
+    "closed_loop_rhs",
+    "first_exits",
+    "fleet_derivative",
+    "integrate_batch",
+    "simulate",
+    "simulate_batch",
+]

@@ -1,0 +1,133 @@
+"""Vectorised post-processing of closed-loop runs: O(N) Jacobi maps, errors, envelope margin.
+
+Every function works on whole sample arrays at once (no Python loop over samples or
+vehicles). Positions are inertial (m); stacks have shape ``(..., N, 2)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray, JacobiKind
+from auv_hinf.arrays import stack_last
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.jacobi_maps import jacobi_coordinates
+from auv_hinf.models.reference import Motion, wrap_angle
+
+
+def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
+    """Smallest distance of ``(u, v, r)`` to the envelope's bounds, shape ``states.shape[:-1]``.
+
+    Positive inside, zero on the boundary, negative outside. Units mix m/s and rad/s; only
+    the sign and the roots matter (the first root is the first exit time).
+    """
+    u, v, r = states[..., 3], states[..., 4], states[..., 5]
+    margin: FloatArray = np.minimum.reduce(
+        [
+            u - envelope.u[0],
+            envelope.u[1] - u,
+            v - envelope.v[0],
+            envelope.v[1] - v,
+            r - envelope.r[0],
+            envelope.r[1] - r,
+        ]
+    )
+    return margin
+
+
+def ground_velocity(
+    states: FloatArray, current: FloatArray | tuple[float, float], cs: tuple[FloatArray, FloatArray] | None = None
+) -> FloatArray:
+    """Inertial velocity ``R(psi) [u, v] + current`` of states ``(..., N, 6)`` (m/s).
+
+    ``current`` (inertial, m/s) broadcasts against ``(..., N, 2)``; ``cs`` is
+    ``(cos psi, sin psi)`` when the caller has them.
+    """
+    c, s = (np.cos(states[..., 2]), np.sin(states[..., 2])) if cs is None else cs
+    u, v = states[..., 3], states[..., 4]
+    out: FloatArray = stack_last([c * u - s * v, s * u + c * v]) + np.asarray(current, dtype=float)
+    return out
+
+
+@dataclass(frozen=True)
+class TrackingErrors:
+    """Per-vehicle tracking errors against the reference the law used.
+
+    Attributes
+    ----------
+    e, e_dot : ndarray, shape (T, N, 2)
+        ``p_i - p_id`` (m) and ``p_i' - p_id'`` (m/s), inertial.
+    e_psi, e_psi_dot : ndarray, shape (T, N)
+        ``wrap(psi_i - psi_id)`` (rad) and ``r_i - psi_id'`` (rad/s).
+    """
+
+    e: FloatArray
+    e_dot: FloatArray
+    e_psi: FloatArray
+    e_psi_dot: FloatArray
+
+
+def tracking_errors(states: FloatArray, p_dot: FloatArray, motion: Motion) -> TrackingErrors:
+    """:class:`TrackingErrors` of states ``(T, N, 6)`` with ground velocities ``(T, N, 2)``."""
+    e_psi = wrap_angle(states[..., 2] - motion.psi)
+    return TrackingErrors(
+        e=states[..., 0:2] - motion.p,
+        e_dot=p_dot - motion.v,
+        e_psi=e_psi,
+        e_psi_dot=states[..., 5] - motion.r,
+    )
+
+
+@dataclass(frozen=True)
+class FormationErrors:
+    """Formation-level errors against a target motion (the unshaped mission).
+
+    Attributes
+    ----------
+    jacobi : ndarray, shape (T, N, 2)
+        Jacobi coordinates of the positions (m).
+    shape_error : ndarray, shape (T,)
+        ``||X_shape - X_shape,d||`` (m, Frobenius over the N-1 shape vectors).
+    center_error : ndarray, shape (T,)
+        ``||q_c - q_cd||`` (m).
+    desired_center : ndarray, shape (T, 2)
+        ``q_cd``, the mean of the target positions (m).
+    position_error : ndarray, shape (T, N)
+        ``||p_i - p_id||`` of every vehicle (m).
+    """
+
+    jacobi: FloatArray
+    shape_error: FloatArray
+    center_error: FloatArray
+    desired_center: FloatArray
+    position_error: FloatArray
+
+
+def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind = "paper") -> FormationErrors:
+    """:class:`FormationErrors` of positions ``(T, N, 2)`` against target positions (m).
+
+    Leading axes broadcast: positions ``(T, S, N, 2)`` of ``S`` scenarios against one target
+    ``(T, 1, N, 2)`` transform the target once (``desired_center`` then has the target's shape).
+    """
+    jac = jacobi_coordinates(positions, kind)
+    jac_d = jacobi_coordinates(target, kind)
+    diff = jac - jac_d
+    return FormationErrors(
+        jacobi=jac,
+        shape_error=np.sqrt(np.sum(diff[..., :-1, :] ** 2, axis=(-2, -1))),
+        center_error=np.linalg.norm(diff[..., -1, :], axis=-1),
+        desired_center=jac_d[..., -1, :],
+        position_error=np.linalg.norm(positions - target, axis=-1),
+    )
+
+
+__all__ = [
+    "FormationErrors",
+    "TrackingErrors",
+    "envelope_margin",
+    "formation_errors",
+    "ground_velocity",
+    "tracking_errors",
+]

@@ -1,0 +1,180 @@
+"""Simulation results: trajectories plus vectorised metrics (forces, errors, envelope exit)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.models.reference import Motion
+from auv_hinf.simulation.law import saturate
+from auv_hinf.simulation.postprocess import TrackingErrors, formation_errors, ground_velocity, tracking_errors
+
+if TYPE_CHECKING:
+    from auv_hinf.simulation.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """Trajectories and metrics of one scenario.
+
+    Attributes
+    ----------
+    t : ndarray (T,)
+        Time, s.
+    states : ndarray (T, N, 6)
+    forces : ndarray (T, N, 3)
+        Applied thrust (after saturation), N and N m, body frame.
+    jacobi : ndarray (T, N, 2)
+        Jacobi coordinates of the positions (m).
+    shape_error, center_error : ndarray (T,)
+        Jacobi shape error (m, Frobenius over the N-1 vectors) and centre error (m), both
+        against the unshaped mission (``scenario.mission``, default the reference used).
+    desired_center : ndarray (T, 2)
+        Mission formation centre (m).
+    saturated : ndarray (T,) of bool
+        Whether any vehicle's thrust was clipped.
+    position_error : ndarray (T, N)
+        ``||p_i - p_id||`` against the reference the law tracked (m).
+    mission_error : ndarray (T, N)
+        ``||p_i - off_i - q_d||`` against the unshaped mission (m).
+    tracking : TrackingErrors
+        Per-vehicle ``e, e', e_psi, e_psi'`` against the reference the law tracked.
+    exit_time : float or None
+        First time (s) any vehicle's ``(u, v, r)`` left the envelope, located on the
+        integrator's interpolant; None if it stayed in (or there is no envelope).
+    n_steps : int
+        Accepted integration steps (the largest over the scenario's systems).
+    scenario : Scenario
+    """
+
+    t: FloatArray
+    states: FloatArray
+    forces: FloatArray
+    jacobi: FloatArray
+    shape_error: FloatArray
+    center_error: FloatArray
+    desired_center: FloatArray
+    saturated: NDArray[np.bool_]
+    position_error: FloatArray
+    mission_error: FloatArray
+    tracking: TrackingErrors = field(repr=False)
+    exit_time: float | None
+    n_steps: int
+    scenario: Scenario = field(repr=False)
+
+    def error_at(self, time: float) -> tuple[float, float]:
+        """Shape and centre error (m) at the sample nearest to ``time`` (s)."""
+        k = int(np.argmin(np.abs(self.t - time)))
+        return float(self.shape_error[k]), float(self.center_error[k])
+
+    def envelope_check(self) -> tuple[bool | None, float | None]:
+        """Whether ``(u, v, r)`` stayed in the scenario's envelope, and the first exit time (s)."""
+        if self.scenario.envelope is None:
+            return None, None
+        return self.exit_time is None, self.exit_time
+
+    def summary(self) -> dict[str, Any]:
+        """Metrics as a JSON-safe dictionary (m, N, N m, m/s, rad/s, s)."""
+        stayed, exit_time = self.envelope_check()
+        return {
+            "scenario": self.scenario.name,
+            "n": int(self.states.shape[1]),
+            "horizon": float(self.t[-1]),
+            "final_shape_error": float(self.shape_error[-1]),
+            "final_center_error": float(self.center_error[-1]),
+            "final_position_error": float(self.mission_error[-1].max()),
+            "rms_shape_error": float(np.sqrt(np.mean(self.shape_error**2))),
+            "max_force": float(np.abs(self.forces[..., :2]).max()),
+            "max_moment": float(np.abs(self.forces[..., 2]).max()),
+            "max_speed": float(np.abs(self.states[..., 3]).max()),
+            "max_sway": float(np.abs(self.states[..., 4]).max()),
+            "max_yaw_rate": float(np.abs(self.states[..., 5]).max()),
+            "final_sway": float(np.abs(self.states[-1, :, 4]).max()),
+            "saturation_fraction": float(self.saturated.mean()),
+            "stayed_in_envelope": stayed,
+            "first_exit_time": exit_time,
+        }
+
+    def save_npz(self, path: str | Path) -> None:
+        """Write time, states, forces and Jacobi coordinates to a ``.npz`` file."""
+        np.savez_compressed(path, t=self.t, states=self.states, forces=self.forces, jacobi=self.jacobi)
+
+
+def build_result(
+    scn: Scenario, t: FloatArray, states: FloatArray, exit_time: float | None, n_steps: int
+) -> SimulationResult:
+    """Post-process the samples ``states (T, N, 6)`` at times ``t (T,)`` in whole-array calls."""
+    return build_results((scn,), t, states[:, None], [exit_time], [n_steps])[0]
+
+
+def _expand(m: Motion) -> Motion:
+    """``m`` with a scenario axis inserted after the time axis: ``(T, N, .)`` -> ``(T, 1, N, .)``."""
+    return Motion(*(x[:, None] for x in (m.p, m.v, m.a, m.psi, m.r, m.r_dot)))
+
+
+def build_results(
+    scns: Sequence[Scenario],
+    t: FloatArray,
+    states: FloatArray,
+    exit_times: Sequence[float | None],
+    n_steps: Sequence[int],
+) -> list[SimulationResult]:
+    """Post-process ``S`` scenarios sampled as ``states (T, S, N, 6)`` at times ``t (T,)``.
+
+    Scenarios that share their reference, mission, law and Jacobi convention (a campaign's
+    chunk) are processed together in whole-array calls, with the desired motion evaluated
+    once; the others one at a time. Each result holds views of the batched arrays.
+    """
+    first = scns[0]
+    shared = all(
+        x.reference is first.reference and x.mission is first.mission and x.jacobi == first.jacobi for x in scns
+    )
+    shared = shared and all(x.law == first.law for x in scns)
+    if not shared and len(scns) > 1:
+        return [
+            build_results((x,), t, states[:, k : k + 1], [exit_times[k]], [n_steps[k]])[0] for k, x in enumerate(scns)
+        ]
+    current = np.array([x.current for x in scns], dtype=float)[None, :, None, :]  # (1, S, 1, 2)
+    p_dot = ground_velocity(states, current)
+    motion = _expand(first.reference.motion(t))
+    forces, active = saturate(first.law.unsaturated(states, p_dot, motion), first.law.thrust_limit)
+    target = motion.p if first.mission is None else first.mission.motion(t).p[:, None]
+    form = formation_errors(states[..., 0:2], target, first.jacobi)
+    track = tracking_errors(states, p_dot, motion)
+    saturated = np.asarray(active.any(axis=-1), dtype=bool)
+    position_error = np.linalg.norm(track.e, axis=-1)
+    out = []
+    for k, scn in enumerate(scns):
+        out.append(
+            SimulationResult(
+                t=t,
+                states=states[:, k],
+                forces=forces[:, k],
+                jacobi=form.jacobi[:, k],
+                shape_error=form.shape_error[:, k],
+                center_error=form.center_error[:, k],
+                desired_center=np.broadcast_to(form.desired_center, (*form.jacobi.shape[:2], 2))[:, k],
+                saturated=saturated[:, k],
+                position_error=position_error[:, k],
+                mission_error=form.position_error[:, k],
+                tracking=TrackingErrors(
+                    e=track.e[:, k],
+                    e_dot=track.e_dot[:, k],
+                    e_psi=track.e_psi[:, k],
+                    e_psi_dot=track.e_psi_dot[:, k],
+                ),
+                exit_time=exit_times[k],
+                n_steps=int(n_steps[k]),
+                scenario=scn,
+            )
+        )
+    return out
+
+
+__all__ = ["SimulationResult", "build_result", "build_results"]

@@ -1,0 +1,217 @@
+"""The one home of a configuration's design: everything a command derives before it certifies or simulates.
+
+:func:`design_point` computes, once per command, the envelope ``lam``, the certified
+``sigma``, ``gamma``, the Theorem 1 gain of every method, the :class:`~auv_hinf.design.gains.Gains`
+that run (Theorem 1's, or the robust design's when ``[design] robust = true``), the mission
+reference, its tube and the formation offsets. :func:`~auv_hinf.workflow.certificate.certify`,
+:func:`~auv_hinf.workflow.run_plan.plan_run`, campaigns and the python-control export all
+take this object, so no command derives the gains twice and every report shows the gains
+that run.
+
+The result is cached on what the design depends on (vehicle, envelope, formation, design
+table, mission, declared box and current, actuator limits), so runs that differ only in their
+start, plant or horizon share one design.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from typing import Literal
+
+import numpy as np
+
+from auv_hinf._typing import GAIN_METHODS, FloatArray
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.config.presets import spread_start
+from auv_hinf.config.tables import SimulationConfig
+from auv_hinf.design.alpha import GainDesign, design_alpha
+from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
+from auv_hinf.exceptions import AuvHinfError, DesignError
+from auv_hinf.models.envelope import envelope_lambda
+from auv_hinf.models.jacobi_maps import positions_from_jacobi
+from auv_hinf.models.paths import MissionReference
+from auv_hinf.models.reference import FleetReference, ReferenceTube, reference_from_dict
+from auv_hinf.models.tubes import mission_tube
+from auv_hinf.robust.bandwidth import RobustDesign, design_robust
+from auv_hinf.robust.box import ParameterBox
+
+#: Where the gains that run come from.
+GainSource = Literal["theorem1", "robust"]
+
+
+@dataclass(frozen=True, eq=False)
+class DesignPoint:
+    """The design of one configuration, computed once (see the module docstring).
+
+    Attributes
+    ----------
+    config : FormationConfig
+        The configuration it was computed for.
+    lam : float
+        Envelope lambda (1/s): ``cfg.lam`` or :func:`~auv_hinf.models.envelope.envelope_lambda`.
+    sigma : SigmaBounds
+        Certified vehicle-coordinate bound of ``||G_i - lam I||`` (1/s).
+    gamma : float
+        H-infinity bound (s): ``cfg.gamma`` or ``1/sigma.upper``.
+    designs : dict
+        Theorem 1 :class:`~auv_hinf.design.alpha.GainDesign` of every method, ``None`` where
+        the method is infeasible.
+    gains : Gains or None
+        The gains that run; ``None`` when the design gives none (see ``reasons``).
+    source : {"theorem1", "robust"}
+        Where ``gains`` come from.
+    robust_design : RobustDesign or None
+        The robust design, when ``[design] robust = true``.
+    reasons : tuple of str
+        Why there are no gains (empty when there are).
+    mission : MissionReference
+        The configured centre path.
+    tube : ReferenceTube
+        Its tube (sound bounds of the desired motion for all time).
+    offsets : ndarray, shape (N, 2)
+        Vehicle offsets from the formation centre (m).
+    """
+
+    config: FormationConfig
+    lam: float
+    sigma: SigmaBounds
+    gamma: float
+    designs: dict[str, GainDesign | None]
+    gains: Gains | None
+    source: GainSource
+    robust_design: RobustDesign | None
+    reasons: tuple[str, ...]
+    mission: MissionReference
+    tube: ReferenceTube
+    offsets: FloatArray
+
+    def require_gains(self) -> Gains:
+        """The gains, or a :class:`~auv_hinf.exceptions.DesignError` saying why there are none."""
+        if self.gains is None:
+            raise DesignError("; ".join(self.reasons) or "the design gives no gains")
+        return self.gains
+
+    @property
+    def box(self) -> ParameterBox:
+        """The ``[uncertainty]`` box around the configured vehicle."""
+        return ParameterBox.from_ranges(self.config.vehicle, self.config.uncertainty.box)
+
+    @property
+    def current(self) -> float:
+        """The ``[disturbance]`` current bound (m/s, 0 when absent)."""
+        return float(self.config.disturbance.current_speed or 0.0)
+
+    @property
+    def declared(self) -> bool:
+        """A parameter box or a current is declared (the robust certificate applies)."""
+        return self.box.declared or self.current > 0.0
+
+    def fleet(self) -> FleetReference:
+        """The raw (unshaped) fleet reference: the mission with the formation offsets."""
+        return FleetReference(self.mission, self.offsets)
+
+
+def mission_reference(cfg: FormationConfig) -> MissionReference:
+    """The configured mission (centre path)."""
+    return reference_from_dict(cfg.reference.kind, **cfg.reference.kwargs())
+
+
+def formation_offsets(cfg: FormationConfig) -> FloatArray:
+    """Vehicle offsets from the formation centre, shape ``(N, 2)`` (m), in O(N)."""
+    rho = np.asarray(cfg.shape, dtype=float).reshape(cfg.n - 1, 2)
+    return positions_from_jacobi(np.vstack([rho, np.zeros((1, 2))]), cfg.jacobi)
+
+
+def initial_states(cfg: FormationConfig) -> FloatArray:
+    """The configured initial states ``(N, 6)``, or the preset spread start when none is given."""
+    if cfg.simulation.initial is not None:
+        return np.asarray(cfg.simulation.initial, dtype=float)
+    return np.asarray(spread_start(tuple(map(tuple, cfg.shape)), cfg.transform), dtype=float)
+
+
+def design_point(cfg: FormationConfig) -> DesignPoint:
+    """The design of ``cfg`` (see the module docstring); cached on what it depends on.
+
+    Raises
+    ------
+    DesignError
+        If ``cfg.method`` is not a gain method.
+    ParameterError
+        If the mission reference is invalid.
+    """
+    if cfg.method not in GAIN_METHODS:
+        raise DesignError(f"gain method must be one of {GAIN_METHODS}, got {cfg.method!r}")
+    core = _design(_design_key(cfg))
+    return replace(core, config=cfg)
+
+
+def _design_key(cfg: FormationConfig) -> FormationConfig:
+    """``cfg`` without what the design does not depend on (name, start, plant, horizon)."""
+    return replace(cfg, name="design", simulation=SimulationConfig(thrust_limit=cfg.simulation.thrust_limit))
+
+
+@lru_cache(maxsize=16)
+def _design(cfg: FormationConfig) -> DesignPoint:
+    lam = cfg.lam if cfg.lam is not None else envelope_lambda(cfg.vehicle, cfg.envelope)
+    sigma = vehicle_sigma(cfg.vehicle, cfg.envelope, lam, cfg.n)
+    gamma = cfg.gamma if cfg.gamma is not None else 1.0 / sigma.upper
+    reasons: list[str] = []
+    designs: dict[str, GainDesign | None] = {}
+    for m in GAIN_METHODS:
+        try:
+            designs[m] = design_alpha(lam, gamma, m)
+        except DesignError as exc:
+            designs[m] = None
+            if m == cfg.method:
+                reasons.append(str(exc))
+    mission = mission_reference(cfg)
+    tube = mission_tube(mission)
+    gains: Gains | None = None
+    robust: RobustDesign | None = None
+    source: GainSource = "robust" if cfg.robust else "theorem1"
+    if cfg.robust:
+        try:
+            robust = design_robust(
+                ParameterBox.from_ranges(cfg.vehicle, cfg.uncertainty.box),
+                cfg.envelope,
+                tube,
+                float(cfg.disturbance.current_speed or 0.0),
+                cfg.simulation.thrust_limit,
+                progress=True,
+            )
+            gains = robust.gains
+        except AuvHinfError as exc:
+            reasons = [f"robust design failed: {exc}"]
+    else:
+        used = designs.get(cfg.method)
+        if used is not None and math.isfinite(used.alpha):
+            gains = Gains(used.alpha, cfg.k1, heading_gains(cfg.vehicle, cfg.heading_poles))
+        elif used is not None:
+            reasons.append(f"no finite gain for method {cfg.method!r} at lambda={lam:g}, gamma={gamma:g}")
+    return DesignPoint(
+        config=cfg,
+        lam=lam,
+        sigma=sigma,
+        gamma=gamma,
+        designs=designs,
+        gains=gains,
+        source=source,
+        robust_design=robust,
+        reasons=tuple(reasons),
+        mission=mission,
+        tube=tube,
+        offsets=formation_offsets(cfg),
+    )
+
+
+__all__ = [
+    "DesignPoint",
+    "GainSource",
+    "design_point",
+    "formation_offsets",
+    "initial_states",
+    "mission_reference",
+]

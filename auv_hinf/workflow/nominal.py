@@ -1,0 +1,203 @@
+"""The nominal closed-loop part of a certificate and of a run, from a design point.
+
+:func:`closed_loop_for` certifies the full error loop of the design's gains along its
+mission; :func:`coverage_for` decides whether that certificate covers one run's start;
+:func:`closed_loop_summary` is what :func:`~auv_hinf.workflow.certificate.certify` adds to
+the small-gain test: decay rates, the start region and thrust bounds along the configured
+mission, and the verdict on the configured start.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from tqdm.auto import tqdm
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
+from auv_hinf.certification.coverage import Coverage, StartMode, cover_start
+from auv_hinf.exceptions import AuvHinfError, DesignError
+from auv_hinf.workflow.design_point import DesignPoint, initial_states
+
+#: A heading range counts as the full circle when its width is 2 pi up to this relative
+#: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
+FULL_CIRCLE_RTOL = 1e-12
+
+
+def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
+    """Closed-loop certificate of the design's gains along its mission (raises when there is none).
+
+    Raises
+    ------
+    DesignError
+        If there are no gains, the envelope's heading range is narrower than the full
+        circle, the small-gain condition fails, or the mission leaves the envelope even at
+        zero error.
+    """
+    cfg = point.config
+    width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
+    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+        raise DesignError(
+            f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
+            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
+        )
+    return closed_loop_certificate(
+        cfg.vehicle, cfg.envelope, point.tube, point.require_gains(), lam=point.lam, sigma=point.sigma.upper
+    )
+
+
+def coverage_for(point: DesignPoint, cert: ClosedLoopCertificate, initial: FloatArray, start: StartMode) -> Coverage:
+    """Coverage of the run of the design's configuration from ``initial`` in ``start`` mode (nominal plant)."""
+    cfg = point.config
+    return cover_start(
+        cert,
+        cfg.vehicle,
+        cfg.envelope,
+        point.require_gains(),
+        point.mission,
+        point.offsets,
+        initial,
+        start=start,
+        blend_time=cfg.simulation.blend_time,
+        thrust_limit=cfg.simulation.thrust_limit,
+        current=cfg.simulation.current,
+    )
+
+
+@dataclass(frozen=True)
+class ClosedLoopSummary:
+    """What :func:`~auv_hinf.workflow.certificate.certify` reports about the closed loop.
+
+    Attributes
+    ----------
+    certificate : ClosedLoopCertificate or None
+        Decay rates, start region and thrust over the region; ``None`` when the mission
+        leaves the envelope even at zero error (see ``reasons``).
+    shaped : Coverage or None
+        Verdict on the configured start in shaped mode.
+    declared_start : bool
+        The configuration gives its own initial states (then the verdict requires them covered).
+    reasons : tuple of str
+        Why the closed loop is not certified (empty when it is).
+    """
+
+    certificate: ClosedLoopCertificate | None
+    shaped: Coverage | None
+    declared_start: bool
+    reasons: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        """The closed loop is certified."""
+        return not self.reasons
+
+    def lines(self) -> list[str]:
+        """Lines of ``Certificate.summary``: decay, region, thrust, start (4-6 digits, with units)."""
+        c = self.certificate
+        if c is None:
+            return ["  closed loop               not certified"]
+        r = c.region.region
+        out = [
+            f"  closed-loop decay rate    {c.rate:.4g} 1/s "
+            f"(position {c.position.rate:.4g}, heading {c.heading.rate:.4g})",
+            f"  start region (all at once) |e| <= {r.position:.4g} m, |e'| <= {r.velocity:.4g} m/s, "
+            f"|e_psi| <= {r.heading:.4g} rad, |e_r| <= {r.yaw_rate:.4g} rad/s",
+            f"  thrust over the region    |tau_x| <= {c.thrust.force_x:.5g} N, |tau_y| <= {c.thrust.force_y:.5g} N, "
+            f"|tau_psi| <= {c.thrust.moment:.5g} N m",
+        ]
+        s = self.shaped
+        if s is not None:
+            how = f"blend {s.blend_time:g} s, turn {s.turn_time:g} s" if s.blend_time is not None else "no blend needed"
+            out.append(f"  shaped start              {'covered' if s.covered else 'NOT covered'} ({how})")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``closed_loop`` object of ``auv-hinf certify --json``."""
+        c, s = self.certificate, self.shaped
+        forces = [] if c is None else [c.thrust.force_x, c.thrust.force_y]
+        moments = [] if c is None else [c.thrust.moment]
+        if s is not None and s.covered and s.thrust is not None:
+            forces += [s.thrust.force_x, s.thrust.force_y]
+            moments.append(s.thrust.moment)
+
+        def radii(r: Any) -> dict[str, float]:
+            return {
+                "position_error": float(r.position),
+                "velocity_error": float(r.velocity),
+                "heading_error": float(r.heading),
+                "yaw_rate_error": float(r.yaw_rate),
+            }
+
+        return {
+            "decay_rate": None if c is None else c.rate,
+            "position_decay_rate": None if c is None else c.position.rate,
+            "heading_decay_rate": None if c is None else c.heading.rate,
+            "region": None if c is None else radii(c.region.region),
+            "single_axis_region": None if c is None else radii(c.region.single_axis),
+            "region_error_bounds": None if c is None else radii(c.region.bounds),
+            "reference_inside_envelope": c is not None,
+            "max_force": max(forces) if forces else None,
+            "max_moment": max(moments) if moments else None,
+            "covers_shaped_start": bool(s is not None and s.covered),
+            "shaped_start": None if s is None else s.to_dict(),
+            "shaped_start_note": (
+                None
+                if s is not None
+                else "not evaluated: the configuration declares no start and the fleet is too large to check "
+                "the default one (give [simulation] initial to have it checked)"
+                if not self.declared_start
+                else "the declared start could not be checked (see reasons)"
+            ),
+            "method": None if c is None else c.method,
+            "certified": self.ok,
+            "reasons": list(self.reasons),
+        }
+
+
+def closed_loop_summary(
+    point: DesignPoint, *, default_start_max_n: int = 16, progress_min_n: int = 16
+) -> ClosedLoopSummary:
+    """Certify the closed loop of the design point along its mission and check its configured start.
+
+    The start check builds per-vehicle tubes for every candidate blend time it tries: from
+    about 0.1 s to 1 s per vehicle (40 vehicles of a spread start: 20 candidates, 30-40 s). A
+    declared start (``simulation.initial``) is always checked and enters the verdict; the
+    default start enters no verdict and is only checked up to ``default_start_max_n`` vehicles
+    (one chunk of tubes): beyond, it is not evaluated (``shaped`` is ``None``, so
+    ``covers_shaped_start`` is false; nothing is claimed about it) and ``auv-hinf simulate``
+    decides coverage for its own run. Above ``progress_min_n`` vehicles a progress bar is shown.
+    """
+    cfg = point.config
+    reasons: list[str] = []
+    try:
+        cert = closed_loop_for(point)
+    except AuvHinfError as exc:
+        return ClosedLoopSummary(None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",))
+    limit = cfg.simulation.thrust_limit
+    t = cert.thrust
+    if limit is not None and not (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2]):
+        reasons.append(
+            f"thrust needed over the start region ({t.force_x:.4g} N, {t.force_y:.4g} N, "
+            f"{t.moment:.4g} N m) exceeds the limits {tuple(limit)}"
+        )
+    declared = cfg.simulation.initial is not None
+    if not declared and cfg.n > default_start_max_n:
+        return ClosedLoopSummary(cert, None, declared, tuple(reasons))
+    try:
+        with tqdm(
+            total=1,
+            disable=cfg.n <= progress_min_n,
+            unit="start",
+            desc=f"checking the {'declared' if declared else 'default'} start of {cfg.n} vehicles",
+        ) as bar:
+            shaped: Coverage | None = coverage_for(point, cert, initial_states(cfg), "shaped")
+            bar.update(1)
+    except AuvHinfError as exc:
+        shaped = None
+        if declared:
+            reasons.append(f"configured start: {exc}")
+    if declared and shaped is not None and not shaped.covered:
+        reasons.append(f"configured start not covered: {shaped.reason}")
+    return ClosedLoopSummary(cert, shaped, declared, tuple(reasons))

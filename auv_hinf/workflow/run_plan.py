@@ -1,0 +1,201 @@
+"""From a configuration to a certified run: design point, closed-loop certificate, start, scenario.
+
+:func:`plan_run` takes the design point (:func:`~auv_hinf.workflow.design_point.design_point`,
+computed once), certifies the full error loop along the configured mission
+(:func:`~auv_hinf.workflow.nominal.closed_loop_for`), chooses the reference of one run (shaped
+or raw start, :mod:`auv_hinf.certification.coverage`) and builds the
+:class:`~auv_hinf.simulation.scenario.Scenario`; :func:`run_report` puts the measured and the
+certified numbers side by side.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.certification.coverage import Coverage, StartMode
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.simulation.law import VehicleLaw
+from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
+from auv_hinf.simulation.results import SimulationResult
+from auv_hinf.simulation.scenario import Scenario
+from auv_hinf.workflow.design_point import DesignPoint, design_point, initial_states
+from auv_hinf.workflow.nominal import closed_loop_for, coverage_for
+from auv_hinf.workflow.robust_part import RobustRunCheck, check_robust_run
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """A run ready to simulate, with what the certificate says about it.
+
+    Attributes
+    ----------
+    design : DesignPoint
+        The design of the run's configuration: its ``gains`` are the gains the run uses.
+    certificate : ClosedLoopCertificate or None
+        ``None`` when the design has no closed-loop certificate (see ``notes``).
+    coverage : Coverage or None
+        The certificate's verdict on this run.
+    covered : bool
+        The certificate covers this run: certified design, covered start, nominal plant and
+        no current.
+    scenario : Scenario
+    notes : tuple of str
+        One line per reason the run is not covered.
+    start : {"shaped", "paper"}
+        The start mode of the run.
+    robust : RobustRunCheck or None
+        The robust certificate's verdict when the configuration declares a box or a current.
+    """
+
+    design: DesignPoint
+    certificate: ClosedLoopCertificate | None
+    coverage: Coverage | None
+    covered: bool
+    scenario: Scenario
+    notes: tuple[str, ...]
+    start: str = "shaped"
+    robust: RobustRunCheck | None = None
+
+
+def plan_run(
+    cfg: FormationConfig,
+    *,
+    start: StartMode | None = None,
+    horizon: float | None = None,
+    samples: int = 3001,
+    design: DesignPoint | None = None,
+) -> RunPlan:
+    """Gains, certificate and scenario of one configured run.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``simulation`` table gives the start, current and plant).
+    start : {"shaped", "paper"}, optional
+        Overrides ``cfg.simulation.start``.
+    horizon : float, optional
+        Overrides ``cfg.simulation.horizon`` (s).
+    samples : int
+        Output samples.
+    design : DesignPoint, optional
+        The design point of ``cfg`` when the caller has it (otherwise computed, or taken from
+        the cache).
+
+    Raises
+    ------
+    DesignError
+        If the design gives no gains.
+    """
+    sim = cfg.simulation
+    mode: StartMode = start or sim.start
+    point = design if design is not None else design_point(cfg)
+    gains = point.require_gains()
+    initial = initial_states(cfg)
+    notes: list[str] = []
+    cert: ClosedLoopCertificate | None = None
+    cov: Coverage | None = None
+    try:
+        cert = closed_loop_for(point)
+        cov = coverage_for(point, cert, initial, mode)
+        if not cov.covered:
+            notes.append(cov.reason)
+    except AuvHinfError as exc:
+        notes.append(f"design not certified: {exc}")
+    plant = sim.plant_params(cfg.vehicle)
+    if plant != cfg.vehicle:
+        notes.append("the plant differs from the controller's model; the nominal certificate assumes it is known")
+    if any(c != 0.0 for c in sim.current):
+        notes.append("a current is present; the nominal certificate assumes none")
+    reference = cov.reference if cov is not None else point.fleet()
+    law = VehicleLaw(params=cfg.vehicle, gains=gains, thrust_limit=sim.thrust_limit)
+    scn = Scenario(
+        law=law,
+        reference=reference,
+        plant=plant,
+        initial=initial,
+        horizon=float(horizon if horizon is not None else sim.horizon),
+        current=sim.current,
+        envelope=cfg.envelope,
+        samples=samples,
+        name=cfg.name,
+        jacobi=cfg.jacobi,
+    )
+    nominal = cov is not None and cov.covered and not notes
+    rob = None
+    if point.declared:
+        rob = check_robust_run(point, reference, initial)
+    return RunPlan(point, cert, cov, nominal or (rob is not None and rob.covered), scn, tuple(notes), mode, rob)
+
+
+def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:
+    """Average decay rate (1/s) of the slowest vehicle's certified Lyapunov norm.
+
+    ``V_i = x_i^T (P2 kron I2) x_i + z_i^T Q z_i`` with the decay matrices of ``cert``;
+    ``sqrt(V_i)`` must decay at least at ``cert.rate``. The rate is
+    ``ln(sqrt(V_i(0)/V_i(t*)))/t*`` with ``t*`` the first sample where ``V_i`` has fallen by
+    :data:`~auv_hinf.simulation.metrics.DECAY_MEASURE_DROP` (or the end), minimised over the vehicles
+    whose initial norm exceeds :data:`~auv_hinf.simulation.metrics.DECAY_MEASURE_FLOOR`; ``None`` when
+    no vehicle starts with an error.
+    """
+    v = lyapunov_values(result.tracking, cert.position.matrix, cert.heading.matrix)  # (T, N)
+    below = v <= DECAY_MEASURE_DROP * v[0]
+    k = np.where(below.any(axis=0), below.argmax(axis=0), v.shape[0] - 1)  # first drop, else the end
+    cols = np.arange(v.shape[1])
+    tk = np.where(k == 0, 0.0, result.t[k])
+    rate = float(decay_rates(v[0], v[k, cols], tk))
+    return None if math.isnan(rate) else rate
+
+
+def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
+    """The simulation summary plus the certificate's verdict and bounds next to the measured ones."""
+    out = result.summary()
+    tr = result.tracking
+    measured = {
+        "position_error": float(np.linalg.norm(tr.e, axis=-1).max()),
+        "velocity_error": float(np.linalg.norm(tr.e_dot, axis=-1).max()),
+        "heading_error": float(np.abs(tr.e_psi).max()),
+        "yaw_rate_error": float(np.abs(tr.e_psi_dot).max()),
+    }
+    cov = plan.coverage
+    certified = None
+    if cov is not None:
+        b = cov.bounds
+        certified = {
+            "position_error": b.position,
+            "velocity_error": b.velocity,
+            "heading_error": b.heading,
+            "yaw_rate_error": b.yaw_rate,
+        }
+    cert = plan.certificate
+    out.update(
+        {
+            "start": plan.start,
+            "blend_time": None if cov is None else cov.blend_time,
+            "turn_time": None if cov is None else cov.turn_time,
+            "certificate_covers_run": plan.covered,
+            "coverage_reason": "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None),
+            "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
+            "certified_decay_rate": None if cert is None else cert.rate,
+            "measured_errors": measured,
+            "certified_errors": certified,
+            "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
+            "robust_covers_run": None if plan.robust is None else plan.robust.covered,
+            "robust_bounds": None if plan.robust is None else plan.robust.bounds,
+            "robust_reason": None if plan.robust is None else plan.robust.reason,
+            **plan.design.require_gains().to_dict(),
+            "gain_source": plan.design.source,
+        }
+    )
+    return out
+
+
+def with_start(cfg: FormationConfig, initial: FloatArray) -> FormationConfig:
+    """Copy of ``cfg`` whose simulation starts from ``initial`` ``(N, 6)``."""
+    return replace(cfg, simulation=replace(cfg.simulation, initial=tuple(map(tuple, np.asarray(initial).tolist()))))

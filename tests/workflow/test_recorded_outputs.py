@@ -1,0 +1,78 @@
+"""The restructure changed no number: certify and simulate of every preset against 0.2.0's outputs.
+
+``tests/fixtures/preset-outputs-v0.2.0.json`` holds the ``--json`` output of ``certify`` and
+``simulate`` for each preset, recorded with auv-hinf 0.2.0 before the package was split into
+subpackages. Every number of the recorded output must be reproduced at the same place of
+today's output (new keys may be added).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "preset-outputs-v0.2.0.json"
+RECORDED: dict[str, Any] = json.loads(FIXTURE.read_text(encoding="utf-8"))
+
+#: Relative agreement of recorded and recomputed numbers: the computations are the same, so
+#: they agree to round-off; Clarabel's interior-point iterates and the adaptive integrator's
+#: step sequence may differ in the last bits across BLAS builds, which moves derived numbers
+#: by far less than this.
+RTOL = 1e-6
+#: Absolute floor for numbers that are round-off themselves (final shape errors ~1e-14 m).
+ATOL = 1e-9
+
+
+#: The command line, run in a fresh interpreter.
+CLI = "from auv_hinf.cli.main import main; raise SystemExit(main())"
+
+
+def leaves(obj: Any, path: str = "") -> list[tuple[str, Any]]:
+    """``(path, value)`` of every scalar in a JSON object."""
+    if isinstance(obj, dict):
+        return [leaf for k, v in obj.items() for leaf in leaves(v, f"{path}/{k}")]
+    if isinstance(obj, list):
+        return [leaf for i, v in enumerate(obj) for leaf in leaves(v, f"{path}[{i}]")]
+    return [(path, obj)]
+
+
+def lookup(obj: Any, path: str) -> Any:
+    for part in path.strip("/").replace("[", "/[").split("/"):
+        if not part:
+            continue
+        obj = obj[int(part[1:-1])] if part.startswith("[") else obj[part]
+    return obj
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("key", sorted(RECORDED))
+def test_every_recorded_number_is_reproduced(key: str) -> None:
+    # one fresh process per command, as recorded: the cached cvxpy problems of the LMIs make
+    # the last digits (about 1e-5 relative) of a certificate depend on what the same process
+    # solved before; each result is verified on its own, but only a fresh process is comparable
+    command, preset = key.split("-", 1)
+    run = subprocess.run(
+        [sys.executable, "-c", CLI, command, "--preset", preset, "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    now = json.loads(run.stdout)
+    checked = 0
+    for path, old in leaves(RECORDED[key]):
+        new = lookup(now, path)
+        if isinstance(old, bool) or not isinstance(old, (int, float)):
+            assert new == old, f"{key}{path}: {new!r} != recorded {old!r}"
+        else:
+            assert isinstance(new, (int, float)) and math.isclose(new, old, rel_tol=RTOL, abs_tol=ATOL), (
+                f"{key}{path}: {new!r} != recorded {old!r}"
+            )
+            checked += 1
+    assert checked > 20
