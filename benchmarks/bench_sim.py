@@ -79,7 +79,7 @@ def end_to_end(sizes: tuple[int, ...] = (3, 30, 300, 1000, 10_000)) -> str:
             ]
         )
     note = (
-        "Certification = `plan.design_gains` + `plan.closed_loop_for` (gains, decay rates, start region, "
+        "Certification = `design_point` + `closed_loop_for` (gains, decay rates, start region, "
         "thrust bounds). `certify` (separate column) additionally runs the Jacobi-coordinate witness search and "
         "the LMI cross-check (at a fixed small size). Simulation columns exclude certification and include "
         "post-processing "
