@@ -3,12 +3,14 @@
 Every function returns a :class:`~matplotlib.figure.Figure`; library code never calls
 ``show()``. The simulation figures read only ``t``, ``states``, ``forces``,
 ``shape_error``, ``center_error``, ``desired_center`` and ``scenario.name`` /
-``scenario.envelope`` of a result, so any object with those attributes can be plotted.
+``scenario.envelope`` (and, if present, ``scenario.law.actuators``) of a result, so any object
+with those attributes can be plotted.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -18,20 +20,19 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.design.sigma import sigma_grid
+from auv_hinf.exceptions import ParameterError
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from auv_hinf.config.formation import FormationConfig
     from auv_hinf.simulation.results import SimulationResult
-    from auv_hinf.workflow.certificate import Certificate
-
-#: Level of the contour drawn on the sigma heatmap, as a fraction of the certified sigma.
-SIGMA_CONTOUR_FRACTION = 0.9
 
 #: Relative margin around the data in the trajectory figure.
 TRAJECTORY_MARGIN = 0.04
+
+#: Legend labels of the force figure's horizontal lines.
+CERTIFIED_LABEL = "certified bound"
+LIMIT_LABEL = "actuator limit"
 
 
 def _vehicle_labels(n: int) -> list[str]:
@@ -51,97 +52,6 @@ def _scenario_name(res: Any) -> str:
 
 def _scenario_envelope(res: Any) -> Any:
     return getattr(getattr(res, "scenario", None), "envelope", None)
-
-
-def _witness_vertex(cert: Certificate) -> tuple[float, float, float] | None:
-    """The ``(u, v, r)`` vertex at which the certified vehicle sigma is attained, if recorded."""
-    witness = getattr(cert.sigma, "witness", None)
-    try:
-        return float(witness.u[0]), float(witness.v[0]), float(witness.r[0])  # type: ignore[union-attr]
-    except (AttributeError, IndexError, TypeError, ValueError):
-        return None
-
-
-def sigma_heatmap(cfg: FormationConfig, cert: Certificate, resolution: int = 121) -> Figure:
-    """Vehicle-coordinate sigma over two slices of the envelope, through the certified vertex.
-
-    The left panel sweeps surge ``u`` and yaw rate ``r`` at the sway speed of the vertex
-    where the certified sigma is attained; the right panel sweeps ``v`` and ``r`` at that
-    vertex's surge speed. Both panels share one colour scale spanning the plotted values
-    (from their minimum, not from 0). The white contour marks
-    :data:`SIGMA_CONTOUR_FRACTION` (90 %) of the certified sigma and the star the
-    certified vertex.
-
-    Parameters
-    ----------
-    cfg : FormationConfig
-        Configuration: vehicle parameters and envelope.
-    cert : Certificate
-        Its certificate: ``lam`` and the vehicle-coordinate ``sigma``.
-    resolution : int
-        Grid points per axis.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Two panels and a shared colour bar labelled in 1/s.
-    """
-    env, lam, upper = cfg.envelope, float(cert.lam), float(cert.sigma.upper)
-    vertex = _witness_vertex(cert)
-    if vertex is None:  # no witness recorded: slice at the largest speeds
-        vertex = (max(abs(env.u[0]), abs(env.u[1])), max(abs(env.v[0]), abs(env.v[1])), env.r[1])
-    u_w, v_w, r_w = vertex
-    r = np.linspace(env.r[0], env.r[1], resolution)
-    panels = []
-    for axis, rng, other, at in (("u", env.u, abs(v_w), u_w), ("v", env.v, abs(u_w), v_w)):
-        x = np.linspace(rng[0], rng[1], resolution)
-        panels.append((axis, x, other, at, sigma_grid(cfg.vehicle, lam, x, r, axis=axis, other=other)))  # type: ignore[arg-type]
-    lo = float(min(p[4].min() for p in panels))
-    hi = float(max(p[4].max() for p in panels))
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), constrained_layout=True, sharey=True)
-    level = SIGMA_CONTOUR_FRACTION * upper
-    im, contoured = None, False
-    for ax, (axis, x, other, at, s) in zip(axes, panels):
-        im = ax.pcolormesh(x, r, s, shading="auto", vmin=lo, vmax=hi, cmap="viridis")
-        if s.min() < level < s.max():
-            ax.contour(x, r, s, levels=[level], colors="w", linewidths=1.2)
-            contoured = True
-        ax.plot([at], [r_w], marker="*", ms=15, mfc="r", mec="w", ls="none", clip_on=False, zorder=4)
-        ax.set_xlabel(f"{axis} [m/s]")
-        fixed = "|v|" if axis == "u" else "|u|"
-        ax.set_title(f"over ({axis}, r) at {fixed} = {other:.3g} m/s", fontsize=10)
-    axes[0].set_ylabel("r [rad/s]")
-    assert im is not None
-    fig.colorbar(im, ax=list(axes), label="sigma = ||B - lam I|| [1/s]")
-    contour_label = f"white contour: {SIGMA_CONTOUR_FRACTION:.0%} of certified sigma ({level:.3g} 1/s)"
-    if not contoured:
-        contour_label += f", not reached: sigma >= {lo:.3g} 1/s on these slices"
-    handles = [
-        Line2D([], [], color="w", mec="k", lw=1.2, label=contour_label),
-        Line2D(
-            [], [], marker="*", ms=12, mfc="r", mec="k", ls="none", label=f"certified vertex (sigma = {upper:.4g} 1/s)"
-        ),
-    ]
-    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=8, facecolor="0.75")
-    fig.suptitle(f"{cfg.name}: lambda = {lam:.3g} 1/s, certified sigma = {upper:.4g} 1/s")
-    return fig
-
-
-def save_sigma_heatmap(cfg: FormationConfig, cert: Certificate, path: Path) -> None:
-    """Write :func:`sigma_heatmap` to ``path``.
-
-    Parameters
-    ----------
-    cfg : FormationConfig
-        Configuration.
-    cert : Certificate
-        Its certificate.
-    path : pathlib.Path
-        Image file; the format follows the suffix.
-    """
-    fig = sigma_heatmap(cfg, cert)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _snapshot_indices(t: np.ndarray, every: float) -> list[int]:
@@ -293,27 +203,74 @@ def errors(res: SimulationResult) -> Figure:
     return fig
 
 
-def forces(res: SimulationResult) -> Figure:
-    """Surge force, sway force and yaw moment of every vehicle.
+def _channel_levels(name: str, values: Sequence[float] | None) -> list[float] | None:
+    """``values`` as three finite levels >= 0 (N, N, N m), or None."""
+    out = None if values is None else [float(v) for v in values]
+    if out is not None and (len(out) != 3 or not all(np.isfinite(v) and v >= 0.0 for v in out)):
+        raise ParameterError(f"{name} must be three finite values >= 0 (N, N, N m), got {values!r}")
+    return out
+
+
+def forces(
+    res: SimulationResult,
+    *,
+    certified: Sequence[float] | None = None,
+    limits: Sequence[float] | None = None,
+) -> Figure:
+    """Surge force, sway force and yaw moment of every vehicle, with the certified bound and the limits.
 
     Parameters
     ----------
     res : SimulationResult
         A simulation result.
+    certified : sequence of 3 float, optional
+        Certified bound of ``|tau_x|`` (N), ``|tau_y|`` (N), ``|tau_psi|`` (N m), e.g.
+        ``certificate.thrust.as_tuple()``: drawn dashed at ``+-`` the bound, labelled
+        ``"certified bound"``.
+    limits : sequence of 3 float, optional
+        Actuator limits (N, N, N m), e.g. ``actuators.limits()``: drawn solid red at ``+-`` the
+        limit, labelled ``"actuator limit"``. Default: the limits of ``res.scenario.law.actuators``
+        when it declares actuators.
 
     Returns
     -------
     matplotlib.figure.Figure
-        Three stacked axes; the top one carries one legend entry per vehicle.
+        Three stacked axes; the top one's legend has one entry per vehicle, then the bound and
+        the limit when drawn.
+
+    Raises
+    ------
+    ParameterError
+        If ``certified`` or ``limits`` is not three finite values >= 0.
     """
-    fig, axes = _per_vehicle_axes(
-        res.t, np.asarray(res.forces, dtype=float), ("tau_x [N]", "tau_y [N]", "tau_psi [N m]")
-    )
-    axes[0].set_title(f"{_scenario_name(res)}: thrust and yaw moment (body frame)")
+    if limits is None:
+        act = getattr(getattr(getattr(res, "scenario", None), "law", None), "actuators", None)
+        limits = None if act is None else act.limits()
+    data = np.asarray(res.forces, dtype=float)
+    fig, axes = _per_vehicle_axes(res.t, data, ("tau_x [N]", "tau_y [N]", "tau_psi [N m]"))
+    notes = []
+    for levels, label, word, style in (
+        (_channel_levels("certified", certified), CERTIFIED_LABEL, "dashed", {"color": "k", "ls": "--"}),
+        (_channel_levels("limits", limits), LIMIT_LABEL, "red", {"color": "r", "ls": "-"}),
+    ):
+        for ax, level in zip(axes, levels or ()):
+            ax.axhline(level, label=label, lw=1.2, **style)
+            ax.axhline(-level, label=f"_{label} (lower)", lw=1.2, **style)  # "_": not in the legend
+        notes += [f"{word}: {label}"] if levels else []
+    if notes:
+        _vehicle_legend(axes[0], data.shape[1])  # again, now with the bound and the limit
+    note = f" ({'; '.join(notes)})" if notes else ""
+    axes[0].set_title(f"{_scenario_name(res)}: thrust and yaw moment (body frame){note}")
     return fig
 
 
-def save_simulation_plots(res: SimulationResult, out: Path) -> list[Path]:
+def save_simulation_plots(
+    res: SimulationResult,
+    out: Path,
+    *,
+    certified: Sequence[float] | None = None,
+    limits: Sequence[float] | None = None,
+) -> list[Path]:
     """Write the trajectory, velocity, error and force figures as PNGs into ``out``.
 
     Parameters
@@ -322,19 +279,23 @@ def save_simulation_plots(res: SimulationResult, out: Path) -> list[Path]:
         A simulation result.
     out : pathlib.Path
         Existing directory.
+    certified, limits : sequence of 3 float, optional
+        Certified thrust bound and actuator limits (N, N, N m) drawn on the force figure; see
+        :func:`forces` (the limits default to those of the result's law).
 
     Returns
     -------
     list of pathlib.Path
         The files written.
     """
-    paths = []
-    for name, fn in (
+    figures: list[tuple[str, Callable[[SimulationResult], Figure]]] = [
         ("trajectories", trajectories),
         ("velocities", velocities),
         ("errors", errors),
-        ("forces", forces),
-    ):
+        ("forces", functools.partial(forces, certified=certified, limits=limits)),
+    ]
+    paths = []
+    for name, fn in figures:
         fig = fn(res)
         path = Path(out) / f"{name}.png"
         fig.savefig(path, dpi=110)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from types import SimpleNamespace
 
+import matplotlib.colors as mcolors
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
@@ -16,8 +17,10 @@ from matplotlib.collections import QuadMesh
 from matplotlib.contour import ContourSet
 from matplotlib.quiver import Quiver
 
-from auv_hinf import plots
+from auv_hinf import plots, sigma_figure
 from auv_hinf.design.sigma import vehicle_sigma
+from auv_hinf.exceptions import ParameterError
+from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.envelope import Envelope, envelope_lambda
 from auv_hinf.models.vehicle import VehicleParams, paper2011
 
@@ -151,7 +154,7 @@ def heatmap_inputs() -> tuple[SimpleNamespace, SimpleNamespace]:
 
 def test_sigma_heatmap_colour_scale_is_the_data_range(heatmap_inputs):
     cfg, cert = heatmap_inputs
-    fig = plots.sigma_heatmap(cfg, cert, resolution=41)
+    fig = sigma_figure.sigma_heatmap(cfg, cert, resolution=41)
     meshes = [c for ax in fig.axes[:2] for c in ax.collections if isinstance(c, QuadMesh)]
     assert len(meshes) == 2
     data = np.concatenate([np.ravel(m.get_array()) for m in meshes])
@@ -171,7 +174,7 @@ def figure_legend_texts(fig: plt.Figure) -> list[str]:
 
 def test_sigma_heatmap_marks_vertex_and_explains_contour(heatmap_inputs):
     cfg, cert = heatmap_inputs
-    fig = plots.sigma_heatmap(cfg, cert, resolution=41)
+    fig = sigma_figure.sigma_heatmap(cfg, cert, resolution=41)
     u_w, v_w, r_w = (getattr(cert.sigma.witness, k)[0] for k in ("u", "v", "r"))
     for ax, at in zip(fig.axes[:2], (u_w, v_w)):
         stars = [line for line in ax.get_lines() if line.get_marker() == "*"]
@@ -192,7 +195,7 @@ def test_sigma_heatmap_contour_at_ninety_percent():
     lam = envelope_lambda(vehicle, env)
     sigma = vehicle_sigma(vehicle, env, lam, 3)
     cfg = SimpleNamespace(name="wide", vehicle=vehicle, envelope=env)
-    fig = plots.sigma_heatmap(cfg, SimpleNamespace(lam=lam, sigma=sigma), resolution=41)
+    fig = sigma_figure.sigma_heatmap(cfg, SimpleNamespace(lam=lam, sigma=sigma), resolution=41)
     contours = [c for ax in fig.axes[:2] for c in ax.collections if isinstance(c, ContourSet)]
     assert contours, "the 90 % level lies inside the plotted range"
     for c in contours:
@@ -207,3 +210,110 @@ def test_save_simulation_plots_writes_four_pngs(tmp_path):
     for p in paths:
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert plt.get_fignums() == []
+
+
+CERTIFIED = (150.0, 20.0, 8.0)
+LIMITS = (200.0, 60.0, 12.0)
+
+
+def labelled_levels(ax: plt.Axes, label: str) -> list[tuple[float, str, str]]:
+    """``(y, linestyle, colour)`` of the horizontal lines of ``ax`` labelled ``label`` or ``_label (lower)``."""
+    out = []
+    for line in ax.get_lines():
+        if line.get_label() in (label, f"_{label} (lower)"):
+            y = np.asarray(line.get_ydata(), dtype=float)
+            assert np.all(y == y[0]), "a bound is a horizontal line"
+            out.append((float(y[0]), line.get_linestyle(), mcolors.to_hex(line.get_color())))
+    return sorted(out)
+
+
+def test_force_figure_draws_the_certified_bound_and_the_actuator_limits():
+    fig = plots.forces(synthetic_result(), certified=CERTIFIED, limits=LIMITS)
+    assert len(fig.axes) == 3
+    for ax, bound, limit in zip(fig.axes, CERTIFIED, LIMITS):
+        assert labelled_levels(ax, "certified bound") == [(-bound, "--", "#000000"), (bound, "--", "#000000")]
+        assert labelled_levels(ax, "actuator limit") == [(-limit, "-", "#ff0000"), (limit, "-", "#ff0000")]
+        lo, hi = ax.get_ylim()
+        assert lo <= -limit and hi >= limit, "the limits are inside the view"
+    # one legend entry each (the lower lines are hidden), after the vehicles
+    assert legend_texts(fig.axes[0]) == [f"AUV {i + 1}" for i in range(N_VEHICLES)] + [
+        "certified bound",
+        "actuator limit",
+    ]
+    title = fig.axes[0].get_title()
+    assert "certified bound" in title and "actuator limit" in title
+    # the vehicles' data lines are unchanged
+    res = synthetic_result()
+    for i, line in enumerate(fig.axes[0].get_lines()[:N_VEHICLES]):
+        np.testing.assert_array_equal(line.get_ydata(), res.forces[:, i, 0])
+
+
+def test_force_figure_without_bounds_draws_no_horizontal_lines():
+    fig = plots.forces(synthetic_result())
+    for ax in fig.axes:
+        assert len(ax.get_lines()) == N_VEHICLES
+        assert labelled_levels(ax, "certified bound") == [] and labelled_levels(ax, "actuator limit") == []
+    assert "certified" not in fig.axes[0].get_title()
+
+
+def test_force_figure_takes_the_limits_of_the_law_and_an_explicit_override():
+    res = synthetic_result()
+    res.scenario.law = SimpleNamespace(actuators=Actuators(*LIMITS))
+    fig = plots.forces(res)
+    for ax, limit in zip(fig.axes, LIMITS):
+        assert [y for y, _, _ in labelled_levels(ax, "actuator limit")] == [-limit, limit]
+        assert labelled_levels(ax, "certified bound") == []
+    assert legend_texts(fig.axes[0])[-1] == "actuator limit"
+    other = (300.0, 70.0, 15.0)
+    fig = plots.forces(res, limits=other)
+    for ax, limit in zip(fig.axes, other):
+        assert [y for y, _, _ in labelled_levels(ax, "actuator limit")] == [-limit, limit]
+
+
+@pytest.mark.parametrize("bad", [(1.0, 2.0), (1.0, -2.0, 3.0), (1.0, float("nan"), 3.0)])
+def test_force_figure_rejects_bad_bounds(bad):
+    with pytest.raises(ParameterError, match="certified"):
+        plots.forces(synthetic_result(), certified=bad)
+    with pytest.raises(ParameterError, match="limits"):
+        plots.forces(synthetic_result(), limits=bad)
+
+
+def test_save_simulation_plots_passes_the_bound_and_limits_to_the_force_figure(tmp_path, monkeypatch):
+    drawn: list[plt.Figure] = []
+    real = plots.forces
+
+    def spy(res, **kw):
+        drawn.append(real(res, **kw))
+        return drawn[-1]
+
+    monkeypatch.setattr(plots, "forces", spy)
+    paths = plots.save_simulation_plots(synthetic_result(), tmp_path, certified=CERTIFIED, limits=LIMITS)
+    assert (tmp_path / "forces.png") in paths and plt.get_fignums() == []
+    (fig,) = drawn
+    for ax, bound, limit in zip(fig.axes, CERTIFIED, LIMITS):
+        assert [y for y, _, _ in labelled_levels(ax, "certified bound")] == [-bound, bound]
+        assert [y for y, _, _ in labelled_levels(ax, "actuator limit")] == [-limit, limit]
+
+
+def test_force_figure_of_a_simulated_run_with_actuators(tmp_path):
+    """A real (short) certified run: the law's limits are drawn, its forces stay within the bound."""
+    from dataclasses import replace
+
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.simulation.engine import simulate
+    from auv_hinf.workflow.run_plan import plan_run
+
+    cfg = replace(preset_config("paper-triangle"), actuators=Actuators(1400.0, 400.0, 250.0))
+    plan = plan_run(cfg, horizon=5.0, samples=51)
+    assert plan.covered and plan.coverage is not None and plan.coverage.thrust is not None
+    res = simulate(plan.scenario)
+    certified = plan.coverage.thrust.as_tuple()
+    fig = plots.forces(res, certified=certified)
+    for ax, k in zip(fig.axes, range(3)):
+        assert [y for y, _, _ in labelled_levels(ax, "actuator limit")] == [
+            -cfg.actuators.limits()[k],
+            cfg.actuators.limits()[k],
+        ]
+        assert [y for y, _, _ in labelled_levels(ax, "certified bound")] == [-certified[k], certified[k]]
+        assert np.abs(res.forces[..., k]).max() <= certified[k]
+    assert len(plots.save_simulation_plots(res, tmp_path, certified=certified)) == 4

@@ -1,10 +1,11 @@
 """Campaign outputs: the verdict, ``summary.json``, ``runs.parquet`` and the histograms.
 
 A run *passes* when a certificate applies to it and every measured error stayed within its
-certified bound and the velocities in the envelope; or, when no certificate applies, when it
-merely stayed in the envelope. The robust certificate applies to every run when a box or a
-current is declared and it covers them; otherwise the nominal one applies to the runs with
-the nominal plant and no current.
+certified bound, the velocities in the envelope and the peak commanded force within the
+certificate's thrust bound; or, when no certificate applies, when it merely stayed in the
+envelope. The robust certificate applies to every run when a box or a current is declared and
+it covers them; otherwise the nominal one applies to the runs with the nominal plant and no
+current.
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from auv_hinf.campaign.sampling import COEFFICIENTS, ERROR_KINDS
+from auv_hinf.campaign.sampling import COEFFICIENTS, ERROR_KINDS, FORCE_COLUMNS
+from auv_hinf.models.actuators import CHANNELS
 from auv_hinf.workflow.codec import json_safe
 
 if TYPE_CHECKING:
@@ -33,13 +35,15 @@ ROBUST_NOTE = (
 
 
 def passed(table: pd.DataFrame) -> pd.Series:
-    """Per-run verdict: ``inside_bounds`` where it applies, else ``stayed_in_envelope``."""
+    """Per-run verdict: ``inside_bounds & within_certified_force`` where they apply, else ``stayed_in_envelope``."""
     inside = table["inside_bounds"]
+    if "within_certified_force" in table:
+        inside = inside & table["within_certified_force"]
     return inside.fillna(table["stayed_in_envelope"]).astype(bool)
 
 
 def summarize(camp: Campaign) -> dict[str, Any]:
-    """The ``summary.json`` object: counts, fractions, worst ratios, throughput (s, runs/s)."""
+    """The ``summary.json`` object: counts, fractions, worst ratios, forces (N, N m), throughput (s, runs/s)."""
     t, s, cert = camp.table, camp.setup, camp.certificate
     k = len(t)
     applicable = t["inside_bounds"].notna()
@@ -57,6 +61,7 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         notes.append(ROBUST_NOTE + (f" ({s.robust_reason})" if s.robust_reason else ""))
     if not s.certificate_applies:
         notes.append("the certified thrust exceeds the configured thrust limit: the certificate covers no run")
+    forces = force_summary(camp)
     veh_s = k * s.n * s.horizon
     wall = camp.wall_time
     return {
@@ -80,11 +85,14 @@ def summarize(camp: Campaign) -> dict[str, Any]:
             "inside_bounds": inside,
             "outside_bounds": n_app - inside,
             "left_envelope": int((~t["stayed_in_envelope"].astype(bool)).sum()),
+            "exceeded_certified_force": forces["exceeded_certified_force"],
+            "saturated": int((t["saturated_fraction"] > 0).sum()),
             "passed": int(passed(t).sum()),
         },
         "fraction_inside": inside / n_app if n_app else None,
         "worst_ratio": worst,
         "worst_tail_position_ratio": float(t.loc[applicable, "ratio_tail_position_error"].max()) if n_app else None,
+        "forces": forces,
         "certified_decay_rate": cert.rate if s.robust is None else s.robust.decay_rate,
         "min_measured_decay_rate": float(rates.min()) if len(rates) else None,
         "throughput": {
@@ -95,6 +103,42 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         },
         "ok": bool(passed(t).all()),
         "notes": notes,
+    }
+
+
+def certified_thrust(camp: Campaign) -> dict[str, float]:
+    """Thrust bound the runs are checked against (N, N, N m): the robust certificate's, else the nominal one's."""
+    rob = camp.setup.robust
+    if rob is not None:
+        return {c: float(b) for c, b in zip(CHANNELS, rob.thrust)}
+    return dict(camp.certificate.thrust.to_dict())
+
+
+def force_summary(camp: Campaign) -> dict[str, Any]:
+    """The ``forces`` object of the summary: peak commanded forces against the bound and the limits.
+
+    ``certified_thrust`` and ``actuator_limits`` (None when undeclared) are ``{force_x, force_y,
+    moment}`` (N, N, N m); ``max_commanded`` is the peak over all runs before saturation;
+    ``worst_ratio`` the largest peak / certified bound over the runs a certificate applies to
+    (None when there are none); ``within_certified_force`` and ``exceeded_certified_force``
+    count those runs.
+    """
+    t = camp.table
+    within = t["within_certified_force"]
+    app = within.notna()
+    n_app, n_in = int(app.sum()), int(within.fillna(False).astype(bool).sum())
+    bound = certified_thrust(camp)
+    act = camp.setup.law.actuators
+    return {
+        "certified_thrust": bound,
+        "actuator_limits": None if act is None else act.to_dict(),
+        "max_commanded": {c: float(t[col].max()) for c, col in zip(CHANNELS, FORCE_COLUMNS)},
+        "worst_ratio": {
+            c: float(t.loc[app, col].max() / bound[c]) if n_app else None for c, col in zip(CHANNELS, FORCE_COLUMNS)
+        },
+        "within_certified_force": n_in,
+        "exceeded_certified_force": n_app - n_in,
+        "max_saturated_fraction": float(t["saturated_fraction"].max()),
     }
 
 
@@ -157,4 +201,14 @@ def write_outputs(camp: Campaign, out: Path) -> dict[str, Any]:
     return summary
 
 
-__all__ = ["ROBUST_NOTE", "UNITS", "certified_bounds", "passed", "save_histograms", "summarize", "write_outputs"]
+__all__ = [
+    "ROBUST_NOTE",
+    "UNITS",
+    "certified_bounds",
+    "certified_thrust",
+    "force_summary",
+    "passed",
+    "save_histograms",
+    "summarize",
+    "write_outputs",
+]

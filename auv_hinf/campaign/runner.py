@@ -22,7 +22,9 @@ When a box or a current is declared and the robust certificate covers them, the 
 plants and currents are drawn as :mod:`auv_hinf.campaign.starts` says (inside the robust
 invariant sets, the box's vertices first) and every run is checked against the robust bounds.
 Otherwise the nominal certificate bounds a run only when its plant is nominal and there is no
-current; elsewhere ``inside_bounds`` is NA.
+current; elsewhere ``inside_bounds`` is NA. Every run also records its peak commanded force per
+channel before saturation, checked (``within_certified_force``) against the thrust bound of
+the certificate that applies to it.
 :mod:`auv_hinf.campaign.report` writes the table, the summary and the histograms.
 """
 
@@ -122,7 +124,8 @@ def run_campaign(
     parts = _execute(setup, chunks(int(runs), size), client, progress)
     wall = time.perf_counter() - t1
     table = pd.concat(parts, ignore_index=True)
-    table["inside_bounds"] = table["inside_bounds"].astype("boolean")
+    for col in ("inside_bounds", "within_certified_force"):
+        table[col] = table[col].astype("boolean")
     executor = "serial" if client is None else f"dask {getattr(client.scheduler, 'address', client)}"
     return Campaign(table, setup, cert, size, executor, t1 - t0, wall)
 

@@ -38,6 +38,8 @@ from auv_hinf.workflow.nominal import closed_loop_for
 COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
 #: Error kinds, in the order of :func:`~auv_hinf.certification.region.start_bounds` (m, m/s, rad, rad/s).
 ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
+#: Table columns of the peak commanded force per channel, ``(tau_x, tau_y, tau_psi)`` (N, N, N m).
+FORCE_COLUMNS = ("max_force_x", "max_force_y", "max_moment")
 #: Output sample interval (s): the measured sup of the errors is taken on these samples.
 SAMPLE_INTERVAL = 0.1
 #: Default chunk: at most this many scenarios per batch. The per-step Python overhead of the
@@ -219,8 +221,11 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float]
     ``measured_decay_rate`` (1/s, NaN if none),
     ``bound_<kind>_error`` (largest per-start certified bound), ``ratio_<kind>_error``
     (largest measured / certified over the vehicles), ``inside_bounds`` (NA when no
-    certificate applies: see :mod:`auv_hinf.campaign.report`) and ``n_steps``. ``<kind>`` is one
-    of :data:`ERROR_KINDS` (m, m/s, rad, rad/s).
+    certificate applies: see :mod:`auv_hinf.campaign.report`), :data:`FORCE_COLUMNS` (peak
+    commanded force before saturation over samples and vehicles, N, N, N m),
+    ``within_certified_force`` (every channel's peak within the thrust bound of the certificate
+    that applies, NA where none does), ``saturated_fraction`` (fraction of the samples at which
+    some vehicle saturates) and ``n_steps``. ``<kind>`` is one of :data:`ERROR_KINDS` (m, m/s, rad, rad/s).
 
     The samples are not stored: :class:`~auv_hinf.simulation.metrics.ErrorSink` folds each one into
     the metrics as the integrator produces it (the same numbers as post-processing stored
@@ -238,6 +243,7 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float]
         cert.position.matrix,
         cert.heading.matrix,
         progress=progress,
+        law=setup.law,
     )
     sol = integrate_batch(batch, sink=sink)
     return _rows(setup, lo, inputs, batch, sink.result(), first_exits(sol, hi - lo), sol.n_steps)
@@ -270,6 +276,9 @@ def _rows(
         tail = np.where(bound[..., 0] > 0, met.tail_position / bound[..., 0], math.inf)
     tol = BOUND_SLACK * max(RTOL, ATOL)
     inside = np.all(measured <= bound * (1.0 + tol) + tol, axis=(1, 2)) & stayed
+    thrust = np.array(setup.certificate.thrust.as_tuple()) if setup.robust is None else setup.robust.thrust
+    peak = met.commanded_peak  # (S, 3)
+    within = np.all(peak <= thrust * (1.0 + tol) + tol, axis=1)
     cols: dict[str, Any] = {"run": np.arange(lo, lo + len(inputs)), "seed": setup.seed}
     cols.update({f"{k}_mult": mult[:, j] for j, k in enumerate(COEFFICIENTS)})
     cols.update({"current_x": batch.current[:, 0], "current_y": batch.current[:, 1], "nominal": nominal})
@@ -284,6 +293,9 @@ def _rows(
     cols.update({f"ratio_{k}_error": ratio[..., j].max(axis=1) for j, k in enumerate(ERROR_KINDS)})
     cols["ratio_tail_position_error"] = tail.max(axis=1)
     cols["inside_bounds"] = [bool(x) if a else pd.NA for x, a in zip(inside, applies)]
+    cols.update({k: peak[:, j] for j, k in enumerate(FORCE_COLUMNS)})
+    cols["within_certified_force"] = [bool(x) if a else pd.NA for x, a in zip(within, applies)]
+    cols["saturated_fraction"] = met.saturated_fraction
     cols["n_steps"] = n_steps.astype(np.int64)
     return pd.DataFrame(cols)
 
@@ -316,10 +328,10 @@ def prepare(
     for k, (lo, hi) in cfg.uncertainty.box:
         box[COEFFICIENTS.index(k)] = (lo, hi)
     rob, why = robust_start(point, box, cert)
-    limit = cfg.simulation.thrust_limit
+    limit = cfg.actuators
     t = cert.thrust
-    applies = limit is None or (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2])
-    law = VehicleLaw(params=cfg.vehicle, gains=gains, thrust_limit=limit)
+    applies = limit is None or limit.admits(t.as_tuple())
+    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=limit)
     setup = CampaignSetup(
         name=cfg.name,
         law=law,
@@ -359,6 +371,7 @@ __all__ = [
     "CHUNK_BYTES",
     "COEFFICIENTS",
     "ERROR_KINDS",
+    "FORCE_COLUMNS",
     "MAX_CHUNK",
     "SAMPLE_INTERVAL",
     "WORKING_ARRAYS",

@@ -15,7 +15,8 @@ against its bounds:
   of the full declared speed in a random direction; the others are uniform in the box, with a
   current uniform in the disc.
 * **Check.** Each vehicle's sup over the samples of ``||e||``, ``||e'||``, ``|e_psi|`` and
-  ``|e_psi'|`` must lie within the certified bounds, and the run must stay in the envelope.
+  ``|e_psi'|`` must lie within the certified bounds, and the run must stay in the envelope;
+  the commanded force must stay within the certificate's thrust bound (:attr:`RobustStart.thrust`).
 """
 
 from __future__ import annotations
@@ -87,6 +88,14 @@ class RobustStart:
         if b is None:  # pragma: no cover - a covering certificate has bounds
             raise ParameterError("a robust campaign needs a certificate with bounds")
         return np.array([b.position, b.velocity, b.heading, b.yaw_rate])
+
+    @property
+    def thrust(self) -> FloatArray:
+        """Certified bound of the commanded ``|tau_x|`` (N), ``|tau_y|`` (N), ``|tau_psi|`` (N m) over the sets."""
+        t = self.certificate.thrust
+        if t is None:  # pragma: no cover - a covering certificate has thrust bounds
+            raise ParameterError("a robust campaign needs a certificate with thrust bounds")
+        return np.array(t.as_tuple())
 
     @property
     def decay_rate(self) -> float:

@@ -233,6 +233,10 @@ class ThrustBounds:
         """JSON-safe dictionary."""
         return {"force_x": self.force_x, "force_y": self.force_y, "moment": self.moment}
 
+    def as_tuple(self) -> tuple[float, float, float]:
+        """``(force_x, force_y, moment)`` (N, N, N m)."""
+        return (self.force_x, self.force_y, self.moment)
+
 
 def thrust_bounds(
     params: VehicleParams,
@@ -240,29 +244,73 @@ def thrust_bounds(
     tube: ReferenceTube,
     bounds: ErrorBounds,
     gains: Gains,
+    current: float = 0.0,
 ) -> ThrustBounds:
-    """Sound bounds of ``|tau_x|, |tau_y|, |tau_psi|`` while the velocities stay in ``envelope``.
+    """Sound bounds of ``|tau_x|, |tau_y|, |tau_psi|`` while the errors stay within ``bounds``.
 
     ``tau_xy = M1 (-alpha R^T e' - k1 R^T e - B R^T p_d' + R^T p_d'')``, so per cell
-    ``|tau_x| <= m11 (alpha E_v + k1 E_p + ||row_1 B|| S_hi + |p_d''|)`` (likewise y); the
-    rows of ``B(|u|, |v|, r)`` are affine, so their norms peak at the 8 box vertices.
-    ``tau_psi = m33 V - (m11 - m22) u v`` with
+    ``|tau_x| <= m11 (alpha E_v + k1 E_p + |B_11| S_hi + |B_12| S_hi sin(|offset| + E_psi) +
+    |p_d''|)`` (likewise y: ``R^T p_d'`` is the desired velocity in the actual body frame); the
+    entries of ``B(|u|, |v|, r)`` are affine, so their moduli peak at the 8 vertices of the box of
+    body velocities the vehicle can have in the cell: ``|u| <= S_hi + E_v + |c|`` and
+    ``|v| <= S_hi sin(|offset| + E_psi) + E_v + |c|`` (the ground velocity is ``p_d' + e'`` and
+    ``p_d'`` points along the desired heading up to the tube's heading offset; the
+    water-relative velocity differs by the current ``c``), and ``r`` within the cell's desired
+    yaw rate widened by ``E_r``, each intersected with the envelope. ``tau_psi = m33 V - (m11 - m22) u v`` with
     ``|V| <= |psi_d''| + d33_max/m33 |psi_d'| + |k1psi| E_psi + |k2psi| E_r`` (``k2psi`` is
-    negative when the heading poles are slower than the yaw damping).
+    negative when the heading poles are slower than the yaw damping) and ``|u v|`` bounded on
+    the same box.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model.
+    envelope : Envelope
+        The envelope the body velocities stay in.
+    tube : ReferenceTube
+        Bounds of the desired motion over time cells.
+    bounds : ErrorBounds
+        Bounds of the tracking errors (m, m/s, rad, rad/s).
+    gains : Gains
+        The gains of the law.
+    current : float
+        Bound of the water current's speed (m/s).
     """
-    a_rng, b_rng = abs_range(*envelope.u), abs_range(*envelope.v)
-    verts = np.array(list(itertools.product(a_rng, b_rng, envelope.r)))
-    rows = np.linalg.norm(body_block(params, verts[:, 0], verts[:, 1], verts[:, 2]), axis=-1).max(axis=0)
+    s_hi = tube.speed[:, 1]
+    a_env, b_env = abs_range(*envelope.u), abs_range(*envelope.v)
+    # body velocity = R(psi_d + e_psi)^T (p_d' + e') (+ current): the desired velocity points
+    # along the desired heading up to the tube's heading offset, so its sway part is at most
+    # S sin(|offset| + E_psi)
+    slip = np.minimum(0.5 * np.pi, np.abs(tube.offset).max(axis=1) + bounds.heading)
+    extra = bounds.velocity + abs(current)
+    a_hi = np.minimum(a_env[1], s_hi + extra)
+    b_hi = np.minimum(b_env[1], s_hi * np.sin(slip) + extra)
+    a_lo = np.minimum(a_env[0], a_hi)
+    b_lo = np.minimum(b_env[0], b_hi)
+    r_lo = np.clip(tube.yaw_rate[:, 0] - bounds.yaw_rate, envelope.r[0], envelope.r[1])
+    r_hi = np.clip(tube.yaw_rate[:, 1] + bounds.yaw_rate, envelope.r[0], envelope.r[1])
+    corners = np.array(list(itertools.product((0, 1), repeat=3)))  # (8, 3): low/high of |u|, |v|, r
+    u = np.where(corners[:, 0], a_hi[:, None], a_lo[:, None])  # (K, 8)
+    v = np.where(corners[:, 1], b_hi[:, None], b_lo[:, None])
+    r = np.where(corners[:, 2], r_hi[:, None], r_lo[:, None])
+    # |B R^T p_d'| row by row: R^T p_d' = S (cos d, sin d) with |d| <= |offset| + E_psi, and
+    # each entry of B is affine in (|u|, |v|, r), so its modulus peaks at a vertex
+    # (and, by Cauchy-Schwarz, by ||row|| S; each row takes the smaller of the two bounds)
+    blocks = body_block(params, u, v, r)  # (K, 8, 2, 2)
+    entries = np.abs(blocks).max(axis=1)  # (K, 2, 2)
+    along = s_hi[:, None] * entries[:, :, 0] + (s_hi * np.sin(slip))[:, None] * entries[:, :, 1]  # (K, 2)
+    along = np.minimum(along, s_hi[:, None] * np.linalg.norm(blocks, axis=-1).max(axis=1))
     k_psi = gains.k_psi
     err = abs(gains.alpha) * bounds.velocity + abs(gains.k1) * bounds.position
-    drift = tube.speed[:, 1][:, None] * rows[None, :] + tube.accel[:, None]
+    drift = along + tube.accel[:, None]
     fx, fy = np.array([params.m11, params.m22]) * (err + drift.max(axis=0))
-    d33_max = params.d33_lin + params.d33_quad * abs_range(*envelope.r)[1]
+    r_abs = np.maximum(np.abs(r_lo), np.abs(r_hi))
+    d33_max = params.d33_lin + params.d33_quad * r_abs
     yaw = np.abs(tube.yaw_rate).max(axis=1)
-    big_v = float(np.max(tube.yaw_accel + d33_max / params.m33 * yaw))
+    big_v = tube.yaw_accel + d33_max / params.m33 * yaw
     # |k1psi e + k2psi e'| <= |k1psi| E_psi + |k2psi| E_r: k2psi is negative for slow heading poles
-    big_v += abs(k_psi[0]) * bounds.heading + abs(k_psi[1]) * bounds.yaw_rate
-    moment = params.m33 * big_v + abs(params.m11 - params.m22) * a_rng[1] * b_rng[1]
+    big_v = big_v + abs(k_psi[0]) * bounds.heading + abs(k_psi[1]) * bounds.yaw_rate
+    moment = float(np.max(params.m33 * big_v + abs(params.m11 - params.m22) * a_hi * b_hi))
     k = 1.0 + BOUND_RTOL
     return ThrustBounds(k * float(fx), k * float(fy), k * moment)
 

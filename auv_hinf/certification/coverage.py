@@ -33,6 +33,7 @@ from auv_hinf.certification.margins import ErrorBounds, Margins, envelope_margin
 from auv_hinf.certification.region import start_bounds
 from auv_hinf.design.gains import Gains
 from auv_hinf.exceptions import AuvHinfError, ParameterError
+from auv_hinf.models.actuators import Actuators, actuator_shortfall
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.paths import MissionReference
 from auv_hinf.models.reference import FleetReference, shaped_start, wrap_angle
@@ -182,7 +183,7 @@ def check_run(
     fleet: FleetReference,
     initial: ArrayLike,
     *,
-    thrust_limit: tuple[float, float, float] | None = None,
+    actuators: Actuators | None = None,
     start: str = "paper",
 ) -> Coverage:
     """Coverage of the run that tracks ``fleet`` from ``initial`` (see the module docstring).
@@ -201,8 +202,8 @@ def check_run(
         Reference tracked by the run.
     initial : array_like, shape (N, 6)
         Initial states.
-    thrust_limit : tuple of float, optional
-        ``(|tau_x|, |tau_y|, |tau_psi|)`` limits (N, N, N m).
+    actuators : Actuators, optional
+        What the vehicles can push; the run is covered only if its certified thrust fits.
     start : str
         Start mode recorded in the result.
     """
@@ -247,13 +248,8 @@ def check_run(
     if not marg.ok:
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
         reason = f"not covered: envelope margin {worst} = {getattr(marg, worst):.4g} < 0"
-    elif thrust_limit is not None and not (
-        thrust.force_x <= thrust_limit[0] and thrust.force_y <= thrust_limit[1] and thrust.moment <= thrust_limit[2]
-    ):
-        reason = (
-            f"not covered: certified thrust ({thrust.force_x:.4g} N, {thrust.force_y:.4g} N, "
-            f"{thrust.moment:.4g} N m) exceeds the limits {tuple(thrust_limit)}"
-        )
+    elif actuators is not None and not actuators.admits(thrust.as_tuple()):
+        reason = "not covered: " + actuator_shortfall(actuators, thrust.as_tuple())
     else:
         reason = "covered: start inside the certified invariant set, reference inside the envelope"
     return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, tb, th, reason)
@@ -270,7 +266,7 @@ def cover_start(
     *,
     start: StartMode = "shaped",
     blend_time: float | None = None,
-    thrust_limit: tuple[float, float, float] | None = None,
+    actuators: Actuators | None = None,
     current: tuple[float, float] = (0.0, 0.0),
 ) -> Coverage:
     """Choose the reference for a run and decide whether the certificate covers it.
@@ -289,8 +285,8 @@ def cover_start(
         Start mode (see the module docstring).
     blend_time : float, optional
         Fixed ``T_b`` (s) of the shaped start; by default the candidates :data:`BLEND_TIMES`.
-    thrust_limit : tuple of float, optional
-        Thrust limits (N, N, N m).
+    actuators : Actuators, optional
+        What the vehicles can push.
     current : tuple of float
         Water current of the run (m/s, inertial): the shaped start matches the actual ground
         velocity ``R(psi) [u, v] + current``. A run with a current is covered only by the
@@ -305,7 +301,7 @@ def cover_start(
     if start not in ("shaped", "paper"):
         raise ParameterError(f"start must be 'shaped' or 'paper', got {start!r}")
     raw = FleetReference(mission, np.asarray(offsets, dtype=float))
-    base = check_run(cert, params, envelope, gains, raw, initial, thrust_limit=thrust_limit, start=start)
+    base = check_run(cert, params, envelope, gains, raw, initial, actuators=actuators, start=start)
     if start == "paper" or base.covered:
         return base
     blends = BLEND_TIMES if blend_time is None else (float(blend_time),)
@@ -318,7 +314,7 @@ def cover_start(
                 return Coverage(
                     False, start, raw, base.bounds, base.margins, base.thrust, None, None, f"no shaped start: {exc}"
                 )
-            cov = check_run(cert, params, envelope, gains, fleet, initial, thrust_limit=thrust_limit, start=start)
+            cov = check_run(cert, params, envelope, gains, fleet, initial, actuators=actuators, start=start)
             if cov.covered:
                 return cov
             if best is None or _score(cov) > _score(best):

@@ -13,6 +13,13 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
+#: Exit codes: success, a negative verdict, bad input.
+EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
+#: The command's name in messages.
+PROG = "auv-hinf"
+#: Largest ``design --n``: the full-size LMI cross-check grows as (2N)^2 (25 s at N = 20).
+DESIGN_MAX_N = 20
+
 
 class UsageError(Exception):
     """Bad command-line arguments (exit 2)."""

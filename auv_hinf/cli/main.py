@@ -9,50 +9,39 @@ problem on stderr and never as a traceback, unless ``--debug`` is given, which r
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import sys
-import tempfile
-from collections.abc import Callable, Sequence
-from dataclasses import replace
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+if sys.version_info >= (3, 11):
+    pass
+else:  # pragma: no cover - Python 3.10
+    pass
 
 from auv_hinf._typing import GAIN_METHODS
 from auv_hinf._version import __version__
 from auv_hinf.campaign.sampling import MAX_CHUNK
-from auv_hinf.cli.args import NUMERIC_OPTIONS, BadInput, Negative, Parser, UsageError, join_numbers, numeric, vector
+from auv_hinf.cli.args import (
+    DESIGN_MAX_N,
+    EXIT_BAD_INPUT,
+    EXIT_NEGATIVE,
+    EXIT_OK,
+    NUMERIC_OPTIONS,
+    PROG,
+    BadInput,
+    Negative,
+    Parser,
+    UsageError,
+    join_numbers,
+    numeric,
+    vector,
+)
+from auv_hinf.cli.commands import COMMANDS
 from auv_hinf.config.presets import PRESETS
 from auv_hinf.config.schema import DEFAULT_K1
-from auv_hinf.exceptions import AuvHinfError, DesignError, SolverError
-from auv_hinf.workflow.codec import json_safe
-
-EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
-PROG = "auv-hinf"
-#: Largest ``design --n``: the full-size LMI cross-check grows as (2N)^2 (25 s at N = 20).
-DESIGN_MAX_N = 20
-
-
-def _dump(obj: Any) -> str:
-    return json.dumps(json_safe(obj), indent=2)
-
-
-def _prepare_out(path: Path | None) -> None:
-    """Create ``--out`` and check that it is writable, before any computation."""
-    if path is None:
-        return
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=path):
-            pass
-    except OSError as exc:
-        raise BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
-
-
-def _load(args: argparse.Namespace) -> Any:
-    from auv_hinf.config.formation import load_config
-    from auv_hinf.config.presets import preset_config
-
-    return preset_config(args.preset) if args.preset else load_config(args.config)
+from auv_hinf.exceptions import AuvHinfError, SolverError
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -88,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
                 help="shaped: the reference blends from the actual start (default); paper: raw reference",
             )
             numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
-            NUMERIC_OPTIONS.update(("--current", "--thrust-limit"))
+            NUMERIC_OPTIONS.update(("--current",))
             c.add_argument(
                 "--current",
                 type=vector(2, "m/s"),
@@ -96,11 +85,17 @@ def build_parser() -> argparse.ArgumentParser:
                 help="constant current, inertial frame, m/s (e.g. --current 0.1,0)",
             )
             c.add_argument(
-                "--thrust-limit",
-                type=vector(3, "N, N, N m"),
-                metavar="FX,FY,M",
-                help="thrust limits |tau_x|, |tau_y| (N) and |tau_psi| (N m)",
+                "--uncertified",
+                action="store_true",
+                help="simulate even when no certificate covers the gains (the run is then reported as not covered)",
             )
+        NUMERIC_OPTIONS.add("--actuators")
+        c.add_argument(
+            "--actuators",
+            type=vector(3, "N, N, N m"),
+            metavar="FX,FY,M",
+            help="actuator limits |tau_x|, |tau_y| (N) and |tau_psi| (N m); overrides [actuators]",
+        )
         if name == "certify":
             c.add_argument("--method", choices=GAIN_METHODS, help="gain method")
             c.add_argument(
@@ -120,134 +115,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _cmd_design(args: argparse.Namespace) -> int:
-    from auv_hinf.design.crosscheck import crosscheck
-
-    report = crosscheck(args.lam, args.gamma, args.n, args.k1)
-    data = report.to_dict()
-    if args.json:
-        print(_dump(data))
-        return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
-    a = data["alpha"]
-    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g}, n = {report.n}")
-    print(f"gamma_min = {report.conditions['gamma_min']:.6g}  regime: {report.conditions['regime']} 1/sqrt2")
-    for key in ("paper", "stabilizing", "minimal", "care", "scipy_care", "lmi", "lmi_minimal"):
-        val = a.get(key)
-        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g}"))
-    for flag in report.paper_flags:
-        print(f"  paper: {flag}")
-    h = data["closed_loop_hinf"]
-    print(f"||T||_inf exact {h['exact']}, python-control {h['python_control']}, LMI {h['lmi']}")
-    print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
-    for c in report.checks:
-        if not c.ok:
-            print(f"  FAIL {c.name}: {c.value!r} vs {c.reference!r} (rel {c.rel_diff:.3g} > {c.tol:g})")
-    return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
-
-
-def _verdict(ok: bool, reason: str) -> int:
-    """Exit code of a verdict; a negative one also gets its reason as one line on stderr."""
-    if ok:
-        return EXIT_OK
-    print(f"{PROG}: not certified: {' '.join(reason.split())}", file=sys.stderr)
-    return EXIT_NEGATIVE
-
-
-def _cmd_certify(args: argparse.Namespace) -> int:
-    from auv_hinf.workflow.certificate import certify
-
-    _prepare_out(args.out)
-    cfg = _load(args)
-    if args.method:
-        cfg = cfg.with_method(args.method)
-    if args.design:
-        cfg = replace(cfg, robust=args.design == "robust")
-    cert = certify(cfg, refine_jacobi=args.refine_jacobi)
-    data = cert.to_dict()
-    if args.out:
-        from auv_hinf.plots import save_sigma_heatmap
-
-        cert.save(args.out / "certificate.json")  # the file Certificate.load reads
-        save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
-    print(_dump(data) if args.json else cert.summary())
-    return _verdict(cert.certified, "; ".join(cert.reasons) or "no reason given")
-
-
-def _cmd_simulate(args: argparse.Namespace) -> int:
-    from auv_hinf.simulation.engine import simulate
-    from auv_hinf.workflow.run_plan import plan_run, run_report
-
-    _prepare_out(args.out)
-    cfg = _load(args)
-    overrides = {k: v for k, v in (("current", args.current), ("thrust_limit", args.thrust_limit)) if v is not None}
-    if overrides:
-        cfg = replace(cfg, simulation=replace(cfg.simulation, **overrides))
-    if args.design:
-        cfg = replace(cfg, robust=args.design == "robust")
-    try:
-        plan = plan_run(cfg, start=args.start, horizon=args.horizon)
-    except DesignError as exc:
-        raise Negative(f"no gain to simulate with: {exc}") from None
-    result = simulate(plan.scenario)
-    summary = run_report(plan, result)
-    if args.out:
-        from auv_hinf.plots import save_simulation_plots
-
-        (args.out / "summary.json").write_text(_dump(summary))
-        result.save_npz(args.out / "trajectory.npz")
-        save_simulation_plots(result, args.out)
-    if args.json:
-        print(_dump(summary))
-    else:
-        for key, val in summary.items():
-            print(f"{key:>24}: {_short(val)}")
-    if plan.certificate is None:
-        return _verdict(False, "; ".join(plan.notes))
-    if not summary["stayed_in_envelope"]:
-        why = f"left the certified envelope at t = {summary['first_exit_time']:.4g} s"
-        if not plan.covered:
-            why += f" (the certificate does not cover this run: {'; '.join(plan.notes)})"
-        return _verdict(False, why)
-    return EXIT_OK
-
-
-def _short(value: Any) -> str:
-    """A value printed with 4-6 significant digits (floats inside dicts and lists too)."""
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{k}: {_short(v)}" for k, v in value.items()) + "}"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_short(v) for v in value) + "]"
-    return str(value)
-
-
-def _cmd_schema(args: argparse.Namespace) -> int:
-    from auv_hinf.config.schema import json_schema
-
-    print(json.dumps(json_schema(), indent=2))
-    return EXIT_OK
-
-
-def _cmd_init(args: argparse.Namespace) -> int:
-    from auv_hinf.config.presets import annotated_toml, preset_config
-
-    out: Path | None = args.out
-    if out is not None and out.exists() and not args.force:
-        raise BadInput(f"{str(out)!r} exists; use --force to overwrite it")
-    text = annotated_toml(preset_config(args.preset))
-    if out is None:
-        print(text, end="")
-        return EXIT_OK
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
-    print(f"wrote {out} (from preset {args.preset}); check it with: {PROG} certify --config {out}")
-    return EXIT_OK
-
-
 def _campaign_parser(sub: Any) -> None:
     """The ``campaign`` sub-command's arguments."""
     c = sub.add_parser("campaign", help="Monte Carlo runs from inside the certified start region", allow_abbrev=False)
@@ -265,43 +132,6 @@ def _campaign_parser(sub: Any) -> None:
     numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
     c.add_argument("--out", type=Path, required=True, help="directory for runs.parquet, summary.json, PNGs")
     c.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-
-
-def _cmd_campaign(args: argparse.Namespace) -> int:
-    from auv_hinf.campaign.report import write_outputs
-    from auv_hinf.campaign.runner import dask_client, run_campaign
-
-    _prepare_out(args.out)
-    cfg = _load(args)
-    with dask_client(args.workers, args.scheduler) as client:
-        try:
-            camp = run_campaign(
-                cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
-            )
-        except DesignError as exc:
-            raise Negative(f"no certified start region to sample from: {exc}") from None
-    summary = write_outputs(camp, args.out)
-    if args.json:
-        print(_dump(summary))
-    else:
-        for key in ("config", "runs", "executor", "counts", "fraction_inside", "worst_ratio", "throughput", "notes"):
-            print(f"{key:>16}: {_short(summary[key])}")
-    c = summary["counts"]
-    return _verdict(
-        summary["ok"],
-        f"{c['outside_bounds']} of {c['certificate_applies']} covered runs outside the "
-        f"certified bounds, {c['left_envelope']} of {c['runs']} runs left the envelope",
-    )
-
-
-_COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
-    "design": _cmd_design,
-    "certify": _cmd_certify,
-    "simulate": _cmd_simulate,
-    "schema": _cmd_schema,
-    "init": _cmd_init,
-    "campaign": _cmd_campaign,
-}
 
 
 def _report(kind: str, exc: BaseException) -> None:
@@ -347,7 +177,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command is None:
             parser.print_help()
             return EXIT_OK
-        return _COMMANDS[args.command](args)
+        return COMMANDS[args.command](args)
+    except BrokenPipeError:  # the reader went away (`auv-hinf ... | head`): stop quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_OK
     except Exception as exc:  # the one error boundary: every failure becomes an exit code
         code, kind = _classify(exc)
         if debug and not isinstance(exc, UsageError):

@@ -19,7 +19,9 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "d33_lin": ("kg m^2/s", "ge"),
     "d33_quad": ("kg m^2", "ge"),
 }
-VehiclePreset = Literal["paper2011", "remus100"]
+VehiclePreset = Literal["paper2011", "remus100", "bluerov2-heavy"]
+ActuatorPreset = Literal["remus100", "bluerov2-heavy"]
+SynthesisKind = Literal["bandwidth", "lmi"]
 ReferenceKind = Literal["sine", "line", "circle", "lawnmower"]
 StartKind = Literal["shaped", "paper"]
 DEFAULT_POLYGON_RADIUS = 15.0  # m
@@ -49,7 +51,6 @@ Point = Annotated[
 ]
 NegativePair = Annotated[list[Annotated[float, Field(lt=0.0)]], Field(min_length=2, max_length=2)]
 StateRow = Annotated[list[float], Field(min_length=6, max_length=6)]
-PositiveTriple = Annotated[list[Annotated[float, Field(gt=0.0)]], Field(min_length=3, max_length=3)]
 
 
 class _Table(BaseModel):

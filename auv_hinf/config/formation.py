@@ -15,10 +15,20 @@ from pathlib import Path
 from typing import Any, cast
 
 from auv_hinf._typing import GainMethod, JacobiKind
+from auv_hinf.config.fields import SynthesisKind
 from auv_hinf.config.messages import parse_config, plain_data, set_fields, validate_table
-from auv_hinf.config.schema import DEFAULT_K1, DEFAULT_METHOD, DEFAULT_POLES, DesignTable, FormationTable
+from auv_hinf.config.schema import (
+    DEFAULT_K1,
+    DEFAULT_METHOD,
+    DEFAULT_POLES,
+    DEFAULT_SYNTHESIS,
+    ActuatorsTable,
+    DesignTable,
+    FormationTable,
+)
 from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError
+from auv_hinf.models.actuators import VEHICLE_ACTUATORS, Actuators, vehicle_actuators
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.formation import JacobiTransform
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
@@ -59,6 +69,11 @@ class FormationConfig:
     robust : bool
         Use the robust design (:mod:`auv_hinf.robust.bandwidth`) instead of the Theorem 1 gain,
         ``k1`` and ``heading_poles``.
+    synthesis : {"bandwidth", "lmi"}
+        How the robust design chooses its gains: the bandwidth family or LMI synthesis
+        (:mod:`auv_hinf.robust.synthesis`).
+    actuators : Actuators or None
+        What the vehicles can push (``None``: none declared, unlimited thrust).
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
 
@@ -81,10 +96,12 @@ class FormationConfig:
     k1: float = DEFAULT_K1
     heading_poles: tuple[float, float] = DEFAULT_POLES
     robust: bool = False
+    synthesis: SynthesisKind = DEFAULT_SYNTHESIS
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
+    actuators: Actuators | None = None
 
     def __post_init__(self) -> None:
         for key, kind in (
@@ -98,6 +115,8 @@ class FormationConfig:
         ):
             if not isinstance(getattr(self, key), kind):
                 raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
+        if self.actuators is not None and not isinstance(self.actuators, Actuators):
+            raise ConfigError(f"actuators must be an Actuators or None, got {self.actuators!r}")
         form = validate_table(
             FormationTable, plain_data({"n": self.n, "jacobi": self.jacobi, "shape": self.shape}), ("formation",)
         )
@@ -108,6 +127,7 @@ class FormationConfig:
             "gamma": self.gamma,
             "lambda": self.lam,
             "robust": self.robust,
+            "synthesis": self.synthesis,
         }
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
         init = self.simulation.initial
@@ -147,10 +167,12 @@ class FormationConfig:
             "k1": self.k1,
             "heading_poles": list(self.heading_poles),
             "robust": self.robust,
+            "synthesis": self.synthesis,
             "reference": self.reference.to_dict(),
             "simulation": self.simulation.to_dict(),
             "uncertainty": self.uncertainty.to_dict(),
             "disturbance": self.disturbance.to_dict(),
+            "actuators": None if self.actuators is None else self.actuators.to_dict(),
         }
 
     def to_toml_dict(self) -> dict[str, Any]:
@@ -166,6 +188,7 @@ class FormationConfig:
             "k1": self.k1,
             "heading_poles": list(self.heading_poles),
             "robust": self.robust,
+            "synthesis": self.synthesis,
         }
         sim = {k: v for k, v in self.simulation.to_dict().items() if v not in (None, {})}
         out = {
@@ -178,8 +201,27 @@ class FormationConfig:
             "simulation": sim,
             "uncertainty": self.uncertainty.to_dict(),
             "disturbance": self.disturbance.to_dict(),
+            "actuators": _actuators_table(self.actuators),
         }
         return {k: v for k, v in out.items() if v != {}}
+
+
+def _actuators_table(act: Actuators | None) -> dict[str, Any]:
+    """The ``[actuators]`` table of ``act`` (empty when none is declared)."""
+    if act is None:
+        return {}
+    if act.source in VEHICLE_ACTUATORS and VEHICLE_ACTUATORS[act.source] == act:
+        return {"preset": act.source}
+    return {"tau_x": act.tau_x, "tau_y": act.tau_y, "tau_psi": act.tau_psi}
+
+
+def _actuators(table: ActuatorsTable | None) -> Actuators | None:
+    """Runtime limits of a validated ``[actuators]`` table."""
+    if table is None:
+        return None
+    if table.preset is not None:
+        return vehicle_actuators(table.preset)
+    return Actuators(float(table.tau_x or 0.0), float(table.tau_y or 0.0), float(table.tau_psi or 0.0))
 
 
 def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
@@ -212,20 +254,19 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
         k1=cf.design.k1,
         heading_poles=(cf.design.heading_poles[0], cf.design.heading_poles[1]),
         robust=cf.design.robust,
+        synthesis=cf.design.synthesis,
         reference=ReferenceConfig(cf.reference.kind, tuple(cf.reference.model_dump(exclude={"kind"}).items())),
         simulation=SimulationConfig(
             horizon=sim.horizon,
             start=sim.start,
             initial=None if sim.initial is None else tuple(map(tuple, sim.initial)),
             current=(sim.current[0], sim.current[1]),
-            thrust_limit=None
-            if sim.thrust_limit is None
-            else (sim.thrust_limit[0], sim.thrust_limit[1], sim.thrust_limit[2]),
             blend_time=sim.blend_time,
             plant=tuple((k, v) for k, v in sim.plant.model_dump().items() if v is not None),
         ),
         uncertainty=UncertaintyConfig(tuple((k, (v[0], v[1])) for k, v in cf.uncertainty.model_dump().items() if v)),
         disturbance=DisturbanceConfig(cf.disturbance.current_speed, cf.disturbance.current_rate),
+        actuators=_actuators(cf.actuators),
     )
 
 

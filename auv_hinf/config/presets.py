@@ -19,6 +19,7 @@ from pydantic.fields import FieldInfo
 from auv_hinf.config.fields import REFERENCE_MODELS
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.config.schema import (
+    ActuatorsTable,
     DesignTable,
     DisturbanceTable,
     EnvelopeTable,
@@ -30,10 +31,11 @@ from auv_hinf.config.schema import (
 )
 from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import ConfigError
+from auv_hinf.models.actuators import vehicle_actuators
 from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope
 from auv_hinf.models.formation import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
-from auv_hinf.models.vehicle import paper2011, remus100
+from auv_hinf.models.vehicle import bluerov2_heavy, paper2011, remus100
 
 #: Demo envelope of the paper presets (u, v in m/s, r in rad/s). The paper's envelope has
 #: ``|v| <= 1 m/s``, but its Section V vehicles start with sway exactly 1 m/s, on the edge, so
@@ -141,11 +143,50 @@ def _remus_line() -> FormationConfig:
     )
 
 
+#: BlueROV2 Heavy fleet: a line abreast 4 m apart (m), surveying at 0.4 m/s in a 0.1 m/s current.
+BLUEROV_OFFSETS = ((0.0, -6.0), (0.0, -2.0), (0.0, 2.0), (0.0, 6.0))
+BLUEROV_SPEED = 0.4  # m/s
+BLUEROV_CURRENT = 0.1  # m/s
+#: Declared box: masses within +-10 %, quadratic damping within +-20 % (the BlueROV2 has no
+#: linear sway and yaw damping in its published model).
+BLUEROV_BOX = (
+    ("m11", (0.9, 1.1)),
+    ("m22", (0.9, 1.1)),
+    ("m33", (0.9, 1.1)),
+    ("d11_lin", (0.8, 1.2)),
+    ("d11_quad", (0.8, 1.2)),
+    ("d22_quad", (0.8, 1.2)),
+    ("d33_quad", (0.8, 1.2)),
+)
+BLUEROV_ENVELOPE = Envelope(u=(-0.5, 1.0), v=(-0.5, 0.5), r=(-0.5, 0.5))
+
+
+def _bluerov2_line() -> FormationConfig:
+    t = JacobiTransform(4, "paper")
+    shape = shape_from_offsets(np.asarray(BLUEROV_OFFSETS), t)
+    initial = tuple((float(x), float(y), 0.0, BLUEROV_SPEED, 0.0, 0.0) for x, y in BLUEROV_OFFSETS)
+    return FormationConfig(
+        name="bluerov2-line",
+        vehicle=bluerov2_heavy(),
+        n=4,
+        jacobi="paper",
+        shape=tuple((float(a), float(b)) for a, b in shape),
+        envelope=BLUEROV_ENVELOPE,
+        robust=True,
+        reference=ReferenceConfig("line", (("speed", BLUEROV_SPEED), ("heading", 0.0))),
+        simulation=SimulationConfig(horizon=60.0, start="paper", initial=initial),
+        uncertainty=UncertaintyConfig(BLUEROV_BOX),
+        disturbance=DisturbanceConfig(current_speed=BLUEROV_CURRENT),
+        actuators=vehicle_actuators("bluerov2-heavy"),
+    )
+
+
 #: The registry: preset name -> factory of the complete configuration.
 PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "paper-triangle": _paper_triangle,
     "paper-hexagon": _paper_hexagon,
     "remus-line": _remus_line,
+    "bluerov2-line": _bluerov2_line,
 }
 #: Names of the built-in presets (the CLI's ``--preset`` choices).
 PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)
@@ -258,6 +299,12 @@ def annotated_toml(cfg: FormationConfig) -> str:
         data.get("disturbance", {}),
         {"current_speed": 0.1, "current_rate": 0.0},
     )
+    act = _table(
+        "actuators", ActuatorsTable, data.get("actuators", {}), {"tau_x": 86.0, "tau_y": 86.0, "tau_psi": 23.0}
+    )
+    if "actuators" not in data:  # none declared: the whole table stays a comment (an empty one is an error)
+        act = [line if not line.startswith("[") else f"# {line}  (none declared: unlimited thrust)" for line in act]
+    lines += act
     return "\n".join(lines) + "\n"
 
 

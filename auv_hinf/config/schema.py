@@ -25,14 +25,15 @@ from auv_hinf.config.fields import (
     MAX_VEHICLES,
     PARAMETERS,
     REFERENCE_MODELS,
+    ActuatorPreset,
     NegativePair,
     Pair,
     Point,
-    PositiveTriple,
     ReferenceTable,
     SineReference,
     StartKind,
     StateRow,
+    SynthesisKind,
     VehiclePreset,
     _field,
     _Table,
@@ -187,6 +188,11 @@ class DesignTable(_Table):
         "use the robust design: alpha, k1 and the heading gains chosen for the [uncertainty] box and "
         "[disturbance] current (certify, simulate and campaign all run these gains)",
     )
+    synthesis: SynthesisKind = _field(
+        "bandwidth",
+        "how the robust design chooses its gains: bandwidth (one-parameter family, the baseline) or lmi "
+        "(LMI synthesis minimising the certified peak force for the box, the current and the actuators)",
+    )
     heading_poles: NegativePair = _field(
         list(DEFAULT_HEADING_POLES),
         "two distinct negative closed-loop poles of the heading loop",
@@ -249,11 +255,6 @@ class SimulationTable(_Table):
         "one [x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s); default: a shaped start",
     )
     current: Pair = _field([0.0, 0.0], "constant ocean current, inertial frame", "m/s")
-    thrust_limit: PositiveTriple | None = _field(
-        None,
-        "saturation of [tau_x, tau_y, tau_psi] (N, N, N m)",
-        examples=[[500.0, 500.0, 200.0]],
-    )
     blend_time: float | None = _field(
         None,
         "reference blending time (default: chosen by the certificate)",
@@ -264,6 +265,35 @@ class SimulationTable(_Table):
         default_factory=PlantTable,
         description="true plant as multipliers of the parameters",
     )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _moved_thrust_limit(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "thrust_limit" in data:
+            raise ValueError(
+                "thrust_limit was replaced by the [actuators] table: write "
+                '[actuators] tau_x = ..., tau_y = ..., tau_psi = ... (N, N, N m), or preset = "remus100" '
+                "for a vehicle's published limits"
+            )
+        return data
+
+
+class ActuatorsTable(_Table):
+    """``[actuators]``: what the vehicle can push; the certificate checks the law's peak force against it."""
+
+    preset: ActuatorPreset | None = _field(None, "published limits of a vehicle preset (see docs/vehicles.md)")
+    tau_x: float | None = _field(None, "largest surge force", "N", gt=0.0, examples=[86.0])
+    tau_y: float | None = _field(None, "largest sway force", "N", gt=0.0, examples=[86.0])
+    tau_psi: float | None = _field(None, "largest yaw moment", "N m", gt=0.0, examples=[23.0])
+
+    @model_validator(mode="after")
+    def _one_source(self) -> ActuatorsTable:
+        given = [k for k in ("tau_x", "tau_y", "tau_psi") if getattr(self, k) is not None]
+        if self.preset is not None and given:
+            raise ValueError(f"give either preset or the limits, not both (got preset and {', '.join(given)})")
+        if self.preset is None and len(given) != 3:
+            raise ValueError("give all three limits tau_x, tau_y, tau_psi (N, N, N m), or a preset")
+        return self
 
 
 class DisturbanceTable(_Table):
@@ -277,6 +307,7 @@ class DisturbanceTable(_Table):
 #: default its table above declares: the schema is the one source).
 DEFAULT_METHOD: GainMethod = schema_default(DesignTable, "method")
 DEFAULT_K1: float = schema_default(DesignTable, "k1")
+DEFAULT_SYNTHESIS: SynthesisKind = schema_default(DesignTable, "synthesis")
 DEFAULT_POLES: tuple[float, float] = schema_default(DesignTable, "heading_poles")
 DEFAULT_HORIZON: float = schema_default(SimulationTable, "horizon")
 DEFAULT_START: StartKind = schema_default(SimulationTable, "start")
@@ -294,6 +325,9 @@ class ConfigFile(_Table):
     simulation: SimulationTable = Field(default_factory=SimulationTable)
     uncertainty: UncertaintyTable = Field(default_factory=UncertaintyTable)
     disturbance: DisturbanceTable = Field(default_factory=DisturbanceTable)
+    actuators: ActuatorsTable | None = Field(
+        default=None, description="actuator limits (default: none declared, unlimited thrust)"
+    )
 
     @model_validator(mode="before")
     @classmethod

@@ -64,8 +64,6 @@ class SimulationConfig:
         lets the scenario choose.
     current : tuple of float
         Constant ocean current, inertial frame, m/s.
-    thrust_limit : tuple of float or None
-        Saturation of ``tau_x, tau_y, tau_psi`` (N, N, N m).
     blend_time : float or None
         Reference blending time, s (``None``: chosen by the certificate).
     plant : tuple of (str, float) pairs
@@ -76,7 +74,6 @@ class SimulationConfig:
     start: StartKind = DEFAULT_START
     initial: tuple[tuple[float, ...], ...] | None = None
     current: tuple[float, float] = (0.0, 0.0)
-    thrust_limit: tuple[float, float, float] | None = None
     blend_time: float | None = None
     plant: tuple[tuple[str, float], ...] = ()
 
@@ -87,9 +84,7 @@ class SimulationConfig:
             "current": self.current,
             "plant": as_dict(self.plant, "simulation.plant"),
         }
-        raw.update(
-            {k: getattr(self, k) for k in ("initial", "thrust_limit", "blend_time") if getattr(self, k) is not None}
-        )
+        raw.update({k: getattr(self, k) for k in ("initial", "blend_time") if getattr(self, k) is not None})
         t = validate_table(SimulationTable, plain_data(raw), ("simulation",))
         rows = None if t.initial is None else tuple(tuple(row) for row in t.initial)
         set_fields(
@@ -98,7 +93,6 @@ class SimulationConfig:
             start=t.start,
             initial=rows,
             current=tuple(t.current),
-            thrust_limit=None if t.thrust_limit is None else tuple(t.thrust_limit),
             blend_time=t.blend_time,
             plant=tuple((k, v) for k, v in t.plant.model_dump().items() if v is not None),
         )
@@ -118,7 +112,6 @@ class SimulationConfig:
             "start": self.start,
             "initial": None if self.initial is None else [list(r) for r in self.initial],
             "current": list(self.current),
-            "thrust_limit": None if self.thrust_limit is None else list(self.thrust_limit),
             "blend_time": self.blend_time,
             "plant": dict(self.plant),
         }

@@ -180,7 +180,48 @@ def remus100(design_speed: float = 1.5) -> VehicleParams:
     )
 
 
-PRESETS: dict[str, Callable[[], VehicleParams]] = {"paper2011": paper2011, "remus100": remus100}
+#: REMUS 100 horizontal actuation at its best: ``(tau_x, tau_y, tau_psi)`` in N, N, N m. Sources (Fossen's
+#: ``remus100`` in the Marine Systems Simulator / PythonVehicleSimulator, after Allen et al. 2000):
+#: propeller at its 1525 rpm maximum less 10 % thrust deduction, about 67 N at 1.5 m/s (105 N at rest,
+#: 41 N at 2.5 m/s); the tail rudder at its 15 degree maximum gives a sway force of 0.89 U^2 N, 2.0 N at
+#: 1.5 m/s and 5.6 N at 2.5 m/s, with the yaw moment 0.8 m times that, 1.6 to 4.5 N m. Sway and yaw both
+#: come from the one rudder, so they are coupled (tau_psi = -0.8 m * tau_y), not independent, and vanish
+#: at low speed. The figures are the largest horizontal forces the fins and propeller give (docs/vehicles.md).
+REMUS100_LIMITS = (67.0, 5.6, 4.5)
+
+
+def bluerov2_heavy() -> VehicleParams:
+    """BlueROV2 Heavy (Blue Robotics' open-frame ROV, 8 thrusters) in the paper's 3-DOF structure.
+
+    Source: M. von Benzon et al., *An open-source benchmark simulator: control of a BlueROV2
+    underwater robot*, J. Mar. Sci. Eng. 10 (2022) 1898, appendix parameter table, which lists
+    magnitudes: ``m = 13.5 kg``, ``I_z = 0.37 kg m^2``, added masses ``X_udot = 6.36 kg``,
+    ``Y_vdot = 7.12 kg``, ``N_rdot = 0.22 kg m^2``, linear damping ``X_u = 13.7 kg/s``,
+    ``Y_v = N_r = 0``, quadratic damping ``X_u|u| = 141 kg/m``, ``Y_v|v| = 217 kg/m``,
+    ``N_r|r| = 1.5 kg m^2``. So ``m11 = m + X_udot``, ``m22 = m + Y_vdot``, ``m33 = I_z + N_rdot``,
+    ``d11 = 13.7 + 141|u|``, ``d22 = 217|v|``, ``d33 = 1.5|r|``. The model has no lift terms,
+    hence no design speed. Its thrusters are :func:`auv_hinf.models.thrusters.bluerov2_heavy_thrusters`.
+    """
+    m, izz = 13.5, 0.37
+    return VehicleParams(
+        m11=m + 6.36,
+        m22=m + 7.12,
+        m33=izz + 0.22,
+        d11_lin=13.7,
+        d11_quad=141.0,
+        d22_lin=0.0,
+        d22_quad=217.0,
+        d33_lin=0.0,
+        d33_quad=1.5,
+        name="bluerov2-heavy",
+    )
+
+
+PRESETS: dict[str, Callable[[], VehicleParams]] = {
+    "paper2011": paper2011,
+    "remus100": remus100,
+    "bluerov2-heavy": bluerov2_heavy,
+}
 
 
 def preset(name: str) -> VehicleParams:

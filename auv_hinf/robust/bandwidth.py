@@ -26,6 +26,7 @@ from tqdm.auto import tqdm
 
 from auv_hinf.certification.margins import inflate_envelope
 from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.reference import ReferenceTube
 from auv_hinf.robust.box import ParameterBox, box_lambda
@@ -99,9 +100,10 @@ def design_robust(
     envelope: Envelope,
     tube: ReferenceTube,
     current: float = 0.0,
-    thrust_limit: tuple[float, float, float] | None = None,
+    actuators: Actuators | None = None,
     *,
     progress: bool = False,
+    fallback: bool = True,
 ) -> RobustDesign:
     """Choose the robust gains (see the module docstring)."""
     tried: list[tuple[float, float, bool]] = []
@@ -109,7 +111,7 @@ def design_robust(
 
     def covers(w: float, s: float) -> bool:
         b = box.scaled(min(s, cap)) if box.declared else box
-        c = robust_certificate(b, envelope, tube, family_gains(box, envelope, w), current * s, thrust_limit)
+        c = robust_certificate(b, envelope, tube, family_gains(box, envelope, w), current * s, actuators)
         tried.append((w, s, c.covers))
         return c.covers
 
@@ -130,7 +132,7 @@ def design_robust(
                             else:
                                 lo = mid
                     gains = family_gains(box, envelope, hi)
-                    cert = robust_certificate(box, envelope, tube, gains, current, thrust_limit)
+                    cert = robust_certificate(box, envelope, tube, gains, current, actuators)
                     why = (
                         f"gentlest bandwidth {hi:.4g} rad/s of the family (zeta = {POSITION_DAMPING:g}, heading "
                         f"{HEADING_RATIO:g} w) whose certificate covers the box scaled by {target:g}"
@@ -138,9 +140,21 @@ def design_robust(
                     return RobustDesign(gains, hi, target, cert, tuple(tried), why)
                 prev = w
             bar.reset(total=len(BANDWIDTHS))
+    if actuators is not None and fallback:
+        # nothing fits the actuators: take the gentlest design that covers the box without them,
+        # whose certificate then says by how much it exceeds them (the most aggressive
+        # bandwidth would need the most force of all)
+        free = design_robust(box, envelope, tube, current, None, progress=progress)
+        if free.target > 0.0:
+            cert = robust_certificate(box, envelope, tube, free.gains, current, actuators)
+            why = (
+                f"no bandwidth of the family covers the declared box within the actuator limits; showing the "
+                f"gentlest that covers it without them ({free.bandwidth:.4g} rad/s)"
+            )
+            return RobustDesign(free.gains, free.bandwidth, 0.0, cert, tuple(tried) + free.tried, why)
     w = BANDWIDTHS[-1]
     gains = family_gains(box, envelope, w)
-    cert = robust_certificate(box, envelope, tube, gains, current, thrust_limit)
+    cert = robust_certificate(box, envelope, tube, gains, current, actuators)
     return RobustDesign(
         gains,
         w,

@@ -31,6 +31,7 @@ from auv_hinf.certification.region import pair_level
 from auv_hinf.design.gains import Gains
 from auv_hinf.design.lmi.ellipsoid import Ellipsoid, best_ellipsoid, heading_ellipsoid, position_ellipsoid
 from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.models.actuators import Actuators, actuator_shortfall
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.reference import ReferenceTube
 from auv_hinf.robust.box import (
@@ -202,7 +203,7 @@ def robust_certificate(
     tube: ReferenceTube,
     gains: Gains,
     current: float = 0.0,
-    thrust_limit: tuple[float, float, float] | None = None,
+    actuators: Actuators | None = None,
 ) -> RobustCertificate:
     """Certify the closed loop of ``gains`` for every plant of ``box`` and current ``<= current``.
 
@@ -217,8 +218,8 @@ def robust_certificate(
     gains : Gains
     current : float
         Bound of the constant current's speed (m/s, >= 0).
-    thrust_limit : tuple of float, optional
-        ``(|tau_x|, |tau_y|, |tau_psi|)`` limits (N, N, N m).
+    actuators : Actuators, optional
+        What the vehicles can push: the certificate covers only if its thrust bound fits.
     """
     env = inflate_envelope(envelope)
     lam, sigma = box_lambda(box, env)
@@ -292,11 +293,9 @@ def robust_certificate(
         reasons.append(f"envelope margins: {exc}")
     if margins is not None and not margins.ok:
         reasons.append(f"the envelope does not hold with these error bounds (smallest margin {margins.min:.4g})")
-    thrust = thrust_bounds(box.nominal, env, tube, bounds, gains)
-    if thrust_limit is not None and not (
-        thrust.force_x <= thrust_limit[0] and thrust.force_y <= thrust_limit[1] and thrust.moment <= thrust_limit[2]
-    ):
-        reasons.append(f"thrust needed {thrust.to_dict()} exceeds the limits {tuple(thrust_limit)}")
+    thrust = thrust_bounds(box.nominal, env, tube, bounds, gains, current)
+    if actuators is not None and not actuators.admits(thrust.as_tuple()):
+        reasons.append(actuator_shortfall(actuators, thrust.as_tuple()))
     return RobustCertificate(
         stable=True, covers=not reasons, margins=margins, thrust=thrust, reasons=tuple(reasons), **base, **rest
     )

@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 from auv_hinf._typing import FloatArray, OrientationLaw
 from auv_hinf.arrays import stack_last
 from auv_hinf.design.gains import Gains
-from auv_hinf.exceptions import DesignError, ParameterError, require_finite
+from auv_hinf.exceptions import DesignError, ParameterError
+from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.formation import JacobiTransform
 from auv_hinf.models.paths import MissionReference, heading_from_velocity
 from auv_hinf.models.reference import Motion, rigid_motion, wrap_angle
@@ -129,13 +130,14 @@ def check_orientation(orientation: str) -> None:
         raise DesignError(f"orientation must be 'corrected' or 'printed', got {orientation!r}")
 
 
-def saturate(tau: FloatArray, limit: tuple[float, float, float] | None) -> tuple[FloatArray, NDArray[np.bool_]]:
-    """Clip ``tau (..., 3)`` to ``|tau_k| <= limit_k`` (N, N, N m); also the per-vehicle active flag."""
-    if limit is None:
+def saturate(tau: FloatArray, actuators: Actuators | None) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The forces ``actuators`` deliver for commands ``tau (..., 3)`` (N, N, N m); also the active flag.
+
+    Without declared actuators nothing saturates.
+    """
+    if actuators is None:
         return tau, np.zeros(tau.shape[:-1], dtype=bool)
-    lim = np.asarray(limit, dtype=float)
-    clipped = np.clip(tau, -lim, lim)
-    return clipped, np.any(clipped != tau, axis=-1)
+    return actuators.saturate(tau)
 
 
 @dataclass(frozen=True)
@@ -150,22 +152,19 @@ class VehicleLaw:
         ``alpha`` (1/s), ``k1`` (1/s^2) and the heading gains ``k_psi`` (1/s^2, 1/s).
     orientation : {"corrected", "printed"}
         Heading law, see :func:`heading_torque`.
-    thrust_limit : tuple of float, optional
-        Saturation ``(|tau_x|, |tau_y|, |tau_psi|)`` in N, N, N m.
+    actuators : Actuators, optional
+        What the vehicles can push; commands beyond it saturate (none declared: unlimited).
     """
 
     params: VehicleParams
     gains: Gains
     orientation: OrientationLaw = "corrected"
-    thrust_limit: tuple[float, float, float] | None = None
+    actuators: Actuators | None = None
 
     def __post_init__(self) -> None:
         check_orientation(self.orientation)
-        if self.thrust_limit is not None:
-            lim = tuple(require_finite("thrust_limit", x) for x in self.thrust_limit)
-            if len(lim) != 3 or min(lim) <= 0:
-                raise ParameterError(f"thrust_limit must be three positive numbers, got {self.thrust_limit!r}")
-            object.__setattr__(self, "thrust_limit", lim)
+        if self.actuators is not None and not isinstance(self.actuators, Actuators):
+            raise ParameterError(f"actuators must be an Actuators or None, got {self.actuators!r}")
 
     def unsaturated(
         self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None
@@ -205,7 +204,7 @@ class VehicleLaw:
         self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None
     ) -> FloatArray:
         """Applied body-frame thrust (after saturation), shape ``(..., N, 3)``; see :meth:`unsaturated`."""
-        return saturate(self.unsaturated(states, p_dot, motion, cs), self.thrust_limit)[0]
+        return saturate(self.unsaturated(states, p_dot, motion, cs), self.actuators)[0]
 
 
 @dataclass(frozen=True)
@@ -218,7 +217,7 @@ class FormationController:
 
     Parameters
     ----------
-    params, gains, orientation, thrust_limit
+    params, gains, orientation, actuators
         As in :class:`VehicleLaw`.
     transform : JacobiTransform
     reference : MotionSource
@@ -230,7 +229,7 @@ class FormationController:
     reference: MotionSource
     gains: Gains
     orientation: OrientationLaw = "corrected"
-    thrust_limit: tuple[float, float, float] | None = None
+    actuators: Actuators | None = None
 
     def __post_init__(self) -> None:
         check_orientation(self.orientation)
@@ -261,7 +260,7 @@ class FormationController:
         body = np.einsum("nji,nj->ni", rotation(psi), w)
         tau_psi = heading_torque(par, self.gains.k_psi, self.orientation, states, m.psi, m.r, m.r_dot)
         tau = np.column_stack([body * np.array([par.m11, par.m22]), tau_psi])
-        clipped, active = saturate(tau, self.thrust_limit)
+        clipped, active = saturate(tau, self.actuators)
         return clipped, bool(active.any())
 
 

@@ -1,8 +1,9 @@
 """Per-run error metrics of a batch, accumulated sample by sample while it is integrated.
 
 A campaign needs, per run and vehicle, only the sup of the four tracking errors, the sup of
-the position error over the second half of the run, the final position error and the
-measured decay rate of the certified Lyapunov norm. :class:`ErrorSink` receives the
+the position error over the second half of the run, the final position error, the
+measured decay rate of the certified Lyapunov norm and, given the law, the peak commanded
+force per channel and the fraction of samples at which it saturates. :class:`ErrorSink` receives the
 integrator's output samples (:data:`~auv_hinf.simulation.integrators.SampleSink`) and keeps these
 running values, so a batch needs ``O(S N)`` memory instead of ``O(T S N)`` for stored
 samples, and the post-processing is done while the samples are hot in the cache.
@@ -23,7 +24,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.arrays import stack_last
 from auv_hinf.certification.region import pair_level
 from auv_hinf.exceptions import SolverError
-from auv_hinf.simulation.law import MotionSource
+from auv_hinf.simulation.law import MotionSource, VehicleLaw, saturate
 from auv_hinf.simulation.postprocess import TrackingErrors, ground_velocity, tracking_errors
 
 #: The measured decay rate is the average rate of the per-vehicle Lyapunov norm from
@@ -76,12 +77,21 @@ class RunMetrics:
     decay_rate : ndarray, shape (S,)
         Measured decay rate of the slowest vehicle (1/s, see
         :func:`~auv_hinf.workflow.run_plan.measured_decay_rate`); NaN where no vehicle starts off the reference.
+    commanded_peak : ndarray, shape (S, 3)
+        Sup over the samples and vehicles of the commanded ``|tau_x|`` (N), ``|tau_y|`` (N) and
+        ``|tau_psi|`` (N m) before saturation (:meth:`~auv_hinf.simulation.law.VehicleLaw.unsaturated`);
+        NaN when the sink was given no law.
+    saturated_fraction : ndarray, shape (S,)
+        Fraction of the samples at which some vehicle's command saturates (0 without actuator
+        limits; NaN when the sink was given no law).
     """
 
     max_errors: FloatArray
     tail_position: FloatArray
     final_position: FloatArray
     decay_rate: FloatArray
+    commanded_peak: FloatArray
+    saturated_fraction: FloatArray
 
 
 class ErrorSink:
@@ -102,6 +112,9 @@ class ErrorSink:
     progress : callable, optional
         Called with the fraction of all samples received (0 to 1) each time it has grown by
         a percent or more (for a progress bar).
+    law : VehicleLaw, optional
+        The law every run uses: then the sink also keeps the peak commanded force of each run,
+        evaluated at the sample states against ``reference`` (``O(S)`` more memory).
     """
 
     def __init__(
@@ -113,6 +126,7 @@ class ErrorSink:
         p2: FloatArray,
         q: FloatArray,
         progress: Callable[[float], None] | None = None,
+        law: VehicleLaw | None = None,
     ) -> None:
         s = current.shape[0]
         self._ref, self._t, self._current, self._n = reference, np.asarray(t_eval, dtype=float), current, n
@@ -124,13 +138,22 @@ class ErrorSink:
         self._vk = np.full((s, n), np.nan)  # V at the measuring sample, once found
         self._tk = np.full((s, n), np.nan)
         self._seen = np.zeros(s, dtype=int)
+        self._law = law
+        self._force = np.zeros((s, 3))
+        self._saturated = np.zeros(s, dtype=int)
         self._progress, self._reported = progress, 0.0
 
     def __call__(self, idx: NDArray[np.int_], systems: NDArray[np.int_], values: FloatArray) -> None:
         """Fold samples ``idx`` of runs ``systems`` (flat states ``values (m, 6 N)``) in."""
         states = np.asfortranarray(values.reshape(-1, self._n, 6))  # run axis fastest (auv_hinf.arrays)
         motion = self._ref.motion(self._t[idx])
-        tr = tracking_errors(states, ground_velocity(states, self._current[systems, None, :]), motion)
+        cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))
+        p_dot = ground_velocity(states, self._current[systems, None, :], cs)
+        tr = tracking_errors(states, p_dot, motion)
+        if self._law is not None:
+            tau = self._law.unsaturated(states, p_dot, motion, cs)  # (m, N, 3)
+            self._force[systems] = np.maximum(self._force[systems], np.abs(tau).max(axis=1))
+            self._saturated[systems] += saturate(tau, self._law.actuators)[1].any(axis=1)
         pos = np.hypot(tr.e[..., 0], tr.e[..., 1])
         now = stack_last([pos, np.hypot(tr.e_dot[..., 0], tr.e_dot[..., 1]), np.abs(tr.e_psi), np.abs(tr.e_psi_dot)])
         self._max[systems] = np.maximum(self._max[systems], now)
@@ -158,11 +181,16 @@ class ErrorSink:
         """The metrics; every run must have received all ``T`` samples."""
         if np.any(self._seen != self._t.size):
             raise SolverError("the integrator did not deliver every output sample of every run")
+        peak, saturated = self._force.copy(), self._saturated / self._t.size
+        if self._law is None:  # no law, no forces
+            peak, saturated = np.full_like(peak, np.nan), np.full_like(saturated, np.nan)
         return RunMetrics(
             max_errors=self._max.copy(),
             tail_position=self._tail.copy(),
             final_position=self._final.copy(),
             decay_rate=decay_rates(self._v0, self._vk, self._tk),
+            commanded_peak=peak,
+            saturated_fraction=saturated,
         )
 
 

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.models.actuators import CHANNELS
 from auv_hinf.models.reference import Motion
 from auv_hinf.simulation.law import saturate
 from auv_hinf.simulation.postprocess import TrackingErrors, formation_errors, ground_velocity, tracking_errors
@@ -51,6 +52,9 @@ class SimulationResult:
     n_steps : int
         Accepted integration steps (the largest over the scenario's systems).
     scenario : Scenario
+    commanded_peak : tuple of float
+        Largest ``|tau_x|, |tau_y|, |tau_psi|`` the law commanded at the output samples,
+        before saturation (N, N, N m), over all vehicles.
     """
 
     t: FloatArray
@@ -67,6 +71,7 @@ class SimulationResult:
     exit_time: float | None
     n_steps: int
     scenario: Scenario = field(repr=False)
+    commanded_peak: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def error_at(self, time: float) -> tuple[float, float]:
         """Shape and centre error (m) at the sample nearest to ``time`` (s)."""
@@ -97,6 +102,8 @@ class SimulationResult:
             "max_yaw_rate": float(np.abs(self.states[..., 5]).max()),
             "final_sway": float(np.abs(self.states[-1, :, 4]).max()),
             "saturation_fraction": float(self.saturated.mean()),
+            "commanded_peak": dict(zip(CHANNELS, self.commanded_peak)),
+            "actuator_limits": None if self.scenario.law.actuators is None else self.scenario.law.actuators.to_dict(),
             "stayed_in_envelope": stayed,
             "first_exit_time": exit_time,
         }
@@ -143,7 +150,9 @@ def build_results(
     current = np.array([x.current for x in scns], dtype=float)[None, :, None, :]  # (1, S, 1, 2)
     p_dot = ground_velocity(states, current)
     motion = _expand(first.reference.motion(t))
-    forces, active = saturate(first.law.unsaturated(states, p_dot, motion), first.law.thrust_limit)
+    commanded = first.law.unsaturated(states, p_dot, motion)
+    forces, active = saturate(commanded, first.law.actuators)
+    peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
     target = motion.p if first.mission is None else first.mission.motion(t).p[:, None]
     form = formation_errors(states[..., 0:2], target, first.jacobi)
     track = tracking_errors(states, p_dot, motion)
@@ -172,6 +181,7 @@ def build_results(
                 exit_time=exit_times[k],
                 n_steps=int(n_steps[k]),
                 scenario=scn,
+                commanded_peak=(float(peaks[k, 0]), float(peaks[k, 1]), float(peaks[k, 2])),
             )
         )
     return out

@@ -19,11 +19,16 @@ from auv_hinf.exceptions import DesignError
 from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.law import MotionSource, VehicleLaw
+from auv_hinf.workflow.actuator_check import ActuatorCheck, check_actuators
 from auv_hinf.workflow.design_point import design_point, formation_offsets, mission_reference
 from auv_hinf.workflow.interconnect import fleet_closed_loop, formation_controller
 from auv_hinf.workflow.nominal import ClosedLoopSummary, closed_loop_summary
 from auv_hinf.workflow.persist import load_certificate, save_certificate
 from auv_hinf.workflow.robust_part import RobustSummary, robust_summary
+
+#: An actuator channel counts as the binding constraint when the certified peak reaches this
+#: share of its limit (the region is shrunk to fit the limits, so a binding channel sits at 1).
+ACTUATOR_BINDING_RATIO = 0.99
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
 #: ``A_lam = lam I`` every 2x2 channel is identical, so a larger problem checks nothing
@@ -93,6 +98,11 @@ class Certificate:
     gains : Gains or None
         The gains that run: the ones every certificate above is about, that ``simulate`` uses
         and that :meth:`controller` exports (``None`` when the design gives none).
+    actuators : ActuatorCheck or None
+        The certified peak force against the declared ``[actuators]`` limits.
+    design : dict or None
+        How the gains were chosen (:meth:`~auv_hinf.workflow.design_point.DesignPoint.summary`),
+        with the binding constraint of the certificate.
     gain_source : {"theorem1", "robust"}
         Where ``gains`` come from: Theorem 1 (``alpha_used``, ``k1``, the heading poles) or the
         robust design.
@@ -115,6 +125,8 @@ class Certificate:
     robust: RobustSummary | None = None
     gains: Gains | None = None
     gain_source: str = "theorem1"
+    actuators: ActuatorCheck | None = None
+    design: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary (the ``auv-hinf certify --json`` layout)."""
@@ -158,6 +170,8 @@ class Certificate:
             "closed_loop": None if self.closed_loop is None else self.closed_loop.to_dict(),
             "robust": None if self.robust is None else self.robust.to_dict(),
             "gains": None if self.gains is None else {**self.gains.to_dict(), "source": self.gain_source},
+            "actuators": None if self.actuators is None else self.actuators.to_dict(),
+            "design": self.design,
         }
 
     def save(self, path: str | Path) -> Path:
@@ -192,7 +206,7 @@ class Certificate:
         if self.gains is None:
             raise DesignError(f"certificate of {self.config.name!r} has no gains: {'; '.join(self.reasons)}")
         cfg = self.config
-        return VehicleLaw(params=cfg.vehicle, gains=self.gains, thrust_limit=cfg.simulation.thrust_limit)
+        return VehicleLaw(params=cfg.vehicle, gains=self.gains, actuators=cfg.actuators)
 
     def controller(self, reference: MotionSource | None = None) -> ct.NonlinearIOSystem:
         """The certified law along the raw mission as a static python-control ``nlsys``.
@@ -252,6 +266,7 @@ class Certificate:
         )
         lines += ["  closed loop               not certified"] if self.closed_loop is None else self.closed_loop.lines()
         lines += [] if self.robust is None else self.robust.lines()
+        lines += [] if self.actuators is None else self.actuators.lines()
         lines += [f"  CERTIFIED: {'yes' if self.certified else 'no'}"]
         lines.extend(f"    - {r}" for r in self.reasons)
         return "\n".join(lines)
@@ -320,7 +335,11 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
     if point.gains is not None and (config.robust or not reasons):
         loop = closed_loop_summary(point)
         reasons.extend(loop.reasons)
-    rob = robust_summary(point, nominal=None if loop is None else loop.certificate)
+    nominal = None if loop is None else loop.certificate
+    rob = robust_summary(point, nominal=nominal)
+    act = check_actuators(point, _peaks(loop, rob))
+    if config.actuators is not None and not act.certified:
+        reasons.append(f"actuators: {act.reason}")
     if rob.declared and not rob.covers:
         reasons.append(
             "robust certificate does not cover the declared [uncertainty] box and [disturbance] current: "
@@ -344,4 +363,32 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         robust=rob,
         gains=point.gains,
         gain_source=point.source,
+        actuators=act,
+        design={**point.summary(), "binding": _binding(act, rob, loop)},
     )
+
+
+def _binding(act: ActuatorCheck, rob: RobustSummary, loop: ClosedLoopSummary | None) -> str | None:
+    """The constraint that limits the certified design: actuators, the envelope, or none found."""
+    if act.limits is not None and act.binding is not None and act.binding_ratio is not None:
+        if act.binding_ratio >= ACTUATOR_BINDING_RATIO:
+            return f"actuators ({act.binding}, {act.binding_ratio:.3g} of its limit)"
+    margins = rob.certificate.margins if rob.declared and rob.certificate is not None else None
+    if margins is None and loop is not None and loop.certificate is not None:
+        margins = loop.certificate.region.margins
+    if margins is not None:
+        return f"operating envelope (smallest margin {margins.min:.3g})"
+    return None
+
+
+def _peaks(loop: ClosedLoopSummary | None, rob: RobustSummary) -> list[tuple[float, float, float]]:
+    """The thrust bounds the certificate proves: nominal region, checked shaped start, robust set."""
+    out = []
+    if loop is not None and loop.certificate is not None:
+        out.append(loop.certificate.thrust.as_tuple())
+        if loop.shaped is not None and loop.shaped.covered and loop.shaped.thrust is not None:
+            out.append(loop.shaped.thrust.as_tuple())
+    c = rob.certificate
+    if rob.declared and c is not None and c.thrust is not None:
+        out.append(c.thrust.as_tuple())
+    return out

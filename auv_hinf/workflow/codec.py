@@ -34,12 +34,14 @@ from auv_hinf.certification import closed_loop, coverage, margins, region
 from auv_hinf.design import alpha, crosscheck, gains, sigma, theorem1
 from auv_hinf.design.lmi import ellipsoid
 from auv_hinf.exceptions import AuvHinfError, ConfigError
-from auv_hinf.models import envelope, lawnmower, paths, reference, shaping, vehicle
+from auv_hinf.models import actuators, envelope, lawnmower, paths, reference, shaping, vehicle
 from auv_hinf.robust import bandwidth, box, certificate, margin
-from auv_hinf.workflow import nominal, robust_part
+from auv_hinf.workflow import actuator_check, nominal, robust_part
 
 #: Modules whose dataclasses may appear in a certificate's state.
 _STORED_MODULES = (
+    actuator_check,
+    actuators,
     alpha,
     bandwidth,
     box,

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -37,6 +37,8 @@ from auv_hinf.models.reference import FleetReference, ReferenceTube, reference_f
 from auv_hinf.models.tubes import mission_tube
 from auv_hinf.robust.bandwidth import RobustDesign, design_robust
 from auv_hinf.robust.box import ParameterBox
+from auv_hinf.robust.synthesis import OBJECTIVE as SYNTHESIS_OBJECTIVE
+from auv_hinf.robust.synthesis import synthesise_robust
 
 #: Where the gains that run come from.
 GainSource = Literal["theorem1", "robust"]
@@ -109,6 +111,29 @@ class DesignPoint:
         """A parameter box or a current is declared (the robust certificate applies)."""
         return self.box.declared or self.current > 0.0
 
+    def summary(self) -> dict[str, Any]:
+        """The ``design`` object of ``auv-hinf certify --json``: method, structure, objective, value, gains."""
+        cfg = self.config
+        if self.source == "theorem1":
+            method = f"theorem1-{cfg.method}"
+            objective = "Theorem 1: the H-infinity bound gamma of the velocity loop (s)"
+            value: float | None = self.gamma
+        elif cfg.synthesis == "lmi":
+            method, objective = "lmi", SYNTHESIS_OBJECTIVE
+            value = None if self.robust_design is None else self.robust_design.bandwidth
+        else:
+            method = "bandwidth"
+            objective = "the gentlest bandwidth (rad/s) of the family whose certificate covers the box with headroom"
+            value = None if self.robust_design is None else self.robust_design.bandwidth
+        return {
+            "method": method,
+            "structure": "scalar: alpha (1/s), k1 (1/s^2), k_psi (1/s^2, 1/s), the same for every vehicle",
+            "objective": objective,
+            "value": value,
+            "reason": None if self.robust_design is None else self.robust_design.reason,
+            "gains": None if self.gains is None else self.gains.to_dict(),
+        }
+
     def fleet(self) -> FleetReference:
         """The raw (unshaped) fleet reference: the mission with the formation offsets."""
         return FleetReference(self.mission, self.offsets)
@@ -149,8 +174,8 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
 
 
 def _design_key(cfg: FormationConfig) -> FormationConfig:
-    """``cfg`` without what the design does not depend on (name, start, plant, horizon)."""
-    return replace(cfg, name="design", simulation=SimulationConfig(thrust_limit=cfg.simulation.thrust_limit))
+    """``cfg`` without what the design does not depend on (name, start, plant, current of the run, horizon)."""
+    return replace(cfg, name="design", simulation=SimulationConfig())
 
 
 @lru_cache(maxsize=16)
@@ -173,13 +198,14 @@ def _design(cfg: FormationConfig) -> DesignPoint:
     robust: RobustDesign | None = None
     source: GainSource = "robust" if cfg.robust else "theorem1"
     if cfg.robust:
+        designer = synthesise_robust if cfg.synthesis == "lmi" else design_robust
         try:
-            robust = design_robust(
+            robust = designer(
                 ParameterBox.from_ranges(cfg.vehicle, cfg.uncertainty.box),
                 cfg.envelope,
                 tube,
                 float(cfg.disturbance.current_speed or 0.0),
-                cfg.simulation.thrust_limit,
+                cfg.actuators,
                 progress=True,
             )
             gains = robust.gains

@@ -16,9 +16,11 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.certification.actuation import mission_thrust, within_actuators
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
 from auv_hinf.certification.coverage import Coverage, StartMode, cover_start
 from auv_hinf.exceptions import AuvHinfError, DesignError
+from auv_hinf.models.actuators import actuator_shortfall
 from auv_hinf.workflow.design_point import DesignPoint, initial_states
 
 #: A heading range counts as the full circle when its width is 2 pi up to this relative
@@ -29,12 +31,15 @@ FULL_CIRCLE_RTOL = 1e-12
 def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
     """Closed-loop certificate of the design's gains along its mission (raises when there is none).
 
+    With declared ``[actuators]`` the start region is shrunk until the certified thrust fits
+    them (:func:`~auv_hinf.certification.actuation.within_actuators`).
+
     Raises
     ------
     DesignError
         If there are no gains, the envelope's heading range is narrower than the full
-        circle, the small-gain condition fails, or the mission leaves the envelope even at
-        zero error.
+        circle, the small-gain condition fails, the mission leaves the envelope even at zero
+        error, or the mission alone needs more force than the actuators give.
     """
     cfg = point.config
     width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
@@ -43,9 +48,18 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
             f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
             "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
         )
-    return closed_loop_certificate(
-        cfg.vehicle, cfg.envelope, point.tube, point.require_gains(), lam=point.lam, sigma=point.sigma.upper
-    )
+    gains = point.require_gains()
+    cert = closed_loop_certificate(cfg.vehicle, cfg.envelope, point.tube, gains, lam=point.lam, sigma=point.sigma.upper)
+    if cfg.actuators is None:
+        return cert
+    fitted = within_actuators(cert, cfg.vehicle, cfg.envelope, point.tube, gains, cfg.actuators)
+    if fitted is None:
+        need = mission_thrust(cfg.vehicle, cfg.envelope, point.tube, gains).as_tuple()
+        raise DesignError(
+            "no start region fits the actuators: even tracked exactly, the mission needs "
+            + actuator_shortfall(cfg.actuators, need)
+        )
+    return fitted
 
 
 def coverage_for(point: DesignPoint, cert: ClosedLoopCertificate, initial: FloatArray, start: StartMode) -> Coverage:
@@ -61,7 +75,7 @@ def coverage_for(point: DesignPoint, cert: ClosedLoopCertificate, initial: Float
         initial,
         start=start,
         blend_time=cfg.simulation.blend_time,
-        thrust_limit=cfg.simulation.thrust_limit,
+        actuators=cfg.actuators,
         current=cfg.simulation.current,
     )
 
@@ -175,13 +189,6 @@ def closed_loop_summary(
         cert = closed_loop_for(point)
     except AuvHinfError as exc:
         return ClosedLoopSummary(None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",))
-    limit = cfg.simulation.thrust_limit
-    t = cert.thrust
-    if limit is not None and not (t.force_x <= limit[0] and t.force_y <= limit[1] and t.moment <= limit[2]):
-        reasons.append(
-            f"thrust needed over the start region ({t.force_x:.4g} N, {t.force_y:.4g} N, "
-            f"{t.moment:.4g} N m) exceeds the limits {tuple(limit)}"
-        )
     declared = cfg.simulation.initial is not None
     if not declared and cfg.n > default_start_max_n:
         return ClosedLoopSummary(cert, None, declared, tuple(reasons))

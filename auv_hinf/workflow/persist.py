@@ -157,7 +157,7 @@ def certificate_from_document(doc: Any, cls: type[C], source: str = "certificate
 
 
 #: Certificate fields that version 1 files lack.
-_ADDED_IN_2 = ("gains", "gain_source")
+_ADDED_IN_2 = ("gains", "gain_source", "actuators", "design")
 
 
 def _gains_of_version_1(config: FormationConfig, values: dict[str, Any]) -> dict[str, Any]:

@@ -148,14 +148,12 @@ def robust_summary(
         reasons.append(
             "a time-varying current (current_rate > 0) is not certified: the certificate assumes it constant"
         )
-    cert = robust_certificate(box, cfg.envelope, tube, gains, current, cfg.simulation.thrust_limit)
+    cert = robust_certificate(box, cfg.envelope, tube, gains, current, cfg.actuators)
     margin = None
     if margins and cert.stable:
 
         def covers(s: float) -> bool:
-            return robust_certificate(
-                box.scaled(s), cfg.envelope, tube, gains, current * s, cfg.simulation.thrust_limit
-            ).covers
+            return robust_certificate(box.scaled(s), cfg.envelope, tube, gains, current * s, cfg.actuators).covers
 
         margin = robust_margin(box, gains, speed, current, covers)
     worst = weakest_corner(box, gains, speed, current)
@@ -172,11 +170,15 @@ class RobustRunCheck:
     bounds : dict or None
         Certified per-vehicle error bounds for this run (m, m/s, rad, rad/s).
     reason : str
+    design_covered : bool or None
+        The robust certificate of the gains covers the declared box and current along the
+        mission, whatever this run's plant and start (``None`` when not evaluated).
     """
 
     covered: bool
     bounds: dict[str, float] | None
     reason: str
+    design_covered: bool | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
@@ -219,17 +221,20 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
                     False, None, f"not evaluated: shaped start of more than {RUN_TUBE_MAX_N} vehicles"
                 )
             tube = ReferenceTube.concatenate([tube, fleet_tube(fleet)])
-        cert = robust_certificate(box, cfg.envelope, tube, gains, bound, cfg.simulation.thrust_limit)
+        cert = robust_certificate(box, cfg.envelope, tube, gains, bound, cfg.actuators)
     except AuvHinfError as exc:
         return RobustRunCheck(False, None, f"not certified: {exc}")
     if not cert.covers or cert.bounds is None:
-        return RobustRunCheck(False, None, "; ".join(cert.reasons) or "the robust certificate does not cover")
+        why = "; ".join(cert.reasons) or "the robust certificate does not cover"
+        return RobustRunCheck(False, None, why, design_covered=False if fleet.shaping is None else None)
     b = cert.bounds
     bounds = {"position": b.position, "velocity": b.velocity, "heading": b.heading, "yaw_rate": b.yaw_rate}
     e, de, epsi, depsi = initial_errors(fleet, initial, (float(cur[0]), float(cur[1])))
     if not cert.start_inside(e, de, epsi, depsi, cur):
-        return RobustRunCheck(False, bounds, "the start is outside the certified invariant set")
-    return RobustRunCheck(True, bounds, "covered: plant and current declared, start inside the certified set")
+        return RobustRunCheck(False, bounds, "the start is outside the certified invariant set", design_covered=True)
+    return RobustRunCheck(
+        True, bounds, "covered: plant and current declared, start inside the certified set", design_covered=True
+    )
 
 
 __all__ = ["RobustRunCheck", "RobustSummary", "check_robust_run", "robust_summary"]

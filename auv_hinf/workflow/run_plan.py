@@ -63,6 +63,24 @@ class RunPlan:
     start: str = "shaped"
     robust: RobustRunCheck | None = None
 
+    def uncertified_gains(self) -> str | None:
+        """Why no certificate covers the gains of this run's configuration, or ``None``.
+
+        A run may still be uncovered with certified gains (e.g. a start outside the certified
+        set); this is about the gains: no nominal closed-loop certificate (small gain, envelope,
+        actuators), or a declared box and current the robust certificate does not cover.
+        """
+        return _uncertified(self)
+
+
+def _uncertified(plan: RunPlan) -> str | None:
+    """Why no certificate covers the plan's gains for its configuration (``None`` when one does)."""
+    if plan.certificate is None:
+        return "; ".join(n for n in plan.notes if n.startswith("design not certified")) or "no closed-loop certificate"
+    if plan.robust is not None and plan.robust.design_covered is False:
+        return f"the robust certificate does not cover the declared box and current: {plan.robust.reason}"
+    return None
+
 
 def plan_run(
     cfg: FormationConfig,
@@ -114,7 +132,7 @@ def plan_run(
     if any(c != 0.0 for c in sim.current):
         notes.append("a current is present; the nominal certificate assumes none")
     reference = cov.reference if cov is not None else point.fleet()
-    law = VehicleLaw(params=cfg.vehicle, gains=gains, thrust_limit=sim.thrust_limit)
+    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators)
     scn = Scenario(
         law=law,
         reference=reference,

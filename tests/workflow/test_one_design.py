@@ -20,6 +20,7 @@ def remus() -> Certificate:
     return certify(preset_config("remus-line"))
 
 
+@pytest.mark.slow
 def test_robust_preset_runs_the_robust_gains_everywhere(remus, tmp_path, capsys):
     g = remus.gains
     assert g is not None and remus.gain_source == "robust"
@@ -61,6 +62,7 @@ def test_robust_preset_runs_the_robust_gains_everywhere(remus, tmp_path, capsys)
     assert json.loads((tmp_path / "certificate.json").read_text())["certificate"]["gains"]["alpha"] == g.alpha
 
 
+@pytest.mark.slow
 def test_certify_computes_the_design_once(monkeypatch):
     calls = {"sigma": 0, "robust": 0}
     sigma, robust = design_module.vehicle_sigma, design_module.design_robust

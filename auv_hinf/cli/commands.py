@@ -1,0 +1,290 @@
+"""The sub-commands of ``auv-hinf``: each takes the parsed arguments and returns the exit code.
+
+Every command loads its configuration once, computes its design point once (through the
+workflow layer) and reports its verdict as an exit code with one readable line on stderr for a
+negative one (:func:`verdict`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+from auv_hinf._typing import GAIN_METHODS
+from auv_hinf.cli.args import (
+    EXIT_NEGATIVE,
+    EXIT_OK,
+    PROG,
+    BadInput,
+    Negative,
+)
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.config.hygiene import input_warnings
+from auv_hinf.exceptions import AuvHinfError, DesignError, SolverError
+from auv_hinf.models.actuators import Actuators
+from auv_hinf.workflow.codec import json_safe
+from auv_hinf.workflow.run_plan import RunPlan
+
+
+def _dump(obj: Any) -> str:
+    return json.dumps(json_safe(obj), indent=2)
+
+
+def _prepare_out(path: Path | None) -> None:
+    """Create ``--out`` and check that it is writable, before any computation."""
+    if path is None:
+        return
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as exc:
+        raise BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
+
+
+def _load(args: argparse.Namespace) -> Any:
+    from auv_hinf.config.formation import load_config
+    from auv_hinf.config.presets import preset_config
+
+    if args.preset:
+        return preset_config(args.preset)
+    cfg = load_config(args.config)  # reads and validates; the warnings read the same file again
+    for line in input_warnings(_toml_data(args.config)):
+        print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
+    return cfg
+
+
+def _toml_data(path: Path) -> Any:
+    """The parsed TOML of a file that :func:`load_config` has just read and validated."""
+    return tomllib.loads(path.read_text(encoding="utf-8"))
+
+
+def _cmd_design(args: argparse.Namespace) -> int:
+    from auv_hinf.design.crosscheck import crosscheck
+
+    try:
+        report = crosscheck(args.lam, args.gamma, args.n, args.k1)
+    except SolverError as exc:
+        if not args.json:
+            raise
+        # the closed form always answers; a failed numerical route is reported inside the JSON
+        print(_dump(_design_without_crosscheck(args, exc)))
+        return _verdict(False, f"cross-check could not run: {exc}")
+    data = report.to_dict()
+    if args.json:
+        print(_dump(data))
+        return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
+    a = data["alpha"]
+    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g}, n = {report.n}")
+    print(f"gamma_min = {report.conditions['gamma_min']:.6g}  regime: {report.conditions['regime']} 1/sqrt2")
+    for key in ("paper", "stabilizing", "minimal", "care", "scipy_care", "lmi", "lmi_minimal"):
+        val = a.get(key)
+        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g}"))
+    for flag in report.paper_flags:
+        print(f"  paper: {flag}")
+    h = data["closed_loop_hinf"]
+    print(f"||T||_inf exact {h['exact']}, python-control {h['python_control']}, LMI {h['lmi']}")
+    print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
+    for c in report.checks:
+        if not c.ok:
+            print(f"  FAIL {c.name}: {c.value!r} vs {c.reference!r} (rel {c.rel_diff:.3g} > {c.tol:g})")
+    return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
+
+
+def _design_without_crosscheck(args: argparse.Namespace, exc: Exception) -> dict[str, Any]:
+    """``design --json`` when a numerical cross-check route fails: the closed forms and the failure."""
+    from auv_hinf.design.alpha import design_alpha
+
+    alpha: dict[str, float | None] = {}
+    for method in GAIN_METHODS:
+        try:
+            alpha[method] = float(design_alpha(args.lam, args.gamma, method).alpha)
+        except AuvHinfError:
+            alpha[method] = None
+    return {
+        "lam": args.lam,
+        "gamma": args.gamma,
+        "n": args.n,
+        "k1": args.k1,
+        "alpha": alpha,
+        "ok": False,
+        "crosscheck_error": f"{type(exc).__name__}: {exc}",
+    }
+
+
+def _verdict(ok: bool, reason: str) -> int:
+    """Exit code of a verdict; a negative one also gets its reason as one line on stderr."""
+    if ok:
+        return EXIT_OK
+    print(f"{PROG}: not certified: {' '.join(reason.split())}", file=sys.stderr)
+    return EXIT_NEGATIVE
+
+
+def _cmd_certify(args: argparse.Namespace) -> int:
+    from auv_hinf.workflow.certificate import certify
+
+    _prepare_out(args.out)
+    cfg = _with_actuators(_load(args), args.actuators)
+    if args.method:
+        cfg = cfg.with_method(args.method)
+    if args.design:
+        cfg = replace(cfg, robust=args.design == "robust")
+    cert = certify(cfg, refine_jacobi=args.refine_jacobi)
+    data = cert.to_dict()
+    if args.out:
+        from auv_hinf.sigma_figure import save_sigma_heatmap
+
+        cert.save(args.out / "certificate.json")  # the file Certificate.load reads
+        save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
+    print(_dump(data) if args.json else cert.summary())
+    return _verdict(cert.certified, "; ".join(cert.reasons) or "no reason given")
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from auv_hinf.simulation.engine import simulate
+    from auv_hinf.workflow.run_plan import plan_run, run_report
+
+    _prepare_out(args.out)
+    cfg = _with_actuators(_load(args), args.actuators)
+    if args.current is not None:
+        cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
+    if args.design:
+        cfg = replace(cfg, robust=args.design == "robust")
+    try:
+        plan = plan_run(cfg, start=args.start, horizon=args.horizon)
+    except DesignError as exc:
+        raise Negative(f"no gain to simulate with: {exc}") from None
+    refusal = plan.uncertified_gains()
+    if refusal is not None and not args.uncertified:
+        raise Negative(
+            f"refusing to simulate gains that no certificate covers: {refusal}; `{PROG} certify` gives the "
+            "largest certifiable box and current, or rerun with --uncertified to simulate them anyway"
+        )
+    result = simulate(plan.scenario)
+    summary = run_report(plan, result)
+    if args.out:
+        from auv_hinf.plots import save_simulation_plots
+
+        (args.out / "summary.json").write_text(_dump(summary))
+        result.save_npz(args.out / "trajectory.npz")
+        cov = plan.coverage  # the bound that applies to this run (None when it is not covered)
+        bound = cov.thrust.as_tuple() if plan.covered and cov is not None and cov.thrust is not None else None
+        save_simulation_plots(result, args.out, certified=bound)
+    if args.json:
+        print(_dump(summary))
+    else:
+        for key, val in summary.items():
+            print(f"{key:>24}: {_short(val)}")
+    if plan.certificate is None:
+        return _verdict(False, "; ".join(plan.notes))
+    if not summary["stayed_in_envelope"]:
+        why = f"left the certified envelope at t = {summary['first_exit_time']:.4g} s"
+        if not plan.covered:
+            why += f" (the certificate does not cover this run: {_run_reason(plan)})"
+        return _verdict(False, why)
+    if not plan.covered:  # it stayed inside, but no certificate says it had to
+        return _verdict(False, f"the run stayed inside, but no certificate covers it: {_run_reason(plan)}")
+    return EXIT_OK
+
+
+def _run_reason(plan: RunPlan) -> str:
+    """Why neither the nominal nor the robust certificate covers a run, in one line."""
+    parts = list(plan.notes)
+    if plan.robust is not None and not plan.robust.covered:
+        parts.append(f"robust certificate: {plan.robust.reason}")
+    return "; ".join(parts) or "not covered"
+
+
+def _with_actuators(cfg: FormationConfig, limits: tuple[float, ...] | None) -> FormationConfig:
+    """``cfg`` with the ``--actuators`` override (N, N, N m), if given."""
+    if limits is None:
+        return cfg
+    return replace(cfg, actuators=Actuators(limits[0], limits[1], limits[2]))
+
+
+def _short(value: Any) -> str:
+    """A value printed with 4-6 significant digits (floats inside dicts and lists too)."""
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_short(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    return str(value)
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from auv_hinf.config.schema import json_schema
+
+    print(json.dumps(json_schema(), indent=2))
+    return EXIT_OK
+
+
+def _cmd_init(args: argparse.Namespace) -> int:
+    from auv_hinf.config.presets import annotated_toml, preset_config
+
+    out: Path | None = args.out
+    if out is not None and out.exists() and not args.force:
+        raise BadInput(f"{str(out)!r} exists; use --force to overwrite it")
+    text = annotated_toml(preset_config(args.preset))
+    if out is None:
+        print(text, end="")
+        return EXIT_OK
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
+    print(f"wrote {out} (from preset {args.preset}); check it with: {PROG} certify --config {out}")
+    return EXIT_OK
+
+
+def _cmd_campaign(args: argparse.Namespace) -> int:
+    from auv_hinf.campaign.report import write_outputs
+    from auv_hinf.campaign.runner import dask_client, run_campaign
+
+    _prepare_out(args.out)
+    cfg = _load(args)
+    with dask_client(args.workers, args.scheduler) as client:
+        try:
+            camp = run_campaign(
+                cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
+            )
+        except DesignError as exc:
+            raise Negative(f"no certified start region to sample from: {exc}") from None
+    summary = write_outputs(camp, args.out)
+    if args.json:
+        print(_dump(summary))
+    else:
+        for key in ("config", "runs", "executor", "counts", "fraction_inside", "worst_ratio", "throughput", "notes"):
+            print(f"{key:>16}: {_short(summary[key])}")
+    c = summary["counts"]
+    return _verdict(
+        summary["ok"],
+        f"{c['outside_bounds']} of {c['certificate_applies']} covered runs outside the "
+        f"certified bounds, {c['left_envelope']} of {c['runs']} runs left the envelope",
+    )
+
+
+COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "design": _cmd_design,
+    "certify": _cmd_certify,
+    "simulate": _cmd_simulate,
+    "schema": _cmd_schema,
+    "init": _cmd_init,
+    "campaign": _cmd_campaign,
+}
+
+
+__all__ = ["COMMANDS"]

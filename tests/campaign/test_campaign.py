@@ -1,0 +1,181 @@
+"""Monte Carlo campaigns: reproducible sampling, executor independence, certified bounds, CLI."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from auv_hinf.campaign.report import passed, summarize
+from auv_hinf.campaign.runner import run_campaign
+from auv_hinf.campaign.sampling import chunks, initial_state, prepare, run_chunk, sample_run
+from auv_hinf.certification.coverage import initial_errors
+from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
+from auv_hinf.exceptions import ParameterError
+
+RUNS, HORIZON, SEED = 8, 20.0, 7
+
+
+@pytest.fixture(scope="module")
+def serial() -> pd.DataFrame:
+    return run_campaign(preset_config("paper-triangle"), RUNS, seed=SEED, chunk=3, horizon=HORIZON).table
+
+
+def test_sampled_starts_lie_in_the_certified_region() -> None:
+    setup, cert = prepare(preset_config("paper-triangle"), seed=SEED, horizon=HORIZON)
+    radii = cert.region.region.as_array()
+    for i in range(50):
+        x = sample_run(setup, i)
+        e, de, ep, dep = initial_errors(setup.reference, initial_state(setup, x))
+        measured = np.stack([np.linalg.norm(e, axis=1), np.linalg.norm(de, axis=1), np.abs(ep), np.abs(dep)], 1)
+        assert np.all(measured <= radii * (1 + 1e-12)), (i, measured, radii)
+        assert np.all(x.multipliers == 1.0) and np.all(x.current == 0.0)
+    # the same run index gives the same inputs whatever else was sampled
+    a, b = sample_run(setup, 5), sample_run(setup, 5)
+    assert all(np.array_equal(u, v) for u, v in zip(a.errors, b.errors))
+    assert not np.array_equal(sample_run(setup, 4).errors[0], a.errors[0])
+
+
+def test_nominal_runs_stay_inside_their_certified_bounds(serial: pd.DataFrame) -> None:
+    assert list(serial["run"]) == list(range(RUNS))
+    assert serial["nominal"].all() and serial["stayed_in_envelope"].all()
+    assert serial["inside_bounds"].dtype == "boolean" and serial["inside_bounds"].all()
+    for kind in ("position", "velocity", "heading", "yaw_rate"):
+        # every bound covers the start error and the measured excursion
+        assert (serial[f"start_{kind}_error"] <= serial[f"bound_{kind}_error"]).all()
+        assert (serial[f"max_{kind}_error"] >= serial[f"start_{kind}_error"]).all()
+        assert (serial[f"ratio_{kind}_error"] <= 1.0 + 1e-6).all()
+    assert (serial["final_position_error"] < serial["start_position_error"]).all()
+
+
+@pytest.mark.slow
+def test_dask_in_process_gives_an_identical_table(serial: pd.DataFrame) -> None:
+    distributed = pytest.importorskip("distributed")
+    # no warning filter: an in-process cluster without a dashboard starts and stops silently
+    with distributed.Client(processes=False, n_workers=2, threads_per_worker=1, dashboard_address=None) as client:
+        table = run_campaign(
+            preset_config("paper-triangle"), RUNS, seed=SEED, chunk=3, horizon=HORIZON, client=client
+        ).table
+    pd.testing.assert_frame_equal(table, serial, check_exact=True)
+
+
+def test_sampling_does_not_depend_on_the_chunking(serial: pd.DataFrame) -> None:
+    other = run_campaign(preset_config("paper-triangle"), RUNS, seed=SEED, chunk=5, horizon=HORIZON).table
+    inputs = [c for c in serial.columns if c.endswith("_mult") or c.startswith(("start_", "current_"))]
+    pd.testing.assert_frame_equal(other[inputs], serial[inputs], check_exact=True)
+    np.testing.assert_allclose(other["max_position_error"], serial["max_position_error"], rtol=1e-9)
+    assert chunks(8, 3) == [(0, 3), (3, 6), (6, 8)]
+
+
+def test_uncovered_box_and_current_make_the_verdict_not_applicable() -> None:
+    """The nominal paper gains are not robustly certified for this box: no verdict on such runs."""
+    cfg = replace(
+        preset_config("paper-triangle"),
+        uncertainty=UncertaintyConfig({"m11": (0.9, 1.1)}),
+        disturbance=DisturbanceConfig(current_speed=0.05),
+    )
+    camp = run_campaign(cfg, 3, seed=1, horizon=5.0)
+    t = camp.table
+    assert t["inside_bounds"].isna().all()
+    assert ((t["m11_mult"] >= 0.9) & (t["m11_mult"] <= 1.1) & (t["m11_mult"] != 1.0)).all()
+    assert (np.hypot(t["current_x"], t["current_y"]) <= 0.05).all() and (t["m22_mult"] == 1.0).all()
+    summary = summarize(camp)
+    assert summary["counts"]["not_applicable"] == 3 and summary["fraction_inside"] is None
+    assert any("robust certificate does not cover" in n for n in summary["notes"])
+    assert summary["ok"] == bool(passed(t).all()) == bool(t["stayed_in_envelope"].all())
+
+
+def test_bad_inputs_raise() -> None:
+    cfg = preset_config("paper-triangle")
+    with pytest.raises(ParameterError, match="runs"):
+        run_campaign(cfg, 0)
+    with pytest.raises(ParameterError, match="seed"):
+        prepare(cfg, seed=-1)
+
+
+@pytest.mark.slow
+def test_cli_campaign_writes_its_outputs(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "camp"
+    code = main(
+        [
+            "campaign",
+            "--preset",
+            "paper-triangle",
+            "--runs",
+            "4",
+            "--seed",
+            "3",
+            "--horizon",
+            "10",
+            "--out",
+            str(out),
+            "--json",
+        ]
+    )
+    assert code == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["ok"] and summary["counts"]["inside_bounds"] == 4 and summary["fraction_inside"] == 1.0
+    assert math.isfinite(summary["throughput"]["vehicle_seconds_per_wall_second"])
+    for name in ("runs.parquet", "summary.json", "excursions.png", "bound_ratios.png"):
+        assert (out / name).stat().st_size > 0
+    assert len(pd.read_parquet(out / "runs.parquet")) == 4
+
+
+def test_cli_campaign_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["campaign", "--preset", "paper-triangle", "--runs", "0", "--out", str(tmp_path)])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--runs" in err and "Traceback" not in err
+    assert (
+        main(
+            [
+                "campaign",
+                "--preset",
+                "paper-triangle",
+                "--runs",
+                "2",
+                "--workers",
+                "1",
+                "--scheduler",
+                "x",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+        == 2
+    )
+
+
+def test_local_workers_get_the_allocator_settings_and_even_chunks() -> None:
+    """Dask's default trims the heap so hard that every temporary is re-mapped (page faults)."""
+    pytest.importorskip("distributed")
+    import os
+
+    from auv_hinf.campaign.runner import WORKER_MALLOC, _balanced, dask_client
+
+    with dask_client(workers=2) as client:
+        env = client.run(lambda: {k: os.environ.get(k) for k in WORKER_MALLOC})
+        assert len(env) == 2
+        for got in env.values():
+            assert got == {k: str(v) for k, v in WORKER_MALLOC.items()}
+        # 10,000 runs with chunks of at most 4096 on 2 workers: 4 chunks of 2500, not 4096 + 4096 + 1808
+        size = _balanced(4096, 10_000, client)
+        assert size == 2500 and len(chunks(10_000, size)) % 2 == 0
+        assert _balanced(4096, 3, client) == 2  # both workers get a chunk
+
+
+def test_a_chunk_reports_its_progress_as_it_runs() -> None:
+    setup, _ = prepare(preset_config("paper-triangle"), seed=SEED, horizon=HORIZON)
+    seen: list[float] = []
+    table = run_chunk(setup, 0, 3, progress=seen.append)
+    assert len(table) == 3
+    assert 50 <= len(seen) <= 101 and all(b >= a + 0.01 for a, b in itertools.pairwise(seen))
+    assert 0.0 < seen[0] <= 0.02 and 0.99 <= seen[-1] <= 1.0

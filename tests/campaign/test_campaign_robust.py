@@ -1,0 +1,94 @@
+"""Robust campaigns: starts inside the robust invariant sets, box vertices first, robust bounds."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from auv_hinf.campaign.report import summarize
+from auv_hinf.campaign.runner import run_campaign
+from auv_hinf.campaign.sampling import COEFFICIENTS, initial_state, prepare, sample_run
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.tables import SimulationConfig
+from auv_hinf.workflow.design_point import design_point
+from auv_hinf.workflow.robust_part import check_robust_run
+
+RUNS, HORIZON, SEED = 12, 12.0, 5
+
+
+@pytest.fixture(scope="module")
+def remus_setup():
+    """The robust remus-line preset prepared for a campaign (about 5 s): its tests are marked slow."""
+    return prepare(preset_config("remus-line"), seed=SEED, horizon=HORIZON)[0]
+
+
+@pytest.mark.slow
+def test_vertex_runs_enumerate_the_box_corners(remus_setup) -> None:
+    s = remus_setup
+    assert s.robust is not None and s.robust.vertices == 2**9
+    corners = set()
+    for i in range(s.robust.vertices):
+        x = sample_run(s, i)
+        assert np.all((x.multipliers == s.box[:, 0]) | (x.multipliers == s.box[:, 1]))
+        assert np.hypot(*x.current) == pytest.approx(design_point(preset_config("remus-line")).current, rel=1e-12)
+        corners.add(tuple(x.multipliers))
+    assert len(corners) == 2**9
+    inner = sample_run(s, s.robust.vertices + 3)
+    assert np.all((inner.multipliers > s.box[:, 0]) & (inner.multipliers < s.box[:, 1]))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("index", [0, 300, 511, 512, 2000])
+def test_sampled_starts_are_covered_by_the_robust_certificate(remus_setup, index) -> None:
+    """An independent path: the state is rebuilt into a configuration and checked by check_robust_run."""
+    s = remus_setup
+    x = sample_run(s, index)
+    init = initial_state(s, x)
+    base = preset_config("remus-line")
+    cfg = replace(
+        base,
+        simulation=SimulationConfig(
+            horizon=HORIZON,
+            start="paper",
+            initial=tuple(map(tuple, init.tolist())),
+            current=(float(x.current[0]), float(x.current[1])),
+            plant=dict(zip(COEFFICIENTS, x.multipliers.tolist())),
+        ),
+    )
+    verdict = check_robust_run(design_point(cfg), s.reference, init)
+    assert verdict.covered, verdict.reason
+
+
+@pytest.mark.slow
+def test_starts_fill_the_certified_sets(remus_setup) -> None:
+    """Uniform in volume: some starts lie near the boundary of the 4-D position ellipsoid."""
+    s, rob = remus_setup, remus_setup.robust
+    rng = np.random.default_rng(0)
+    cur = np.array([0.1, -0.1])
+    e, de, ep, dep = rob.sample_errors(rng, 4000, cur)
+    et = e - rob.certificate.equilibrium_shift(cur)
+    p = rob.position
+    v = p[0, 0] * (et**2).sum(1) + 2 * p[0, 1] * (et * de).sum(1) + p[1, 1] * (de**2).sum(1)
+    assert v.max() <= rob.position_level**2 and v.max() >= 0.95 * rob.position_level**2
+    assert rob.inside(e, de, ep, dep, cur) and not rob.inside(2 * e, 2 * de, ep, dep, cur)
+    assert s.n == 3
+
+
+@pytest.mark.slow
+def test_robust_campaign_stays_inside_the_robust_bounds() -> None:
+    camp = run_campaign(preset_config("remus-line"), RUNS, seed=SEED, horizon=HORIZON, chunk=5)
+    t = camp.table
+    assert t["inside_bounds"].notna().all() and t["inside_bounds"].all()
+    summary = summarize(camp)
+    assert summary["certificate"] == "robust" and summary["box_vertex_runs"] == RUNS and summary["ok"]
+    bounds = summary["region_error_bounds"]
+    for kind in ("position", "velocity", "heading", "yaw_rate"):
+        assert (t[f"max_{kind}_error"] <= bounds[kind] * (1 + 1e-6)).all()
+        assert (t[f"bound_{kind}_error"] == bounds[kind]).all()
+    # the errors contract: late errors are well inside the bound (decay rate ~0.95 1/s)
+    assert (t["tail_position_error"] < t["max_position_error"]).all()
+    assert summary["worst_tail_position_ratio"] < 1.0
+    assert isinstance(t, pd.DataFrame)

@@ -1,0 +1,58 @@
+"""Input that validates but is probably a mistake, a closed pipe, and `design --json` that always answers."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from auv_hinf.cli.main import main
+from auv_hinf.config.hygiene import input_warnings
+from auv_hinf.design import crosscheck as crosscheck_module
+from auv_hinf.exceptions import SolverError
+
+
+def test_degrees_and_empty_files_are_flagged():
+    assert input_warnings({}) and "sets nothing" in input_warnings({})[0]
+    lines = input_warnings({"reference": {"kind": "line", "heading": 90.0}})
+    assert len(lines) == 1 and "reference.heading" in lines[0] and "1.571" in lines[0]
+    rows = [[0.0, 0.0, 45.0, 1.0, 0.0, 0.0], [5.0, 0.0, 0.5, 1.0, 0.0, 0.0]]
+    lines = input_warnings({"simulation": {"initial": rows}})
+    assert len(lines) == 1 and "initial[0][2]" in lines[0]
+    assert input_warnings({"reference": {"kind": "line", "heading": 1.0}}) == []
+
+
+def test_cli_prints_the_warning(tmp_path, capsys):
+    path = tmp_path / "deg.toml"
+    path.write_text('[reference]\nkind = "line"\nspeed = 1.0\nheading = 90.0\n', encoding="utf-8")
+    main(["certify", "--config", str(path), "--json"])
+    err = capsys.readouterr().err
+    assert "warning" in err and "reference.heading = 90 rad" in err
+
+
+def test_closed_pipe_exits_quietly():
+    cmd = [sys.executable, "-c", "from auv_hinf.cli.main import main; raise SystemExit(main())", "schema"]
+    with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        assert proc.stdout is not None and proc.stderr is not None
+        proc.stdout.read(10)
+        proc.stdout.close()  # the reader goes away, like `| head -c 10`
+        err = proc.stderr.read().decode()
+        code = proc.wait()
+    assert code == 0 and "Broken pipe" not in err and "error" not in err
+
+
+def test_design_json_answers_when_a_crosscheck_route_fails(monkeypatch, capsys):
+    def broken(*args: object, **kw: object) -> None:
+        raise SolverError("Riccati-inequality LMI: Clarabel returned solver error")
+
+    monkeypatch.setattr(crosscheck_module, "crosscheck", broken)
+    code = main(["design", "--lam", "-1.2", "--gamma", "2.86", "--json"])
+    out = capsys.readouterr()
+    data = json.loads(out.out)
+    assert code == 1 and data["ok"] is False and "solver error" in data["crosscheck_error"]
+    # the closed form still answers: the stabilising root of eq. (37), c a^2 + 2 lam a + 1 = 0
+    # with c = 1/gamma^2 - 2
+    a, lam, c = data["alpha"]["stabilizing"], -1.2, 1.0 / 2.86**2 - 2.0
+    assert c * a * a + 2.0 * lam * a + 1.0 == pytest.approx(0.0, abs=1e-12) and lam + c * a < 0
