@@ -267,6 +267,7 @@ def test_chunked_fleet_margins_agree_to_tube_resolution(tri, monkeypatch):
     assert all(getattr(whole.margins, f) == getattr(direct, f) for f in MARGINS)
 
 
+@pytest.mark.slow
 def test_chunked_fleet_gives_unchunked_margins(tri, monkeypatch):
     _, chunked, whole = chunked_and_whole(tri, monkeypatch)
     assert chunked.margins == whole.margins and chunked.thrust == whole.thrust

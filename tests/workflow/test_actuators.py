@@ -12,12 +12,13 @@ from auv_hinf.certification.actuation import actuator_fraction, mission_thrust, 
 from auv_hinf.certification.closed_loop import thrust_bounds
 from auv_hinf.certification.margins import ErrorBounds, inflate_envelope
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import config_from_dict
+from auv_hinf.config.formation import config_from_dict, load_config
 from auv_hinf.config.presets import preset_config
 from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.models.actuators import Actuators, actuator_shortfall, vehicle_actuators
 from auv_hinf.simulation.engine import simulate_batch
 from auv_hinf.simulation.scenario import ScenarioBatch
+from auv_hinf.workflow import certificate as certificate_module
 from auv_hinf.workflow.certificate import Certificate, certify
 from auv_hinf.workflow.design_point import design_point
 from auv_hinf.workflow.nominal import closed_loop_for
@@ -131,16 +132,20 @@ def test_remus_with_its_real_limits_names_the_sway_channel(remus_limited, tmp_pa
 
 
 @pytest.mark.slow
-def test_cli_remus100_limits_exit_1_naming_sway(tmp_path, capsys):
+def test_cli_remus100_limits_exit_1_naming_sway(remus_limited, tmp_path, capsys, monkeypatch):
     path = tmp_path / "remus.toml"
     assert main(["init", "--preset", "remus-line", "--out", str(path)]) == 0
     path.write_text(path.read_text(encoding="utf-8") + '\n[actuators]\npreset = "remus100"\n', encoding="utf-8")
     capsys.readouterr()
+    # the configuration the CLI reads is the fixture's: reuse its certificate (the API test above
+    # computes it) and check what the command line makes of it
+    assert load_config(path).actuators == remus_limited.config.actuators
+    monkeypatch.setattr(certificate_module, "certify", lambda cfg, **kw: remus_limited)
     code = main(["certify", "--config", str(path), "--json"])
     out = capsys.readouterr()
     data = json.loads(out.out)
     assert code == 1 and data["certified"] is False
-    assert "sway force" in out.err
+    assert "sway force" in out.err and "fins" in out.err
     assert data["actuators"]["limits"]["force_y"] == 5.6
     # simulate refuses the uncertified gains unless asked
     code = main(["simulate", "--config", str(path), "--horizon", "2"])

@@ -21,6 +21,7 @@ from auv_hinf.exceptions import ConfigError
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.workflow.certificate import Certificate, certify
 from auv_hinf.workflow.codec import STORED_TYPES, decode_value, encode_value
+from auv_hinf.workflow.design_point import design_point
 from auv_hinf.workflow.persist import FORMAT, VERSION, certificate_document, certificate_from_document
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
@@ -279,11 +280,12 @@ def test_version_1_files_of_0_2_0_still_load(preset):
     doc = json.loads(path.read_text(encoding="utf-8"))
     assert doc["version"] == 1 and doc["tool_version"] == "0.2.0"
     old = Certificate.load(path)
-    now = certify(preset_config(preset))
+    now = design_point(preset_config(preset))  # today's design of the same configuration
     assert old.certified is doc["certificate"]["certified"] is True
-    assert old.alpha_used == doc["certificate"]["alpha"]["used"] == now.alpha_used
+    used = now.designs[old.config.method]
+    assert used is not None and old.alpha_used == doc["certificate"]["alpha"]["used"] == used.alpha
     # the gains that ran in 0.2.0 are restored: the robust design's, or the Theorem 1 gains
-    assert old.gain_source == now.gain_source
+    assert old.gain_source == now.source
     assert old.gains is not None and now.gains is not None
     np.testing.assert_allclose(
         [old.gains.alpha, old.gains.k1, *old.gains.k_psi], [now.gains.alpha, now.gains.k1, *now.gains.k_psi], rtol=1e-9
