@@ -229,8 +229,9 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float]
 
     The samples are not stored: :class:`~auv_hinf.simulation.metrics.ErrorSink` folds each one into
     the metrics as the integrator produces it (the same numbers as post-processing stored
-    samples, to a few units in the last place; ``tests/test_run_metrics.py``). ``progress``, if given, is called with
-    the fraction of the chunk's samples produced so far (0 to 1), about once per percent.
+    samples, to a few units in the last place; ``tests/simulation/test_run_metrics.py``).
+    ``progress``, if given, is called with the fraction of the chunk's samples produced so far
+    (0 to 1), about once per percent.
     """
     inputs = [sample_run(setup, i) for i in range(lo, hi)]
     batch = ScenarioBatch(tuple(run_scenario(setup, i, x) for i, x in zip(range(lo, hi), inputs)))

@@ -2,7 +2,7 @@
 
 Every table, key, type, unit, range and default on that page is read from the pydantic models of
 :mod:`auv_hinf.config.schema` and :mod:`auv_hinf.config.fields`, so the page cannot drift from
-the schema: ``tests/test_config_reference.py`` compares the stored page with
+the schema: ``tests/config/test_config_reference.py`` compares the stored page with
 :func:`config_reference`. Regenerate it with::
 
     .venv/bin/python -c "from auv_hinf.config.reference_doc import write_config_reference; write_config_reference()"
@@ -64,7 +64,7 @@ reads a file into a {class}`~auv_hinf.config.formation.FormationConfig`.
 
 This page is generated from the schema ({mod}`auv_hinf.config.schema`, the single source of every
 default) by {func}`~auv_hinf.config.reference_doc.config_reference`;
-`tests/test_config_reference.py` fails when it is out of date.
+`tests/config/test_config_reference.py` fails when it is out of date.
 
 **Rules.** Every table and every key is optional unless its default reads *required*. A key
 that is not listed here is an error, with a "did you mean" hint. Types are strict: a string is

@@ -154,7 +154,7 @@ def remus100(design_speed: float = 1.5) -> VehicleParams:
     1310 kg/m. The choice matters: on ``u in [0.5, 2.5] m/s``, ``|v| <= 0.3 m/s``,
     ``|r| <= 0.3 rad/s`` the envelope lambda is -6.61 1/s and the vehicle-coordinate sigma
     6.67 1/s; with 131 kg/m they are -1.25 1/s and 1.31 1/s
-    (``tests/test_vehicle.py::test_remus100_sway_drag_sensitivity``). To study the
+    (``tests/models/test_vehicle.py::test_remus100_sway_drag_sensitivity``). To study the
     alternative, use ``dataclasses.replace(remus100(), d22_quad=131.0)``.
 
     Parameters
@@ -255,7 +255,7 @@ def body_block(params: VehicleParams, u: ArrayLike, v: ArrayLike, r: ArrayLike) 
     """Body-frame block ``S(r) - M1^-1 D1`` of eq. (8), shape ``(..., 2, 2)``, in 1/s.
 
     Equal to ``[[-d11/m11, (m22-m11) r/m11], [(m22-m11) r/m22, -d22/m22]]``
-    (eq. 20 equals eq. 8; ``tests/test_vehicle.py::test_eq20_equals_eq8_symbolically``).
+    (eq. 20 equals eq. 8; ``tests/models/test_vehicle.py::test_eq20_equals_eq8_symbolically``).
     """
     md = coriolis_damping_matrix(params, u, v, r)
     r_ = np.asarray(r, dtype=float)

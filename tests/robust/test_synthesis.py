@@ -55,6 +55,7 @@ def test_remus_line_synthesis_is_certified_and_needs_no_more_force_than_the_fami
     assert box_lambda(point.box, env)[0] < 0.0
 
 
+@pytest.mark.slow
 def test_synthesis_answers_without_a_covering_candidate():
     cfg = preset_config("bluerov2-line")
     point = design_point(replace(cfg, robust=False))
