@@ -30,6 +30,9 @@ if TYPE_CHECKING:
 #: Relative margin around the data in the trajectory figure.
 TRAJECTORY_MARGIN = 0.04
 
+#: Largest fleet drawn one line per vehicle; larger fleets are drawn as percentile bands.
+MAX_VEHICLE_LINES = 12
+
 #: Legend labels of the force figure's horizontal lines.
 CERTIFIED_LABEL = "certified bound"
 LIMIT_LABEL = "actuator limit"
@@ -40,9 +43,15 @@ def _vehicle_labels(n: int) -> list[str]:
 
 
 def _vehicle_legend(ax: Axes, n: int) -> None:
-    """One legend entry per vehicle, right of the axes (never over the data)."""
+    """The legend right of the axes (never over the data): one entry per vehicle, or the fleet bands."""
+    title = "vehicle" if n <= MAX_VEHICLE_LINES else f"fleet of {n}"
     ax.legend(
-        loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, ncol=-(-n // 16), title="vehicle", title_fontsize=7
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        fontsize=7,
+        ncol=-(-n // 16) if n <= MAX_VEHICLE_LINES else 1,
+        title=title,
+        title_fontsize=7,
     )
 
 
@@ -91,13 +100,16 @@ def trajectories(res: SimulationResult, marker_every: float = 50.0) -> Figure:
     span = np.maximum(hi - lo, 1e-9)
     pad = TRAJECTORY_MARGIN * span.max()
     n = xy.shape[1]
-    legend_rows = -(-(n + 2) // 6)
+    many = n > MAX_VEHICLE_LINES  # a large fleet gets one legend entry for all its paths
+    legend_rows = 1 if many else -(-(n + 2) // 6)
     # axes about 9.1 in wide; title, x label and the legend rows below take about 1.1 + 0.25/row in
     axes_height = float(np.clip(9.1 * (span[1] + 2 * pad) / (span[0] + 2 * pad), 2.0, 8.0))
     fig, ax = plt.subplots(figsize=(10.0, axes_height + 1.1 + 0.25 * legend_rows), constrained_layout=True)
     colours = [f"C{i % 10}" for i in range(n)]
     for i, label in enumerate(_vehicle_labels(n)):
-        ax.plot(xy[:, i, 0], xy[:, i, 1], lw=1, color=colours[i], label=label)
+        if many:
+            label = f"paths of the {n} vehicles" if i == 0 else "_"
+        ax.plot(xy[:, i, 0], xy[:, i, 1], lw=0.6 if many else 1, color=colours[i], label=label)
     ax.plot(centre[:, 0], centre[:, 1], "k--", lw=0.8, label="desired centre")
     arrow_len = 0.03 * span.max()
     for k in _snapshot_indices(t, marker_every):
@@ -166,11 +178,18 @@ def _per_vehicle_axes(
 ) -> tuple[Figure, Any]:
     """Three stacked axes of ``data[:, i, k]`` (one line per vehicle i, axis k), bounds dotted."""
     n = data.shape[1]
+    tt = np.asarray(t, dtype=float)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     for ax, k, label, rng in zip(axes, range(3), labels, ranges):
-        lines = ax.plot(np.asarray(t, dtype=float), data[:, :, k], lw=1)
-        for line, name in zip(lines, _vehicle_labels(n)):
-            line.set_label(name)
+        if n <= MAX_VEHICLE_LINES:
+            lines = ax.plot(tt, data[:, :, k], lw=1)
+            for line, name in zip(lines, _vehicle_labels(n)):
+                line.set_label(name)
+        else:  # a large fleet: its range, the 5-95 % band and the median, not n lines
+            lo, p5, p50, p95, hi = np.percentile(data[:, :, k], [0, 5, 50, 95, 100], axis=1)
+            ax.fill_between(tt, lo, hi, color="C0", alpha=0.2, lw=0, label="min - max")
+            ax.fill_between(tt, p5, p95, color="C0", alpha=0.45, lw=0, label="5 - 95 %")
+            ax.plot(tt, p50, color="C0", lw=1.2, label="median")
         for b in rng or ():
             ax.axhline(b, color="r", ls=":", lw=0.8)
         ax.set_ylabel(label)

@@ -317,3 +317,17 @@ def test_force_figure_of_a_simulated_run_with_actuators(tmp_path):
         assert [y for y, _, _ in labelled_levels(ax, "certified bound")] == [-certified[k], certified[k]]
         assert np.abs(res.forces[..., k]).max() <= certified[k]
     assert len(plots.save_simulation_plots(res, tmp_path, certified=certified)) == 4
+
+
+def test_large_fleets_are_drawn_as_bands_without_warnings():
+    n = plots.MAX_VEHICLE_LINES + 188  # 200 vehicles
+    res = synthetic_result(n)
+    for fig in (plots.velocities(res), plots.forces(res), plots.trajectories(res, marker_every=SNAPSHOT_EVERY)):
+        labels = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+        assert len(labels) <= 6, labels  # a few band entries, not 200
+        fig.canvas.draw()  # constrained layout runs here; a collapsed layout would warn (an error in pytest)
+    top = plots.forces(res).axes[0]
+    assert {"min - max", "5 - 95 %", "median"} <= {t.get_text() for t in top.get_legend().get_texts()}
+    # the median line is the fleet's median of the data
+    median = next(line for line in top.get_lines() if line.get_label() == "median")
+    np.testing.assert_allclose(median.get_ydata(), np.median(res.forces[:, :, 0], axis=1))

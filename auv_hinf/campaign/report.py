@@ -34,6 +34,21 @@ ROBUST_NOTE = (
 )
 
 
+def _composition(s: Any, k: int) -> str:
+    """The campaign's sample composition, in words."""
+    if s.robust is None:
+        return (
+            f"{k} runs from starts uniform in the certified start region; plants uniform in the declared box; "
+            "currents uniform in the declared disc"
+        )
+    corners = s.robust.vertex_runs(k)
+    return (
+        f"{k} runs: {corners} at box vertices (every other run, current at the declared speed, random direction; "
+        f"{s.robust.vertices} vertices in all), {k - corners} uniform in the box with currents uniform in the disc; "
+        "starts uniform in the robust invariant sets"
+    )
+
+
 def passed(table: pd.DataFrame) -> pd.Series:
     """Per-run verdict: ``inside_bounds & within_certified_force`` where they apply, else ``stayed_in_envelope``."""
     inside = table["inside_bounds"]
@@ -75,7 +90,8 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "certificate": "nominal" if s.robust is None else "robust",
         "start_region": cert.region.region.to_dict() if s.robust is None else "robust invariant ellipsoids",
         "region_error_bounds": certified_bounds(camp),
-        "box_vertex_runs": 0 if s.robust is None else min(k, s.robust.vertices),
+        "box_vertex_runs": 0 if s.robust is None else s.robust.vertex_runs(k),
+        "composition": _composition(s, k),
         "uncertainty_box": {c: list(b) for c, b in zip(COEFFICIENTS, s.box.tolist()) if b != [1.0, 1.0]},
         "current_speed": s.current_speed,
         "counts": {

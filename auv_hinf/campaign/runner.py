@@ -20,7 +20,7 @@ step control does not couple the scenarios of a batch, only BLAS round-off may d
 
 When a box or a current is declared and the robust certificate covers them, the start errors,
 plants and currents are drawn as :mod:`auv_hinf.campaign.starts` says (inside the robust
-invariant sets, the box's vertices first) and every run is checked against the robust bounds.
+invariant sets, box vertices on every other run) and every run is checked against the robust bounds.
 Otherwise the nominal certificate bounds a run only when its plant is nominal and there is no
 current; elsewhere ``inside_bounds`` is NA. Every run also records its peak commanded force per
 channel before saturation, checked (``within_certified_force``) against the thrust bound of

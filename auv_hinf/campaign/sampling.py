@@ -155,8 +155,9 @@ def sample_run(setup: CampaignSetup, index: int) -> RunInputs:
     """Inputs of run ``index``, from ``SeedSequence(setup.seed, spawn_key=(index,))`` alone."""
     rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
     rob = setup.robust
-    if rob is not None and index < rob.vertices:
-        mult, current = rob.vertex(setup.box, index), vertex_current(rng, setup.current_speed)
+    corner = None if rob is None else rob.vertex_index(index)
+    if rob is not None and corner is not None:
+        mult, current = rob.vertex(setup.box, corner), vertex_current(rng, setup.current_speed)
     else:
         lo, hi = setup.box[:, 0], setup.box[:, 1]
         mult = lo + (hi - lo) * rng.random(lo.size)

@@ -10,10 +10,12 @@ against its bounds:
   current-shifted equilibrium) and ``(e_psi, e_psi')`` uniform in the heading ellipse
   ``[e_psi, e_psi'] Q [e_psi, e_psi']^T <= h^2``. Uniform in volume puts most starts near the
   boundary, where the bounds are tight.
-* **Plants.** The first ``2^d`` runs (``d`` declared parameters) are the box's vertices, run
-  ``i`` taking the upper end of parameter ``k`` when bit ``k`` of ``i`` is set, with a current
-  of the full declared speed in a random direction; the others are uniform in the box, with a
-  current uniform in the disc.
+* **Plants.** Every :data:`CORNER_PERIOD`-th run (run ``i`` with ``i % CORNER_PERIOD == 0``)
+  is a vertex of the box, until the ``2^d`` vertices (``d`` declared parameters) are used:
+  vertex ``j = i // CORNER_PERIOD`` takes the upper end of parameter ``k`` when bit ``k`` of
+  ``j`` is set, with a current of the full declared speed in a random direction. The other runs
+  are uniform in the box, with a current uniform in the disc. Corners are thus at most half of
+  any campaign and interleaved with interior samples, and the summary states the composition.
 * **Check.** Each vehicle's sup over the samples of ``||e||``, ``||e'||``, ``|e_psi|`` and
   ``|e_psi'|`` must lie within the certified bounds, and the run must stay in the envelope;
   the commanded force must stay within the certificate's thrust bound (:attr:`RobustStart.thrust`).
@@ -34,6 +36,9 @@ from auv_hinf.robust.certificate import RobustCertificate
 from auv_hinf.workflow.design_point import DesignPoint
 from auv_hinf.workflow.robust_part import robust_summary
 
+#: Every CORNER_PERIOD-th run is a box vertex (until all are used): at most 1/CORNER_PERIOD of a
+#: campaign's runs are corners, interleaved with interior samples.
+CORNER_PERIOD = 2
 #: The start sets are shrunk by this relative factor so that round-off in building the initial
 #: state (rotations of the body velocity) cannot put a start outside the verified ellipsoid.
 START_SHRINK = 1e-9
@@ -104,8 +109,18 @@ class RobustStart:
 
     @property
     def vertices(self) -> int:
-        """Number of box vertices, run first."""
+        """Number of box vertices."""
         return int(2 ** len(self.declared))
+
+    def vertex_index(self, run: int) -> int | None:
+        """The box vertex run ``run`` samples, or ``None`` for an interior run (see the module docstring)."""
+        if run % CORNER_PERIOD == 0 and run // CORNER_PERIOD < self.vertices:
+            return run // CORNER_PERIOD
+        return None
+
+    def vertex_runs(self, runs: int) -> int:
+        """How many of the first ``runs`` runs are box vertices."""
+        return min(self.vertices, (runs + CORNER_PERIOD - 1) // CORNER_PERIOD)
 
     def sample_errors(
         self, rng: np.random.Generator, n: int, current: FloatArray

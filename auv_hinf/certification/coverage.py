@@ -247,7 +247,13 @@ def check_run(
     thrust = ThrustBounds(*(max(getattr(t, f) for t in thrusts) for f in ("force_x", "force_y", "moment")))
     if not marg.ok:
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
-        reason = f"not covered: envelope margin {worst} = {getattr(marg, worst):.4g} < 0"
+        unit = "rad/s" if worst.startswith("r") else "m/s"
+        side = "upper" if worst.endswith("hi") else "lower"
+        channel = {"u": "surge", "v": "sway", "r": "yaw-rate"}[worst[0]]
+        reason = (
+            f"not covered: the {channel} speed would cross the envelope's {side} edge "
+            f"(certified margin {getattr(marg, worst):.4g} {unit} < 0)"
+        )
     elif actuators is not None and not actuators.admits(thrust.as_tuple()):
         reason = "not covered: " + actuator_shortfall(actuators, thrust.as_tuple())
     else:
@@ -329,7 +335,8 @@ def cover_start(
         best.thrust,
         best.blend_time,
         best.turn_time,
-        f"no candidate blend time covers this start; best {best.reason}",
+        "not covered: no candidate blend time covers this start; the best one: "
+        + best.reason.removeprefix("not covered: "),
     )
 
 

@@ -91,8 +91,16 @@ class LawnmowerReference(_Reference):
 
     kind: Literal["lawnmower"] = _field("lawnmower", _KIND_TEXT)
     leg_length: float = _field(..., "length of one straight leg", "m", gt=0.0, examples=[200.0])
-    spacing: float = _field(..., "distance between neighbouring legs", "m", gt=0.0, examples=[40.0])
-    turn_radius: float = _field(..., "radius of the turns", "m", gt=0.0, examples=[20.0])
+    spacing: float = _field(
+        ...,
+        "distance between neighbouring legs; at least about 3.97 turn_radius (two turns fit)",
+        "m",
+        gt=0.0,
+        examples=[100.0],
+    )
+    turn_radius: float = _field(
+        ..., "smallest radius of the turns; at most about spacing / 3.97", "m", gt=0.0, examples=[20.0]
+    )
 
 
 REFERENCE_MODELS: dict[str, type[_Reference]] = {

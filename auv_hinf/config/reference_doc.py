@@ -79,6 +79,13 @@ Theorem 2 position gain, defaults to @K1@ 1/s^2 everywhere: in a file without it
 presets, and as the default of `auv-hinf design --k1`. Only the robust design
 (`[design] robust = true`) picks its own `k1`, together with `alpha` and the heading gains.
 
+**The default start.** Without `[simulation] initial` every vehicle starts on its slot: at
+its desired position on the raw mission at t = 0, heading along the path, with the path's
+speed as surge and its turn rate as yaw rate. That start has zero tracking error, so the
+closed-loop certificate covers it at every fleet size without a blended start, and `certify`
+and `simulate` judge the same start. A declared `initial` is checked as given (with a blended
+start when it is off the slots).
+
 ## A minimal file
 
 Tables that are left out take their defaults (the paper's vehicle, a triangle, the paper's

@@ -252,7 +252,7 @@ class SimulationTable(_Table):
     )
     initial: list[StateRow] | None = _field(
         None,
-        "one [x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s); default: a shaped start",
+        "[x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s); default: each on its slot, zero error",
     )
     current: Pair = _field([0.0, 0.0], "constant ocean current, inertial frame", "m/s")
     blend_time: float | None = _field(

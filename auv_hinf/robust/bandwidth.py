@@ -115,10 +115,11 @@ def design_robust(
         tried.append((w, s, c.covers))
         return c.covers
 
-    with tqdm(total=len(BANDWIDTHS), disable=not progress, desc="robust design", unit="bandwidth") as bar:
-        for target in (TARGET_MARGIN, 1.0):
-            if target > cap:
-                continue
+    targets = [t for t in (TARGET_MARGIN, 1.0) if t <= cap]
+    # one bar for the whole search: every bandwidth of every target, refinements included
+    total = len(targets) * (len(BANDWIDTHS) + REFINE_STEPS)
+    with tqdm(total=total, disable=not progress, desc="robust design", unit="certificate") as bar:
+        for target in targets:
             prev: float | None = None
             for w in BANDWIDTHS:
                 bar.update(1)
@@ -126,11 +127,13 @@ def design_robust(
                     lo, hi = prev, w
                     if lo is not None:
                         for _ in range(REFINE_STEPS):
+                            bar.update(1)
                             mid = math.sqrt(lo * hi)
                             if covers(mid, target):
                                 hi = mid
                             else:
                                 lo = mid
+                    bar.update(total - bar.n)  # the search is over: the bar ends full
                     gains = family_gains(box, envelope, hi)
                     cert = robust_certificate(box, envelope, tube, gains, current, actuators)
                     why = (
@@ -139,7 +142,6 @@ def design_robust(
                     )
                     return RobustDesign(gains, hi, target, cert, tuple(tried), why)
                 prev = w
-            bar.reset(total=len(BANDWIDTHS))
     if actuators is not None and fallback:
         # nothing fits the actuators: take the gentlest design that covers the box without them,
         # whose certificate then says by how much it exceeds them (the most aggressive

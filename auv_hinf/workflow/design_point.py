@@ -24,7 +24,6 @@ import numpy as np
 
 from auv_hinf._typing import GAIN_METHODS, FloatArray
 from auv_hinf.config.formation import FormationConfig
-from auv_hinf.config.presets import spread_start
 from auv_hinf.config.tables import SimulationConfig
 from auv_hinf.design.alpha import GainDesign, design_alpha
 from auv_hinf.design.gains import Gains, heading_gains
@@ -151,10 +150,25 @@ def formation_offsets(cfg: FormationConfig) -> FloatArray:
 
 
 def initial_states(cfg: FormationConfig) -> FloatArray:
-    """The configured initial states ``(N, 6)``, or the preset spread start when none is given."""
+    """The configured initial states ``(N, 6)``; without ``[simulation] initial``, the fleet on its slots.
+
+    The default start puts every vehicle exactly on its desired motion at ``t = 0`` along the
+    raw mission (position on its slot, heading along the path, the path's speed as surge, the
+    path's turn rate as yaw rate): zero tracking error, so the certificate covers it at every
+    fleet size without a blended start, and ``certify`` and ``simulate`` judge the same start.
+    """
     if cfg.simulation.initial is not None:
         return np.asarray(cfg.simulation.initial, dtype=float)
-    return np.asarray(spread_start(tuple(map(tuple, cfg.shape)), cfg.transform), dtype=float)
+    return slot_states(FleetReference(mission_reference(cfg), formation_offsets(cfg)))
+
+
+def slot_states(fleet: FleetReference) -> FloatArray:
+    """States ``(N, 6)`` ``[x, y, psi, u, v, r]`` with zero error against ``fleet`` at ``t = 0`` (no current)."""
+    m = fleet.motion(0.0)
+    c, s = np.cos(m.psi), np.sin(m.psi)
+    u = c * m.v[:, 0] + s * m.v[:, 1]
+    v = -s * m.v[:, 0] + c * m.v[:, 1]
+    return np.column_stack([m.p, m.psi, u, v, m.r])
 
 
 def design_point(cfg: FormationConfig) -> DesignPoint:
@@ -240,4 +254,5 @@ __all__ = [
     "formation_offsets",
     "initial_states",
     "mission_reference",
+    "slot_states",
 ]

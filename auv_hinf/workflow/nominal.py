@@ -159,8 +159,7 @@ class ClosedLoopSummary:
             "shaped_start_note": (
                 None
                 if s is not None
-                else "not evaluated: the configuration declares no start and the fleet is too large to check "
-                "the default one (give [simulation] initial to have it checked)"
+                else "the default start (the fleet on its slots) could not be checked (see reasons)"
                 if not self.declared_start
                 else "the declared start could not be checked (see reasons)"
             ),
@@ -170,18 +169,15 @@ class ClosedLoopSummary:
         }
 
 
-def closed_loop_summary(
-    point: DesignPoint, *, default_start_max_n: int = 16, progress_min_n: int = 16
-) -> ClosedLoopSummary:
+def closed_loop_summary(point: DesignPoint, *, progress_min_n: int = 16) -> ClosedLoopSummary:
     """Certify the closed loop of the design point along its mission and check its configured start.
 
-    The start check builds per-vehicle tubes for every candidate blend time it tries: from
-    about 0.1 s to 1 s per vehicle (40 vehicles of a spread start: 20 candidates, 30-40 s). A
-    declared start (``simulation.initial``) is always checked and enters the verdict; the
-    default start enters no verdict and is only checked up to ``default_start_max_n`` vehicles
-    (one chunk of tubes): beyond, it is not evaluated (``shaped`` is ``None``, so
-    ``covers_shaped_start`` is false; nothing is claimed about it) and ``auv-hinf simulate``
-    decides coverage for its own run. Above ``progress_min_n`` vehicles a progress bar is shown.
+    The start ``simulate`` will run is checked, whatever the fleet size: a declared start
+    (``simulation.initial``) enters the verdict; the default start is the fleet on its slots
+    (:func:`~auv_hinf.workflow.design_point.initial_states`), at zero error, so the raw mission
+    covers it without a blend and the check costs one tube. A declared start far from the
+    slots builds per-vehicle tubes for every candidate blend time it tries (about 0.1-1 s per
+    vehicle); above ``progress_min_n`` vehicles a progress bar is shown.
     """
     cfg = point.config
     reasons: list[str] = []
@@ -190,8 +186,6 @@ def closed_loop_summary(
     except AuvHinfError as exc:
         return ClosedLoopSummary(None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",))
     declared = cfg.simulation.initial is not None
-    if not declared and cfg.n > default_start_max_n:
-        return ClosedLoopSummary(cert, None, declared, tuple(reasons))
     try:
         with tqdm(
             total=1,

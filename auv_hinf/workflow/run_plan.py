@@ -21,6 +21,7 @@ from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.coverage import Coverage, StartMode
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.simulation.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
 from auv_hinf.simulation.results import SimulationResult
@@ -82,12 +83,27 @@ def _uncertified(plan: RunPlan) -> str | None:
     return None
 
 
+#: Stored output samples of a run of few vehicles (one every 0.1 s over the paper's 300 s).
+RUN_SAMPLES = 3001
+#: Vehicle-samples a run stores at most (3001 samples of 1000 vehicles, about 1 GB with the
+#: forces and the post-processing): larger fleets store fewer samples, so memory stays bounded
+#: at any N. Sampling does not decide envelope exits: the integrator locates them between samples.
+SAMPLE_BUDGET = 3_001_000
+#: Fewest samples a run stores, however large the fleet.
+MIN_RUN_SAMPLES = 101
+
+
+def run_samples(n: int) -> int:
+    """Stored output samples of a run of ``n`` vehicles: :data:`RUN_SAMPLES`, fewer above the budget."""
+    return int(max(MIN_RUN_SAMPLES, min(RUN_SAMPLES, SAMPLE_BUDGET // max(n, 1))))
+
+
 def plan_run(
     cfg: FormationConfig,
     *,
     start: StartMode | None = None,
     horizon: float | None = None,
-    samples: int = 3001,
+    samples: int | None = None,
     design: DesignPoint | None = None,
 ) -> RunPlan:
     """Gains, certificate and scenario of one configured run.
@@ -100,8 +116,8 @@ def plan_run(
         Overrides ``cfg.simulation.start``.
     horizon : float, optional
         Overrides ``cfg.simulation.horizon`` (s).
-    samples : int
-        Output samples.
+    samples : int, optional
+        Output samples (default :func:`run_samples` of the fleet size).
     design : DesignPoint, optional
         The design point of ``cfg`` when the caller has it (otherwise computed, or taken from
         the cache).
@@ -141,7 +157,7 @@ def plan_run(
         horizon=float(horizon if horizon is not None else sim.horizon),
         current=sim.current,
         envelope=cfg.envelope,
-        samples=samples,
+        samples=run_samples(cfg.n) if samples is None else samples,
         name=cfg.name,
         jacobi=cfg.jacobi,
     )
@@ -185,11 +201,12 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
     certified = None
     if cov is not None:
         b = cov.bounds
+        # the exact solution obeys the bounds; the simulated one to the integrator's accuracy
         certified = {
-            "position_error": b.position,
-            "velocity_error": b.velocity,
-            "heading_error": b.heading,
-            "yaw_rate_error": b.yaw_rate,
+            "position_error": max(b.position, NUMERICAL_FLOOR),
+            "velocity_error": max(b.velocity, NUMERICAL_FLOOR),
+            "heading_error": max(b.heading, NUMERICAL_FLOOR),
+            "yaw_rate_error": max(b.yaw_rate, NUMERICAL_FLOOR),
         }
     cert = plan.certificate
     out.update(
@@ -203,6 +220,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "certified_decay_rate": None if cert is None else cert.rate,
             "measured_errors": measured,
             "certified_errors": certified,
+            "numerical_floor": NUMERICAL_FLOOR,
             "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
             "robust_covers_run": None if plan.robust is None else plan.robust.covered,
             "robust_bounds": None if plan.robust is None else plan.robust.bounds,
@@ -211,7 +229,25 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "gain_source": plan.design.source,
         }
     )
+    out["null_reasons"] = {k: _NULL_REASONS.get(k, "not applicable to this run") for k, v in out.items() if v is None}
     return out
+
+
+#: Why a key of :func:`run_report` can be ``null``, in words.
+_NULL_REASONS = {
+    "first_exit_time": "the run never left the envelope",
+    "blend_time": "no blended start: the run starts on the raw mission, or no certificate evaluated it",
+    "turn_time": "no blended start: the run starts on the raw mission, or no certificate evaluated it",
+    "coverage_reason": "no certificate evaluated the run",
+    "measured_decay_rate": "no vehicle starts with an error large enough to measure a decay (or no certificate)",
+    "certified_decay_rate": "no closed-loop certificate",
+    "certified_errors": "no certificate covers the run's start",
+    "certified_thrust": "no certificate bounds the run's force",
+    "robust_covers_run": "no [uncertainty] box or [disturbance] current declared",
+    "robust_bounds": "no robust bound for this run (none declared, or not covered)",
+    "robust_reason": "no [uncertainty] box or [disturbance] current declared",
+    "actuator_limits": "no [actuators] declared: unlimited thrust",
+}
 
 
 def with_start(cfg: FormationConfig, initial: FloatArray) -> FormationConfig:

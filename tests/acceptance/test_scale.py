@@ -55,10 +55,10 @@ def test_certify_ten_thousand_vehicles(big_cert):
     for key in ("decay_rate", "max_force", "max_moment"):
         assert loop[key] == pytest.approx(small_loop[key], rel=1e-12), key
     assert loop["region"] == pytest.approx(small_loop["region"], rel=1e-12)
-    # the default start of so large a fleet is not evaluated, and so is not claimed covered
-    assert loop["covers_shaped_start"] is False and loop["shaped_start"] is None
-    assert loop["shaped_start_note"].startswith("not evaluated")
-    assert small_loop["covers_shaped_start"] is True
+    # the default start (each vehicle on its slot, zero error) is evaluated at every size and
+    # covered without a blend, as for 3 vehicles
+    assert loop["covers_shaped_start"] is True and loop["shaped_start_note"] is None
+    assert loop["shaped_start"]["blend_time"] is None and small_loop["covers_shaped_start"] is True
 
 
 @pytest.mark.slow

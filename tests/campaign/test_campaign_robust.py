@@ -30,14 +30,16 @@ def test_vertex_runs_enumerate_the_box_corners(remus_setup) -> None:
     s = remus_setup
     assert s.robust is not None and s.robust.vertices == 2**9
     corners = set()
-    for i in range(s.robust.vertices):
+    for i in range(0, 2 * s.robust.vertices, 2):  # every other run is a vertex
         x = sample_run(s, i)
         assert np.all((x.multipliers == s.box[:, 0]) | (x.multipliers == s.box[:, 1]))
         assert np.hypot(*x.current) == pytest.approx(design_point(preset_config("remus-line")).current, rel=1e-12)
         corners.add(tuple(x.multipliers))
     assert len(corners) == 2**9
-    inner = sample_run(s, s.robust.vertices + 3)
-    assert np.all((inner.multipliers > s.box[:, 0]) & (inner.multipliers < s.box[:, 1]))
+    for i in (1, 3, 2 * s.robust.vertices + 2):  # odd runs, and every run after the vertices are used
+        inner = sample_run(s, i)
+        assert np.all((inner.multipliers > s.box[:, 0]) & (inner.multipliers < s.box[:, 1]))
+    assert s.robust.vertex_runs(200) == 100 and s.robust.vertex_runs(10**6) == 2**9
 
 
 @pytest.mark.slow
