@@ -12,9 +12,11 @@ certificates (the lower end of every bisection is a certified value, so re-runni
 certifies; with ``[design] robust = true`` the answer is confirmed by re-running the robust
 design there, as a re-run of ``certify`` would):
 
-* ``box_scale``: the largest scale of the declared ``[uncertainty]`` box (declared current);
-* ``current_speed``: the largest current speed (declared box);
-* ``joint_scale``: when neither alone helps, the largest scale of box and current together.
+* ``box_scale_alone``: the largest scale of the declared ``[uncertainty]`` box (declared current);
+* ``current_speed_alone``: the largest current speed (declared box);
+* ``box_scale`` and ``current_speed``: a pair that certifies *together*, the one to re-run with
+  (one of the answers alone with the other declared value, both when they are confirmed
+  together, else box and current scaled together), with the scaled ``uncertainty`` table.
 
 The nominal start region needs no answer of its own: it is already shrunk to fit the limits
 (:func:`~auv_hinf.certification.actuation.within_actuators`).
@@ -30,6 +32,7 @@ from typing import Any
 
 from auv_hinf.models.actuators import CHANNELS, Actuators, actuator_shortfall
 from auv_hinf.robust.bandwidth import design_robust
+from auv_hinf.robust.box import PARAMETERS
 from auv_hinf.robust.certificate import robust_certificate
 from auv_hinf.robust.synthesis import synthesise_robust
 from auv_hinf.workflow.design_point import DesignPoint
@@ -65,8 +68,9 @@ class ActuatorCheck:
     reason : str
         One sentence on the verdict.
     largest_certifiable : dict or None
-        When the limits bind: ``box_scale`` and ``current_speed`` that certify within them
-        (``None`` for an answer that does not apply or does not exist).
+        When the limits bind: a ``box_scale`` and ``current_speed`` that certify together within
+        them, with the scaled ``uncertainty`` table, and each answer alone (see
+        :func:`largest_certifiable`).
     """
 
     limits: Actuators | None
@@ -75,7 +79,7 @@ class ActuatorCheck:
     binding_ratio: float | None
     certified: bool
     reason: str
-    largest_certifiable: dict[str, float | None] | None = None
+    largest_certifiable: dict[str, Any] | None = None
 
     def lines(self) -> list[str]:
         """Lines of ``Certificate.summary``."""
@@ -92,8 +96,17 @@ class ActuatorCheck:
         if not self.certified:
             out.append(f"    {self.reason}")
         if self.largest_certifiable is not None:
-            parts = [f"{k} {v:.4g}" for k, v in self.largest_certifiable.items() if v is not None]
-            out.append("    largest certifiable within the limits: " + (", ".join(parts) or "none"))
+            best = self.largest_certifiable
+            if best.get("current_speed") is None:
+                out.append(
+                    "    largest certifiable within the limits: none (not even the nominal plant in still water)"
+                )
+            else:
+                box = "n/a" if best.get("box_scale") is None else f"{best['box_scale']:.4g}"
+                out.append(
+                    f"    largest certifiable within the limits: box scale {box} with current "
+                    f"{best['current_speed']:.4g} m/s (re-run with these)"
+                )
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -143,15 +156,18 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)
 
 
-def largest_certifiable(point: DesignPoint, act: Actuators) -> dict[str, float | None]:
-    """Largest box scale and current speed (or both scaled together) that certify within ``act``.
+def largest_certifiable(point: DesignPoint, act: Actuators) -> dict[str, Any]:
+    """A box scale and a current speed that certify together within ``act``, largest first.
 
+    ``box_scale`` and ``current_speed`` are a pair to re-run with (``uncertainty`` gives the
+    scaled ``[uncertainty]`` table); ``box_scale_alone`` (declared current) and
+    ``current_speed_alone`` (declared box) are the largest of each with the other unchanged.
     Each is ``None`` when it does not apply (nothing of that kind declared) or when not even
     zero certifies.
     """
     cfg = point.config
     gains = point.gains
-    out: dict[str, float | None] = {"box_scale": None, "current_speed": None}
+    out: dict[str, Any] = {"box_scale": None, "current_speed": None}
     if gains is None:
         return out
     box, current = point.box, point.current
@@ -178,12 +194,35 @@ def largest_certifiable(point: DesignPoint, act: Actuators) -> dict[str, float |
             x *= 0.5
         return None
 
-    if box.declared:
-        out["box_scale"] = answer(lambda s: (s, current), min(1.0, box.max_scale))
-    if current > 0.0:
-        out["current_speed"] = answer(lambda c: (1.0, c), current)
-    if box.declared and current > 0.0 and out["box_scale"] is None and out["current_speed"] is None:
-        out["joint_scale"] = answer(lambda s: (s, s * current), min(1.0, box.max_scale))
+    top = min(1.0, box.max_scale)
+    alone_box = answer(lambda s: (s, current), top) if box.declared else None
+    alone_current = answer(lambda c: (1.0, c), current) if current > 0.0 else None
+
+    def pair_fits(scale: float, speed: float) -> bool:
+        return fits(scale, speed) and (not cfg.robust or redesign_fits(scale, speed))
+
+    # the pair to re-run with: each answer alone holds the other at its declared value, so one
+    # of them alone is a certified pair; when both shrink, the pair is confirmed together, and
+    # when neither alone helps, box and current are scaled together
+    if alone_box is not None and alone_current is None:
+        pair: tuple[float | None, float] | None = (alone_box, current)
+    elif alone_current is not None and alone_box is None:
+        pair = (1.0 if box.declared else None, alone_current)
+    elif alone_box is not None and alone_current is not None and pair_fits(alone_box, alone_current):
+        pair = (alone_box, alone_current)
+    elif box.declared and current > 0.0:
+        joint = answer(lambda s: (s, s * current), top)
+        pair = None if joint is None else (joint, joint * current)
+    else:
+        pair = None
+    out["box_scale_alone"], out["current_speed_alone"] = alone_box, alone_current
+    if pair is not None:
+        out["box_scale"], out["current_speed"] = pair
+        if pair[0] is not None:
+            scaled = box.scaled(pair[0])
+            out["uncertainty"] = {
+                name: [lo, hi] for name, lo, hi in zip(PARAMETERS, scaled.lo, scaled.hi) if lo < 1.0 or hi > 1.0
+            }
     return out
 
 

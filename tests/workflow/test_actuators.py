@@ -14,6 +14,7 @@ from auv_hinf.certification.margins import ErrorBounds, inflate_envelope
 from auv_hinf.cli.main import main
 from auv_hinf.config.formation import config_from_dict, load_config
 from auv_hinf.config.presets import preset_config
+from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
 from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.models.actuators import Actuators, actuator_shortfall, vehicle_actuators
 from auv_hinf.simulation.engine import simulate_batch
@@ -123,9 +124,8 @@ def test_remus_with_its_real_limits_names_the_sway_channel(remus_limited, tmp_pa
     assert any("sway force" in r and "fins" in r for r in cert.reasons)
     # the answer within the limits, by bisection on certificates: re-certified at that scale
     best = act["largest_certifiable"]
-    assert best is not None and set(best) >= {"box_scale", "current_speed"}
-    scale = best.get("joint_scale") or best["box_scale"]
-    assert scale is not None and 0.0 < scale < 1.0
+    assert best is not None and set(best) >= {"box_scale", "current_speed", "box_scale_alone", "current_speed_alone"}
+    assert best["box_scale"] is not None and 0.0 < best["box_scale"] < 1.0
     # saved and loaded with its actuator verdict
     path = cert.save(tmp_path / "c.json")
     assert Certificate.load(path).actuators == cert.actuators
@@ -164,3 +164,22 @@ def test_simulate_reports_commanded_peak_before_saturation(capsys):
     assert run["commanded_peak"]["force_x"] == pytest.approx(run["max_force"], rel=1e-12) or (
         run["commanded_peak"]["force_y"] == pytest.approx(run["max_force"], rel=1e-12)
     )
+
+
+@pytest.mark.slow
+def test_bluerov2_line_answers_and_the_answer_certifies():
+    """Not certifiable as declared: the answer is a box scale and a current that, re-run, certify."""
+    cfg = preset_config("bluerov2-line")
+    cert = certify(cfg)
+    act = cert.to_dict()["actuators"]
+    assert not cert.certified and act["certified"] is False and act["binding_ratio"] > 1.0
+    best = act["largest_certifiable"]
+    assert 0.0 < best["box_scale"] < 1.0 and 0.0 <= best["current_speed"] < cfg.disturbance.current_speed
+    box = tuple((name, (lo, hi)) for name, (lo, hi) in best["uncertainty"].items())
+    again = replace(
+        cfg, uncertainty=UncertaintyConfig(box), disturbance=DisturbanceConfig(current_speed=best["current_speed"])
+    )
+    redo = certify(again)
+    assert redo.certified, redo.reasons
+    peak, limits = redo.to_dict()["actuators"]["certified_peak"], redo.to_dict()["actuators"]["limits"]
+    assert all(peak[k] <= limits[k] for k in limits)
