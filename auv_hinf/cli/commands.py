@@ -185,7 +185,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(_dump(summary))
     else:
         for key, val in summary.items():
-            print(f"{key:>24}: {_short(val)}")
+            if key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
+                print(f"{key:>24}: {_short(val)}")
     if plan.certificate is None:
         return _verdict(False, "; ".join(plan.notes))
     if not summary["stayed_in_envelope"]:

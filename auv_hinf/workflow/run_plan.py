@@ -230,7 +230,21 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
         }
     )
     out["null_reasons"] = {k: _NULL_REASONS.get(k, "not applicable to this run") for k, v in out.items() if v is None}
+    out["definitions"] = DEFINITIONS
     return out
+
+
+#: What the fleet-wide numbers of :func:`run_report` are, in words (they are not per vehicle).
+DEFINITIONS = {
+    "final_shape_error": "fleet-wide Jacobi shape error at the end (m): Frobenius norm over the N-1 Jacobi vectors",
+    "rms_shape_error": "root mean square over the samples of the fleet-wide Jacobi shape error (m); it grows with "
+    "sqrt(N) for equal per-vehicle errors",
+    "final_position_error": "largest |p_i - p_d,i| over the vehicles at the end (m)",
+    "measured_errors": "sup over samples and vehicles of each tracking error (m, m/s, rad, rad/s)",
+    "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
+    "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
+    "commanded_peak": "largest commanded force per channel before saturation (N, N, N m)",
+}
 
 
 #: Why a key of :func:`run_report` can be ``null``, in words.
