@@ -23,6 +23,7 @@ import dataclasses
 
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, ThrustBounds, thrust_bounds
 from auv_hinf.certification.margins import ErrorBounds, envelope_margins, inflate_envelope
+from auv_hinf.certification.region import largest_fitting
 from auv_hinf.design.gains import Gains
 from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.envelope import Envelope
@@ -64,13 +65,7 @@ def actuator_fraction(
 
     if not fits(0.0):
         return None
-    if fits(1.0):
-        return 1.0
-    lo, hi = 0.0, 1.0
-    while hi - lo > KAPPA_RTOL:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
-    return lo
+    return largest_fitting(fits, 1.0, KAPPA_RTOL)
 
 
 def within_actuators(

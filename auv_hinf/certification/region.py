@@ -284,12 +284,17 @@ def _axis_ok(prob: _RegionProblem, axis: FloatArray, k: float) -> bool:
     return prob.trial(Region(*(k * axis))).ok
 
 
-def _largest(ok: Callable[[float], bool], hi: float) -> float:
-    """Largest ``k`` in ``[0, hi]`` with ``ok(k)`` (``ok(0)`` true, monotone), by bisection."""
+def largest_fitting(ok: Callable[[float], bool], hi: float, rtol: float = REGION_RTOL) -> float:
+    """Largest ``k`` in ``[0, hi]`` with ``ok(k)``, by bisection to ``rtol * hi``.
+
+    ``ok(0)`` must be true (the caller checks it). Only values where ``ok`` was evaluated true
+    are returned, so the answer is certified whether or not ``ok`` is monotone; monotonicity
+    decides only whether it is also the largest.
+    """
     lo = 0.0
     if ok(hi):
         return hi
-    while hi - lo > REGION_RTOL * hi:
+    while hi - lo > rtol * hi:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if ok(mid) else (lo, mid)
     return lo
@@ -350,9 +355,9 @@ def certify_region(
             hi *= 2.0
         else:
             raise DesignError(f"single-axis radius along {axis} is unbounded: the margins never bind")
-        single.append(_largest(partial(_axis_ok, prob, axis), hi))
+        single.append(largest_fitting(partial(_axis_ok, prob, axis), hi))
     single_axis = Region(*single)
-    kappa = _largest(lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0)
+    kappa = largest_fitting(lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0)
     region = single_axis.scaled(kappa)
     final = prob.trial(region)
     if not final.ok or final.margins is None:  # the bisection keeps only certified scales
@@ -370,4 +375,12 @@ def certify_region(
     )
 
 
-__all__ = ["Region", "RegionCertificate", "certify_region", "ellipsoid_extent", "pair_level", "start_bounds"]
+__all__ = [
+    "Region",
+    "RegionCertificate",
+    "certify_region",
+    "ellipsoid_extent",
+    "largest_fitting",
+    "pair_level",
+    "start_bounds",
+]

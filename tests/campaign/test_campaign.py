@@ -14,7 +14,7 @@ import pytest
 
 from auv_hinf.campaign.report import passed, summarize
 from auv_hinf.campaign.runner import run_campaign
-from auv_hinf.campaign.sampling import chunks, initial_state, prepare, run_chunk, sample_run
+from auv_hinf.campaign.sampling import FORCE_COLUMNS, chunks, initial_state, prepare, run_chunk, sample_run
 from auv_hinf.certification.coverage import initial_errors
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
@@ -91,6 +91,10 @@ def test_uncovered_box_and_current_make_the_verdict_not_applicable() -> None:
     assert summary["counts"]["not_applicable"] == 3 and summary["fraction_inside"] is None
     assert any("robust certificate does not cover" in n for n in summary["notes"])
     assert summary["ok"] == bool(passed(t).all()) == bool(t["stayed_in_envelope"].all())
+    # no certificate covers these runs: their forces are recorded, with no force verdict
+    assert t["within_certified_force"].isna().all() and (t[list(FORCE_COLUMNS)] > 0).all().all()
+    assert summary["counts"]["exceeded_certified_force"] == 0 and summary["forces"]["within_certified_force"] == 0
+    assert all(v is None for v in summary["forces"]["worst_ratio"].values())
 
 
 def test_bad_inputs_raise() -> None:

@@ -15,7 +15,6 @@ from auv_hinf.campaign.report import force_summary, passed, summarize, write_out
 from auv_hinf.campaign.runner import Campaign, run_campaign
 from auv_hinf.campaign.sampling import FORCE_COLUMNS, prepare, run_scenario, sample_run
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
 from auv_hinf.models.actuators import CHANNELS, Actuators
 from auv_hinf.simulation.engine import integrate_batch, simulate_batch
 from auv_hinf.simulation.metrics import ErrorSink
@@ -125,22 +124,6 @@ def test_declared_actuators_bound_the_certified_force_and_are_reported() -> None
     assert forces["actuator_limits"] == TIGHT.to_dict()
     assert forces["exceeded_certified_force"] == 0
     assert all(forces["max_commanded"][c] <= lim for c, lim in zip(CHANNELS, TIGHT.limits()))
-
-
-def test_runs_no_certificate_covers_have_no_force_verdict() -> None:
-    cfg = replace(
-        preset_config("paper-triangle"),
-        uncertainty=UncertaintyConfig({"m11": (0.9, 1.1)}),
-        disturbance=DisturbanceConfig(current_speed=0.05),
-    )
-    camp = run_campaign(cfg, 3, seed=1, horizon=5.0)
-    t = camp.table
-    assert t["within_certified_force"].isna().all()
-    assert (t[list(FORCE_COLUMNS)] > 0).all().all()
-    summary = summarize(camp)
-    assert summary["counts"]["exceeded_certified_force"] == 0
-    assert summary["forces"]["within_certified_force"] == 0
-    assert all(v is None for v in summary["forces"]["worst_ratio"].values())
 
 
 @pytest.mark.slow
