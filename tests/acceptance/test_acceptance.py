@@ -369,6 +369,7 @@ def test_shaped_far_starts(case):
             covered.setdefault((cov.blend_time, cov.turn_time), []).append(x)
         else:  # nothing is claimed about the run; the verdict must say why
             assert "not covered" in cov.reason or "no shaped start" in cov.reason
+            assert cov.reason.count("not covered") <= 1  # one readable line, no doubled prefix
     print(f"\n{case}: shaped starts covered {verdicts}, blend/turn times {sorted(covered)}")
     assert covered, f"no far start of {case} is covered: the test would check nothing"
     for g, ((tb, th), xs) in enumerate(sorted(covered.items())):

@@ -85,7 +85,9 @@ def test_robust_campaign_stays_inside_the_robust_bounds() -> None:
     t = camp.table
     assert t["inside_bounds"].notna().all() and t["inside_bounds"].all()
     summary = summarize(camp)
-    assert summary["certificate"] == "robust" and summary["box_vertex_runs"] == RUNS and summary["ok"]
+    # every other run is a box vertex, interleaved with interior plants; the summary says so
+    assert summary["certificate"] == "robust" and summary["box_vertex_runs"] == (RUNS + 1) // 2 and summary["ok"]
+    assert f"{(RUNS + 1) // 2} at box vertices" in summary["composition"]
     bounds = summary["region_error_bounds"]
     for kind in ("position", "velocity", "heading", "yaw_rate"):
         assert (t[f"max_{kind}_error"] <= bounds[kind] * (1 + 1e-6)).all()
