@@ -58,7 +58,7 @@ GNU_TIME = shutil.which("time", path="/usr/bin:/bin")
 STAGES = [
     ("design", "design", "`design_point(cfg)` (design cache cleared)"),
     ("certificate", "certificate", "`closed_loop_for(point)`: nominal closed-loop certificate"),
-    ("coverage", "coverage", "`coverage_for(point, cert, initial_states(cfg), 'shaped')`"),
+    ("coverage", "coverage", "`coverage_for(point, cert, initial_states(point), 'shaped')`"),
     ("certify", "**certify, in-process**", "`certify(cfg)` (design cache cleared; with Jacobi sigma, cross-checks)"),
     ("plan", "plan", "`plan_run(cfg)`, design cached"),
     ("integration", "integration", "`integrate_batch` of the plan's scenario (dopri, rtol = atol = 1e-8)"),
@@ -112,7 +112,7 @@ def _one_pass(cfg: FormationConfig, times: dict[str, list[float]], out: Path) ->
     _design.cache_clear()
     point = _clock(times, "design", design_point, cfg)
     cert = _clock(times, "certificate", closed_loop_for, point)
-    cov = _clock(times, "coverage", lambda: coverage_for(point, cert, initial_states(cfg), "shaped"))
+    cov = _clock(times, "coverage", lambda: coverage_for(point, cert, initial_states(point), "shaped"))
     if not cov.covered:
         raise RuntimeError(f"N = {cfg.n}: the default start is not covered: {cov.reason}")
     plan: RunPlan = _clock(times, "plan", plan_run, cfg)  # design cached, as in the command

@@ -16,11 +16,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
-
 from auv_hinf._typing import GAIN_METHODS
 from auv_hinf.cli.args import (
     EXIT_NEGATIVE,
@@ -54,20 +49,15 @@ def _prepare_out(path: Path | None) -> None:
 
 
 def _load(args: argparse.Namespace) -> Any:
-    from auv_hinf.config.formation import load_config
+    from auv_hinf.config.formation import read_config
     from auv_hinf.config.presets import preset_config
 
     if args.preset:
         return preset_config(args.preset)
-    cfg = load_config(args.config)  # reads and validates; the warnings read the same file again
-    for line in input_warnings(_toml_data(args.config)):
+    cfg, data = read_config(args.config)
+    for line in input_warnings(data):
         print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
     return cfg
-
-
-def _toml_data(path: Path) -> Any:
-    """The parsed TOML of a file that :func:`load_config` has just read and validated."""
-    return tomllib.loads(path.read_text(encoding="utf-8"))
 
 
 def _cmd_design(args: argparse.Namespace) -> int:

@@ -120,15 +120,7 @@ class FormationConfig:
         form = validate_table(
             FormationTable, plain_data({"n": self.n, "jacobi": self.jacobi, "shape": self.shape}), ("formation",)
         )
-        design = {
-            "method": self.method,
-            "k1": self.k1,
-            "heading_poles": self.heading_poles,
-            "gamma": self.gamma,
-            "lambda": self.lam,
-            "robust": self.robust,
-            "synthesis": self.synthesis,
-        }
+        design = self._design_table()
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
         init = self.simulation.initial
         if init is not None and len(init) != form.n:
@@ -142,6 +134,18 @@ class FormationConfig:
             k1=des.k1,
             heading_poles=(des.heading_poles[0], des.heading_poles[1]),
         )
+
+    def _design_table(self) -> dict[str, Any]:
+        """The ``[design]`` table of this configuration (``None`` for an option not set)."""
+        return {
+            "method": self.method,
+            "gamma": self.gamma,
+            "lambda": self.lam,
+            "k1": self.k1,
+            "heading_poles": list(self.heading_poles),
+            "robust": self.robust,
+            "synthesis": self.synthesis,
+        }
 
     @property
     def transform(self) -> JacobiTransform:
@@ -161,13 +165,7 @@ class FormationConfig:
             "jacobi": self.jacobi,
             "shape": [list(s) for s in self.shape],
             "envelope": self.envelope.to_dict(),
-            "method": self.method,
-            "gamma": self.gamma,
-            "lambda": self.lam,
-            "k1": self.k1,
-            "heading_poles": list(self.heading_poles),
-            "robust": self.robust,
-            "synthesis": self.synthesis,
+            **self._design_table(),
             "reference": self.reference.to_dict(),
             "simulation": self.simulation.to_dict(),
             "uncertainty": self.uncertainty.to_dict(),
@@ -181,15 +179,7 @@ class FormationConfig:
             ({"preset": key} for key, make in VEHICLE_PRESETS.items() if make() == self.vehicle),
             {k: v for k, v in self.vehicle.to_dict().items()},
         )
-        design = {
-            "method": self.method,
-            "gamma": self.gamma,
-            "lambda": self.lam,
-            "k1": self.k1,
-            "heading_poles": list(self.heading_poles),
-            "robust": self.robust,
-            "synthesis": self.synthesis,
-        }
+        design = self._design_table()
         sim = {k: v for k, v in self.simulation.to_dict().items() if v not in (None, {})}
         out = {
             "name": self.name,
@@ -279,6 +269,17 @@ def load_config(path: str | Path) -> FormationConfig:
         If the file cannot be read, is not TOML, or fails validation; every line of the
         message starts with the file name.
     """
+    return read_config(path)[0]
+
+
+def read_config(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]:
+    """:func:`load_config`, also returning the parsed TOML document (for input warnings).
+
+    Raises
+    ------
+    ConfigError
+        As :func:`load_config`.
+    """
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -290,9 +291,9 @@ def load_config(path: str | Path) -> FormationConfig:
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: invalid TOML: {exc}") from None
     try:
-        return config_from_dict(data, name=p.stem)
+        return config_from_dict(data, name=p.stem), data
     except ConfigError as exc:
         raise ConfigError("\n".join(f"{p}: {line}" for line in str(exc).splitlines())) from None
 
 
-__all__ = ["FormationConfig", "config_from_dict", "load_config"]
+__all__ = ["FormationConfig", "config_from_dict", "load_config", "read_config"]

@@ -51,6 +51,9 @@ class Actuators:
     thrusters : ThrusterAllocation or None
         The thrusters behind the limits, when known: then a force box must also be deliverable
         by them (the channel limits cannot all be reached at once).
+    note : str
+        What a user should know when the limits bind, in plain words (e.g. that a vehicle
+        has no sway thruster); added to the reason.
 
     Raises
     ------
@@ -63,6 +66,7 @@ class Actuators:
     tau_psi: float
     source: str = "declared"
     thrusters: ThrusterAllocation | None = None
+    note: str = ""
 
     def __post_init__(self) -> None:
         for name in ("tau_x", "tau_y", "tau_psi"):
@@ -161,7 +165,13 @@ def actuator_shortfall(actuators: Actuators, peak: tuple[float, float, float]) -
 #: one channel at a time, with von Benzon et al.'s (2022) thruster curve (30.6 N a thruster);
 #: the allocation polytope is checked too, since the thrusters cannot give all three at once.
 VEHICLE_ACTUATORS: dict[str, Actuators] = {
-    "remus100": Actuators(67.0, 5.6, 4.5, source="remus100"),
+    "remus100": Actuators(
+        67.0,
+        5.6,
+        4.5,
+        source="remus100",
+        note="the fully actuated law needs a sway force that the REMUS 100's fins cannot give",
+    ),
     "bluerov2-heavy": Actuators(
         86.0, 86.0, 23.0, "bluerov2-heavy", bluerov2_heavy_thrusters(BENZON2022_THRUST, BENZON2022_THRUST)
     ),

@@ -39,6 +39,10 @@ RATES = (0.05, 0.15, 0.4, 1.0)
 #: Shares of the envelope's sway half-width that the certified velocity error may take.
 VELOCITY_SHARES = (0.3, 0.6, 0.9)
 
+#: Smallest disturbance bound used to size the velocity cap (m/s^2): a plant known exactly in
+#: still water has none, and any positive floor far below real disturbances keeps the cap finite.
+DISTURBANCE_FLOOR = 1e-12
+
 OBJECTIVE = "minimise the certified peak force (relative to the actuator limits when declared)"
 
 
@@ -77,9 +81,11 @@ def synthesise_robust(
     half_v = min(-envelope.v[0], envelope.v[1])
     scale = abs(lam) + sigma
     candidates: list[tuple[Gains, float]] = []
+    # the disturbance of the position loop at zero heading error; the heading coupling is
+    # checked afterwards by the robust certificate of each candidate
+    dbar = max(position_disturbance(box, env, summ, current, 0.0, lam, sigma), DISTURBANCE_FLOOR)
     for share in VELOCITY_SHARES:
-        dbar = position_disturbance(box, env, summ, current, 0.0, lam, sigma)
-        cap = (share * half_v / max(dbar, 1e-12)) ** 2
+        cap = (share * half_v / dbar) ** 2
         for frac in RATES:
             found = synthesise_position(lam, lc, sigma, spread, frac * scale, cap)
             if found is None:
@@ -125,4 +131,4 @@ def synthesise_robust(
     return RobustDesign(gains, w, target, cert, tuple(tried), why)
 
 
-__all__ = ["OBJECTIVE", "RATES", "VELOCITY_SHARES", "synthesise_robust"]
+__all__ = ["DISTURBANCE_FLOOR", "OBJECTIVE", "RATES", "VELOCITY_SHARES", "synthesise_robust"]

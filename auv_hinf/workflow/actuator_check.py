@@ -150,8 +150,8 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
         why = f"the certified peak force fits the limits (binding: {channel}, {ratio:.3g} of its limit)"
         return ActuatorCheck(act, peak, channel, ratio, True, why)
     why = actuator_shortfall(act, peak)
-    if act.source == "remus100" and channel in ("force_y", "moment"):
-        why += " (the fully actuated law needs a sway force that the REMUS 100's fins cannot give)"
+    if act.note:
+        why += f" ({act.note})"
     best = largest_certifiable(point, act) if answers and point.declared else None
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)
 

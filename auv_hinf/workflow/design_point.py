@@ -149,7 +149,7 @@ def formation_offsets(cfg: FormationConfig) -> FloatArray:
     return positions_from_jacobi(np.vstack([rho, np.zeros((1, 2))]), cfg.jacobi)
 
 
-def initial_states(cfg: FormationConfig) -> FloatArray:
+def initial_states(point: DesignPoint) -> FloatArray:
     """The configured initial states ``(N, 6)``; without ``[simulation] initial``, the fleet on its slots.
 
     The default start puts every vehicle exactly on its desired motion at ``t = 0`` along the
@@ -157,9 +157,10 @@ def initial_states(cfg: FormationConfig) -> FloatArray:
     path's turn rate as yaw rate): zero tracking error, so the certificate covers it at every
     fleet size without a blended start, and ``certify`` and ``simulate`` judge the same start.
     """
-    if cfg.simulation.initial is not None:
-        return np.asarray(cfg.simulation.initial, dtype=float)
-    return slot_states(FleetReference(mission_reference(cfg), formation_offsets(cfg)))
+    initial = point.config.simulation.initial
+    if initial is not None:
+        return np.asarray(initial, dtype=float)
+    return slot_states(point.fleet())
 
 
 def slot_states(fleet: FleetReference) -> FloatArray:

@@ -193,7 +193,7 @@ def closed_loop_summary(point: DesignPoint, *, progress_min_n: int = 16) -> Clos
             unit="start",
             desc=f"checking the {'declared' if declared else 'default'} start of {cfg.n} vehicles",
         ) as bar:
-            shaped: Coverage | None = coverage_for(point, cert, initial_states(cfg), "shaped")
+            shaped: Coverage | None = coverage_for(point, cert, initial_states(point), "shaped")
             bar.update(1)
     except AuvHinfError as exc:
         shaped = None

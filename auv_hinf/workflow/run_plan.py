@@ -71,16 +71,12 @@ class RunPlan:
         set); this is about the gains: no nominal closed-loop certificate (small gain, envelope,
         actuators), or a declared box and current the robust certificate does not cover.
         """
-        return _uncertified(self)
-
-
-def _uncertified(plan: RunPlan) -> str | None:
-    """Why no certificate covers the plan's gains for its configuration (``None`` when one does)."""
-    if plan.certificate is None:
-        return "; ".join(n for n in plan.notes if n.startswith("design not certified")) or "no closed-loop certificate"
-    if plan.robust is not None and plan.robust.design_covered is False:
-        return f"the robust certificate does not cover the declared box and current: {plan.robust.reason}"
-    return None
+        if self.certificate is None:
+            why = "; ".join(n for n in self.notes if n.startswith("design not certified"))
+            return why or "no closed-loop certificate"
+        if self.robust is not None and self.robust.design_covered is False:
+            return f"the robust certificate does not cover the declared box and current: {self.robust.reason}"
+        return None
 
 
 #: Stored output samples of a run of few vehicles (one every 0.1 s over the paper's 300 s).
@@ -131,7 +127,7 @@ def plan_run(
     mode: StartMode = start or sim.start
     point = design if design is not None else design_point(cfg)
     gains = point.require_gains()
-    initial = initial_states(cfg)
+    initial = initial_states(point)
     notes: list[str] = []
     cert: ClosedLoopCertificate | None = None
     cov: Coverage | None = None

@@ -17,7 +17,7 @@ from auv_hinf.workflow.design_point import design_point, initial_states
 @pytest.mark.parametrize("n", [3, 40, 400])
 def test_default_start_has_zero_error_and_is_covered(n):
     cfg = config_from_dict({"formation": {"n": n, "polygon_radius": 0.5 * n}})
-    x0 = initial_states(cfg)
+    x0 = initial_states(design_point(cfg))
     fleet = design_point(cfg).fleet()
     m = fleet.motion(0.0)
     np.testing.assert_allclose(x0[:, :2], m.p, atol=1e-12)

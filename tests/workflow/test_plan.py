@@ -191,7 +191,7 @@ def test_design_gains_agree_with_certify(which):
 
 def test_initial_states_and_offsets(triangle):
     cfg, _ = triangle
-    np.testing.assert_array_equal(initial_states(cfg), np.asarray(cfg.simulation.initial))
+    np.testing.assert_array_equal(initial_states(design_point(cfg)), np.asarray(cfg.simulation.initial))
     off = formation_offsets(cfg)
     # paper Jacobi convention: rho_j = mean(p_1..p_j) - p_{j+1}, centroid at zero
     np.testing.assert_allclose(off.mean(axis=0), 0.0, atol=1e-12)

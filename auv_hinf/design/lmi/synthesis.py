@@ -90,15 +90,11 @@ def _synthesis_sdp() -> tuple[cp.Problem, dict[str, cp.Parameter], dict[str, cp.
         ]
     )
     sym = 0.5 * (m + m.T)
+    bound = _CP.bmat([[_CP.reshape(u, (1, 1), order="C"), y], [y.T, q]])  # |K x|^2 <= u on the ellipsoid
     cons = [
         sym << -LYAP_STRICT_RTOL * _CP.trace(q) * np.eye(4),
         q >> 0,
-        0.5
-        * (
-            _CP.bmat([[_CP.reshape(u, (1, 1), order="C"), y], [y.T, q]])
-            + _CP.bmat([[_CP.reshape(u, (1, 1), order="C"), y], [y.T, q]]).T
-        )
-        >> 0,
+        0.5 * (bound + bound.T) >> 0,
         q[1, 1] <= vcap,
     ]
     prob = cp.Problem(cp.Minimize(u), cons)
