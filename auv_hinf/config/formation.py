@@ -25,10 +25,12 @@ from auv_hinf.config.schema import (
     ActuatorsTable,
     DesignTable,
     FormationTable,
+    ImplementationTable,
 )
 from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError
 from auv_hinf.models.actuators import VEHICLE_ACTUATORS, Actuators, vehicle_actuators
+from auv_hinf.models.implementation import Implementation, MeasurementNoise
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.formation import JacobiTransform
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
@@ -74,6 +76,9 @@ class FormationConfig:
         (:mod:`auv_hinf.robust.synthesis`).
     actuators : Actuators or None
         What the vehicles can push (``None``: none declared, unlimited thrust).
+    implementation : Implementation
+        The controller as it runs: sample time, delay, measurement noise (default:
+        continuous, undelayed, exact, as in the paper).
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
 
@@ -102,6 +107,7 @@ class FormationConfig:
     uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
     actuators: Actuators | None = None
+    implementation: Implementation = field(default_factory=Implementation)
 
     def __post_init__(self) -> None:
         for key, kind in (
@@ -112,6 +118,7 @@ class FormationConfig:
             ("simulation", SimulationConfig),
             ("uncertainty", UncertaintyConfig),
             ("disturbance", DisturbanceConfig),
+            ("implementation", Implementation),
         ):
             if not isinstance(getattr(self, key), kind):
                 raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
@@ -171,6 +178,7 @@ class FormationConfig:
             "uncertainty": self.uncertainty.to_dict(),
             "disturbance": self.disturbance.to_dict(),
             "actuators": None if self.actuators is None else self.actuators.to_dict(),
+            "implementation": self.implementation.to_dict(),
         }
 
     def to_toml_dict(self) -> dict[str, Any]:
@@ -192,6 +200,7 @@ class FormationConfig:
             "uncertainty": self.uncertainty.to_dict(),
             "disturbance": self.disturbance.to_dict(),
             "actuators": _actuators_table(self.actuators),
+            "implementation": {} if self.implementation == Implementation() else self.implementation.to_dict(),
         }
         return {k: v for k, v in out.items() if v != {}}
 
@@ -212,6 +221,16 @@ def _actuators(table: ActuatorsTable | None) -> Actuators | None:
     if table.preset is not None:
         return vehicle_actuators(table.preset)
     return Actuators(float(table.tau_x or 0.0), float(table.tau_y or 0.0), float(table.tau_psi or 0.0))
+
+
+def _implementation(table: ImplementationTable) -> Implementation:
+    """Runtime implementation of a validated ``[implementation]`` table."""
+    return Implementation(
+        sample_time=table.sample_time,
+        delay=table.delay,
+        varying_delay=table.varying_delay,
+        noise=MeasurementNoise(**table.noise.model_dump()),
+    )
 
 
 def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
@@ -253,10 +272,12 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
             current=(sim.current[0], sim.current[1]),
             blend_time=sim.blend_time,
             plant=tuple((k, v) for k, v in sim.plant.model_dump().items() if v is not None),
+            seed=sim.seed,
         ),
         uncertainty=UncertaintyConfig(tuple((k, (v[0], v[1])) for k, v in cf.uncertainty.model_dump().items() if v)),
         disturbance=DisturbanceConfig(cf.disturbance.current_speed, cf.disturbance.current_rate),
         actuators=_actuators(cf.actuators),
+        implementation=_implementation(cf.implementation),
     )
 
 

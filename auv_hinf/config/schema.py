@@ -261,6 +261,7 @@ class SimulationTable(_Table):
         "s",
         gt=0.0,
     )
+    seed: int = _field(0, "seed of the noise and delay draws of a sampled implementation", ge=0)
     plant: PlantTable = Field(
         default_factory=PlantTable,
         description="true plant as multipliers of the parameters",
@@ -296,6 +297,24 @@ class ActuatorsTable(_Table):
         return self
 
 
+class NoiseTable(_Table):
+    """``[implementation.noise]``: bounds of the measurement errors (default: exact)."""
+
+    position: float = _field(0.0, "bound of the horizontal position error (Euclidean)", "m", ge=0.0, le=MAX_COORDINATE)
+    velocity: float = _field(0.0, "bound of the body-velocity error |(u, v)| (Euclidean)", "m/s", ge=0.0, le=100.0)
+    heading: float = _field(0.0, "bound of the heading error", "rad", ge=0.0, le=3.14159)
+    yaw_rate: float = _field(0.0, "bound of the yaw-rate error", "rad/s", ge=0.0, le=100.0)
+
+
+class ImplementationTable(_Table):
+    """``[implementation]``: the controller as it runs (default: continuous, undelayed, exact)."""
+
+    sample_time: float = _field(0.0, "control period, forces held between samples (0: continuous)", "s", ge=0.0, le=60.0)
+    delay: float = _field(0.0, "lumped input + measurement delay", "s", ge=0.0, le=60.0)
+    varying_delay: bool = _field(False, "false: every sample late by exactly delay; true: by any value in [0, delay]")
+    noise: NoiseTable = Field(default_factory=NoiseTable, description="bounds of the measurement errors")
+
+
 class DisturbanceTable(_Table):
     """``[disturbance]``: declared bounds of the ocean current."""
 
@@ -311,6 +330,7 @@ DEFAULT_SYNTHESIS: SynthesisKind = schema_default(DesignTable, "synthesis")
 DEFAULT_POLES: tuple[float, float] = schema_default(DesignTable, "heading_poles")
 DEFAULT_HORIZON: float = schema_default(SimulationTable, "horizon")
 DEFAULT_START: StartKind = schema_default(SimulationTable, "start")
+DEFAULT_SEED: int = schema_default(SimulationTable, "seed")
 
 
 class ConfigFile(_Table):
@@ -327,6 +347,10 @@ class ConfigFile(_Table):
     disturbance: DisturbanceTable = Field(default_factory=DisturbanceTable)
     actuators: ActuatorsTable | None = Field(
         default=None, description="actuator limits (default: none declared, unlimited thrust)"
+    )
+    implementation: ImplementationTable = Field(
+        default_factory=ImplementationTable,
+        description="the controller as it runs (default: continuous, undelayed, exact measurements)",
     )
 
     @model_validator(mode="before")
@@ -371,6 +395,9 @@ TABLES: dict[tuple[str, ...], type[BaseModel]] = {
     ("simulation", "plant"): PlantTable,
     ("uncertainty",): UncertaintyTable,
     ("disturbance",): DisturbanceTable,
+    ("actuators",): ActuatorsTable,
+    ("implementation",): ImplementationTable,
+    ("implementation", "noise"): NoiseTable,
     **{("reference", k): m for k, m in REFERENCE_MODELS.items()},
 }
 
@@ -389,6 +416,8 @@ __all__ = [
     "DisturbanceTable",
     "EnvelopeTable",
     "FormationTable",
+    "ImplementationTable",
+    "NoiseTable",
     "PlantTable",
     "SimulationTable",
     "UncertaintyTable",

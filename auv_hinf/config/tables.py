@@ -12,7 +12,7 @@ from typing import Any
 
 from auv_hinf.config.fields import REFERENCE_MODELS, ReferenceKind, StartKind
 from auv_hinf.config.messages import as_dict, plain_data, set_fields, validate_table
-from auv_hinf.config.schema import DEFAULT_HORIZON, DEFAULT_START, DisturbanceTable, SimulationTable, UncertaintyTable
+from auv_hinf.config.schema import DEFAULT_HORIZON, DEFAULT_SEED, DEFAULT_START, DisturbanceTable, SimulationTable, UncertaintyTable
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.models.vehicle import VehicleParams
 
@@ -68,6 +68,8 @@ class SimulationConfig:
         Reference blending time, s (``None``: chosen by the certificate).
     plant : tuple of (str, float) pairs
         True plant as multipliers (> 0) of the controller's parameters; a dict is accepted.
+    seed : int
+        Seed of the noise and delay draws of a sampled implementation (>= 0).
     """
 
     horizon: float = DEFAULT_HORIZON
@@ -76,6 +78,7 @@ class SimulationConfig:
     current: tuple[float, float] = (0.0, 0.0)
     blend_time: float | None = None
     plant: tuple[tuple[str, float], ...] = ()
+    seed: int = DEFAULT_SEED
 
     def __post_init__(self) -> None:
         raw = {
@@ -83,6 +86,7 @@ class SimulationConfig:
             "start": self.start,
             "current": self.current,
             "plant": as_dict(self.plant, "simulation.plant"),
+            "seed": self.seed,
         }
         raw.update({k: getattr(self, k) for k in ("initial", "blend_time") if getattr(self, k) is not None})
         t = validate_table(SimulationTable, plain_data(raw), ("simulation",))
@@ -95,6 +99,7 @@ class SimulationConfig:
             current=tuple(t.current),
             blend_time=t.blend_time,
             plant=tuple((k, v) for k, v in t.plant.model_dump().items() if v is not None),
+            seed=t.seed,
         )
 
     def plant_params(self, nominal: VehicleParams) -> VehicleParams:
@@ -114,6 +119,7 @@ class SimulationConfig:
             "current": list(self.current),
             "blend_time": self.blend_time,
             "plant": dict(self.plant),
+            "seed": self.seed,
         }
 
 
