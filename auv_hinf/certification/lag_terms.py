@@ -1,0 +1,211 @@
+"""Bounds of what a held, delayed, noisy law adds to each error loop beyond the lagged feedback.
+
+Under the implementation convention (:mod:`auv_hinf.models.implementation`) the force at time
+``t`` is the law evaluated at ``t' = t - eta`` (``0 <= eta <= T = h + delay``) on the measured
+state ``y = x(t') + n``. Writing ``x = (e, e')`` the position loop becomes (derivation in
+``docs/derivations/implementation.md``)
+
+    e'' = (G(x) - alpha) e' - k1 e + K (x(t) - x(t')) + w,
+
+    w = -alpha n_v - k1 n_p + [p_d''(t') - p_d''(t)] + [G(x) - G(y)] p_d'(t)
+        + G(y) [p_d'(t) - p_d'(t')] + (R(psi - psi_y) - I) R(psi_y) M1^-1 tau_xy,
+
+and the heading loop ``e_psi'' = -k1psi e_psi - (k2psi + d33(r)/m33) e_psi' + K_psi (...) + w_psi``
+with
+
+    w_psi = -k1psi n_psi - k2psi n_r + [psi_d''(t') - psi_d''(t)]
+            + [d33(r_y) psi_d'(t') - d33(r) psi_d'(t)]/m33 + (m11 - m22)(u v - u_y v_y)/m33.
+
+Every bracket is bounded here by envelope and tube quantities: the state moves at most
+``T`` times its rate bound between ``t'`` and ``t`` (body accelerations from the force bound,
+the drag and the Coriolis terms over the envelope), ``G = R B R^T`` is Lipschitz in the body
+velocities (``B`` is affine in ``|u|, |v|, r``) and in the heading (``2 sigma``), and the
+rotation error satisfies ``||R(a) - I|| <= |a|``. The desired yaw acceleration has no jerk
+bound in the tube, so its change is bounded by twice its size (does not shrink with ``T``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from auv_hinf.certification.closed_loop import ThrustBounds
+from auv_hinf.certification.margins import ErrorBounds
+from auv_hinf.design.gains import Gains
+from auv_hinf.models.envelope import Envelope, abs_range
+from auv_hinf.models.implementation import Implementation
+from auv_hinf.models.reference import ReferenceTube
+from auv_hinf.models.vehicle import VehicleParams, body_block
+
+
+@dataclass(frozen=True)
+class LagDisturbance:
+    """Bounds of the disturbances ``w`` (position, m/s^2) and ``w_psi`` (heading, rad/s^2).
+
+    Attributes
+    ----------
+    position, heading : float
+        ``sup |w|`` and ``sup |w_psi|``.
+    body_rates : tuple of float
+        Bounds of ``|u'|, |v'|`` (m/s^2) and ``|r'|`` (rad/s^2) used.
+    """
+
+    position: float
+    heading: float
+    body_rates: tuple[float, float, float]
+
+
+def _block_slopes(params: VehicleParams) -> tuple[float, float, float]:
+    """Spectral norms of ``dB/d|u|``, ``dB/d|v|``, ``dB/dr`` (``B`` is affine in them), 1/m and 1."""
+    base = body_block(params, 0.0, 0.0, 0.0)
+    return tuple(  # type: ignore[return-value]
+        float(np.linalg.norm(body_block(params, *unit) - base, 2)) for unit in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    )
+
+
+def body_rates(
+    params: VehicleParams,
+    envelope: Envelope,
+    tube: ReferenceTube,
+    gains: Gains,
+    implementation: Implementation,
+    *,
+    lam: float,
+    sigma: float,
+    bounds: ErrorBounds,
+    force: ThrustBounds,
+) -> tuple[float, float, float]:
+    """Bounds of ``|u'|, |v'|`` (m/s^2) and ``|r'|`` (rad/s^2) under the lagged law.
+
+    ``nu'(t) = nu*'(t') + M^-1 [tau(y) - tau(x(t'))] + M^-1 [f(x(t)) - f(x(t'))]`` with ``nu*'``
+    the continuous closed loop's body acceleration at ``t'`` (``R^T p'' - S(r) nu``, ``p'' = p_d''
+    + e''``, ``|e''| <= (|lam| + sigma + alpha) E_v + k1 E_p``), the law's response to the
+    measurement noise, and the Coriolis and drag terms ``f`` moved by the state's change over
+    at most ``T``: so ``rho <= a0 + T L rho`` componentwise, ``rho <= (I - T L)^-1 a0`` when the
+    spectral radius of ``T L`` is below 1. Otherwise the force bound gives the (looser) rates.
+    """
+    lag, n = implementation.max_lag, implementation.noise
+    m11, m22, m33 = params.m11, params.m22, params.m33
+    u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
+    d11, d22, d33 = (float(x) for x in params.damping(u_hi, v_hi, r_hi))
+    # the state the vehicle can be in: desired motion widened by the error bounds, inside the envelope
+    speed = float(tube.speed[:, 1].max())
+    slip = min(0.5 * math.pi, float(np.abs(tube.offset).max()) + bounds.heading)
+    yaw = float(np.abs(tube.yaw_rate).max())
+    u_in = min(u_hi, speed + bounds.velocity)
+    v_in = min(v_hi, speed * math.sin(slip) + bounds.velocity)
+    r_in = min(r_hi, yaw + bounds.yaw_rate)
+    crude = (
+        (force.force_x + m22 * v_hi * r_hi + d11 * u_hi) / m11,
+        (force.force_y + m11 * u_hi * r_hi + d22 * v_hi) / m22,
+        (force.moment + abs(m22 - m11) * u_hi * v_hi + d33 * r_hi) / m33,
+    )
+    b_u, b_v, b_r = _block_slopes(params)
+    accel = float(tube.accel.max())
+    k1p, k2p = gains.k_psi
+    p_acc = accel + (abs(lam) + sigma + gains.alpha) * bounds.velocity + gains.k1 * bounds.position
+    c_hi = abs(k2p) + float(params.damping(0.0, 0.0, r_hi)[2]) / m33
+    ground_noise = n.velocity + math.hypot(u_hi, v_hi) * n.heading
+    f_acc = math.hypot(force.force_x / m11, force.force_y / m22)
+    xy_noise = (
+        gains.alpha * ground_noise + gains.k1 * n.position + (f_acc + 2.0 * sigma * speed) * n.heading
+        + speed * ((b_u + b_v) * n.velocity + b_r * n.yaw_rate)
+    )
+    d33_slope = float(params.damping(0.0, 0.0, 1.0)[2] - params.damping(0.0, 0.0, 0.0)[2])
+    yaw_noise = abs(k1p) * n.heading + abs(k2p) * n.yaw_rate + d33_slope * n.yaw_rate * yaw / m33 + abs(m11 - m22) * (
+        (u_hi + v_hi) * n.velocity + n.velocity**2
+    ) / m33
+    a0 = np.array([
+        p_acc + r_in * v_in + xy_noise,
+        p_acc + r_in * u_in + xy_noise,
+        float(tube.yaw_accel.max()) + abs(k1p) * bounds.heading + c_hi * bounds.yaw_rate + yaw_noise,
+    ])
+    d11_slope = float(params.damping(1.0, 0.0, 0.0)[0] - params.damping(0.0, 0.0, 0.0)[0])
+    d22_slope = float(params.damping(0.0, 1.0, 0.0)[1] - params.damping(0.0, 0.0, 0.0)[1])
+    # Lipschitz matrix of (Coriolis - drag)/m in (u, v, r) over the envelope: d(d(u) u)/du = d_lin + 2 d_quad |u|
+    lip = np.array([
+        [(d11 + d11_slope * u_hi) / m11, m22 * r_hi / m11, m22 * v_hi / m11],
+        [m11 * r_hi / m22, (d22 + d22_slope * v_hi) / m22, m11 * u_hi / m22],
+        [abs(m22 - m11) * v_hi / m33, abs(m22 - m11) * u_hi / m33, (d33 + d33_slope * r_hi) / m33],
+    ])
+    step = lag * lip
+    if lag > 0 and float(np.abs(np.linalg.eigvals(step)).max()) < 1.0:
+        tight = np.linalg.solve(np.eye(3) - step, a0)
+        if np.all(tight >= 0):
+            return tuple(float(min(t, c)) for t, c in zip(tight, crude, strict=True))  # type: ignore[return-value]
+    return crude if lag > 0 else tuple(float(min(a, c)) for a, c in zip(a0, crude, strict=True))  # type: ignore[return-value]
+
+
+def lag_disturbance(
+    params: VehicleParams,
+    envelope: Envelope,
+    tube: ReferenceTube,
+    gains: Gains,
+    implementation: Implementation,
+    *,
+    lam: float,
+    sigma: float,
+    jerk: float,
+    force: ThrustBounds,
+    bounds: ErrorBounds,
+) -> LagDisturbance:
+    """Sound bounds of ``|w|`` and ``|w_psi|`` (see the module docstring).
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model, taken as the plant.
+    envelope : Envelope
+        The envelope the true body velocities stay in.
+    tube : ReferenceTube
+        Bounds of the desired motion.
+    gains : Gains
+    implementation : Implementation
+    lam, sigma : float
+        Envelope lambda and the bound of ``||G - lam I||`` over the envelope (1/s).
+    jerk : float
+        Bound of ``|p_d'''|`` (m/s^3).
+    force : ThrustBounds
+        Bounds of the applied (held) forces (N, N, N m).
+    bounds : ErrorBounds
+        Bounds of the true errors (m, m/s, rad, rad/s).
+    """
+    lag, n = implementation.max_lag, implementation.noise
+    m11, m22, m33 = params.m11, params.m22, params.m33
+    u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
+    u_rate, v_rate, r_rate = body_rates(params, envelope, tube, gains, implementation, lam=lam, sigma=sigma,
+                                        bounds=bounds, force=force)
+    r_in = min(r_hi, float(np.abs(tube.yaw_rate).max()) + bounds.yaw_rate)
+    # change of each state between the measurement and now, noise included
+    d_psi = r_in * lag + n.heading
+    d_u, d_v, d_r = u_rate * lag + n.velocity, v_rate * lag + n.velocity, r_rate * lag + n.yaw_rate
+    b_u, b_v, b_r = _block_slopes(params)
+    speed = float(tube.speed[:, 1].max())
+    accel = float(tube.accel.max())
+    yaw = float(np.abs(tube.yaw_rate).max())
+    yaw_accel = float(tube.yaw_accel.max())
+    ground_noise = n.velocity + math.hypot(u_hi, v_hi) * n.heading  # |R(psi_y) nu_y - R(psi) nu|
+    g_measured = abs(lam) + sigma + (b_u + b_v) * n.velocity + b_r * n.yaw_rate
+    position = (
+        gains.alpha * ground_noise
+        + gains.k1 * n.position
+        + jerk * lag
+        + speed * (2.0 * sigma * d_psi + b_u * d_u + b_v * d_v + b_r * d_r)
+        + g_measured * accel * lag
+        + d_psi * math.hypot(force.force_x / m11, force.force_y / m22)
+    )
+    d33_y = float(params.damping(0.0, 0.0, r_hi + n.yaw_rate)[2])
+    d33_quad = float(params.damping(0.0, 0.0, 1.0)[2]) - float(params.damping(0.0, 0.0, 0.0)[2])
+    heading = (
+        abs(gains.k_psi[0]) * n.heading
+        + abs(gains.k_psi[1]) * n.yaw_rate
+        + (2.0 * yaw_accel if lag > 0 else 0.0)
+        + (abs(d33_quad) * d_r * yaw + d33_y * yaw_accel * lag) / m33
+        + abs(m11 - m22) * ((v_hi + n.velocity) * d_u + u_hi * d_v) / m33
+    )
+    return LagDisturbance(position=position, heading=heading, body_rates=(u_rate, v_rate, r_rate))
+
+
+__all__ = ["LagDisturbance", "lag_disturbance"]

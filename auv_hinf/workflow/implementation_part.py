@@ -1,0 +1,156 @@
+"""The implementation part of a certificate: the design's gains run as configured in ``[implementation]``.
+
+:func:`implementation_summary` certifies the sampled, delayed, noisy loop of the design point
+(:mod:`auv_hinf.certification.implementation`) from the configured start, and says whether the
+declared implementation is covered. The continuous default reports the limits too (how fast
+the law must be sampled), and covers exactly when the continuous certificates do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.certification.coverage import initial_errors
+from auv_hinf.certification.implementation import (
+    ImplementationCertificate,
+    ImplementationProblem,
+    certify_implementation,
+)
+from auv_hinf.certification.margins import ErrorBounds
+from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.models.implementation import Implementation
+from auv_hinf.workflow.design_point import DesignPoint, initial_states
+
+#: What the implementation certificate does not yet cover, said when it would matter.
+BOX_NOT_COVERED = (
+    "the implementation certificate covers the controller's own model as the plant: the declared "
+    "[uncertainty] box / [disturbance] current is certified for the continuous law only"
+)
+
+
+def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> ImplementationProblem:
+    """The implementation problem of ``point`` along its mission, with the closed loop's sigma and c-range."""
+    cfg = point.config
+    return ImplementationProblem(
+        params=cfg.vehicle,
+        envelope=cfg.envelope,
+        tube=point.tube,
+        gains=point.require_gains(),
+        lam=point.lam,
+        sigma=cert.region.sigma,
+        c_range=cert.region.c_range,
+        jerk=point.mission.bounds().jerk_max,
+        actuators=cfg.actuators,
+    )
+
+
+def start_errors(point: DesignPoint) -> ErrorBounds:
+    """Largest errors of the configured start against the raw mission at ``t = 0`` (m, m/s, rad, rad/s)."""
+    e, de, epsi, depsi = initial_errors(point.fleet, initial_states(point))
+    return ErrorBounds(
+        float(np.hypot(e[..., 0], e[..., 1]).max()),
+        float(np.hypot(de[..., 0], de[..., 1]).max()),
+        float(np.abs(epsi).max()),
+        float(np.abs(depsi).max()),
+    )
+
+
+@dataclass(frozen=True)
+class ImplementationSummary:
+    """What ``certify`` reports about the implementation.
+
+    Attributes
+    ----------
+    implementation : Implementation
+        The declared one.
+    certificate : ImplementationCertificate or None
+        ``None`` when there is no closed-loop certificate to extend (see ``reasons``).
+    covers : bool
+        The declared implementation is certified from the configured start.
+    reasons : tuple of str
+    """
+
+    implementation: Implementation
+    certificate: ImplementationCertificate | None
+    covers: bool
+    reasons: tuple[str, ...]
+
+    def lines(self) -> list[str]:
+        """Lines of ``Certificate.summary`` (s, Hz, 1/s, m, m/s, rad, rad/s)."""
+        impl, c = self.implementation, self.certificate
+        out = [f"  implementation            {impl.describe()}"]
+        if c is None:
+            return [*out, "  implementation            not certified"]
+        ex = c.exact_max_sample_time
+        tight = "" if c.tightness is None else f", {c.tightness:.2f} of the exact nominal limit {ex:.4g} s"
+        out.append(
+            f"  max sample time           {c.max_sample_time:.4g} s at delay {impl.delay:.4g} s{tight}; "
+            f"max delay {c.max_delay:.4g} s"
+        )
+        if c.ultimate is not None and c.bounds is not None and not impl.continuous:
+            u, b = c.ultimate, c.bounds
+            out.append(
+                f"  errors (whole run)        |e| <= {b.position:.3g} m, |e'| <= {b.velocity:.3g} m/s, "
+                f"|e_psi| <= {b.heading:.3g} rad, |e_r| <= {b.yaw_rate:.3g} rad/s (decay {c.decay_rate:.3g} 1/s)"
+            )
+            out.append(
+                f"  ultimate bounds           |e| <= {u.position:.3g} m, |e'| <= {u.velocity:.3g} m/s, "
+                f"|e_psi| <= {u.heading:.3g} rad, |e_r| <= {u.yaw_rate:.3g} rad/s"
+            )
+        out.append(f"  implementation covered    {'yes' if self.covers else 'NO'}")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``implementation`` object of ``auv-hinf certify --json``."""
+        base: dict[str, Any] = (
+            self.certificate.to_dict()
+            if self.certificate is not None
+            else {
+                **self.implementation.to_dict(),
+                "continuous": self.implementation.continuous,
+                "max_sample_time": None,
+                "max_delay": None,
+                "exact_max_sample_time": None,
+                "tightness": None,
+                "decay_rate": None,
+                "ultimate_bounds": None,
+                "error_bounds": None,
+            }
+        )
+        return {**base, "covers": self.covers, "reasons": list(self.reasons)}
+
+
+def implementation_summary(
+    point: DesignPoint, nominal: ClosedLoopCertificate | None, continuous_ok: bool
+) -> ImplementationSummary:
+    """Certify the declared implementation of ``point`` (see the module docstring).
+
+    Parameters
+    ----------
+    point : DesignPoint
+    nominal : ClosedLoopCertificate or None
+        The continuous closed-loop certificate (its sigma and heading damping range are reused).
+    continuous_ok : bool
+        The continuous certificates (closed loop, robust when declared) hold: the verdict of the
+        continuous default.
+    """
+    impl = point.config.implementation
+    if nominal is None or point.gains is None:
+        return ImplementationSummary(impl, None, False, ("no closed-loop certificate to extend to the implementation",))
+    try:
+        cert = certify_implementation(implementation_problem(point, nominal), impl, start_errors(point))
+    except AuvHinfError as exc:
+        return ImplementationSummary(impl, None, False, (f"implementation not certified: {exc}",))
+    if impl.continuous:
+        return ImplementationSummary(impl, cert, continuous_ok, ())
+    reasons = list(cert.reasons)
+    if point.declared:
+        reasons.append(BOX_NOT_COVERED)
+    return ImplementationSummary(impl, cert, not reasons, tuple(reasons))
+
+
+__all__ = ["BOX_NOT_COVERED", "ImplementationSummary", "implementation_problem", "implementation_summary", "start_errors"]
