@@ -196,6 +196,11 @@ class SineReference(_Base):
             _vec(zero, -a * w**3 * cs),
         )
 
+    @property
+    def period(self) -> float:
+        """``2 pi / w`` (s)."""
+        return 2.0 * math.pi / self.omega
+
     def snap(self, t: ArrayLike) -> FloatArray:
         """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``."""
         tt = times(t)
@@ -306,6 +311,11 @@ class CircleReference(_Base):
         th = -0.5 * np.pi + (s / rad) * times(t)
         e, n = _vec(np.cos(th), np.sin(th)), _vec(-np.sin(th), np.cos(th))
         return np.asarray(self.center) + rad * e, s * n, -(s * s / rad) * e, -(s**3 / rad**2) * n
+
+    @property
+    def period(self) -> float:
+        """One lap, ``2 pi R / s`` (s)."""
+        return 2.0 * math.pi * self.radius / self.speed
 
     def snap(self, t: ArrayLike) -> FloatArray:
         """Fourth derivative ``(s^4/R^3) [cos th, sin th]`` of ``q`` (m/s^4), shape ``t.shape + (2,)``."""
