@@ -122,7 +122,7 @@ def test_path_frame_tube_contains_every_sampled_desired_motion(mission):
     for i in range(off.shape[0]):
         rows = slice(i * k, (i + 1) * k)
 
-        def inside(x, box, i=i):
+        def inside(x, box, i=i, rows=rows):
             return (x[:, i, None] >= box[rows, 0]) & (x[:, i, None] <= box[rows, 1])
 
         cell = inside(speed, tube.speed) & inside(offset, tube.offset) & inside(m.r, tube.yaw_rate)
