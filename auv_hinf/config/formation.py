@@ -78,7 +78,7 @@ class FormationConfig:
     frame : {"inertial", "path"}
         Frame of the formation offsets (``[formation] frame``): ``"inertial"`` (the paper, the
         default: the Jacobi shape is fixed in the earth frame, vehicle i tracks ``q + d_i``) or
-        ``"path"`` (the offsets, ``x`` along the track and ``y`` to its left, turn with the
+        ``"path"`` (the offsets, ``x`` along the track and ``y`` across it on the body y axis, turn with the
         path's course: ``q + R(chi) d_i``; see :mod:`auv_hinf.models.path_frame`).
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.

@@ -182,7 +182,7 @@ def _bluerov2_line() -> FormationConfig:
 
 
 #: ``remus-survey``: five REMUS 100 in a V facing forward, in the path frame (m; x along the track,
-#: y to its left): the lead ahead, each arm 10 m across and 5 m back per vehicle.
+#: y across it on the body y axis): the lead ahead, each arm 10 m across and 5 m back per vehicle.
 SURVEY_V = ((0.0, 0.0), (-5.0, 10.0), (-5.0, -10.0), (-10.0, 20.0), (-10.0, -20.0))
 #: Its lawn-mower: the REMUS 100 cruise speed (m/s), 400 m legs, 240 m between legs and 60 m turns.
 #: The certificate's smallest turn radius for this V in ``REMUS_ENVELOPE`` is 30.06 m (the outer

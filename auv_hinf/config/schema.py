@@ -122,7 +122,8 @@ class FormationTable(_Table):
     frame: FormationFrame = _field(
         "inertial",
         "frame of the offsets: inertial (the paper: the shape is fixed in the earth frame) or path "
-        "(offsets [along track, to the left] turn with the path's course; every vehicle heads along the track)",
+        "(offsets [along track, across track on the body y axis] turn with the path's course; every vehicle "
+        "heads along the track)",
     )
     shape: list[Point] | None = _field(None, "N-1 desired Jacobi vectors [[x, y], ...]", "m")
     offsets: list[Point] | None = _field(None, "N desired vehicle offsets [[x, y], ...] from any common point", "m")

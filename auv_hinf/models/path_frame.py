@@ -2,7 +2,8 @@
 
 In the *inertial* frame (the paper's convention, the default) vehicle ``i`` tracks
 ``p_i = q(t) + d_i``: the Jacobi shape is fixed in the earth frame. In the *path* frame the
-offset ``d_i = (d_x, d_y)`` (m; ``x`` along the track, ``y`` to the left) turns with the
+offset ``d_i = (d_x, d_y)`` (m; ``x`` along the track, ``y`` across it, on the body y axis: to the left as the
+figures draw the plane, starboard in a north-east frame) turns with the
 course ``chi = atan2(q')`` of the centre path::
 
     p_i    = q    + R d
@@ -83,7 +84,7 @@ def path_frame_terms(q: list[FloatArray], chi: list[FloatArray], offsets: FloatA
     chi : list of ndarray, shape (..., N)
         ``[chi, chi', ...]`` (rad .. rad/s^k), at least ``len(q)`` of them.
     offsets : ndarray, shape (N, 2)
-        ``d_i`` (m, path frame: along track, to the left).
+        ``d_i`` (m, path frame: along track, across it on the body y axis).
 
     Returns
     -------
@@ -97,7 +98,7 @@ def path_frame_terms(q: list[FloatArray], chi: list[FloatArray], offsets: FloatA
     def w(x: FloatArray) -> FloatArray:
         return x[..., None]
 
-    out = [q[0] + rd]
+    out: list[FloatArray] = [q[0] + rd]
     if len(q) > 1:
         out.append(q[1] + w(chi[1]) * srd)
     if len(q) > 2:
@@ -128,7 +129,8 @@ class PathFrameReference:
     trajectory : MissionReference
         Centre path (inertial, m).
     offsets : array_like, shape (N, 2)
-        ``d_i`` (m) in the path frame: ``x`` along the track (ahead > 0), ``y`` to its left.
+        ``d_i`` (m) in the path frame: ``x`` along the track (ahead > 0), ``y`` across it
+        (the body y axis).
 
     Examples
     --------

@@ -158,9 +158,9 @@ class FleetReference:
             plain = PathFrameReference(self.mission, self.offsets)
             if self.shaping is None:
                 return plain.motion(times(t))
-            (p, v, a), chi = plain.kinematics(times(t), order=2)
+            (p, v, a), course = plain.kinematics(times(t), order=2)
             c, d = self.shaping.terms(times(t))
-            return Motion(p + c[0], v + c[1], a + c[2], chi[0] + d[0], chi[1] + d[1], chi[2] + d[2])
+            return Motion(p + c[0], v + c[1], a + c[2], course[0] + d[0], course[1] + d[1], course[2] + d[2])
         if self.shaping is None:  # every vehicle moves with the centre: evaluate it once per time
             tt = times(t)
             q, qd, qdd, qddd = self.mission(tt)

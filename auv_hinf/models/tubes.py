@@ -188,6 +188,10 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
             f"near t = {tc[kk]:.6g} s (lower bound {slo.min():.3g}) with {k} cells: the heading "
             "reference may be undefined; lengthen blend_time or start closer to the mission velocity"
         )
+    chi1: FloatArray
+    heading: FloatArray
+    offset_rate: FloatArray
+    rate: FloatArray
     if one.frame == "path":  # psi_d = chi + delta, chi the course of the centre path q'
         mb = one.mission.bounds()
         w = max(abs(mb.turn_rate_min), abs(mb.turn_rate_max))
@@ -197,7 +201,7 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
         offset_rate, rate = w + d1 + acc / slo, mb.turn_accel_max + d2
         heading = wrap_angle(chi + dl0 - np.arctan2(v[..., 1], v[..., 0]))
     else:  # psi_d = atan2(p') + delta: the offset is delta
-        _, chi1, _ = heading_from_velocity(v, a, j)
+        chi1 = heading_from_velocity(v, a, j)[1]
         offset_rate, rate, heading = d1, jerk / slo + 2.0 * acc**2 / slo**2 + d2, dl0
     return ReferenceTube(
         speed=speed.transpose(1, 0, 2).reshape(-1, 2),
