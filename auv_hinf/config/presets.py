@@ -197,6 +197,9 @@ SURVEY_HORIZON = 1200.0
 def _remus_survey() -> FormationConfig:
     t = JacobiTransform(5, "paper")
     shape = tuple((float(a), float(b)) for a, b in shape_from_offsets(np.asarray(SURVEY_V), t))
+    # on the slots at t = 0: the pattern starts at the origin on a straight +x leg (course 0, no turn)
+    off = offsets_from_shape(np.asarray(shape), t)
+    initial = tuple((float(x), float(y), 0.0, REMUS_SPEED, 0.0, 0.0) for x, y in off)
     return FormationConfig(
         name="remus-survey",
         vehicle=remus100(),
@@ -206,7 +209,7 @@ def _remus_survey() -> FormationConfig:
         envelope=REMUS_ENVELOPE,
         frame="path",
         reference=ReferenceConfig("lawnmower", SURVEY_PATH),
-        simulation=SimulationConfig(horizon=SURVEY_HORIZON),
+        simulation=SimulationConfig(horizon=SURVEY_HORIZON, initial=initial),
     )
 
 
