@@ -8,6 +8,7 @@ from auv_hinf._version import __version__
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
 from auv_hinf.certification.coverage import Coverage, cover_start
 from auv_hinf.certification.margins import ErrorBounds
+from auv_hinf.certification.reference_fit import ReferenceFit, reference_fit
 from auv_hinf.certification.region import Region
 from auv_hinf.config.formation import FormationConfig, load_config
 from auv_hinf.config.presets import PRESETS, preset_config
@@ -38,6 +39,7 @@ from auv_hinf.models.formation import (
     shape_from_offsets,
 )
 from auv_hinf.models.lawnmower import LawnmowerReference
+from auv_hinf.models.path_frame import PathFrameReference
 from auv_hinf.models.paths import CircleReference, LineReference, SineReference
 from auv_hinf.models.reference import FleetReference, shaped_start
 from auv_hinf.models.vehicle import (
@@ -83,6 +85,8 @@ __all__ = [
     "LawnmowerReference",
     "LineReference",
     "ParameterError",
+    "PathFrameReference",
+    "ReferenceFit",
     "Region",
     "RunPlan",
     "Scenario",
@@ -121,6 +125,7 @@ __all__ = [
     "position_block",
     "position_loop",
     "preset_config",
+    "reference_fit",
     "regular_polygon",
     "remus100",
     "rhs",

@@ -23,3 +23,7 @@ OrientationLaw = Literal["corrected", "printed"]
 
 #: Riccati solver back ends.
 RiccatiSolver = Literal["control", "scipy"]
+
+#: Frame of the formation offsets: fixed in the earth frame (the paper) or turning with the path.
+FormationFrame = Literal["inertial", "path"]
+FORMATION_FRAMES: tuple[FormationFrame, ...] = get_args(FormationFrame)

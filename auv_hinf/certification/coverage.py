@@ -27,7 +27,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from auv_hinf._typing import FloatArray
+from auv_hinf._typing import FloatArray, FormationFrame
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, ThrustBounds, thrust_bounds
 from auv_hinf.certification.margins import ErrorBounds, Margins, envelope_margins, inflate_envelope
 from auv_hinf.certification.region import start_bounds
@@ -141,10 +141,10 @@ def _chunks(fleet: FleetReference) -> Iterable[FleetReference]:
     for lo in range(0, n, TUBE_CHUNK):
         sl = slice(lo, min(n, lo + TUBE_CHUNK))
         if sh is None:
-            yield FleetReference(fleet.mission, fleet.offsets[sl])
+            yield FleetReference(fleet.mission, fleet.offsets[sl], None, fleet.frame)
             return
         part = type(sh)(sh.blend_time, sh.dp[sl], sh.dv[sl], sh.dpsi[sl], sh.dr[sl], sh.turn_time)
-        yield FleetReference(fleet.mission, fleet.offsets[sl], part)
+        yield FleetReference(fleet.mission, fleet.offsets[sl], part, fleet.frame)
 
 
 def _chunked_margins(
@@ -274,6 +274,7 @@ def cover_start(
     blend_time: float | None = None,
     actuators: Actuators | None = None,
     current: tuple[float, float] = (0.0, 0.0),
+    frame: FormationFrame = "inertial",
 ) -> Coverage:
     """Choose the reference for a run and decide whether the certificate covers it.
 
@@ -297,6 +298,8 @@ def cover_start(
         Water current of the run (m/s, inertial): the shaped start matches the actual ground
         velocity ``R(psi) [u, v] + current``. A run with a current is covered only by the
         robust certificate (:mod:`auv_hinf.robust.summary`).
+    frame : {"inertial", "path"}
+        Frame of the offsets (:class:`~auv_hinf.models.reference.FleetReference`).
 
     Returns
     -------
@@ -306,7 +309,7 @@ def cover_start(
     """
     if start not in ("shaped", "paper"):
         raise ParameterError(f"start must be 'shaped' or 'paper', got {start!r}")
-    raw = FleetReference(mission, np.asarray(offsets, dtype=float))
+    raw = FleetReference(mission, np.asarray(offsets, dtype=float), None, frame)
     base = check_run(cert, params, envelope, gains, raw, initial, actuators=actuators, start=start)
     if start == "paper" or base.covered:
         return base
@@ -315,7 +318,7 @@ def cover_start(
     for tb in blends:
         for th in [t for t in TURN_TIMES if t <= tb] or [tb]:
             try:
-                fleet = shaped_start(mission, offsets, initial, tb, turn_time=th, current=current)
+                fleet = shaped_start(mission, offsets, initial, tb, turn_time=th, current=current, frame=frame)
             except AuvHinfError as exc:
                 return Coverage(
                     False, start, raw, base.bounds, base.margins, base.thrust, None, None, f"no shaped start: {exc}"

@@ -123,8 +123,17 @@ class Margins:
         return {**asdict(self), "min": self.min, "ok": self.ok}
 
 
+#: Names of the six margins, in the column order of :func:`cell_margins`.
+MARGIN_NAMES = ("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo")
+
+
 def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -> Margins:
-    """Sound envelope margins of every tube cell, minimised over cells.
+    """Sound envelope margins of the tube: :func:`cell_margins` minimised over the cells."""
+    return Margins(*(float(x) for x in cell_margins(tube, bounds, envelope).min(axis=0)))
+
+
+def cell_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -> FloatArray:
+    """Sound envelope margins of every tube cell, shape ``(K, 6)`` in the order :data:`MARGIN_NAMES`.
 
     Per cell ``theta = delta + e_psi`` lies in ``[offset_lo - E_psi, offset_hi + E_psi]``
     and ``S`` in ``[speed_lo, speed_hi]``; exact interval ``cos``/``sin`` give
@@ -147,11 +156,15 @@ def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelop
     # -sin(theta) = cos(theta + pi/2)
     v_lo, v_hi = _scaled_range(s_lo, s_hi, *cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
     ev, er = bounds.velocity, bounds.yaw_rate
-    return Margins(
-        u_hi=float(np.min(envelope.u[1] - (u_hi + ev))),
-        u_lo=float(np.min(u_lo - ev - envelope.u[0])),
-        v_hi=float(np.min(envelope.v[1] - (v_hi + ev))),
-        v_lo=float(np.min(v_lo - ev - envelope.v[0])),
-        r_hi=float(np.min(envelope.r[1] - (tube.yaw_rate[:, 1] + er))),
-        r_lo=float(np.min(tube.yaw_rate[:, 0] - er - envelope.r[0])),
+    out: FloatArray = np.stack(
+        [
+            envelope.u[1] - (u_hi + ev),
+            u_lo - ev - envelope.u[0],
+            envelope.v[1] - (v_hi + ev),
+            v_lo - ev - envelope.v[0],
+            envelope.r[1] - (tube.yaw_rate[:, 1] + er),
+            tube.yaw_rate[:, 0] - er - envelope.r[0],
+        ],
+        axis=-1,
     )
+    return out

@@ -14,10 +14,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, cast
 
-from auv_hinf._typing import GainMethod, JacobiKind
+from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind
 from auv_hinf.config.fields import SynthesisKind
 from auv_hinf.config.messages import parse_config, plain_data, set_fields, validate_table
 from auv_hinf.config.schema import (
+    DEFAULT_FRAME,
     DEFAULT_K1,
     DEFAULT_METHOD,
     DEFAULT_POLES,
@@ -79,6 +80,11 @@ class FormationConfig:
     implementation : Implementation
         The controller as it runs: sample time, delay, measurement noise (default:
         continuous, undelayed, exact, as in the paper).
+    frame : {"inertial", "path"}
+        Frame of the formation offsets (``[formation] frame``): ``"inertial"`` (the paper, the
+        default: the Jacobi shape is fixed in the earth frame, vehicle i tracks ``q + d_i``) or
+        ``"path"`` (the offsets, ``x`` along the track and ``y`` across it on the body y axis, turn with the
+        path's course: ``q + R(chi) d_i``; see :mod:`auv_hinf.models.path_frame`).
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
 
@@ -108,6 +114,7 @@ class FormationConfig:
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
     actuators: Actuators | None = None
     implementation: Implementation = field(default_factory=Implementation)
+    frame: FormationFrame = DEFAULT_FRAME
 
     def __post_init__(self) -> None:
         for key, kind in (
@@ -124,9 +131,7 @@ class FormationConfig:
                 raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
         if self.actuators is not None and not isinstance(self.actuators, Actuators):
             raise ConfigError(f"actuators must be an Actuators or None, got {self.actuators!r}")
-        form = validate_table(
-            FormationTable, plain_data({"n": self.n, "jacobi": self.jacobi, "shape": self.shape}), ("formation",)
-        )
+        form = validate_table(FormationTable, plain_data(self._formation_table()), ("formation",))
         design = self._design_table()
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
         init = self.simulation.initial
@@ -141,6 +146,10 @@ class FormationConfig:
             k1=des.k1,
             heading_poles=(des.heading_poles[0], des.heading_poles[1]),
         )
+
+    def _formation_table(self) -> dict[str, Any]:
+        """The ``[formation]`` table of this configuration."""
+        return {"n": self.n, "jacobi": self.jacobi, "frame": self.frame, "shape": [list(s) for s in self.shape]}
 
     def _design_table(self) -> dict[str, Any]:
         """The ``[design]`` table of this configuration (``None`` for an option not set)."""
@@ -170,6 +179,7 @@ class FormationConfig:
             "vehicle": self.vehicle.to_dict(),
             "n": self.n,
             "jacobi": self.jacobi,
+            "frame": self.frame,
             "shape": [list(s) for s in self.shape],
             "envelope": self.envelope.to_dict(),
             **self._design_table(),
@@ -192,7 +202,7 @@ class FormationConfig:
         out = {
             "name": self.name,
             "vehicle": vehicle,
-            "formation": {"n": self.n, "jacobi": self.jacobi, "shape": [list(s) for s in self.shape]},
+            "formation": self._formation_table(),
             "envelope": self.envelope.to_dict(),
             "design": {k: v for k, v in design.items() if v is not None},
             "reference": self.reference.to_dict(),
@@ -278,6 +288,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
         disturbance=DisturbanceConfig(cf.disturbance.current_speed, cf.disturbance.current_rate),
         actuators=_actuators(cf.actuators),
         implementation=_implementation(cf.implementation),
+        frame=cf.formation.frame,
     )
 
 

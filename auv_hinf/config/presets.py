@@ -181,12 +181,45 @@ def _bluerov2_line() -> FormationConfig:
     )
 
 
+#: ``remus-survey``: five REMUS 100 in a V facing forward, in the path frame (m; x along the track,
+#: y across it on the body y axis): the lead ahead, each arm 10 m across and 5 m back per vehicle.
+SURVEY_V = ((0.0, 0.0), (-5.0, 10.0), (-5.0, -10.0), (-10.0, 20.0), (-10.0, -20.0))
+#: Its lawn-mower: the REMUS 100 cruise speed (m/s), 400 m legs, 240 m between legs and 60 m turns.
+#: The certificate's smallest turn radius for this V in ``REMUS_ENVELOPE`` is 30.06 m (the outer
+#: vehicles' surge 1.5 (1 -+ 20/R) m/s and the lead's sideslip 1.5 x 6/R m/s bind); 60 m leaves the
+#: margin the tracking errors need. The legs are 240 m apart because a 180-degree turn of this
+#: pattern spans 3.97 turn radii (:class:`~auv_hinf.models.lawnmower.LawnmowerReference`).
+SURVEY_PATH = (("speed", REMUS_SPEED), ("leg_length", 400.0), ("spacing", 240.0), ("turn_radius", 60.0))
+#: Simulated time of ``remus-survey`` (s): two legs, both 180-degree turns and the start of the third.
+SURVEY_HORIZON = 1200.0
+
+
+def _remus_survey() -> FormationConfig:
+    t = JacobiTransform(5, "paper")
+    shape = tuple((float(a), float(b)) for a, b in shape_from_offsets(np.asarray(SURVEY_V), t))
+    # on the slots at t = 0: the pattern starts at the origin on a straight +x leg (course 0, no turn)
+    off = offsets_from_shape(np.asarray(shape), t)
+    initial = tuple((float(x), float(y), 0.0, REMUS_SPEED, 0.0, 0.0) for x, y in off)
+    return FormationConfig(
+        name="remus-survey",
+        vehicle=remus100(),
+        n=5,
+        jacobi="paper",
+        shape=shape,
+        envelope=REMUS_ENVELOPE,
+        frame="path",
+        reference=ReferenceConfig("lawnmower", SURVEY_PATH),
+        simulation=SimulationConfig(horizon=SURVEY_HORIZON, initial=initial),
+    )
+
+
 #: The registry: preset name -> factory of the complete configuration.
 PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "paper-triangle": _paper_triangle,
     "paper-hexagon": _paper_hexagon,
     "remus-line": _remus_line,
     "bluerov2-line": _bluerov2_line,
+    "remus-survey": _remus_survey,
 }
 #: Names of the built-in presets (the CLI's ``--preset`` choices).
 PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field, field_validator, model_validator
 
-from auv_hinf._typing import GainMethod, JacobiKind
+from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind
 from auv_hinf.config.fields import (
     DEFAULT_HEADING_POLES,
     DEFAULT_POLYGON_RADIUS,
@@ -119,6 +119,12 @@ class FormationTable(_Table):
 
     n: int = _field(3, "number of vehicles", ge=2, le=MAX_VEHICLES)
     jacobi: JacobiKind = _field("paper", "Jacobi transform scaling (paper: as printed; orthonormal: unit rows)")
+    frame: FormationFrame = _field(
+        "inertial",
+        "frame of the offsets: inertial (the paper: the shape is fixed in the earth frame) or path "
+        "(offsets [along track, across track on the body y axis] turn with the path's course; every vehicle "
+        "heads along the track)",
+    )
     shape: list[Point] | None = _field(None, "N-1 desired Jacobi vectors [[x, y], ...]", "m")
     offsets: list[Point] | None = _field(None, "N desired vehicle offsets [[x, y], ...] from any common point", "m")
     polygon_radius: float | None = _field(
@@ -325,6 +331,7 @@ class DisturbanceTable(_Table):
 #: Defaults that the runtime dataclasses, the design functions and the CLI read (each is the
 #: default its table above declares: the schema is the one source).
 DEFAULT_METHOD: GainMethod = schema_default(DesignTable, "method")
+DEFAULT_FRAME: FormationFrame = schema_default(FormationTable, "frame")
 DEFAULT_K1: float = schema_default(DesignTable, "k1")
 DEFAULT_SYNTHESIS: SynthesisKind = schema_default(DesignTable, "synthesis")
 DEFAULT_POLES: tuple[float, float] = schema_default(DesignTable, "heading_poles")

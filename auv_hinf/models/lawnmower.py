@@ -33,6 +33,8 @@ SMOOTHSTEP_D2_MAX = poly_sup(SMOOTHSTEP.deriv(2))
 #: every right-hand-side call).
 _SMOOTHSTEP_D1 = SMOOTHSTEP.deriv()
 _SMOOTHSTEP_D2 = SMOOTHSTEP.deriv(2)
+_SMOOTHSTEP_D3 = SMOOTHSTEP.deriv(3)
+_SMOOTHSTEP_DERIVS = (_SMOOTHSTEP_D1, _SMOOTHSTEP_D2, _SMOOTHSTEP_D3)
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(GL_NODES)
 
 
@@ -124,25 +126,47 @@ class LawnmowerReference(_Base):
         out: FloatArray = np.where((sign != 0)[..., None], turn, self.speed * tau[..., None] * direc)
         return out
 
-    def __call__(self, t: ArrayLike) -> Derivatives:
-        """Position (m), velocity (m/s), acceleration (m/s^2), jerk (m/s^3), shape ``t.shape + (2,)``."""
-        tt = times(t)
-        t0, sign, chi0, direc, pos = self._table
-        period = t0[-1]
-        n_per = np.floor(np.maximum(tt, 0.0) / period)
-        local = tt - n_per * period
+    @property
+    def period(self) -> float:
+        """Duration of one period of the pattern: two legs and two 180-degree turns (s)."""
+        return float(self._table[0][-1])
+
+    def _course(self, tt: FloatArray) -> tuple[FloatArray, ...]:
+        """Per time: period count, segment, local time (s), tangent and normal (unit, inertial),
+        and the course rate and its two derivatives (rad/s, rad/s^2, rad/s^3)."""
+        t0, sign, chi0, direc, _ = self._table
+        n_per = np.floor(np.maximum(tt, 0.0) / t0[-1])
+        local = tt - n_per * t0[-1]
         k = np.clip(np.searchsorted(t0, local, side="right") - 1, 0, len(sign) - 1)
         tau = local - t0[k]
-        t90, s = self.t90, self.speed
+        t90 = self.t90
         frac = np.clip(tau / t90, 0.0, 1.0)
         sg = sign[k]
         chi = chi0[k] + sg * 0.5 * np.pi * SMOOTHSTEP(frac)
-        d1 = sg * 0.5 * np.pi * _SMOOTHSTEP_D1(frac) / t90
-        d2 = sg * 0.5 * np.pi * _SMOOTHSTEP_D2(frac) / t90**2
+        d1, d2, d3 = (sg * 0.5 * np.pi * b(frac) / t90**i for i, b in enumerate(_SMOOTHSTEP_DERIVS, start=1))
         tan = np.where((sg != 0)[..., None], _vec(np.cos(chi), np.sin(chi)), direc[k])
-        nor = _vec(-tan[..., 1], tan[..., 0])
-        q = np.asarray(self.start) + (pos[-1] * n_per[..., None] + pos[k]) + self._advance(tau, sg, chi0[k], direc[k])
+        return n_per, k, tau, tan, _vec(-tan[..., 1], tan[..., 0]), d1, d2, d3
+
+    def __call__(self, t: ArrayLike) -> Derivatives:
+        """Position (m), velocity (m/s), acceleration (m/s^2), jerk (m/s^3), shape ``t.shape + (2,)``."""
+        tt = times(t)
+        _, sign, chi0, direc, pos = self._table
+        n_per, k, tau, tan, nor, d1, d2, _ = self._course(tt)
+        s = self.speed
+        q = (
+            np.asarray(self.start)
+            + (pos[-1] * n_per[..., None] + pos[k])
+            + self._advance(tau, sign[k], chi0[k], direc[k])
+        )
         return (q, s * tan, (s * d1)[..., None] * nor, (s * d2)[..., None] * nor - (s * d1 * d1)[..., None] * tan)
+
+    def snap(self, t: ArrayLike) -> FloatArray:
+        """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``: with ``q' = s T(chi)``,
+        ``q'''' = s ((chi''' - chi'^3) N - 3 chi' chi'' T)`` (``T``, ``N`` tangent and normal)."""
+        _, _, _, tan, nor, d1, d2, d3 = self._course(times(t))
+        s = self.speed
+        out: FloatArray = (s * (d3 - d1**3))[..., None] * nor - (3.0 * s * d1 * d2)[..., None] * tan
+        return out
 
     def bounds(self) -> MissionBounds:
         """Bounds of the class Notes, widened by :data:`BOUND_RTOL`."""

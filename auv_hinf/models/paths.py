@@ -120,11 +120,14 @@ class MissionBounds:
 
 
 class MissionReference(Protocol):
-    """A centre path: ``kind``, ``__call__(t) -> (q, q', q'', q''')``, ``bounds()``, ``to_dict()``."""
+    """A centre path: ``kind``, ``__call__(t) -> (q, q', q'', q''')``, ``snap(t)`` (the fourth
+    derivative, m/s^4), ``bounds()``, ``to_dict()``."""
 
     kind: ClassVar[str]
 
     def __call__(self, t: ArrayLike) -> Derivatives: ...
+
+    def snap(self, t: ArrayLike) -> FloatArray: ...
 
     def bounds(self) -> MissionBounds: ...
 
@@ -193,6 +196,16 @@ class SineReference(_Base):
             _vec(zero, -a * w**3 * cs),
         )
 
+    @property
+    def period(self) -> float:
+        """``2 pi / w`` (s)."""
+        return 2.0 * math.pi / self.omega
+
+    def snap(self, t: ArrayLike) -> FloatArray:
+        """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``."""
+        tt = times(t)
+        return _vec(np.zeros_like(tt), self.amplitude * self.omega**4 * np.sin(self.omega * tt))
+
     def bounds(self) -> MissionBounds:
         """Exact bounds (see Notes), widened by :data:`BOUND_RTOL`."""
         s, w = self.speed, self.omega
@@ -242,6 +255,10 @@ class LineReference(_Base):
         d = self.speed * np.array([math.cos(self.heading), math.sin(self.heading)])
         zero = np.zeros((*tt.shape[:-1], 2))
         return np.asarray(self.start) + tt * d, d + zero, zero, zero.copy()
+
+    def snap(self, t: ArrayLike) -> FloatArray:
+        """Fourth derivative of ``q`` (zero), shape ``t.shape + (2,)``."""
+        return np.zeros((*times(t).shape, 2))
 
     def bounds(self) -> MissionBounds:
         """Speed ``s``; acceleration, jerk and turn terms zero (exact)."""
@@ -294,6 +311,18 @@ class CircleReference(_Base):
         th = -0.5 * np.pi + (s / rad) * times(t)
         e, n = _vec(np.cos(th), np.sin(th)), _vec(-np.sin(th), np.cos(th))
         return np.asarray(self.center) + rad * e, s * n, -(s * s / rad) * e, -(s**3 / rad**2) * n
+
+    @property
+    def period(self) -> float:
+        """One lap, ``2 pi R / s`` (s)."""
+        return 2.0 * math.pi * self.radius / self.speed
+
+    def snap(self, t: ArrayLike) -> FloatArray:
+        """Fourth derivative ``(s^4/R^3) [cos th, sin th]`` of ``q`` (m/s^4), shape ``t.shape + (2,)``."""
+        s, rad = self.speed, self.radius
+        th = -0.5 * np.pi + (s / rad) * times(t)
+        out: FloatArray = (s**4 / rad**3) * _vec(np.cos(th), np.sin(th))
+        return out
 
     def bounds(self) -> MissionBounds:
         """Exact constants (see Notes), widened by :data:`BOUND_RTOL`."""

@@ -16,9 +16,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from auv_hinf._typing import FloatArray
+from auv_hinf._typing import FORMATION_FRAMES, FloatArray, FormationFrame
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.models.lawnmower import LawnmowerReference
+from auv_hinf.models.motion import Motion
+from auv_hinf.models.path_frame import PathFrameReference
 from auv_hinf.models.paths import (
     CircleReference,
     LineReference,
@@ -33,28 +35,6 @@ from auv_hinf.models.shaping import Shaping, blend_basis
 #: mission's minimum speed: the course of a vehicle at rest is undefined, and at 1e-3 of the
 #: mission speed the yaw-rate reference ``|p''|/|p'|`` is already 1000 times the mission's.
 START_SPEED_RTOL = 1e-3
-
-
-@dataclass(frozen=True)
-class Motion:
-    """Desired motion of every vehicle at one or more times.
-
-    Shapes broadcast over leading axes: ``(..., N, 2)`` for vectors, ``(..., N)`` for scalars.
-
-    Attributes
-    ----------
-    p, v, a : ndarray
-        Desired inertial position (m), velocity (m/s) and acceleration (m/s^2) of each vehicle.
-    psi, r, r_dot : ndarray
-        Desired heading (rad), yaw rate (rad/s) and yaw acceleration (rad/s^2) of each vehicle.
-    """
-
-    p: FloatArray
-    v: FloatArray
-    a: FloatArray
-    psi: FloatArray
-    r: FloatArray
-    r_dot: FloatArray
 
 
 @dataclass(frozen=True)
@@ -114,14 +94,19 @@ class FleetReference:
     mission : MissionReference
         Centre path ``q(t)``.
     offsets : array_like, shape (N, 2)
-        Offset of each vehicle from the centre (m, inertial frame).
+        Offset of each vehicle from the centre (m), in ``frame``.
     shaping : Shaping or None
         Start correction (see :func:`shaped_start`); ``None`` for the plain mission.
+    frame : {"inertial", "path"}
+        ``"inertial"`` (the paper): ``p_i = q + d_i``, heading ``atan2(p_i') + delta_i``;
+        ``"path"``: the offsets turn with the course, ``p_i = q + R(chi) d_i``, heading
+        ``chi + delta_i`` (:mod:`auv_hinf.models.path_frame`).
     """
 
     mission: MissionReference
     offsets: FloatArray
     shaping: Shaping | None = None
+    frame: FormationFrame = "inertial"
 
     def __post_init__(self) -> None:
         off = np.asarray(self.offsets, dtype=float)
@@ -129,13 +114,25 @@ class FleetReference:
             raise ParameterError(f"FleetReference.offsets must be finite with shape (N, 2) (m), got {off!r}")
         if self.shaping is not None and self.shaping.dp.shape[-2] != off.shape[0]:
             raise ParameterError(f"shaping is for {self.shaping.dp.shape[-2]} vehicles, offsets for {off.shape[0]}")
+        if self.frame not in FORMATION_FRAMES:
+            raise ParameterError(f"FleetReference.frame must be one of {FORMATION_FRAMES}, got {self.frame!r}")
         object.__setattr__(self, "offsets", off)
+
+    def unshaped(self) -> FleetReference:
+        """The same mission, offsets and frame without the start shaping."""
+        return FleetReference(self.mission, self.offsets, None, self.frame)
 
     def kinematics(self, t: ArrayLike) -> tuple[list[FloatArray], list[FloatArray]]:
         """``[p, p', p'', p''']`` (m .. m/s^3, inertial, shape ``B + (N, 2)``) and
         ``[delta, delta', delta'']`` (rad .. rad/s^2, shape ``B + (N,)``), where ``B`` broadcasts
         ``np.shape(t)`` with the shaping's batch shape."""
         tt = times(t)
+        if self.frame == "path":
+            base, _ = PathFrameReference(self.mission, self.offsets).kinematics(tt)
+            if self.shaping is None:
+                return base, [np.zeros(base[0].shape[:-1])] * 3
+            c, d = self.shaping.terms(tt)
+            return [base[k] + c[k] for k in range(4)], d
         q = [x[..., None, :] for x in self.mission(tt)]
         if self.shaping is None:
             shape = (*tt.shape, self.offsets.shape[0], 2)
@@ -149,13 +146,21 @@ class FleetReference:
     def motion(self, t: ArrayLike) -> Motion:
         """Desired motion at times ``t`` (s), shapes ``B + (N, 2)`` / ``B + (N,)`` (see
         :meth:`kinematics`): ``psi = atan2(p') + delta`` (rad, defined modulo 2 pi),
-        ``r = chi' + delta'``, ``r_dot = chi'' + delta''``.
+        ``r = chi' + delta'``, ``r_dot = chi'' + delta''`` with ``chi`` the course of ``p'``;
+        in the path frame ``chi`` is the course of the centre path ``q'``.
 
         Raises
         ------
         ParameterError
             If a desired velocity is zero (heading undefined) or a time is not finite.
         """
+        if self.frame == "path":
+            plain = PathFrameReference(self.mission, self.offsets)
+            if self.shaping is None:
+                return plain.motion(times(t))
+            (p, v, a), course = plain.kinematics(times(t), order=2)
+            c, d = self.shaping.terms(times(t))
+            return Motion(p + c[0], v + c[1], a + c[2], course[0] + d[0], course[1] + d[1], course[2] + d[2])
         if self.shaping is None:  # every vehicle moves with the centre: evaluate it once per time
             tt = times(t)
             q, qd, qdd, qddd = self.mission(tt)
@@ -210,6 +215,7 @@ def shaped_start(
     blend_time: float,
     current: tuple[float, float] = (0.0, 0.0),
     turn_time: float | None = None,
+    frame: FormationFrame = "inertial",
 ) -> FleetReference:
     """Fleet reference that starts exactly at the vehicles' initial states.
 
@@ -230,6 +236,10 @@ def shaped_start(
         Water current (m/s, inertial); the ground velocity is ``R(psi) [u, v] + current``.
     turn_time : float or None
         ``T_h`` (s) of the velocity and heading blends (see :class:`Shaping`); default ``T_b``.
+    frame : {"inertial", "path"}
+        Frame of the offsets (see :class:`FleetReference`). In the path frame the heading
+        offset is taken from the path's course: ``dpsi = wrap(psi(0) - chi(0))`` and
+        ``dr = r(0) - chi'(0) - dpsi h0'(0)/T_h``, with ``chi = atan2(q')``.
 
     Returns
     -------
@@ -258,7 +268,7 @@ def shaped_start(
     tb = require_finite("blend_time", blend_time)
     if tb <= 0:
         raise ParameterError(f"blend_time must be > 0 (s), got {tb!r}")
-    q0, q1, q2, _ = mission(0.0)
+    _, q1, q2, q3 = mission(0.0)
     psi, u, v, r = (init[..., k] for k in range(2, 6))
     vel = np.stack([np.cos(psi) * u - np.sin(psi) * v, np.sin(psi) * u + np.cos(psi) * v], axis=-1) + cur
     floor = START_SPEED_RTOL * mission.bounds().speed_min
@@ -268,15 +278,20 @@ def shaped_start(
             f"initial ground speed must be >= {floor!r} m/s (START_SPEED_RTOL x mission speed), "
             f"got {speed.min()!r}: the heading reference is undefined for a vehicle at rest"
         )
-    dp = init[..., :2] - off - q0
-    dv = vel - q1
+    raw = FleetReference(mission, off, None, frame)
+    (p0, v0, a0, _), _ = raw.kinematics(0.0)
+    dp = init[..., :2] - p0
+    dv = vel - v0
     th = tb if turn_time is None else require_finite("turn_time", turn_time)
     h0, _ = blend_basis(np.zeros(1), tb)
     g0, g1 = blend_basis(np.zeros(1), th)
-    chi, chi1, _ = heading_from_velocity(vel, q2 + h0[2, 0] * dp + g1[2, 0] * dv, np.zeros_like(vel))
+    if frame == "path":
+        chi, chi1, _ = heading_from_velocity(q1, q2, q3)
+    else:
+        chi, chi1, _ = heading_from_velocity(vel, a0 + h0[2, 0] * dp + g1[2, 0] * dv, np.zeros_like(vel))
     dpsi = wrap_angle(psi - chi)
     dr = (r - chi1 - g0[1, 0] * dpsi) / g1[1, 0]
-    return FleetReference(mission, off, Shaping(tb, dp, dv, dpsi, dr, th))
+    return FleetReference(mission, off, Shaping(tb, dp, dv, dpsi, dr, th), frame)
 
 
 #: Mission classes by ``kind``.

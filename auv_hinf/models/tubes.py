@@ -10,11 +10,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.models.paths import MissionBounds, MissionReference, heading_from_velocity
-from auv_hinf.models.reference import FleetReference, ReferenceTube
+from auv_hinf.models.reference import FleetReference, ReferenceTube, wrap_angle
 from auv_hinf.models.shaping import H0_SUP, H1_SUP, Shaping
 
 #: Cap on the cells per vehicle in :func:`shaped_tube` (each array holds cells x N x 2 floats).
@@ -22,6 +23,8 @@ MAX_CELLS = 200_000
 #: Outward margin of every tube interval relative to the quantity's scale: covers rounding in
 #: the cell-centre evaluation (a few ulps, ~1e-15 relative) with a wide margin.
 TUBE_RTOL = 1e-9
+#: Cells per vehicle of a path-frame tube (:func:`path_frame_tube`): parts of the course-rate range.
+PATH_FRAME_CELLS = 64
 
 
 def mission_tube(ref: MissionReference) -> ReferenceTube:
@@ -102,7 +105,7 @@ def shaped_tube(fleet: FleetReference, *, cells: int | None = None, resolution: 
         (the heading reference may be undefined: lengthen the blend or start closer to the
         mission velocity).
     """
-    tail = mission_tube(fleet.mission)
+    tail = fleet_tube(fleet.unshaped())
     sh = fleet.shaping
     if sh is None:
         return tail
@@ -115,7 +118,9 @@ def shaped_tube(fleet: FleetReference, *, cells: int | None = None, resolution: 
         try:
             parts = [
                 _blend_cells(
-                    FleetReference(fleet.mission, fleet.offsets, Shaping(tb, dp[b], dv[b], dpsi[b], dr[b], th)),
+                    FleetReference(
+                        fleet.mission, fleet.offsets, Shaping(tb, dp[b], dv[b], dpsi[b], dr[b], th), fleet.frame
+                    ),
                     tb,
                     k,
                     (acc[b], jerk[b], d1[b], d2[b]),
@@ -145,6 +150,10 @@ def _derivative_bounds(fleet: FleetReference) -> tuple[FloatArray, FloatArray, F
     jerk = mb.jerk_max + dpn * H0_SUP[3] / tb**3 + dvn * H1_SUP[3] / th**2
     d1 = np.abs(dpsi) * H0_SUP[1] / th + np.abs(dr) * H1_SUP[1]
     d2 = np.abs(dpsi) * H0_SUP[2] / th**2 + np.abs(dr) * H1_SUP[2] / th
+    if fleet.frame == "path":  # |p''| gains |d| (|chi''| + chi'^2); the jerk bound is not needed (see _blend_cells)
+        w = max(abs(mb.turn_rate_min), abs(mb.turn_rate_max))
+        acc = acc + np.hypot(fleet.offsets[:, 0], fleet.offsets[:, 1]) * (mb.turn_accel_max + w * w)
+        jerk = np.full_like(acc, np.inf)
     return acc, jerk, d1, d2
 
 
@@ -179,11 +188,24 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
             f"near t = {tc[kk]:.6g} s (lower bound {slo.min():.3g}) with {k} cells: the heading "
             "reference may be undefined; lengthen blend_time or start closer to the mission velocity"
         )
-    _, chi1, _ = heading_from_velocity(v, a, j)
-    rate = jerk / slo + 2.0 * acc**2 / slo**2 + d2
+    chi1: FloatArray
+    heading: FloatArray
+    offset_rate: FloatArray
+    rate: FloatArray
+    if one.frame == "path":  # psi_d = chi + delta, chi the course of the centre path q'
+        mb = one.mission.bounds()
+        w = max(abs(mb.turn_rate_min), abs(mb.turn_rate_max))
+        _, q1, q2, q3 = one.mission(tc)
+        chi, chi1, _ = (x[:, None] for x in heading_from_velocity(q1, q2, q3))
+        # d/dt (chi + delta - atan2(p')) and d/dt (chi' + delta') are bounded by:
+        offset_rate, rate = w + d1 + acc / slo, mb.turn_accel_max + d2
+        heading = wrap_angle(chi + dl0 - np.arctan2(v[..., 1], v[..., 0]))
+    else:  # psi_d = atan2(p') + delta: the offset is delta
+        chi1 = heading_from_velocity(v, a, j)[1]
+        offset_rate, rate, heading = d1, jerk / slo + 2.0 * acc**2 / slo**2 + d2, dl0
     return ReferenceTube(
         speed=speed.transpose(1, 0, 2).reshape(-1, 2),
-        offset=_interval(dl0, hw * d1, np.pi).transpose(1, 0, 2).reshape(-1, 2),
+        offset=_interval(heading, hw * offset_rate, np.pi).transpose(1, 0, 2).reshape(-1, 2),
         yaw_rate=_interval(chi1 + dl1, hw * rate, acc / slo + d1).transpose(1, 0, 2).reshape(-1, 2),
         accel=(np.minimum(acc, np.hypot(a[..., 0], a[..., 1]) + hw * jerk) * (1 + TUBE_RTOL)).T.ravel(),
         yaw_accel=(rate * (1 + TUBE_RTOL)).T.ravel(),
@@ -191,5 +213,74 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
 
 
 def fleet_tube(fleet: FleetReference) -> ReferenceTube:
-    """Sound tube of ``fleet`` for all ``t >= 0``: :func:`shaped_tube` with its defaults."""
-    return shaped_tube(fleet)
+    """Sound tube of ``fleet`` for all ``t >= 0``.
+
+    Unshaped: :func:`mission_tube` in the inertial frame (every vehicle moves as the centre),
+    :func:`path_frame_tube` in the path frame; shaped: :func:`shaped_tube` with its defaults.
+    """
+    if fleet.shaping is not None:
+        return shaped_tube(fleet)
+    if fleet.frame == "path":
+        return path_frame_tube(fleet.mission, fleet.offsets)
+    return mission_tube(fleet.mission)
+
+
+def path_frame_tube(mission: MissionReference, offsets: ArrayLike, *, cells: int = PATH_FRAME_CELLS) -> ReferenceTube:
+    """Sound tube of every vehicle on path-frame ``offsets`` (m), for all ``t >= 0``.
+
+    Vehicle ``i`` heads along the track (``psi_d = chi``) with desired body velocity
+    ``(u_d, v_d) = (|q'| - chi' d_y, chi' d_x)`` and yaw rate ``chi'``
+    (:mod:`auv_hinf.models.path_frame`). The cells are not time cells: cell ``k`` holds every time
+    at which ``chi'`` lies in the ``k``-th of ``cells`` equal parts of
+    ``[turn_rate_min, turn_rate_max]`` (:meth:`MissionReference.bounds`), so ``u_d`` and
+    ``v_d`` stay correlated with the turn rate, and the outer vehicle's surge
+    ``s (1 + |d_y| chi'max / s)`` is reached exactly at the end cell. Per cell, with
+    ``|q'|`` in ``[speed_min, speed_max]``:
+
+    * ``u_d`` and ``v_d`` range over the products of the cell's ``chi'`` with ``d_y``, ``d_x``;
+    * speed ``|(u_d, v_d)|`` and offset ``psi_d - atan2(p_i') = -atan2(v_d, u_d)`` follow
+      exactly over that box (``atan2`` is monotone in each argument on ``u_d > 0``); a cell whose
+      ``u_d`` may be ``<= 0`` (the vehicle stops or reverses) gets speed ``[0, ..]`` and the
+      full circle of offsets, which no certificate accepts;
+    * ``|p_i''| <= accel_max + |d_i| (turn_accel_max + max chi'^2)``, ``|psi_d''| <= turn_accel_max``.
+
+    Every interval is widened by :data:`TUBE_RTOL` of its scale.
+
+    Returns
+    -------
+    ReferenceTube
+        ``N * cells`` rows in C order of (vehicle, cell).
+    """
+    b = mission.bounds()
+    off = np.asarray(offsets, dtype=float)
+    edges = np.linspace(b.turn_rate_min, b.turn_rate_max, cells + 1)
+    w0, w1 = edges[:-1], edges[1:]
+
+    def span(c: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return np.minimum(c * w0, c * w1), np.maximum(c * w0, c * w1)
+
+    ty_lo, ty_hi = span(off[:, 1:2])  # (N, K): chi' d_y
+    u_lo, u_hi = b.speed_min - ty_hi, b.speed_max - ty_lo
+    n_lo, n_hi = span(off[:, 0:1])
+    n_min = np.where((n_lo <= 0.0) & (n_hi >= 0.0), 0.0, np.minimum(np.abs(n_lo), np.abs(n_hi)))
+    n_max = np.maximum(np.abs(n_lo), np.abs(n_hi))
+    moving = u_lo > 0.0
+    s_lo = np.where(moving, np.hypot(np.maximum(u_lo, 0.0), n_min), 0.0)
+    s_hi = np.hypot(np.maximum(np.abs(u_lo), np.abs(u_hi)), n_max)
+    top = np.arctan2(n_hi, np.where(n_hi > 0.0, u_lo, u_hi))  # sup of atan2(v_d, u_d) over the box
+    bottom = np.arctan2(n_lo, np.where(n_lo > 0.0, u_hi, u_lo))
+    half = 0.5 * (s_hi - s_lo)
+    speed = _interval(s_lo + half, half, s_hi)
+    mid, pad = -0.5 * (top + bottom), 0.5 * (top - bottom)
+    offset = np.where(moving[..., None], _interval(mid, pad, np.pi), np.array([-np.pi, np.pi]))
+    rates = np.broadcast_to(
+        _interval(0.5 * (w0 + w1), 0.5 * (w1 - w0), abs(b.turn_rate_max) + abs(b.turn_rate_min)), speed.shape
+    )
+    accel = b.accel_max + np.hypot(off[:, 0], off[:, 1])[:, None] * (b.turn_accel_max + np.maximum(w0**2, w1**2))
+    return ReferenceTube(
+        speed=speed.reshape(-1, 2),
+        offset=offset.reshape(-1, 2),
+        yaw_rate=rates.reshape(-1, 2),
+        accel=(accel * (1 + TUBE_RTOL)).ravel(),
+        yaw_accel=np.full(accel.size, b.turn_accel_max * (1 + TUBE_RTOL)),
+    )

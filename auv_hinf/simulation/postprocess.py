@@ -96,6 +96,8 @@ class FormationErrors:
         ``q_cd``, the mean of the target positions (m).
     position_error : ndarray, shape (T, N)
         ``||p_i - p_id||`` of every vehicle (m).
+    shape_diff : ndarray, shape (T, N-1, 2)
+        ``X_shape - X_shape,d``: the error of each Jacobi shape vector (m, inertial frame).
     """
 
     jacobi: FloatArray
@@ -103,6 +105,20 @@ class FormationErrors:
     center_error: FloatArray
     desired_center: FloatArray
     position_error: FloatArray
+    shape_diff: FloatArray
+
+
+def in_path_frame(vectors: FloatArray, course: FloatArray | None) -> FloatArray:
+    """Inertial vectors ``(T, ..., 2)`` in the frame of the course ``chi (T,)`` (rad): ``[along, cross]``
+    = ``R(chi)^T v`` (m); unchanged when ``course`` is None (the inertial frame)."""
+    if course is None:
+        return vectors
+    shape = (-1,) + (1,) * (vectors.ndim - 2)
+    c, s = np.cos(course).reshape(shape), np.sin(course).reshape(shape)
+    out: FloatArray = np.stack(
+        [c * vectors[..., 0] + s * vectors[..., 1], -s * vectors[..., 0] + c * vectors[..., 1]], axis=-1
+    )
+    return out
 
 
 def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind = "paper") -> FormationErrors:
@@ -120,6 +136,7 @@ def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind
         center_error=np.linalg.norm(diff[..., -1, :], axis=-1),
         desired_center=jac_d[..., -1, :],
         position_error=np.linalg.norm(positions - target, axis=-1),
+        shape_diff=diff[..., :-1, :],
     )
 
 
@@ -129,5 +146,6 @@ __all__ = [
     "envelope_margin",
     "formation_errors",
     "ground_velocity",
+    "in_path_frame",
     "tracking_errors",
 ]

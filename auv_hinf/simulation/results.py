@@ -14,7 +14,13 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.models.actuators import CHANNELS
 from auv_hinf.models.reference import Motion
 from auv_hinf.simulation.law import saturate
-from auv_hinf.simulation.postprocess import TrackingErrors, formation_errors, ground_velocity, tracking_errors
+from auv_hinf.simulation.postprocess import (
+    TrackingErrors,
+    formation_errors,
+    ground_velocity,
+    in_path_frame,
+    tracking_errors,
+)
 
 if TYPE_CHECKING:
     from auv_hinf.simulation.scenario import Scenario
@@ -55,6 +61,10 @@ class SimulationResult:
     commanded_peak : tuple of float
         Largest ``|tau_x|, |tau_y|, |tau_psi|`` the law commanded at the output samples,
         before saturation (N, N, N m), over all vehicles.
+    shape_components : ndarray (T, N-1, 2) or None
+        Error of each Jacobi shape vector against the unshaped mission in the scenario's
+        ``frame`` (m): ``[along, cross]`` track in the path frame (rotated by the path's course),
+        ``[x, y]`` in the inertial frame.
     """
 
     t: FloatArray
@@ -72,6 +82,7 @@ class SimulationResult:
     n_steps: int
     scenario: Scenario = field(repr=False)
     commanded_peak: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    shape_components: FloatArray | None = field(default=None, repr=False)
 
     def error_at(self, time: float) -> tuple[float, float]:
         """Shape and centre error (m) at the sample nearest to ``time`` (s)."""
@@ -106,7 +117,19 @@ class SimulationResult:
             "actuator_limits": None if self.scenario.law.actuators is None else self.scenario.law.actuators.to_dict(),
             "stayed_in_envelope": stayed,
             "first_exit_time": exit_time,
+            "shape_errors": self.shape_errors(),
         }
+
+    def shape_errors(self) -> dict[str, Any]:
+        """Jacobi shape errors in the formation's frame: largest ``|component|`` at the end and over the run (m)."""
+        frame = self.scenario.frame or "inertial"
+        axes = ["along", "cross"] if frame == "path" else ["x", "y"]
+        comp = self.shape_components
+        if comp is None or comp.shape[1] == 0:
+            return {"frame": frame, "axes": axes, "final": None, "max": None}
+        final = np.abs(comp[-1]).max(axis=0)
+        peak = np.abs(comp).max(axis=(0, 1))
+        return {"frame": frame, "axes": axes, "final": [float(x) for x in final], "max": [float(x) for x in peak]}
 
     def save_npz(self, path: str | Path) -> None:
         """Write time, states, forces and Jacobi coordinates to a ``.npz`` file."""
@@ -153,8 +176,11 @@ def build_results(
     commanded = first.law.unsaturated(states, p_dot, motion)
     forces, active = saturate(commanded, first.law.actuators)
     peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
-    target = motion.p if first.mission is None else first.mission.motion(t).p[:, None]
+    desired = None if first.mission is None else first.mission.motion(t)
+    target = motion.p if desired is None else desired.p[:, None]
     form = formation_errors(states[..., 0:2], target, first.jacobi)
+    course = (motion.psi[:, 0, 0] if desired is None else desired.psi[:, 0]) if first.frame == "path" else None
+    components = in_path_frame(form.shape_diff, course)
     track = tracking_errors(states, p_dot, motion)
     saturated = np.asarray(active.any(axis=-1), dtype=bool)
     position_error = np.linalg.norm(track.e, axis=-1)
@@ -182,6 +208,7 @@ def build_results(
                 n_steps=int(n_steps[k]),
                 scenario=scn,
                 commanded_peak=(float(peaks[k, 0]), float(peaks[k, 1]), float(peaks[k, 2])),
+                shape_components=np.broadcast_to(components, form.jacobi.shape[:2] + components.shape[-2:])[:, k],
             )
         )
     return out

@@ -13,9 +13,10 @@ from typing import cast
 
 import numpy as np
 
-from auv_hinf._typing import FloatArray, JacobiKind
+from auv_hinf._typing import FORMATION_FRAMES, FloatArray, FormationFrame, JacobiKind
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.path_frame import PathFrameReference
 from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.law import MotionSource, VehicleLaw
@@ -52,6 +53,10 @@ class Scenario:
         its shaping; otherwise ``reference`` itself.
     jacobi : {"paper", "orthonormal"}
         Jacobi convention of the reported shape error.
+    frame : {"inertial", "path"} or None
+        Frame of the reported shape-error components (along/cross track in the path frame);
+        default: the frame of a :class:`~auv_hinf.models.reference.FleetReference` or
+        ``"path"`` for a :class:`~auv_hinf.models.path_frame.PathFrameReference`, else inertial.
     """
 
     law: VehicleLaw
@@ -65,6 +70,7 @@ class Scenario:
     name: str = "scenario"
     mission: MotionSource | None = None
     jacobi: JacobiKind = "paper"
+    frame: FormationFrame | None = None
 
     def __post_init__(self) -> None:
         init = np.asarray(self.initial, dtype=float)
@@ -81,8 +87,13 @@ class Scenario:
             raise ParameterError(f"current must be a pair (m/s), got {self.current!r}")
         object.__setattr__(self, "initial", init)
         object.__setattr__(self, "current", cur)
+        if self.frame is None:
+            path = isinstance(ref, PathFrameReference) or (isinstance(ref, FleetReference) and ref.frame == "path")
+            object.__setattr__(self, "frame", "path" if path else "inertial")
+        elif self.frame not in FORMATION_FRAMES:
+            raise ParameterError(f"frame must be one of {FORMATION_FRAMES}, got {self.frame!r}")
         if self.mission is None and isinstance(ref, FleetReference) and ref.shaping is not None:
-            object.__setattr__(self, "mission", FleetReference(ref.mission, ref.offsets))
+            object.__setattr__(self, "mission", ref.unshaped())
 
     @property
     def n(self) -> int:
@@ -182,7 +193,7 @@ class ScenarioBatch:
         if not scn:
             raise ParameterError("a scenario batch needs at least one scenario")
         first = scn[0]
-        for name in ("law", "horizon", "samples", "envelope", "jacobi", "n"):
+        for name in ("law", "horizon", "samples", "envelope", "jacobi", "frame", "n"):
             if any(getattr(s, name) != getattr(first, name) for s in scn):
                 raise ParameterError(f"all scenarios of a batch must share {name!r}")
         if self.reference is None:

@@ -232,8 +232,9 @@ class Certificate:
         return fleet_closed_loop(self.law(), ref, cfg.vehicle if plant is None else plant, cfg.n)
 
     def _mission_fleet(self) -> FleetReference:
-        """Raw mission reference: formation offsets around the mission path, no shaping."""
-        return FleetReference(mission_reference(self.config), formation_offsets(self.config))
+        """Raw mission reference: formation offsets (in their frame) around the mission path, no shaping."""
+        cfg = self.config
+        return FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
 
     def summary(self) -> str:
         """Readable table."""

@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from auv_hinf.certification import closed_loop, coverage, margins, region
+from auv_hinf.certification import closed_loop, coverage, margins, reference_fit, region
 from auv_hinf.design import alpha, crosscheck, gains, sigma, theorem1
 from auv_hinf.design.lmi import ellipsoid
 from auv_hinf.exceptions import AuvHinfError, ConfigError
-from auv_hinf.models import actuators, envelope, lawnmower, paths, reference, shaping, vehicle
+from auv_hinf.models import actuators, envelope, lawnmower, motion, path_frame, paths, reference, shaping, vehicle
 from auv_hinf.robust import bandwidth, box, certificate, margin
 from auv_hinf.workflow import actuator_check, nominal, robust_part
 
@@ -55,9 +55,12 @@ _STORED_MODULES = (
     lawnmower,
     margin,
     margins,
+    motion,
     nominal,
+    path_frame,
     paths,
     reference,
+    reference_fit,
     region,
     robust_part,
     shaping,

@@ -23,6 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from auv_hinf._typing import GAIN_METHODS, FloatArray
+from auv_hinf.certification.reference_fit import ReferenceFit, reference_fit
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.config.tables import SimulationConfig
 from auv_hinf.design.alpha import GainDesign, design_alpha
@@ -33,7 +34,7 @@ from auv_hinf.models.envelope import envelope_lambda
 from auv_hinf.models.jacobi_maps import positions_from_jacobi
 from auv_hinf.models.paths import MissionReference
 from auv_hinf.models.reference import FleetReference, ReferenceTube, reference_from_dict
-from auv_hinf.models.tubes import mission_tube
+from auv_hinf.models.tubes import mission_tube, path_frame_tube
 from auv_hinf.robust.bandwidth import RobustDesign, design_robust
 from auv_hinf.robust.box import ParameterBox
 from auv_hinf.robust.synthesis import OBJECTIVE as SYNTHESIS_OBJECTIVE
@@ -71,9 +72,13 @@ class DesignPoint:
     mission : MissionReference
         The configured centre path.
     tube : ReferenceTube
-        Its tube (sound bounds of the desired motion for all time).
+        Sound bounds of the desired motion for all time: the mission's tube in the inertial
+        frame (every vehicle moves as the centre), every vehicle's own tube in the path frame.
     offsets : ndarray, shape (N, 2)
-        Vehicle offsets from the formation centre (m).
+        Vehicle offsets from the formation centre (m), in the configured frame.
+    fit : ReferenceFit
+        Per-vehicle verdict on the desired motion at zero error (binding vehicle and turn,
+        smallest turn radius that fits), :func:`~auv_hinf.certification.reference_fit.reference_fit`.
     """
 
     config: FormationConfig
@@ -88,6 +93,7 @@ class DesignPoint:
     mission: MissionReference
     tube: ReferenceTube
     offsets: FloatArray
+    fit: ReferenceFit
 
     def require_gains(self) -> Gains:
         """The gains, or a :class:`~auv_hinf.exceptions.DesignError` saying why there are none."""
@@ -134,8 +140,8 @@ class DesignPoint:
         }
 
     def fleet(self) -> FleetReference:
-        """The raw (unshaped) fleet reference: the mission with the formation offsets."""
-        return FleetReference(self.mission, self.offsets)
+        """The raw (unshaped) fleet reference: the mission with the formation offsets in their frame."""
+        return FleetReference(self.mission, self.offsets, None, self.config.frame)
 
 
 def mission_reference(cfg: FormationConfig) -> MissionReference:
@@ -208,7 +214,8 @@ def _design(cfg: FormationConfig) -> DesignPoint:
             if m == cfg.method:
                 reasons.append(str(exc))
     mission = mission_reference(cfg)
-    tube = mission_tube(mission)
+    offsets = formation_offsets(cfg)
+    tube = path_frame_tube(mission, offsets) if cfg.frame == "path" else mission_tube(mission)
     gains: Gains | None = None
     robust: RobustDesign | None = None
     source: GainSource = "robust" if cfg.robust else "theorem1"
@@ -244,7 +251,8 @@ def _design(cfg: FormationConfig) -> DesignPoint:
         reasons=tuple(reasons),
         mission=mission,
         tube=tube,
-        offsets=formation_offsets(cfg),
+        offsets=offsets,
+        fit=reference_fit(mission, offsets, cfg.frame, cfg.envelope),
     )
 
 

@@ -19,6 +19,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.certification.actuation import mission_thrust, within_actuators
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
 from auv_hinf.certification.coverage import Coverage, StartMode, cover_start
+from auv_hinf.certification.reference_fit import ReferenceFit
 from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.models.actuators import actuator_shortfall
 from auv_hinf.workflow.design_point import DesignPoint, initial_states
@@ -38,8 +39,9 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
     ------
     DesignError
         If there are no gains, the envelope's heading range is narrower than the full
-        circle, the small-gain condition fails, the mission leaves the envelope even at zero
-        error, or the mission alone needs more force than the actuators give.
+        circle, some vehicle's desired motion leaves the envelope even at zero error (the
+        message names the vehicle, the turn and the smallest turn radius that fits), the
+        small-gain condition fails, or the mission alone needs more force than the actuators give.
     """
     cfg = point.config
     width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
@@ -49,6 +51,8 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
             "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
         )
     gains = point.require_gains()
+    if not point.fit.ok:
+        raise DesignError(point.fit.reason())
     cert = closed_loop_certificate(cfg.vehicle, cfg.envelope, point.tube, gains, lam=point.lam, sigma=point.sigma.upper)
     if cfg.actuators is None:
         return cert
@@ -74,6 +78,7 @@ def coverage_for(point: DesignPoint, cert: ClosedLoopCertificate, initial: Float
         point.offsets,
         initial,
         start=start,
+        frame=cfg.frame,
         blend_time=cfg.simulation.blend_time,
         actuators=cfg.actuators,
         current=cfg.simulation.current,
@@ -95,12 +100,15 @@ class ClosedLoopSummary:
         The configuration gives its own initial states (then the verdict requires them covered).
     reasons : tuple of str
         Why the closed loop is not certified (empty when it is).
+    fit : ReferenceFit or None
+        Per-vehicle verdict on the desired motion at zero error.
     """
 
     certificate: ClosedLoopCertificate | None
     shaped: Coverage | None
     declared_start: bool
     reasons: tuple[str, ...]
+    fit: ReferenceFit | None = None
 
     @property
     def ok(self) -> bool:
@@ -109,11 +117,19 @@ class ClosedLoopSummary:
 
     def lines(self) -> list[str]:
         """Lines of ``Certificate.summary``: decay, region, thrust, start (4-6 digits, with units)."""
-        c = self.certificate
+        c, fit = self.certificate, self.fit
+        head = []
+        if fit is not None:
+            n_in = sum(fit.inside)
+            head = [
+                f"  reference in envelope     {n_in} of {len(fit.inside)} vehicles ({fit.frame} frame)"
+                + ("" if fit.ok else f": {fit.reason()}")
+            ]
         if c is None:
-            return ["  closed loop               not certified"]
+            return [*head, "  closed loop               not certified"]
         r = c.region.region
         out = [
+            *head,
             f"  closed-loop decay rate    {c.rate:.4g} 1/s "
             f"(position {c.position.rate:.4g}, heading {c.heading.rate:.4g})",
             f"  start region (all at once) |e| <= {r.position:.4g} m, |e'| <= {r.velocity:.4g} m/s, "
@@ -126,6 +142,15 @@ class ClosedLoopSummary:
             how = f"blend {s.blend_time:g} s, turn {s.turn_time:g} s" if s.blend_time is not None else "no blend needed"
             out.append(f"  shaped start              {'covered' if s.covered else 'NOT covered'} ({how})")
         return out
+
+    @staticmethod
+    def _fit_keys(fit: ReferenceFit) -> dict[str, Any]:
+        """``reference_frame``, ``binding`` (vehicle, time, channel, edge, margin) and ``reference_fit``."""
+        return {
+            "reference_frame": fit.frame,
+            "binding": None if fit.binding is None else fit.binding.to_dict(),
+            "reference_fit": fit.to_dict(),
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The ``closed_loop`` object of ``auv-hinf certify --json``."""
@@ -151,7 +176,10 @@ class ClosedLoopSummary:
             "region": None if c is None else radii(c.region.region),
             "single_axis_region": None if c is None else radii(c.region.single_axis),
             "region_error_bounds": None if c is None else radii(c.region.bounds),
-            "reference_inside_envelope": c is not None,
+            # per vehicle: its own desired motion at zero error stays in the envelope (in the inertial
+            # frame every vehicle's is the centre's); certificates saved before 0.3 hold no fit: one bool
+            "reference_inside_envelope": c is not None if self.fit is None else list(self.fit.inside),
+            **({} if self.fit is None else self._fit_keys(self.fit)),
             "max_force": max(forces) if forces else None,
             "max_moment": max(moments) if moments else None,
             "covers_shaped_start": bool(s is not None and s.covered),
@@ -184,7 +212,9 @@ def closed_loop_summary(point: DesignPoint, *, progress_min_n: int = 16) -> Clos
     try:
         cert = closed_loop_for(point)
     except AuvHinfError as exc:
-        return ClosedLoopSummary(None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",))
+        return ClosedLoopSummary(
+            None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",), point.fit
+        )
     declared = cfg.simulation.initial is not None
     try:
         with tqdm(
@@ -201,4 +231,4 @@ def closed_loop_summary(point: DesignPoint, *, progress_min_n: int = 16) -> Clos
             reasons.append(f"configured start: {exc}")
     if declared and shaped is not None and not shaped.covered:
         reasons.append(f"configured start not covered: {shaped.reason}")
-    return ClosedLoopSummary(cert, shaped, declared, tuple(reasons))
+    return ClosedLoopSummary(cert, shaped, declared, tuple(reasons), point.fit)

@@ -156,6 +156,7 @@ def plan_run(
         samples=run_samples(cfg.n) if samples is None else samples,
         name=cfg.name,
         jacobi=cfg.jacobi,
+        frame=cfg.frame,
     )
     nominal = cov is not None and cov.covered and not notes
     rob = None
@@ -239,6 +240,9 @@ DEFINITIONS = {
     "measured_errors": "sup over samples and vehicles of each tracking error (m, m/s, rad, rad/s)",
     "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
     "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
+    "shape_errors": "error of each Jacobi shape vector against the mission, in the formation's frame (along and "
+    "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "
+    "('final') and over the run ('max') (m)",
     "commanded_peak": "largest commanded force per channel before saturation (N, N, N m)",
 }
 

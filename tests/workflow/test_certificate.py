@@ -156,7 +156,8 @@ def test_toml_round_trip(tmp_path):
     assert mission_reference(cfg).bounds().speed_max == pytest.approx(np.sqrt(10.0))
     assert cfg.envelope.u[1] == 2.0
     assert not c.certified
-    assert len(c.reasons) == 1 and "the reference tube itself leaves the envelope" in c.reasons[0]
+    assert len(c.reasons) == 1 and "every vehicle (inertial frame" in c.reasons[0]
+    assert "upper surge edge" in c.reasons[0] and "smallest turn radius that fits" in c.reasons[0]
     assert c.closed_loop is not None and c.closed_loop.certificate is None
     # the CLI verdict is the API verdict: not certified, exit code 1
     assert main(["certify", "--config", str(f)]) == 1
