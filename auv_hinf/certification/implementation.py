@@ -185,6 +185,8 @@ class ImplementationProblem:
     jerk : float
         Bound of ``|p_d'''|`` (m/s^3).
     actuators : Actuators or None
+    yaw_jerk : float
+        Bound of ``|psi_d'''|`` (rad/s^3); ``inf`` when unknown.
     """
 
     params: VehicleParams
@@ -196,6 +198,7 @@ class ImplementationProblem:
     c_range: tuple[float, float]
     jerk: float
     actuators: Actuators | None = None
+    yaw_jerk: float = math.inf
 
     @property
     def loops(self) -> tuple[LagLoop, LagLoop]:
@@ -235,7 +238,7 @@ def _step(
     force = _force(prob, bounds, impl)
     dist = lag_disturbance(
         prob.params, prob.envelope, prob.tube, prob.gains, impl, lam=prob.lam, sigma=prob.sigma,
-        jerk=prob.jerk, force=force, bounds=bounds,
+        jerk=prob.jerk, force=force, bounds=bounds, yaw_jerk=prob.yaw_jerk,
     )
     out, ult = [], []
     for cert, w, v0 in zip(certs, (dist.position, dist.heading), start, strict=True):

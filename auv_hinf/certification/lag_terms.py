@@ -20,8 +20,9 @@ Every bracket is bounded here by envelope and tube quantities: the state moves a
 ``T`` times its rate bound between ``t'`` and ``t`` (body accelerations from the force bound,
 the drag and the Coriolis terms over the envelope), ``G = R B R^T`` is Lipschitz in the body
 velocities (``B`` is affine in ``|u|, |v|, r``) and in the heading (``2 sigma``), and the
-rotation error satisfies ``||R(a) - I|| <= |a|``. The desired yaw acceleration has no jerk
-bound in the tube, so its change is bounded by twice its size (does not shrink with ``T``).
+rotation error satisfies ``||R(a) - I|| <= |a|``. The change of the desired yaw acceleration is
+``T`` times the course jerk bound (:func:`course_jerk_bound`) when the path bounds its fourth
+derivative, else twice its size (which does not shrink with ``T``).
 """
 
 from __future__ import annotations
@@ -138,6 +139,19 @@ def body_rates(
     return crude if lag > 0 else tuple(float(min(a, c)) for a, c in zip(a0, crude, strict=True))  # type: ignore[return-value]
 
 
+def course_jerk_bound(speed_min: float, accel: float, jerk: float, snap: float) -> float:
+    """Bound of ``|chi'''|`` (rad/s^3) of the course ``chi = atan2(q')`` from bounds of the path's derivatives.
+
+    With ``q' = s (cos chi, sin chi)``: ``|chi'| <= A/s``, ``|s'| <= A``, ``|s''| <= J + A^2/s``,
+    ``|chi''| <= J/s + 2 A^2/s^2``, and the normal part of ``q''''`` gives
+    ``s chi''' = n . q'''' - 3 s'' chi' + s chi'^3 - 3 s' chi''``, hence
+    ``|chi'''| <= S4/s + 6 A J/s^2 + 10 A^3/s^3`` (``s`` the smallest speed, ``A, J, S4`` the
+    bounds of ``|q''|, |q'''|, |q''''|``).
+    """
+    s = speed_min
+    return snap / s + 6.0 * accel * jerk / s**2 + 10.0 * accel**3 / s**3
+
+
 def lag_disturbance(
     params: VehicleParams,
     envelope: Envelope,
@@ -150,6 +164,7 @@ def lag_disturbance(
     jerk: float,
     force: ThrustBounds,
     bounds: ErrorBounds,
+    yaw_jerk: float = math.inf,
 ) -> LagDisturbance:
     """Sound bounds of ``|w|`` and ``|w_psi|`` (see the module docstring).
 
@@ -171,6 +186,9 @@ def lag_disturbance(
         Bounds of the applied (held) forces (N, N, N m).
     bounds : ErrorBounds
         Bounds of the true errors (m, m/s, rad, rad/s).
+    yaw_jerk : float
+        Bound of ``|psi_d'''|`` (rad/s^3); ``inf`` when unknown (then the change of ``psi_d''``
+        over the lag is bounded by twice its size).
     """
     lag, n = implementation.max_lag, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
@@ -201,11 +219,11 @@ def lag_disturbance(
     heading = (
         abs(gains.k_psi[0]) * n.heading
         + abs(gains.k_psi[1]) * n.yaw_rate
-        + (2.0 * yaw_accel if lag > 0 else 0.0)
+        + min(2.0 * yaw_accel, yaw_jerk * lag if lag > 0 else 0.0)
         + (abs(d33_quad) * d_r * yaw + d33_y * yaw_accel * lag) / m33
         + abs(m11 - m22) * ((v_hi + n.velocity) * d_u + u_hi * d_v) / m33
     )
     return LagDisturbance(position=position, heading=heading, body_rates=(u_rate, v_rate, r_rate))
 
 
-__all__ = ["LagDisturbance", "lag_disturbance"]
+__all__ = ["LagDisturbance", "body_rates", "course_jerk_bound", "lag_disturbance"]

@@ -90,6 +90,8 @@ class MissionBounds:
         Range of the course rate ``chi' = (x'y'' - y'x'')/|q'|^2`` (rad/s), ``chi = atan2(q')``.
     turn_accel_max : float
         Upper bound of ``|chi''|`` (rad/s^2).
+    snap_max : float
+        Upper bound of the fourth derivative ``|q^(4)|`` (m/s^4); ``inf`` when the path gives none.
     """
 
     speed_min: float
@@ -99,6 +101,7 @@ class MissionBounds:
     turn_rate_min: float
     turn_rate_max: float
     turn_accel_max: float
+    snap_max: float = math.inf
 
     @staticmethod
     def widened(**values: float) -> MissionBounds:
@@ -222,6 +225,7 @@ class SineReference(_Base):
             turn_rate_min=-a * w / s,
             turn_rate_max=a * w / s,
             turn_accel_max=a * w * w / s * h,
+            snap_max=a * w**3,
         )
 
 
@@ -271,6 +275,7 @@ class LineReference(_Base):
             turn_rate_min=0.0,
             turn_rate_max=0.0,
             turn_accel_max=0.0,
+            snap_max=0.0,
         )
 
 
@@ -335,6 +340,7 @@ class CircleReference(_Base):
             turn_rate_min=s / rad,
             turn_rate_max=s / rad,
             turn_accel_max=0.0,
+            snap_max=s**4 / rad**3,
         )
 
 

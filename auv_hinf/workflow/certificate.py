@@ -24,6 +24,7 @@ from auv_hinf.workflow.design_point import design_point, formation_offsets, miss
 from auv_hinf.workflow.interconnect import fleet_closed_loop, formation_controller
 from auv_hinf.workflow.nominal import ClosedLoopSummary, closed_loop_summary
 from auv_hinf.workflow.persist import load_certificate, save_certificate
+from auv_hinf.workflow.implementation_part import ImplementationSummary, implementation_summary
 from auv_hinf.workflow.robust_part import RobustSummary, robust_summary
 
 #: An actuator channel counts as the binding constraint when the certified peak reaches this
@@ -100,6 +101,9 @@ class Certificate:
         and that :meth:`controller` exports (``None`` when the design gives none).
     actuators : ActuatorCheck or None
         The certified peak force against the declared ``[actuators]`` limits.
+    implementation : ImplementationSummary or None
+        The certificate of the controller as it runs (``[implementation]``: sampling, delay,
+        noise): limits, decay, bounds and whether the declared implementation is covered.
     design : dict or None
         How the gains were chosen (:meth:`~auv_hinf.workflow.design_point.DesignPoint.summary`),
         with the binding constraint of the certificate.
@@ -127,6 +131,7 @@ class Certificate:
     gain_source: str = "theorem1"
     actuators: ActuatorCheck | None = None
     design: dict[str, Any] | None = None
+    implementation: ImplementationSummary | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary (the ``auv-hinf certify --json`` layout)."""
@@ -169,6 +174,7 @@ class Certificate:
             "vehicle": self.config.vehicle.to_dict(),
             "closed_loop": None if self.closed_loop is None else self.closed_loop.to_dict(),
             "robust": None if self.robust is None else self.robust.to_dict(),
+            "implementation": None if self.implementation is None else self.implementation.to_dict(),
             "gains": None if self.gains is None else {**self.gains.to_dict(), "source": self.gain_source},
             "actuators": None if self.actuators is None else self.actuators.to_dict(),
             "design": self.design,
@@ -268,6 +274,7 @@ class Certificate:
         lines += ["  closed loop               not certified"] if self.closed_loop is None else self.closed_loop.lines()
         lines += [] if self.robust is None else self.robust.lines()
         lines += [] if self.actuators is None else self.actuators.lines()
+        lines += [] if self.implementation is None else self.implementation.lines()
         lines += [f"  CERTIFIED: {'yes' if self.certified else 'no'}"]
         lines.extend(f"    - {r}" for r in self.reasons)
         return "\n".join(lines)
@@ -346,6 +353,9 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
             "robust certificate does not cover the declared [uncertainty] box and [disturbance] current: "
             + ("; ".join(rob.to_dict()["reasons"]) or "see robust")
         )
+    impl = implementation_summary(point, nominal, continuous_ok=not reasons)
+    if not config.implementation.continuous and not impl.covers:
+        reasons.append("implementation not covered: " + "; ".join(impl.reasons))
     return Certificate(
         config=config,
         lam=lam,
@@ -366,6 +376,7 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         gain_source=point.source,
         actuators=act,
         design={**point.summary(), "binding": _binding(act, rob, loop)},
+        implementation=impl,
     )
 
 

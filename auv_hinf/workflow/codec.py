@@ -30,13 +30,14 @@ from typing import Any
 
 import numpy as np
 
-from auv_hinf.certification import closed_loop, coverage, margins, reference_fit, region
+from auv_hinf.certification import closed_loop, coverage, implementation, lag_terms, margins, reference_fit, region
 from auv_hinf.design import alpha, crosscheck, gains, sigma, theorem1
-from auv_hinf.design.lmi import ellipsoid
+from auv_hinf.design.lmi import ellipsoid, sampled
 from auv_hinf.exceptions import AuvHinfError, ConfigError
 from auv_hinf.models import actuators, envelope, lawnmower, motion, path_frame, paths, reference, shaping, vehicle
+from auv_hinf.models import implementation as implementation_model
 from auv_hinf.robust import bandwidth, box, certificate, margin
-from auv_hinf.workflow import actuator_check, nominal, robust_part
+from auv_hinf.workflow import actuator_check, implementation_part, nominal, robust_part
 
 #: Modules whose dataclasses may appear in a certificate's state.
 _STORED_MODULES = (
@@ -52,6 +53,10 @@ _STORED_MODULES = (
     ellipsoid,
     envelope,
     gains,
+    implementation,
+    implementation_model,
+    implementation_part,
+    lag_terms,
     lawnmower,
     margin,
     margins,
@@ -63,6 +68,7 @@ _STORED_MODULES = (
     reference_fit,
     region,
     robust_part,
+    sampled,
     shaping,
     sigma,
     theorem1,

@@ -15,6 +15,7 @@ import numpy as np
 
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.coverage import initial_errors
+from auv_hinf.certification.lag_terms import course_jerk_bound
 from auv_hinf.certification.implementation import (
     ImplementationCertificate,
     ImplementationProblem,
@@ -35,6 +36,7 @@ BOX_NOT_COVERED = (
 def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> ImplementationProblem:
     """The implementation problem of ``point`` along its mission, with the closed loop's sigma and c-range."""
     cfg = point.config
+    jerk, yaw_jerk = reference_jerks(point)
     return ImplementationProblem(
         params=cfg.vehicle,
         envelope=cfg.envelope,
@@ -43,14 +45,31 @@ def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> I
         lam=point.lam,
         sigma=cert.region.sigma,
         c_range=cert.region.c_range,
-        jerk=point.mission.bounds().jerk_max,
+        jerk=jerk,
         actuators=cfg.actuators,
+        yaw_jerk=yaw_jerk,
     )
+
+
+def reference_jerks(point: DesignPoint) -> tuple[float, float]:
+    """Bounds of every vehicle's ``|p_d'''|`` (m/s^3) and of ``|psi_d'''|`` (rad/s^3) along the raw mission.
+
+    ``psi_d`` is the course ``chi`` in both frames (:func:`course_jerk_bound`). In the path frame
+    ``p_i = q + R(chi) d_i`` adds ``|d_i| (|chi'''| + 3 |chi'| |chi''| + |chi'|^3)`` to the path's jerk.
+    """
+    b = point.mission.bounds()
+    yaw_jerk = course_jerk_bound(b.speed_min, b.accel_max, b.jerk_max, b.snap_max)
+    jerk = b.jerk_max
+    if point.config.frame == "path":
+        d = float(np.hypot(point.offsets[:, 0], point.offsets[:, 1]).max())
+        rate = max(abs(b.turn_rate_min), abs(b.turn_rate_max))
+        jerk += d * (yaw_jerk + 3.0 * rate * b.turn_accel_max + rate**3)
+    return jerk, yaw_jerk
 
 
 def start_errors(point: DesignPoint) -> ErrorBounds:
     """Largest errors of the configured start against the raw mission at ``t = 0`` (m, m/s, rad, rad/s)."""
-    e, de, epsi, depsi = initial_errors(point.fleet, initial_states(point))
+    e, de, epsi, depsi = initial_errors(point.fleet(), initial_states(point))
     return ErrorBounds(
         float(np.hypot(e[..., 0], e[..., 1]).max()),
         float(np.hypot(de[..., 0], de[..., 1]).max()),
@@ -153,4 +172,11 @@ def implementation_summary(
     return ImplementationSummary(impl, cert, not reasons, tuple(reasons))
 
 
-__all__ = ["BOX_NOT_COVERED", "ImplementationSummary", "implementation_problem", "implementation_summary", "start_errors"]
+__all__ = [
+    "BOX_NOT_COVERED",
+    "ImplementationSummary",
+    "implementation_problem",
+    "implementation_summary",
+    "reference_jerks",
+    "start_errors",
+]

@@ -48,9 +48,9 @@ from auv_hinf.workflow.codec import decode_value, encode_value, json_normal
 #: Value of the ``format`` key of a certificate file.
 FORMAT = "auv-hinf-certificate"
 #: Layout version written by this module.
-VERSION = 2
+VERSION = 3
 #: Layout versions :func:`certificate_from_document` reads (1: auv-hinf 0.2.0).
-READABLE_VERSIONS = (1, 2)
+READABLE_VERSIONS = (1, 2, 3)
 
 
 class StoredCertificate(Protocol):
@@ -130,8 +130,7 @@ def certificate_from_document(doc: Any, cls: type[C], source: str = "certificate
         raise ConfigError("\n".join(f"{source}: config: {line}" for line in str(exc).splitlines())) from None
     state = doc["state"]
     names = [f.name for f in dataclasses.fields(cast(Any, cls)) if f.name != "config"]
-    if version == 1:
-        names = [n for n in names if n not in _ADDED_IN_2]
+    names = [n for n in names if n not in _added_after(version)]
     absent = [n for n in names if n not in state]
     extra = sorted(set(state) - set(names))
     if absent or extra:
@@ -144,7 +143,7 @@ def certificate_from_document(doc: Any, cls: type[C], source: str = "certificate
             values.update(_gains_of_version_1(config, values))
         cert: C = cast(Any, cls)(config=config, **values)
         record = json_normal(cert.to_dict())
-        if version == 1:  # compare on the keys the version 1 record has
+        if version < VERSION:  # compare on the keys the older record has
             record = {k: record.get(k) for k in doc["certificate"]}
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
@@ -158,6 +157,13 @@ def certificate_from_document(doc: Any, cls: type[C], source: str = "certificate
 
 #: Certificate fields that version 1 files lack.
 _ADDED_IN_2 = ("gains", "gain_source", "actuators", "design")
+#: Certificate fields that version 2 files lack (the implementation certificate).
+_ADDED_IN_3 = ("implementation",)
+
+
+def _added_after(version: int) -> tuple[str, ...]:
+    """Certificate fields a file of ``version`` lacks (they keep their defaults)."""
+    return (_ADDED_IN_2 if version < 2 else ()) + (_ADDED_IN_3 if version < 3 else ())
 
 
 def _gains_of_version_1(config: FormationConfig, values: dict[str, Any]) -> dict[str, Any]:

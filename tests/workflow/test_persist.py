@@ -126,7 +126,7 @@ def test_document_header_and_complete_config(cert, tmp_path):
 
     doc = json.loads(text, parse_constant=no_constants)
     assert list(doc) == ["format", "version", "tool_version", "created", "config", "certificate", "state"]
-    assert doc["format"] == FORMAT == "auv-hinf-certificate" and doc["version"] == VERSION == 2
+    assert doc["format"] == FORMAT == "auv-hinf-certificate" and doc["version"] == VERSION == 3
     assert doc["tool_version"] == auv_hinf.__version__
     created = datetime.fromisoformat(doc["created"])
     assert created.utcoffset() is not None and created.utcoffset().total_seconds() == 0
@@ -207,7 +207,7 @@ def test_load_refuses_wrong_format_and_version(cert, tmp_path):
         certificate_from_document({**doc, "format": "something-else"}, Certificate)
     with pytest.raises(ConfigError, match="not an auv-hinf certificate file"):
         certificate_from_document([doc], Certificate)
-    for bad in (3, 0, "1", True, None):
+    for bad in (VERSION + 1, 0, "1", True, None):
         with pytest.raises(ConfigError, match="unsupported certificate version"):
             certificate_from_document({**doc, "version": bad}, Certificate)
     with pytest.raises(ConfigError, match="lacks"):
@@ -290,7 +290,7 @@ def test_version_1_files_of_0_2_0_still_load(preset):
     np.testing.assert_allclose(
         [old.gains.alpha, old.gains.k1, *old.gains.k_psi], [now.gains.alpha, now.gains.k1, *now.gains.k_psi], rtol=1e-9
     )
-    # an old file saved again is a version 2 file that loads to the same certificate
+    # an old file saved again is a current-version file that loads to the same certificate
     again = certificate_from_document(_doc(old), Certificate)
     assert again.gains == old.gains and again.to_dict() == old.to_dict()
 
