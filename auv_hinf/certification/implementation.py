@@ -24,7 +24,7 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.certification.closed_loop import ThrustBounds, thrust_bounds
-from auv_hinf.certification.lag_terms import LagDisturbance, lag_disturbance
+from auv_hinf.certification.lag_terms import LagDisturbance, block_slopes, lag_disturbance
 from auv_hinf.certification.margins import MAX_HEADING_ERROR, ErrorBounds, envelope_margins, inflate_envelope
 from auv_hinf.certification.sampling import certified_lag, decay_at, exact_limit, iss_certificate
 from auv_hinf.design.gains import Gains
@@ -51,9 +51,9 @@ METHOD = (
 )
 
 
-def position_loop(gains: Gains, lam: float, sigma: float) -> LagLoop:
-    """The position error loop: ``a = lam``, ``K = (k1, alpha)``, ``|q| <= sigma |e'|``."""
-    return LagLoop((lam,), gains.k1, gains.alpha, sigma)
+def position_loop(gains: Gains, lam: float, sigma: float, lag_sigma: float = 0.0) -> LagLoop:
+    """The position error loop: ``a = lam``, ``K = (k1, alpha)``, ``|q| <= sigma |e'|``, ``|q2| <= lag_sigma |delta_2|``."""
+    return LagLoop((lam,), gains.k1, gains.alpha, sigma, lag_sigma)
 
 
 def heading_loop(gains: Gains, c_range: tuple[float, float]) -> LagLoop:
@@ -202,8 +202,19 @@ class ImplementationProblem:
 
     @property
     def loops(self) -> tuple[LagLoop, LagLoop]:
-        """Position and heading :class:`LagLoop`."""
-        return position_loop(self.gains, self.lam, self.sigma), heading_loop(self.gains, self.c_range)
+        """Position and heading :class:`LagLoop` of the stability limits (no lag channel)."""
+        return self.lag_loops(False)
+
+    def lag_loops(self, channel: bool) -> tuple[LagLoop, LagLoop]:
+        """Position and heading :class:`LagLoop`, with the position lag channel when ``channel``.
+
+        The lag channel is the drift feedforward ``G(y) p_d'`` evaluated at the old state: its
+        part driven by the velocity error's change is at most ``max |p_d'| hypot(b_u, b_v)
+        |delta_2|`` (:func:`~auv_hinf.certification.lag_terms.block_slopes`).
+        """
+        b_u, b_v, _ = block_slopes(self.params)
+        lag_sigma = float(self.tube.speed[:, 1].max()) * math.hypot(b_u, b_v) if channel else 0.0
+        return position_loop(self.gains, self.lam, self.sigma, lag_sigma), heading_loop(self.gains, self.c_range)
 
     @property
     def nominal_dampings(self) -> tuple[float, float]:
@@ -231,14 +242,18 @@ def _force(prob: ImplementationProblem, bounds: ErrorBounds, impl: Implementatio
 
 
 def _step(
-    prob: ImplementationProblem, impl: Implementation, certs: tuple[LagResult, LagResult], start: tuple[float, float],
+    prob: ImplementationProblem,
+    impl: Implementation,
+    certs: tuple[LagResult, LagResult],
+    start: tuple[float, float],
     bounds: ErrorBounds,
+    channel: bool,
 ) -> tuple[ErrorBounds, ErrorBounds, LagDisturbance, ThrustBounds]:
     """One fixed-point step: bounds -> (new bounds, ultimate bounds, disturbance, force)."""
     force = _force(prob, bounds, impl)
     dist = lag_disturbance(
         prob.params, prob.envelope, prob.tube, prob.gains, impl, lam=prob.lam, sigma=prob.sigma,
-        jerk=prob.jerk, force=force, bounds=bounds, yaw_jerk=prob.yaw_jerk,
+        jerk=prob.jerk, force=force, bounds=bounds, yaw_jerk=prob.yaw_jerk, lag_channel=channel,
     )
     out, ult = [], []
     for cert, w, v0 in zip(certs, (dist.position, dist.heading), start, strict=True):
@@ -253,7 +268,7 @@ def _fits(prob: ImplementationProblem, b: ErrorBounds) -> bool:
 
 
 def certify_implementation(
-    prob: ImplementationProblem, impl: Implementation, start: ErrorBounds
+    prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, limits: LagLimits | None = None
 ) -> ImplementationCertificate:
     """The implementation certificate of ``prob`` run as ``impl`` from errors within ``start``.
 
@@ -263,9 +278,11 @@ def certify_implementation(
     impl : Implementation
     start : ErrorBounds
         Bounds of every vehicle's errors at ``t = 0`` against the reference (m, m/s, rad, rad/s).
+    limits : LagLimits, optional
+        :func:`lag_limits` of ``prob`` at ``impl.delay``, when the caller has them.
     """
     loops = prob.loops
-    limits = lag_limits(loops, prob.nominal_dampings, impl.delay)
+    limits = limits or lag_limits(loops, prob.nominal_dampings, impl.delay)
     max_h, max_d = max(limits.lag - impl.delay, 0.0), max(limits.lag - impl.sample_time, 0.0)
     base = {
         "implementation": impl,
@@ -282,47 +299,90 @@ def certify_implementation(
         )
         return ImplementationCertificate(**base, decay_rate=None, bounds=None, ultimate=None, thrust=None,
                                          covers=False, reasons=(why,))
+    attempts = [_bounded(prob, impl, start, channel) for channel in (True, False)]
+    best = next((a for a in attempts if a.covers), attempts[-1])
+    return ImplementationCertificate(**base, **best.fields())
+
+
+@dataclass(frozen=True)
+class _Attempt:
+    """One way of bounding the implementation's effects (with or without the lag channel ``q2``)."""
+
+    covers: bool
+    reasons: tuple[str, ...]
+    decay_rate: float | None = None
+    bounds: ErrorBounds | None = None
+    ultimate: ErrorBounds | None = None
+    thrust: ThrustBounds | None = None
+    disturbance: LagDisturbance | None = None
+    certificates: tuple[LagResult, ...] = ()
+
+    def fields(self) -> dict[str, Any]:
+        return {
+            "decay_rate": self.decay_rate,
+            "bounds": self.bounds,
+            "ultimate": self.ultimate,
+            "thrust": self.thrust,
+            "covers": self.covers,
+            "reasons": self.reasons,
+            "disturbance": self.disturbance,
+            "certificates": self.certificates,
+        }
+
+
+def _bounded(prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, channel: bool) -> _Attempt:
+    """ISS certificates at the declared lag and the verified fixed point of the error bounds.
+
+    ``channel``: the drift feedforward's dependence on the velocity error's change is a
+    norm-bounded term of the position LMI (``q2``); otherwise it is part of the disturbance,
+    bounded through the body accelerations.
+    """
+    lag = impl.max_lag
+    loops = prob.lag_loops(channel)
     rates = [ISS_DECAY_FRACTION * decay_at(loop, lag) for loop in loops]
     certs = tuple(
         iss_certificate(loop, lag, beta, np.diag([loop.k, 1.0])) if beta > 0 else None
         for loop, beta in zip(loops, rates, strict=True)
     )
-    if any(c is None for c in certs):
-        why = f"no decay rate is certified at sample_time + delay = {lag:.4g} s (the loops are only marginally certified)"
-        return ImplementationCertificate(**base, decay_rate=None, bounds=None, ultimate=None, thrust=None,
-                                         covers=False, reasons=(why,))
+    if certs[0] is None or certs[1] is None:
+        return _Attempt(False, (f"no decay rate is certified at sample_time + delay = {lag:.4g} s",))
     pair = (certs[0], certs[1])
-    assert pair[0] is not None and pair[1] is not None
     v0 = (_level(pair[0].p, start.position, start.velocity), _level(pair[1].p, start.heading, start.yaw_rate))
     bounds = ErrorBounds(*_extents(pair[0].p, v0[0]), *_extents(pair[1].p, v0[1]))
     reasons: list[str] = []
     for _ in range(FIXED_POINT_ITERATIONS):
         if not _fits(prob, bounds):
-            reasons.append("the error bounds leave the envelope: the implementation's disturbance is too large")
+            reasons.append(
+                "the error bounds leave the envelope: the implementation's disturbance is too large "
+                f"(last bounds |e| <= {bounds.position:.3g} m, |e'| <= {bounds.velocity:.3g} m/s, "
+                f"|e_psi| <= {bounds.heading:.3g} rad)"
+            )
             break
-        new, ult, dist, force = _step(prob, impl, pair, v0, bounds)
+        new, ult, dist, force = _step(prob, impl, pair, v0, bounds, channel)
         if all(n <= b * (1.0 + 1e-12) + 1e-300 for n, b in zip(_vec(new), _vec(bounds), strict=True)):
             break
         bounds = ErrorBounds(*np.maximum(_vec(new), _vec(bounds)))
     else:
         reasons.append(f"the error bounds did not settle in {FIXED_POINT_ITERATIONS} iterations")
+    if reasons:
+        return _Attempt(False, tuple(reasons), decay_rate=min(c.beta for c in pair), certificates=pair)
     wide = ErrorBounds(*(_vec(bounds) * (1.0 + FIXED_POINT_RTOL)))
-    new, ult, dist, force = _step(prob, impl, pair, v0, wide)
-    if not reasons and not (np.all(_vec(new) <= _vec(wide)) and _fits(prob, wide)):
+    new, ult, dist, force = _step(prob, impl, pair, v0, wide, channel)
+    if not (np.all(_vec(new) <= _vec(wide)) and _fits(prob, wide)):
         reasons.append("the error bounds are not self-consistent (fixed-point check failed)")
     if not reasons and prob.actuators is not None and not prob.actuators.admits(force.as_tuple()):
         reasons.append(
             f"the commanded forces (|tau_x| <= {force.force_x:.4g} N, |tau_y| <= {force.force_y:.4g} N, "
             f"|tau_psi| <= {force.moment:.4g} N m, noise included) exceed the actuators"
         )
-    return ImplementationCertificate(
-        **base,
+    ok = not reasons
+    return _Attempt(
+        ok,
+        tuple(reasons),
         decay_rate=min(c.beta for c in pair),
-        bounds=wide if not reasons else None,
-        ultimate=ult if not reasons else None,
+        bounds=wide if ok else None,
+        ultimate=ult if ok else None,
         thrust=force,
-        covers=not reasons,
-        reasons=tuple(reasons),
         disturbance=dist,
         certificates=pair,
     )

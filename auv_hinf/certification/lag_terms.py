@@ -58,7 +58,7 @@ class LagDisturbance:
     body_rates: tuple[float, float, float]
 
 
-def _block_slopes(params: VehicleParams) -> tuple[float, float, float]:
+def block_slopes(params: VehicleParams) -> tuple[float, float, float]:
     """Spectral norms of ``dB/d|u|``, ``dB/d|v|``, ``dB/dr`` (``B`` is affine in them), 1/m and 1."""
     base = body_block(params, 0.0, 0.0, 0.0)
     return tuple(  # type: ignore[return-value]
@@ -80,17 +80,26 @@ def body_rates(
 ) -> tuple[float, float, float]:
     """Bounds of ``|u'|, |v'|`` (m/s^2) and ``|r'|`` (rad/s^2) under the lagged law.
 
-    ``nu'(t) = nu*'(t') + M^-1 [tau(y) - tau(x(t'))] + M^-1 [f(x(t)) - f(x(t'))]`` with ``nu*'``
-    the continuous closed loop's body acceleration at ``t'`` (``R^T p'' - S(r) nu``, ``p'' = p_d''
-    + e''``, ``|e''| <= (|lam| + sigma + alpha) E_v + k1 E_p``), the law's response to the
-    measurement noise, and the Coriolis and drag terms ``f`` moved by the state's change over
-    at most ``T``: so ``rho <= a0 + T L rho`` componentwise, ``rho <= (I - T L)^-1 a0`` when the
-    spectral radius of ``T L`` is below 1. Otherwise the force bound gives the (looser) rates.
+    Between samples the force is held, so ``nu' = g(nu)`` (body dynamics with constant force)
+    and ``d/dt |nu'|^2 = 2 nu'^T J nu' <= 2 mu |nu'|^2``, ``J = dg/dnu``, ``mu`` a bound of its
+    logarithmic norm over the envelope (the drag terms of the diagonal are negative; the
+    Coriolis terms are bounded by their largest moduli): ``|nu'(t)| <= exp(mu+ h) |nu'(t_k+)|``.
+    Just after a sample, ``nu'(t_k+) = nu*'(s_k) + M^-1 [tau(y) - tau(x(s_k))] + [g(x(t_k)) - g(x(s_k))]``:
+    the continuous closed loop's body acceleration at the measurement time (``R^T p'' - S(r) nu``,
+    ``p'' = p_d'' + e''``, ``|e''| <= (|lam| + sigma + alpha) E_v + k1 E_p``), the law's response to
+    the measurement noise, and the drift moved by the state's change over the delay ``d``
+    (Lipschitz matrix ``L``). So ``rho <= exp(mu+ h) (|a0| + d ||L|| rho)``; every component is
+    bounded by the Euclidean ``rho`` (and by the cruder force-based rate).
     """
-    lag, n = implementation.max_lag, implementation.noise
+    h, d, n = implementation.sample_time, implementation.delay, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
     u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
     d11, d22, d33 = (float(x) for x in params.damping(u_hi, v_hi, r_hi))
+    crude = (
+        (force.force_x + m22 * v_hi * r_hi + d11 * u_hi) / m11,
+        (force.force_y + m11 * u_hi * r_hi + d22 * v_hi) / m22,
+        (force.moment + abs(m22 - m11) * u_hi * v_hi + d33 * r_hi) / m33,
+    )
     # the state the vehicle can be in: desired motion widened by the error bounds, inside the envelope
     speed = float(tube.speed[:, 1].max())
     slip = min(0.5 * math.pi, float(np.abs(tube.offset).max()) + bounds.heading)
@@ -98,45 +107,55 @@ def body_rates(
     u_in = min(u_hi, speed + bounds.velocity)
     v_in = min(v_hi, speed * math.sin(slip) + bounds.velocity)
     r_in = min(r_hi, yaw + bounds.yaw_rate)
-    crude = (
-        (force.force_x + m22 * v_hi * r_hi + d11 * u_hi) / m11,
-        (force.force_y + m11 * u_hi * r_hi + d22 * v_hi) / m22,
-        (force.moment + abs(m22 - m11) * u_hi * v_hi + d33 * r_hi) / m33,
-    )
-    b_u, b_v, b_r = _block_slopes(params)
-    accel = float(tube.accel.max())
+    b_u, b_v, b_r = block_slopes(params)
     k1p, k2p = gains.k_psi
-    p_acc = accel + (abs(lam) + sigma + gains.alpha) * bounds.velocity + gains.k1 * bounds.position
+    p_acc = float(tube.accel.max()) + (abs(lam) + sigma + gains.alpha) * bounds.velocity + gains.k1 * bounds.position
     c_hi = abs(k2p) + float(params.damping(0.0, 0.0, r_hi)[2]) / m33
     ground_noise = n.velocity + math.hypot(u_hi, v_hi) * n.heading
     f_acc = math.hypot(force.force_x / m11, force.force_y / m22)
     xy_noise = (
-        gains.alpha * ground_noise + gains.k1 * n.position + (f_acc + 2.0 * sigma * speed) * n.heading
+        gains.alpha * ground_noise
+        + gains.k1 * n.position
+        + (f_acc + 2.0 * sigma * speed) * n.heading
         + speed * ((b_u + b_v) * n.velocity + b_r * n.yaw_rate)
     )
     d33_slope = float(params.damping(0.0, 0.0, 1.0)[2] - params.damping(0.0, 0.0, 0.0)[2])
-    yaw_noise = abs(k1p) * n.heading + abs(k2p) * n.yaw_rate + d33_slope * n.yaw_rate * yaw / m33 + abs(m11 - m22) * (
-        (u_hi + v_hi) * n.velocity + n.velocity**2
-    ) / m33
-    a0 = np.array([
-        p_acc + r_in * v_in + xy_noise,
-        p_acc + r_in * u_in + xy_noise,
-        float(tube.yaw_accel.max()) + abs(k1p) * bounds.heading + c_hi * bounds.yaw_rate + yaw_noise,
-    ])
-    d11_slope = float(params.damping(1.0, 0.0, 0.0)[0] - params.damping(0.0, 0.0, 0.0)[0])
-    d22_slope = float(params.damping(0.0, 1.0, 0.0)[1] - params.damping(0.0, 0.0, 0.0)[1])
-    # Lipschitz matrix of (Coriolis - drag)/m in (u, v, r) over the envelope: d(d(u) u)/du = d_lin + 2 d_quad |u|
-    lip = np.array([
-        [(d11 + d11_slope * u_hi) / m11, m22 * r_hi / m11, m22 * v_hi / m11],
-        [m11 * r_hi / m22, (d22 + d22_slope * v_hi) / m22, m11 * u_hi / m22],
-        [abs(m22 - m11) * v_hi / m33, abs(m22 - m11) * u_hi / m33, (d33 + d33_slope * r_hi) / m33],
-    ])
-    step = lag * lip
-    if lag > 0 and float(np.abs(np.linalg.eigvals(step)).max()) < 1.0:
-        tight = np.linalg.solve(np.eye(3) - step, a0)
-        if np.all(tight >= 0):
-            return tuple(float(min(t, c)) for t, c in zip(tight, crude, strict=True))  # type: ignore[return-value]
-    return crude if lag > 0 else tuple(float(min(a, c)) for a, c in zip(a0, crude, strict=True))  # type: ignore[return-value]
+    yaw_noise = (
+        abs(k1p) * n.heading
+        + abs(k2p) * n.yaw_rate
+        + d33_slope * n.yaw_rate * yaw / m33
+        + abs(m11 - m22) * ((u_hi + v_hi) * n.velocity + n.velocity**2) / m33
+    )
+    a0 = np.array(
+        [
+            p_acc + r_in * v_in + xy_noise,
+            p_acc + r_in * u_in + xy_noise,
+            float(tube.yaw_accel.max()) + abs(k1p) * bounds.heading + c_hi * bounds.yaw_rate + yaw_noise,
+        ]
+    )
+    d_lin = [float(x) for x in params.damping(0.0, 0.0, 0.0)]
+    slopes = (
+        float(params.damping(1.0, 0.0, 0.0)[0]) - d_lin[0],
+        float(params.damping(0.0, 1.0, 0.0)[1]) - d_lin[1],
+        d33_slope,
+    )
+    # |dg/dnu| entrywise over the envelope; d(d(u) u)/du = d_lin + 2 d_quad |u|
+    lip = np.array(
+        [
+            [(d11 + slopes[0] * u_hi) / m11, m22 * r_hi / m11, m22 * v_hi / m11],
+            [m11 * r_hi / m22, (d22 + slopes[1] * v_hi) / m22, m11 * u_hi / m22],
+            [abs(m22 - m11) * v_hi / m33, abs(m22 - m11) * u_hi / m33, (d33 + slopes[2] * r_hi) / m33],
+        ]
+    )
+    # comparison matrix of sym(J): the least negative diagonal (-d_lin/m) and the largest off-diagonal moduli
+    comp = 0.5 * (lip + lip.T)
+    np.fill_diagonal(comp, [-d_lin[0] / m11, -d_lin[1] / m22, -d_lin[2] / m33])
+    grow = math.exp(max(float(np.linalg.eigvalsh(comp).max()), 0.0) * h)
+    loop = grow * d * float(np.linalg.norm(lip, 2))
+    if loop < 1.0:
+        rho = grow * float(np.linalg.norm(a0)) / (1.0 - loop)
+        return tuple(float(min(rho, c)) for c in crude)  # type: ignore[return-value]
+    return crude
 
 
 def course_jerk_bound(speed_min: float, accel: float, jerk: float, snap: float) -> float:
@@ -165,6 +184,7 @@ def lag_disturbance(
     force: ThrustBounds,
     bounds: ErrorBounds,
     yaw_jerk: float = math.inf,
+    lag_channel: bool = False,
 ) -> LagDisturbance:
     """Sound bounds of ``|w|`` and ``|w_psi|`` (see the module docstring).
 
@@ -189,6 +209,9 @@ def lag_disturbance(
     yaw_jerk : float
         Bound of ``|psi_d'''|`` (rad/s^3); ``inf`` when unknown (then the change of ``psi_d''``
         over the lag is bounded by twice its size).
+    lag_channel : bool
+        The position certificate carries the feedforward's dependence on the velocity error's
+        change (``q2``); then only the rest of the body velocity's change enters here.
     """
     lag, n = implementation.max_lag, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
@@ -199,18 +222,25 @@ def lag_disturbance(
     # change of each state between the measurement and now, noise included
     d_psi = r_in * lag + n.heading
     d_u, d_v, d_r = u_rate * lag + n.velocity, v_rate * lag + n.velocity, r_rate * lag + n.yaw_rate
-    b_u, b_v, b_r = _block_slopes(params)
+    b_u, b_v, b_r = block_slopes(params)
     speed = float(tube.speed[:, 1].max())
     accel = float(tube.accel.max())
     yaw = float(np.abs(tube.yaw_rate).max())
     yaw_accel = float(tube.yaw_accel.max())
+    # change of the body velocity over the lag beyond the velocity error's own change (which the
+    # Lyapunov-Krasovskii certificate carries as q2, |q2| <= S hypot(b_u, b_v) |delta_2|):
+    # reference speed change, rotation of the ground velocity, measurement noise
+    if lag_channel:
+        drift_change = math.hypot(b_u, b_v) * (accel * lag + r_in * lag * (speed + bounds.velocity) + n.velocity)
+    else:
+        drift_change = b_u * d_u + b_v * d_v
     ground_noise = n.velocity + math.hypot(u_hi, v_hi) * n.heading  # |R(psi_y) nu_y - R(psi) nu|
     g_measured = abs(lam) + sigma + (b_u + b_v) * n.velocity + b_r * n.yaw_rate
     position = (
         gains.alpha * ground_noise
         + gains.k1 * n.position
         + jerk * lag
-        + speed * (2.0 * sigma * d_psi + b_u * d_u + b_v * d_v + b_r * d_r)
+        + speed * (2.0 * sigma * d_psi + drift_change + b_r * d_r)
         + g_measured * accel * lag
         + d_psi * math.hypot(force.force_x / m11, force.force_y / m22)
     )

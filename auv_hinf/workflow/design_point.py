@@ -34,6 +34,7 @@ from auv_hinf.models.envelope import envelope_lambda
 from auv_hinf.models.jacobi_maps import positions_from_jacobi
 from auv_hinf.models.paths import MissionReference
 from auv_hinf.models.reference import FleetReference, ReferenceTube, reference_from_dict
+from auv_hinf.models.implementation import Implementation
 from auv_hinf.models.tubes import mission_tube, path_frame_tube
 from auv_hinf.robust.bandwidth import RobustDesign, design_robust
 from auv_hinf.robust.box import ParameterBox
@@ -195,8 +196,10 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
 
 
 def _design_key(cfg: FormationConfig) -> FormationConfig:
-    """``cfg`` without what the design does not depend on (name, start, plant, current of the run, horizon)."""
-    return replace(cfg, name="design", simulation=SimulationConfig())
+    """``cfg`` without what the design does not depend on (name, start, plant, current of the run,
+    horizon, and the implementation: the gains are designed for the continuous law and the
+    implementation certificate says whether they survive the declared one)."""
+    return replace(cfg, name="design", simulation=SimulationConfig(), implementation=Implementation())
 
 
 @lru_cache(maxsize=16)

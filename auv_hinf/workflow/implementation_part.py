@@ -8,7 +8,8 @@ the law must be sampled), and covers exactly when the continuous certificates do
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -19,12 +20,19 @@ from auv_hinf.certification.lag_terms import course_jerk_bound
 from auv_hinf.certification.implementation import (
     ImplementationCertificate,
     ImplementationProblem,
+    LagLimits,
     certify_implementation,
+    lag_limits,
 )
 from auv_hinf.certification.margins import ErrorBounds
 from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.models.implementation import Implementation
 from auv_hinf.workflow.design_point import DesignPoint, initial_states
+
+#: Relative width at which the search for the largest covered sample time stops.
+COVERED_SEARCH_RTOL = 0.05
+#: The search starts at this fraction of the certified sample-time limit.
+COVERED_SEARCH_FLOOR = 1e-3
 
 #: What the implementation certificate does not yet cover, said when it would matter.
 BOX_NOT_COVERED = (
@@ -91,12 +99,16 @@ class ImplementationSummary:
     covers : bool
         The declared implementation is certified from the configured start.
     reasons : tuple of str
+    covered_sample_time : float or None
+        When the declared implementation is not covered: the largest sample time (s) that is,
+        with the declared delay and noise (``None``: none is, or not searched).
     """
 
     implementation: Implementation
     certificate: ImplementationCertificate | None
     covers: bool
     reasons: tuple[str, ...]
+    covered_sample_time: float | None = None
 
     def lines(self) -> list[str]:
         """Lines of ``Certificate.summary`` (s, Hz, 1/s, m, m/s, rad, rad/s)."""
@@ -140,7 +152,12 @@ class ImplementationSummary:
                 "error_bounds": None,
             }
         )
-        return {**base, "covers": self.covers, "reasons": list(self.reasons)}
+        return {
+            **base,
+            "covers": self.covers,
+            "covered_sample_time": self.covered_sample_time,
+            "reasons": list(self.reasons),
+        }
 
 
 def implementation_summary(
@@ -161,20 +178,56 @@ def implementation_summary(
     if nominal is None or point.gains is None:
         return ImplementationSummary(impl, None, False, ("no closed-loop certificate to extend to the implementation",))
     try:
-        cert = certify_implementation(implementation_problem(point, nominal), impl, start_errors(point))
+        prob, start = implementation_problem(point, nominal), start_errors(point)
+        limits = lag_limits(prob.loops, prob.nominal_dampings, impl.delay)
+        cert = certify_implementation(prob, impl, start, limits)
+        if impl.continuous:
+            return ImplementationSummary(impl, cert, continuous_ok, ())
+        covered = None if cert.covers else covered_sample_time(prob, impl, start, limits)
     except AuvHinfError as exc:
         return ImplementationSummary(impl, None, False, (f"implementation not certified: {exc}",))
-    if impl.continuous:
-        return ImplementationSummary(impl, cert, continuous_ok, ())
     reasons = list(cert.reasons)
+    if covered is not None:
+        reasons.append(
+            f"with delay {impl.delay:.4g} s and this noise, sample times up to {covered:.4g} s "
+            f"({1.0 / covered:.3g} Hz) are covered"
+        )
+    elif not cert.covers:
+        reasons.append("no sample time is covered with this delay and noise: reduce them, or lower the gains")
     if point.declared:
         reasons.append(BOX_NOT_COVERED)
-    return ImplementationSummary(impl, cert, not reasons, tuple(reasons))
+    return ImplementationSummary(impl, cert, cert.covers and not point.declared, tuple(reasons), covered)
+
+
+def covered_sample_time(
+    prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, limits: LagLimits
+) -> float | None:
+    """Largest sample time (s) covered with ``impl``'s delay and noise, by bisection (``None``: none).
+
+    Coverage is not provably monotone in the sample time, so the answer is a bisection
+    estimate of the boundary, and only its covered end is returned: that value itself is
+    certified (the certificate at it covers).
+    """
+    hi = max(limits.lag - impl.delay, 0.0)
+    if hi <= 0.0:
+        return None
+
+    def covers(h: float) -> bool:
+        return certify_implementation(prob, replace(impl, sample_time=h), start, limits).covers
+
+    lo = hi * COVERED_SEARCH_FLOOR
+    if not covers(lo):
+        return None
+    while hi / lo > 1.0 + COVERED_SEARCH_RTOL:
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if covers(mid) else (lo, mid)
+    return lo
 
 
 __all__ = [
     "BOX_NOT_COVERED",
     "ImplementationSummary",
+    "covered_sample_time",
     "implementation_problem",
     "implementation_summary",
     "reference_jerks",

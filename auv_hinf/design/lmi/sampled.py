@@ -2,14 +2,16 @@
 
 Each per-vehicle error loop of the certificate is, on one axis, ``x = (e, e')`` with
 
-    e'' = a e' + q + u + w,    u(t) = -k e(t - eta) - b e'(t - eta),    0 <= eta(t) <= tau,
+    e'' = a e' + q + q2 + u + w,    u(t) = -k e(t - eta) - b e'(t - eta),    0 <= eta(t) <= tau,
 
 where ``a`` ranges over a few vertices (heading: the yaw damping ``-d33(r)/m33``), ``q`` is a
 norm-bounded uncertainty ``|q| <= sigma |e'|`` (position: ``D(t) e'``), ``w`` a bounded
 disturbance, and ``eta`` the age of the measurement behind the held command (sample-and-hold
 plus delay, :class:`~auv_hinf.models.implementation.Implementation`). With
-``delta = x(t) - x(t - eta) = int_{t-eta}^t x'`` the law is ``u = -K x + K delta``, so
-``x' = Gamma zeta`` with ``zeta = (x, delta, q, w)`` and ``Gamma = [A - BK, BK, B, B]``.
+``delta = x(t) - x(t - eta) = int_{t-eta}^t x'`` the law is ``u = -K x + K delta``; ``q2`` is a
+second norm-bounded term ``|q2| <= sigma2 |delta_2|`` driven by the change of the velocity error
+over the lag (position: the drift feedforward evaluated at the old state). So ``x' = Gamma zeta``
+with ``zeta = (x, delta, q, q2, w)`` and ``Gamma = [A - BK, BK, B, B, B]``.
 
 The functional (Fridman, *Introduction to Time-Delay Systems*, 2014, sec. 3.5 and 7.1)
 
@@ -19,7 +21,8 @@ satisfies, by Jensen's inequality over ``[t - eta, t]`` (``eta <= tau``),
 
     V' + 2 beta V - g |w|^2 <= zeta^T [He(E0^T P Gamma) + 2 beta E0^T P E0
                                  - exp(-2 beta tau)/tau Ed^T R Ed + tau Gamma^T R Gamma
-                                 + mu (sigma^2 Fv^T Fv - Eq^T Eq) - g Ew^T Ew] zeta,
+                                 + mu (sigma^2 Fv^T Fv - Eq^T Eq)
+                                 + mu2 (sigma2^2 Fd^T Fd - Eq2^T Eq2) - g Ew^T Ew] zeta,
 
 and the bracket is ``<= 0`` iff (Schur complement, ``R > 0``) the matrix :func:`lag_lmi_matrices`
 builds is; it is affine in ``a``, so the vertices suffice. Then ``V`` decays like
@@ -63,24 +66,27 @@ class LagLoop:
         Feedback gains on ``e`` (1/s^2) and ``e'`` (1/s).
     sigma : float
         Bound of ``|q| / |e'|`` (1/s); 0 for no norm-bounded uncertainty.
+    lag_sigma : float
+        Bound of ``|q2| / |delta_2|`` (1/s); 0 for none.
     """
 
     dampings: tuple[float, ...]
     k: float
     b: float
     sigma: float = 0.0
+    lag_sigma: float = 0.0
 
     def __post_init__(self) -> None:
-        vals = (*self.dampings, self.k, self.b, self.sigma)
+        vals = (*self.dampings, self.k, self.b, self.sigma, self.lag_sigma)
         if not (1 <= len(self.dampings) <= MAX_VERTICES) or not all(math.isfinite(v) for v in vals):
             raise DesignError(f"a lag loop needs 1-{MAX_VERTICES} finite dampings and finite gains, got {self!r}")
-        if self.sigma < 0:
-            raise DesignError(f"sigma must be >= 0 (1/s), got {self.sigma!r}")
+        if self.sigma < 0 or self.lag_sigma < 0:
+            raise DesignError(f"sigma and lag_sigma must be >= 0 (1/s), got {self.sigma!r}, {self.lag_sigma!r}")
 
     def gamma_matrix(self, a: float) -> FloatArray:
-        """``Gamma = [A - BK, BK, B, B]`` of vertex ``a``, shape ``(2, 6)`` (columns x, delta, q, w)."""
+        """``Gamma = [A - BK, BK, B, B, B]`` of vertex ``a``, shape ``(2, 7)`` (columns x, delta, q, q2, w)."""
         bk = _B @ np.array([[self.k, self.b]])
-        return np.hstack([np.array([[0.0, 1.0], [0.0, a]]) - bk, bk, _B, _B])
+        return np.hstack([np.array([[0.0, 1.0], [0.0, a]]) - bk, bk, _B, _B, _B])
 
 
 @dataclass(frozen=True)
@@ -92,7 +98,7 @@ class LagResult:
     p, r : ndarray, shape (2, 2)
         ``P > 0`` (the bound ``x^T P x <= V``) and ``R >= 0``.
     multiplier : float
-        S-procedure multiplier ``mu``.
+        S-procedure multiplier ``mu`` (``mu2`` of the lag channel is in ``lag_multiplier``).
     gain : float
         ISS gain ``g`` (``V' <= -2 beta V + g |w|^2``); 0 when not requested.
     tau, beta : float
@@ -109,30 +115,65 @@ class LagResult:
     beta: float
     max_eig: float
     margin: float
+    lag_multiplier: float = 0.0
 
 
-def _columns(tau: float, uncertain: bool, gain: bool) -> list[int]:
-    """Columns of ``zeta = (x1, x2, d1, d2, q, w)`` in use: no ``delta`` without lag, no ``q``
-    without uncertainty (``sigma = 0``), no ``w`` without gain."""
-    return [0, 1] + ([2, 3] if tau > 0 else []) + ([4] if uncertain else []) + ([5] if gain else [])
+#: Column of each part of ``zeta`` in the full layout.
+_X, _D, _Q, _Q2, _W = (0, 1), (2, 3), 4, 5, 6
+_FULL = 7
+
+
+def _columns(tau: float, uncertain: bool, gain: bool, lag_uncertain: bool = False) -> list[int]:
+    """Columns of ``zeta = (x1, x2, d1, d2, q, q2, w)`` in use: no ``delta`` (nor ``q2``) without
+    lag, no ``q`` without uncertainty (``sigma = 0``), no ``q2`` without ``lag_sigma``, no ``w``
+    without gain."""
+    lagged = tau > 0
+    return (
+        list(_X)
+        + (list(_D) if lagged else [])
+        + ([_Q] if uncertain else [])
+        + ([_Q2] if lagged and lag_uncertain else [])
+        + ([_W] if gain else [])
+    )
+
+
+def _selectors(cols: list[int]) -> dict[str, FloatArray]:
+    """Row selectors of ``zeta``'s parts restricted to ``cols``: ``e0`` (x), ``ed`` (delta),
+    ``fv`` (e'), ``fd`` (delta_2), ``eq``, ``eq2``, ``ew``."""
+    eye = np.eye(_FULL)[:, cols]
+    return {
+        "e0": eye[list(_X)],
+        "ed": eye[list(_D)],
+        "fv": eye[[_X[1]]],
+        "fd": eye[[_D[1]]],
+        "eq": eye[[_Q]],
+        "eq2": eye[[_Q2]],
+        "ew": eye[[_W]],
+    }
 
 
 def lag_lmi_matrices(
-    loop: LagLoop, p: FloatArray, r: FloatArray, mu: float, g: float, tau: float, beta: float, gain: bool
+    loop: LagLoop,
+    p: FloatArray,
+    r: FloatArray,
+    mu: float,
+    g: float,
+    tau: float,
+    beta: float,
+    gain: bool,
+    mu2: float = 0.0,
 ) -> list[tuple[FloatArray, float]]:
     """The numeric LMI matrix of every vertex and the scale of its terms (for the eigenvalue re-check)."""
-    cols = _columns(tau, loop.sigma > 0, gain)
+    cols = _columns(tau, loop.sigma > 0, gain, loop.lag_sigma > 0)
+    sel = _selectors(cols)
+    e0, ed, fv, fd, eq, eq2, ew = (sel[k] for k in ("e0", "ed", "fv", "fd", "eq", "eq2", "ew"))
     out = []
     for a in loop.dampings:
         gam = loop.gamma_matrix(a)[:, cols]
         nz = len(cols)
-        e0 = np.eye(2, 6)[:, cols]
-        ed = np.eye(2, 6, 2)[:, cols]
-        eq = np.eye(1, 6, 4)[:, cols]
-        ew = np.eye(1, 6, 5)[:, cols]
-        fv = np.eye(1, 6, 1)[:, cols]
         pg = e0.T @ p @ gam
         xi = pg + pg.T + 2.0 * beta * e0.T @ p @ e0 + mu * (loop.sigma**2 * fv.T @ fv - eq.T @ eq)
+        xi = xi + mu2 * (loop.lag_sigma**2 * fd.T @ fd - eq2.T @ eq2)
         if gain:
             xi = xi - g * ew.T @ ew
         if tau > 0:
@@ -142,6 +183,7 @@ def lag_lmi_matrices(
         else:
             mat = xi
         terms = [np.abs(pg).max(), abs(beta) * np.abs(p).max(), mu * (loop.sigma**2 + 1.0), g]
+        terms.append(mu2 * (loop.lag_sigma**2 + 1.0))
         if tau > 0:
             terms += [np.abs(r).max() / tau, np.abs(rg).max(), tau * np.abs(r).max()]
         out.append((0.5 * (mat + mat.T), 4.0 * float(max(terms)) * max(nz, 1)))
@@ -149,7 +191,9 @@ def lag_lmi_matrices(
 
 
 @lru_cache(maxsize=16)
-def _problem(vertices: int, lagged: bool, uncertain: bool, gain: bool) -> tuple[cp.Problem, dict[str, Any], dict[str, Any]]:
+def _problem(
+    vertices: int, lagged: bool, uncertain: bool, gain: bool, lag_uncertain: bool
+) -> tuple[cp.Problem, dict[str, Any], dict[str, Any]]:
     """The SDP for a loop shape; parameters are set per call (DPP: compiled once per shape).
 
     Without ``gain``: minimise ``s`` with every vertex matrix ``<= s I`` and
@@ -158,11 +202,13 @@ def _problem(vertices: int, lagged: bool, uncertain: bool, gain: bool) -> tuple[
     ``P >= W`` (the weight ``W`` fixes the scale of ``P``).
     """
     tau = 1.0 if lagged else 0.0
-    cols = _columns(tau, uncertain, gain)
+    cols = _columns(tau, uncertain, gain, lag_uncertain)
+    lag_q = _Q2 in cols
     nz = len(cols)
     p = cp.Variable((2, 2), symmetric=True)
     r = cp.Variable((2, 2), symmetric=True)
     mu = cp.Variable(nonneg=True)
+    mu2 = cp.Variable(nonneg=True)
     g = cp.Variable(nonneg=True)
     s = cp.Variable()
     par: dict[str, Any] = {
@@ -170,12 +216,13 @@ def _problem(vertices: int, lagged: bool, uncertain: bool, gain: bool) -> tuple[
         "jensen": cp.Parameter(nonneg=True),
         "tau": cp.Parameter(nonneg=True),
         "sig2": cp.Parameter(nonneg=True),
+        "lsig2": cp.Parameter(nonneg=True),
         "weight": cp.Parameter((2, 2), PSD=True),
         "gam": [cp.Parameter((2, nz)) for _ in range(vertices)],
         "tgam": [cp.Parameter((2, nz)) for _ in range(vertices)],
     }
-    e0, ed = np.eye(2, 6)[:, cols], np.eye(2, 6, 2)[:, cols]
-    eq, ew, fv = np.eye(1, 6, 4)[:, cols], np.eye(1, 6, 5)[:, cols], np.eye(1, 6, 1)[:, cols]
+    sel = _selectors(cols)
+    e0, ed, fv, fd, eq, eq2, ew = (sel[k] for k in ("e0", "ed", "fv", "fd", "eq", "eq2", "ew"))
     size = nz + (2 if lagged else 0)
     cons: list[Any] = [p >> 0, r >> 0]
     for gam, tgam in zip(par["gam"], par["tgam"], strict=True):
@@ -183,6 +230,8 @@ def _problem(vertices: int, lagged: bool, uncertain: bool, gain: bool) -> tuple[
         xi = pg + pg.T + par["beta2"] * (e0.T @ p @ e0)
         if uncertain:
             xi = xi + par["sig2"] * mu * (fv.T @ fv) - mu * (eq.T @ eq)
+        if lag_q:
+            xi = xi + par["lsig2"] * mu2 * (fd.T @ fd) - mu2 * (eq2.T @ eq2)
         if gain:
             xi = xi - g * (ew.T @ ew)
         if lagged:
@@ -200,9 +249,9 @@ def _problem(vertices: int, lagged: bool, uncertain: bool, gain: bool) -> tuple[
         cons.append(p >> par["weight"])
         problem = cp.Problem(cp.Minimize(g), cons)
     else:
-        cons.append(_CP.trace(p) + _CP.trace(r) + (mu if uncertain else 0.0) == 1)
+        cons.append(_CP.trace(p) + _CP.trace(r) + (mu if uncertain else 0.0) + (mu2 if lag_q else 0.0) == 1)
         problem = cp.Problem(cp.Minimize(s), cons)
-    return problem, par, {"p": p, "r": r, "mu": mu, "g": g}
+    return problem, par, {"p": p, "r": r, "mu": mu, "mu2": mu2, "g": g}
 
 
 def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None = None) -> LagResult | None:
@@ -232,13 +281,15 @@ def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None
     if not (tau >= 0 and beta >= 0 and math.isfinite(tau) and math.isfinite(beta)):
         raise DesignError(f"need finite tau >= 0 (s) and beta >= 0 (1/s), got {tau!r}, {beta!r}")
     gain = weight is not None
-    problem, par, var = _problem(len(loop.dampings), tau > 0, loop.sigma > 0, gain)
+    lag_q = tau > 0 and loop.lag_sigma > 0
+    problem, par, var = _problem(len(loop.dampings), tau > 0, loop.sigma > 0, gain, lag_q)
     par["beta2"].value = 2.0 * beta
     par["jensen"].value = math.exp(-2.0 * beta * tau) / tau if tau > 0 else 0.0
     par["tau"].value = tau
     par["sig2"].value = loop.sigma**2
+    par["lsig2"].value = loop.lag_sigma**2
     par["weight"].value = np.eye(2) if weight is None else np.asarray(weight, dtype=float)
-    cols = _columns(tau, loop.sigma > 0, gain)
+    cols = _columns(tau, loop.sigma > 0, gain, loop.lag_sigma > 0)
     for a, gp, tp in zip(loop.dampings, par["gam"], par["tgam"], strict=False):
         gam = loop.gamma_matrix(a)[:, cols]
         gp.value, tp.value = gam, tau * gam
@@ -252,18 +303,21 @@ def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None
     r = np.asarray(var["r"].value, dtype=float)
     p, r = 0.5 * (p + p.T), 0.5 * (r + r.T)
     mu = max(float(np.asarray(var["mu"].value)), 0.0) if loop.sigma > 0 else 0.0
+    mu2 = max(float(np.asarray(var["mu2"].value)), 0.0) if lag_q else 0.0
     g = max(float(np.asarray(var["g"].value)), 0.0) if gain else 0.0
     if gain:
         g *= 1.0 + 1e-9  # a hair above the optimum, so the re-check sees the strict inequality
     top, margin = -math.inf, 0.0
-    for mat, scale in lag_lmi_matrices(loop, p, r, mu, g, tau, beta, gain):
+    for mat, scale in lag_lmi_matrices(loop, p, r, mu, g, tau, beta, gain, mu2):
         t, m = strict_nsd_gap(mat, scale)
         if t >= -m:
             return None
         top, margin = max(top, t), m if t >= top else margin
     if strict_nsd_gap(-p)[0] >= 0 or (tau > 0 and np.linalg.eigvalsh(r).min() < 0):
         return None
-    return LagResult(p=p, r=r, multiplier=mu, gain=g, tau=tau, beta=beta, max_eig=top, margin=margin)
+    return LagResult(
+        p=p, r=r, multiplier=mu, gain=g, tau=tau, beta=beta, max_eig=top, margin=margin, lag_multiplier=mu2
+    )
 
 
 __all__ = ["MAX_VERTICES", "LagLoop", "LagResult", "lag_lmi_matrices", "lmi_lag"]
