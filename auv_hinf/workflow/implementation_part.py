@@ -26,8 +26,9 @@ from auv_hinf.certification.implementation import (
 )
 from auv_hinf.certification.margins import ErrorBounds
 from auv_hinf.exceptions import AuvHinfError
-from auv_hinf.models.implementation import Implementation
+from auv_hinf.models.implementation import Implementation, MeasurementNoise
 from auv_hinf.workflow.design_point import DesignPoint, initial_states
+from auv_hinf.workflow.nominal import closed_loop_for
 
 #: Relative width at which the search for the largest covered sample time stops.
 COVERED_SEARCH_RTOL = 0.05
@@ -230,6 +231,26 @@ __all__ = [
     "covered_sample_time",
     "implementation_problem",
     "implementation_summary",
+    "implementation_sweep",
     "reference_jerks",
     "start_errors",
 ]
+
+
+def implementation_sweep(
+    point: DesignPoint, sample_times: list[float], delay: float = 0.0, noise: MeasurementNoise | None = None
+) -> list[ImplementationCertificate]:
+    """The implementation certificate of ``point`` at each sample time (s), delay (s) and noise fixed.
+
+    For design studies (notebook ``08_implementation``): decay rate and bounds against the sample time.
+
+    Raises
+    ------
+    DesignError
+        When the design has no closed-loop certificate to extend.
+    """
+    nominal = closed_loop_for(point)
+    prob, start = implementation_problem(point, nominal), start_errors(point)
+    limits = lag_limits(prob.loops, prob.nominal_dampings, delay)
+    base = Implementation(delay=delay, noise=noise or MeasurementNoise())
+    return [certify_implementation(prob, replace(base, sample_time=h), start, limits) for h in sample_times]
