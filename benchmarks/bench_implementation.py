@@ -45,9 +45,16 @@ BLUEROV_SLOW: dict[str, Any] = {
     "actuators": {"preset": "bluerov2-heavy"},
 }
 CASES = (
-    ("paper-triangle", lambda: preset_config("paper-triangle").to_toml_dict(),
-     Implementation(0.1, 0.1, noise=MeasurementNoise(0.05, 0.02, 0.01, 0.005))),
-    ("bluerov2-slow", lambda: dict(BLUEROV_SLOW), Implementation(0.01, 0.0, noise=MeasurementNoise(1e-3, 1e-3, 1e-3, 1e-3))),
+    (
+        "paper-triangle",
+        lambda: preset_config("paper-triangle").to_toml_dict(),
+        Implementation(0.1, 0.1, noise=MeasurementNoise(0.05, 0.02, 0.01, 0.005)),
+    ),
+    (
+        "bluerov2-slow",
+        lambda: dict(BLUEROV_SLOW),
+        Implementation(0.01, 0.0, noise=MeasurementNoise(1e-3, 1e-3, 1e-3, 1e-3)),
+    ),
 )
 
 
@@ -76,9 +83,9 @@ def implementation_cost() -> str:
         point = design_point(cfg)
         nominal = closed_loop_for(point)
         prob, start = implementation_problem(point, nominal), start_errors(point)
-        t_cont = _median(lambda: closed_loop_for(point))
-        t_exact = _median(lambda: lag_limits(prob.loops, prob.nominal_dampings, impl.delay))
-        t_impl = _median(lambda: certify_implementation(prob, impl, start))
+        t_cont = _median(lambda point=point: closed_loop_for(point))
+        t_exact = _median(lambda prob=prob, impl=impl: lag_limits(prob.loops, prob.nominal_dampings, impl.delay))
+        t_impl = _median(lambda prob=prob, impl=impl, start=start: certify_implementation(prob, impl, start))
         cert = certify_implementation(prob, impl, start)
         t_cli0 = _cli_seconds(doc)
         t_cli1 = _cli_seconds({**doc, "implementation": impl.to_dict()})
@@ -100,8 +107,15 @@ def implementation_cost() -> str:
 
 def _table(rows: list[list[str]]) -> str:
     header = [
-        "design", "implementation", "continuous cert. [s]", "limits (LMI + c2d) [s]", "implementation cert. [s]",
-        "ratio", "`certify` CLI without / with [s]", "max / exact sample time [s]", "covers",
+        "design",
+        "implementation",
+        "continuous cert. [s]",
+        "limits (LMI + c2d) [s]",
+        "implementation cert. [s]",
+        "ratio",
+        "`certify` CLI without / with [s]",
+        "max / exact sample time [s]",
+        "covers",
     ]
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
     line = "| " + " | ".join(h.ljust(w) for h, w in zip(header, widths)) + " |"

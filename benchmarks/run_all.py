@@ -54,7 +54,16 @@ def machine() -> str:
 def main() -> None:
     t0 = time.perf_counter()
     sections = []
-    for fn in (gains, rhs_peers, time_vs_error, campaign_throughput, end_to_end, synthesis, user_path, implementation_cost):
+    for fn in (
+        gains,
+        rhs_peers,
+        time_vs_error,
+        campaign_throughput,
+        end_to_end,
+        synthesis,
+        user_path,
+        implementation_cost,
+    ):
         t = time.perf_counter()
         text = fn()
         print(text, flush=True)

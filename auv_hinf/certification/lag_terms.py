@@ -62,7 +62,8 @@ def block_slopes(params: VehicleParams) -> tuple[float, float, float]:
     """Spectral norms of ``dB/d|u|``, ``dB/d|v|``, ``dB/dr`` (``B`` is affine in them), 1/m and 1."""
     base = body_block(params, 0.0, 0.0, 0.0)
     return tuple(  # type: ignore[return-value]
-        float(np.linalg.norm(body_block(params, *unit) - base, 2)) for unit in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+        float(np.linalg.norm(body_block(params, *unit) - base, 2))
+        for unit in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
     )
 
 
@@ -216,8 +217,9 @@ def lag_disturbance(
     lag, n = implementation.max_lag, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
     u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
-    u_rate, v_rate, r_rate = body_rates(params, envelope, tube, gains, implementation, lam=lam, sigma=sigma,
-                                        bounds=bounds, force=force)
+    u_rate, v_rate, r_rate = body_rates(
+        params, envelope, tube, gains, implementation, lam=lam, sigma=sigma, bounds=bounds, force=force
+    )
     r_in = min(r_hi, float(np.abs(tube.yaw_rate).max()) + bounds.yaw_rate)
     # change of each state between the measurement and now, noise included
     d_psi = r_in * lag + n.heading

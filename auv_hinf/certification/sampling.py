@@ -133,7 +133,8 @@ def spectral_radius(a: float, k: float, b: float, period: float, delay: float, *
     if period <= 0:
         raise DesignError(f"period must be > 0 (s), got {period!r}")
     disc = _control_plant if control else held_plant
-    m = int(math.floor(delay / period + 1e-12))
+    # the delay in whole periods; 1e-12 absorbs the round-off of delay/period at exact multiples
+    m = math.floor(delay / period + 1e-12)
     f = max(delay - m * period, 0.0)
     ad, bd = disc(a, period)
     if f > 0:

@@ -21,10 +21,10 @@ from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.law import MotionSource, VehicleLaw
 from auv_hinf.workflow.actuator_check import ActuatorCheck, check_actuators
 from auv_hinf.workflow.design_point import design_point, formation_offsets, mission_reference
+from auv_hinf.workflow.implementation_part import ImplementationSummary, implementation_summary
 from auv_hinf.workflow.interconnect import fleet_closed_loop, formation_controller
 from auv_hinf.workflow.nominal import ClosedLoopSummary, closed_loop_summary
 from auv_hinf.workflow.persist import load_certificate, save_certificate
-from auv_hinf.workflow.implementation_part import ImplementationSummary, implementation_summary
 from auv_hinf.workflow.robust_part import RobustSummary, robust_summary
 
 #: An actuator channel counts as the binding constraint when the certified peak reaches this

@@ -31,10 +31,10 @@ from auv_hinf.design.gains import Gains, heading_gains
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.models.envelope import envelope_lambda
+from auv_hinf.models.implementation import Implementation
 from auv_hinf.models.jacobi_maps import positions_from_jacobi
 from auv_hinf.models.paths import MissionReference
 from auv_hinf.models.reference import FleetReference, ReferenceTube, reference_from_dict
-from auv_hinf.models.implementation import Implementation
 from auv_hinf.models.tubes import mission_tube, path_frame_tube
 from auv_hinf.robust.bandwidth import RobustDesign, design_robust
 from auv_hinf.robust.box import ParameterBox

@@ -16,14 +16,14 @@ import numpy as np
 
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.coverage import initial_errors
-from auv_hinf.certification.lag_terms import course_jerk_bound
 from auv_hinf.certification.implementation import (
     ImplementationCertificate,
-    ImplementationProblem,
     LagLimits,
     certify_implementation,
     lag_limits,
 )
+from auv_hinf.certification.lag_problem import ImplementationProblem
+from auv_hinf.certification.lag_terms import course_jerk_bound
 from auv_hinf.certification.margins import ErrorBounds
 from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.models.implementation import Implementation, MeasurementNoise

@@ -54,7 +54,9 @@ def test_a_fast_small_noise_implementation_is_covered_with_consistent_bounds(slo
 def test_more_noise_or_slower_sampling_never_tightens_the_bounds(slow):
     prob, start = slow
     base = certify_implementation(prob, Implementation(0.01, 0.0, noise=SMALL_NOISE), start)
-    noisier = certify_implementation(prob, Implementation(0.01, 0.0, noise=MeasurementNoise(0.002, 0.002, 0.002, 0.002)), start)
+    noisier = certify_implementation(
+        prob, Implementation(0.01, 0.0, noise=MeasurementNoise(0.002, 0.002, 0.002, 0.002)), start
+    )
     assert base.bounds is not None
     if noisier.covers:
         assert noisier.bounds is not None and noisier.ultimate is not None and base.ultimate is not None
@@ -72,15 +74,28 @@ def test_a_sample_time_above_the_exact_limit_is_not_covered(slow):
 
 @pytest.mark.parametrize(
     "preset",
-    ["paper-triangle", pytest.param("bluerov2-line", marks=pytest.mark.slow), pytest.param("remus-line", marks=pytest.mark.slow)],
+    [
+        "paper-triangle",
+        pytest.param("bluerov2-line", marks=pytest.mark.slow),
+        pytest.param("remus-line", marks=pytest.mark.slow),
+    ],
 )
 def test_presets_at_10_hz_with_delay_say_whether_covered(preset):
     cfg = preset_config(preset)
     impl = Implementation(0.1, 0.1, noise=MeasurementNoise(0.05, 0.02, 0.01, 0.005))
     cert = certify(config_from_dict({**cfg.to_toml_dict(), "implementation": impl.to_dict()}))
     d = cert.to_dict()["implementation"]
-    for key in ("sample_time", "delay", "noise", "max_sample_time", "max_delay", "exact_max_sample_time",
-                "decay_rate", "ultimate_bounds", "covers"):
+    for key in (
+        "sample_time",
+        "delay",
+        "noise",
+        "max_sample_time",
+        "max_delay",
+        "exact_max_sample_time",
+        "decay_rate",
+        "ultimate_bounds",
+        "covers",
+    ):
         assert key in d
     assert d["sample_time"] == 0.1 and d["delay"] == 0.1
     assert d["max_sample_time"] <= (d["exact_max_sample_time"] or math.inf)
@@ -103,6 +118,8 @@ def test_the_largest_covered_sample_time_is_itself_covered():
     assert impl is not None and not impl.covers
     h = impl.covered_sample_time
     assert h is not None and 0 < h < 0.2
-    again = certify(config_from_dict({**BLUEROV_SLOW, "implementation": {"sample_time": h, "noise": SMALL_NOISE.to_dict()}}))
+    again = certify(
+        config_from_dict({**BLUEROV_SLOW, "implementation": {"sample_time": h, "noise": SMALL_NOISE.to_dict()}})
+    )
     assert again.implementation is not None and again.implementation.covers
     assert ErrorBounds(0, 0, 0, 0) == start_errors(design_point(cfg))

@@ -39,7 +39,7 @@ def _simulate_held(a, k, b, h, delay, horizon, sigma=0.0, lags=None, drive=None,
     and state giving the uncertainty q (default 0). Returns times and states (2 axes).
     """
     rng = np.random.default_rng(seed)
-    n = int(round(horizon / h))
+    n = round(horizon / h)
     dk = np.full(n, delay) if lags is None else lags(rng, n)
     t_grid = np.arange(n + 1) * h
     # solve on a fine grid, storing dense output to read x(s_k)
@@ -128,8 +128,15 @@ def test_certificate_holds_for_sampled_lags_and_uncertainty(seed):
         return loop.sigma * rot @ y.reshape(2, 2)[:, 1]
 
     times, xs = _simulate_held(
-        loop.dampings[0], loop.k, loop.b, h, 0.0, horizon=40.0, drive=drive,
-        lags=lambda r, n: r.uniform(0.0, tau - h, n), seed=seed,
+        loop.dampings[0],
+        loop.k,
+        loop.b,
+        h,
+        0.0,
+        horizon=40.0,
+        drive=drive,
+        lags=lambda r, n: r.uniform(0.0, tau - h, n),
+        seed=seed,
     )
     p = cert.p
     pairs = xs.reshape(-1, 2)  # rows (e, e') of the x axis, then of the y axis, per time

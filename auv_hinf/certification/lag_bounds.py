@@ -1,0 +1,196 @@
+"""The verified fixed point of the implementation's error bounds.
+
+For one way of bounding the lag's effects (the drift feedforward as the LMI's lag channel
+``q2``, or inside the disturbance), :func:`bound_errors` computes the ISS certificates of both
+loops at the declared lag and the least fixed point of
+
+    bounds -> force(bounds + noise) -> disturbance -> invariant level -> bounds,
+
+iterated from the start's level and accepted only when one more step, from bounds widened by
+:data:`FIXED_POINT_RTOL`, lands inside them and inside the envelope: then, by the first-exit
+argument of :mod:`auv_hinf.certification.region`, the errors never leave them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.certification.closed_loop import ThrustBounds, thrust_bounds
+from auv_hinf.certification.lag_problem import ImplementationProblem
+from auv_hinf.certification.lag_terms import LagDisturbance, lag_disturbance
+from auv_hinf.certification.margins import MAX_HEADING_ERROR, ErrorBounds, envelope_margins, inflate_envelope
+from auv_hinf.certification.sampling import decay_at, iss_certificate
+from auv_hinf.design.lmi.sampled import LagResult
+from auv_hinf.models.implementation import Implementation
+
+#: Relative widening of the fixed-point bounds before the final self-consistency step.
+FIXED_POINT_RTOL = 1e-6
+#: Iterations of the fixed point before it is declared divergent.
+FIXED_POINT_ITERATIONS = 200
+#: Fraction of the largest certified decay rate used for the ISS certificate: halfway keeps
+#: both the decay and the ISS gain finite (at the largest rate the gain blows up).
+ISS_DECAY_FRACTION = 0.5
+
+
+def _level(p: FloatArray, r1: float, r2: float) -> float:
+    """Largest ``x^T P x`` over ``|x1| <= r1, |x2| <= r2`` (planar pairs, exact)."""
+    return float(p[0, 0] * r1 * r1 + 2.0 * abs(p[0, 1]) * r1 * r2 + p[1, 1] * r2 * r2)
+
+
+def _extents(p: FloatArray, level: float) -> tuple[float, float]:
+    """Sup of ``|x1|``, ``|x2|`` over ``{x^T P x <= level}``."""
+    inv = np.linalg.inv(p)
+    return math.sqrt(max(level, 0.0) * inv[0, 0]), math.sqrt(max(level, 0.0) * inv[1, 1])
+
+
+def _force(prob: ImplementationProblem, bounds: ErrorBounds, impl: Implementation) -> ThrustBounds:
+    """Bound of the commanded forces on measurements with errors up to ``bounds + noise``."""
+    n = impl.noise
+    env = prob.envelope
+    wide = replace(
+        env,
+        u=(env.u[0] - n.velocity, env.u[1] + n.velocity),
+        v=(env.v[0] - n.velocity, env.v[1] + n.velocity),
+        r=(env.r[0] - n.yaw_rate, env.r[1] + n.yaw_rate),
+    )
+    seen = ErrorBounds(
+        bounds.position + n.position,
+        bounds.velocity + n.velocity + math.hypot(max(map(abs, env.u)), max(map(abs, env.v))) * n.heading,
+        bounds.heading + n.heading,
+        bounds.yaw_rate + n.yaw_rate,
+    )
+    return thrust_bounds(prob.params, inflate_envelope(wide), prob.tube, seen, prob.gains)
+
+
+def _step(
+    prob: ImplementationProblem,
+    impl: Implementation,
+    certs: tuple[LagResult, LagResult],
+    start: tuple[float, float],
+    bounds: ErrorBounds,
+    channel: bool,
+) -> tuple[ErrorBounds, ErrorBounds, LagDisturbance, ThrustBounds]:
+    """One fixed-point step: bounds -> (new bounds, ultimate bounds, disturbance, force)."""
+    force = _force(prob, bounds, impl)
+    dist = lag_disturbance(
+        prob.params,
+        prob.envelope,
+        prob.tube,
+        prob.gains,
+        impl,
+        lam=prob.lam,
+        sigma=prob.sigma,
+        jerk=prob.jerk,
+        force=force,
+        bounds=bounds,
+        yaw_jerk=prob.yaw_jerk,
+        lag_channel=channel,
+    )
+    out: list[float] = []
+    ult: list[float] = []
+    for cert, w, v0 in zip(certs, (dist.position, dist.heading), start, strict=True):
+        floor = cert.gain * w * w / (2.0 * cert.beta)
+        out += _extents(cert.p, max(v0, floor))
+        ult += _extents(cert.p, floor)
+    return ErrorBounds(*out), ErrorBounds(*ult), dist, force
+
+
+def _fits(prob: ImplementationProblem, b: ErrorBounds) -> bool:
+    return b.heading < MAX_HEADING_ERROR and envelope_margins(prob.tube, b, prob.envelope).ok
+
+
+@dataclass(frozen=True)
+class LagBounds:
+    """The outcome of :func:`bound_errors` (bounds in m, m/s, rad, rad/s; ``None`` when not covered)."""
+
+    covers: bool
+    reasons: tuple[str, ...]
+    decay_rate: float | None = None
+    bounds: ErrorBounds | None = None
+    ultimate: ErrorBounds | None = None
+    thrust: ThrustBounds | None = None
+    disturbance: LagDisturbance | None = None
+    certificates: tuple[LagResult, ...] = ()
+
+    def fields(self) -> dict[str, Any]:
+        """The certificate fields this outcome decides."""
+        return {
+            "decay_rate": self.decay_rate,
+            "bounds": self.bounds,
+            "ultimate": self.ultimate,
+            "thrust": self.thrust,
+            "covers": self.covers,
+            "reasons": self.reasons,
+            "disturbance": self.disturbance,
+            "certificates": self.certificates,
+        }
+
+
+def bound_errors(prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, channel: bool) -> LagBounds:
+    """ISS certificates at the declared lag and the verified fixed point of the error bounds.
+
+    ``channel``: the drift feedforward's dependence on the velocity error's change is a
+    norm-bounded term of the position LMI (``q2``); otherwise it is part of the disturbance,
+    bounded through the body accelerations.
+    """
+    lag = impl.max_lag
+    loops = prob.lag_loops(channel)
+    rates = [ISS_DECAY_FRACTION * decay_at(loop, lag) for loop in loops]
+    certs = tuple(
+        iss_certificate(loop, lag, beta, np.diag([loop.k, 1.0])) if beta > 0 else None
+        for loop, beta in zip(loops, rates, strict=True)
+    )
+    if certs[0] is None or certs[1] is None:
+        return LagBounds(False, (f"no decay rate is certified at sample_time + delay = {lag:.4g} s",))
+    pair = (certs[0], certs[1])
+    v0 = (_level(pair[0].p, start.position, start.velocity), _level(pair[1].p, start.heading, start.yaw_rate))
+    bounds = ErrorBounds(*_extents(pair[0].p, v0[0]), *_extents(pair[1].p, v0[1]))
+    reasons: list[str] = []
+    for _ in range(FIXED_POINT_ITERATIONS):
+        if not _fits(prob, bounds):
+            reasons.append(
+                "the error bounds leave the envelope: the implementation's disturbance is too large "
+                f"(last bounds |e| <= {bounds.position:.3g} m, |e'| <= {bounds.velocity:.3g} m/s, "
+                f"|e_psi| <= {bounds.heading:.3g} rad)"
+            )
+            break
+        new, ult, dist, force = _step(prob, impl, pair, v0, bounds, channel)
+        if all(n <= b * (1.0 + 1e-12) + 1e-300 for n, b in zip(_vec(new), _vec(bounds), strict=True)):
+            break
+        bounds = ErrorBounds(*np.maximum(_vec(new), _vec(bounds)))
+    else:
+        reasons.append(f"the error bounds did not settle in {FIXED_POINT_ITERATIONS} iterations")
+    if reasons:
+        return LagBounds(False, tuple(reasons), decay_rate=min(c.beta for c in pair), certificates=pair)
+    wide = ErrorBounds(*(_vec(bounds) * (1.0 + FIXED_POINT_RTOL)))
+    new, ult, dist, force = _step(prob, impl, pair, v0, wide, channel)
+    if not (np.all(_vec(new) <= _vec(wide)) and _fits(prob, wide)):
+        reasons.append("the error bounds are not self-consistent (fixed-point check failed)")
+    if not reasons and prob.actuators is not None and not prob.actuators.admits(force.as_tuple()):
+        reasons.append(
+            f"the commanded forces (|tau_x| <= {force.force_x:.4g} N, |tau_y| <= {force.force_y:.4g} N, "
+            f"|tau_psi| <= {force.moment:.4g} N m, noise included) exceed the actuators"
+        )
+    ok = not reasons
+    return LagBounds(
+        ok,
+        tuple(reasons),
+        decay_rate=min(c.beta for c in pair),
+        bounds=wide if ok else None,
+        ultimate=ult if ok else None,
+        thrust=force,
+        disturbance=dist,
+        certificates=pair,
+    )
+
+
+def _vec(b: ErrorBounds) -> FloatArray:
+    return np.array([b.position, b.velocity, b.heading, b.yaw_rate])
+
+
+__all__ = ["FIXED_POINT_ITERATIONS", "FIXED_POINT_RTOL", "ISS_DECAY_FRACTION", "LagBounds", "bound_errors"]
