@@ -20,16 +20,14 @@ from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.law import MotionSource, VehicleLaw
 from auv_hinf.workflow.actuator_check import ActuatorCheck, check_actuators
+from auv_hinf.workflow.binding import binding_constraint, certified_peaks
+from auv_hinf.workflow.certificate_text import certificate_text
 from auv_hinf.workflow.design_point import design_point, formation_offsets, mission_reference
 from auv_hinf.workflow.implementation_part import ImplementationSummary, implementation_summary
 from auv_hinf.workflow.interconnect import fleet_closed_loop, formation_controller
 from auv_hinf.workflow.nominal import ClosedLoopSummary, closed_loop_summary
 from auv_hinf.workflow.persist import load_certificate, save_certificate
 from auv_hinf.workflow.robust_part import RobustSummary, robust_summary
-
-#: An actuator channel counts as the binding constraint when the certified peak reaches this
-#: share of its limit (the region is shrunk to fit the limits, so a binding channel sits at 1).
-ACTUATOR_BINDING_RATIO = 0.99
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
 #: ``A_lam = lam I`` every 2x2 channel is identical, so a larger problem checks nothing
@@ -243,41 +241,8 @@ class Certificate:
         return FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
 
     def summary(self) -> str:
-        """Readable table."""
-
-        def fmt(x: float | None) -> str:
-            return "n/a" if x is None else f"{x:.6g}"
-
-        lines = [
-            f"auv-hinf certificate: {self.config.name} (N={self.config.n}, {self.config.vehicle.name})",
-            f"  lambda (envelope)         {fmt(self.lam)} 1/s",
-            f"  sigma vehicle  [lo, up]   [{fmt(self.sigma.lower)}, {fmt(self.sigma.upper)}]  <- used",
-            f"  sigma Jacobi   [lo, up]   [{fmt(self.sigma_jacobi.lower)}, {fmt(self.sigma_jacobi.upper)}]",
-            f"  {'gamma = 1/sigma' if self.config.gamma is None else 'gamma (configured)':<26}"
-            f"{fmt(self.gamma)} s  (Theorem 1 minimum {fmt(self.theorem1.gamma_min)} s)",
-        ]
-        for m, d in self.designs.items():
-            mark = " <- used" if m == self.config.method and self.gain_source == "theorem1" else ""
-            lines.append(f"  alpha[{m:<11}]        {fmt(None if d is None else d.alpha)}{mark}")
-            if d is not None:
-                lines.extend(f"      ! {f}" for f in d.flags)
-        lines += [
-            f"  small-gain margin         {fmt(self.small_gain_margin)} 1/s",
-            f"  position loop ||T||       {fmt(self.position_loop_hinf)} (Theorem 2, k1={self.config.k1:g})",
-            f"  cross-check               {'ok' if self.crosscheck.ok else 'DISAGREES'} "
-            f"(max rel {self.crosscheck.max_rel_diff:.2g})",
-        ]
-        lines.append(
-            f"  gains that run            {'none' if self.gains is None else self.gains.describe()}"
-            f"{'  (robust design)' if self.gain_source == 'robust' else ''}"
-        )
-        lines += ["  closed loop               not certified"] if self.closed_loop is None else self.closed_loop.lines()
-        lines += [] if self.robust is None else self.robust.lines()
-        lines += [] if self.actuators is None else self.actuators.lines()
-        lines += [] if self.implementation is None else self.implementation.lines()
-        lines += [f"  CERTIFIED: {'yes' if self.certified else 'no'}"]
-        lines.extend(f"    - {r}" for r in self.reasons)
-        return "\n".join(lines)
+        """Readable table (:func:`~auv_hinf.workflow.certificate_text.certificate_text`)."""
+        return certificate_text(self)
 
 
 def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacobi: bool = False) -> Certificate:
@@ -345,7 +310,7 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         reasons.extend(loop.reasons)
     nominal = None if loop is None else loop.certificate
     rob = robust_summary(point, nominal=nominal)
-    act = check_actuators(point, _peaks(loop, rob))
+    act = check_actuators(point, certified_peaks(loop, rob))
     if config.actuators is not None and not act.certified:
         reasons.append(f"actuators: {act.reason}")
     if rob.declared and not rob.covers:
@@ -375,32 +340,6 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         gains=point.gains,
         gain_source=point.source,
         actuators=act,
-        design={**point.summary(), "binding": _binding(act, rob, loop)},
+        design={**point.summary(), "binding": binding_constraint(act, rob, loop, impl)},
         implementation=impl,
     )
-
-
-def _binding(act: ActuatorCheck, rob: RobustSummary, loop: ClosedLoopSummary | None) -> str | None:
-    """The constraint that limits the certified design: actuators, the envelope, or none found."""
-    if act.limits is not None and act.binding is not None and act.binding_ratio is not None:
-        if act.binding_ratio >= ACTUATOR_BINDING_RATIO:
-            return f"actuators ({act.binding}, {act.binding_ratio:.3g} of its limit)"
-    margins = rob.certificate.margins if rob.declared and rob.certificate is not None else None
-    if margins is None and loop is not None and loop.certificate is not None:
-        margins = loop.certificate.region.margins
-    if margins is not None:
-        return f"operating envelope (smallest margin {margins.min:.3g})"
-    return None
-
-
-def _peaks(loop: ClosedLoopSummary | None, rob: RobustSummary) -> list[tuple[float, float, float]]:
-    """The thrust bounds the certificate proves: nominal region, checked shaped start, robust set."""
-    out = []
-    if loop is not None and loop.certificate is not None:
-        out.append(loop.certificate.thrust.as_tuple())
-        if loop.shaped is not None and loop.shaped.covered and loop.shaped.thrust is not None:
-            out.append(loop.shaped.thrust.as_tuple())
-    c = rob.certificate
-    if rob.declared and c is not None and c.thrust is not None:
-        out.append(c.thrust.as_tuple())
-    return out

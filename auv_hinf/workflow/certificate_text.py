@@ -1,0 +1,49 @@
+"""The readable table of a certificate (``auv-hinf certify`` without ``--json``)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from auv_hinf.workflow.certificate import Certificate
+
+
+def certificate_text(cert: Certificate) -> str:
+    """One line per quantity, with units; the verdict and its reasons last."""
+
+    def fmt(x: float | None) -> str:
+        return "n/a" if x is None else f"{x:.6g}"
+
+    lines = [
+        f"auv-hinf certificate: {cert.config.name} (N={cert.config.n}, {cert.config.vehicle.name})",
+        f"  lambda (envelope)         {fmt(cert.lam)} 1/s",
+        f"  sigma vehicle  [lo, up]   [{fmt(cert.sigma.lower)}, {fmt(cert.sigma.upper)}]  <- used",
+        f"  sigma Jacobi   [lo, up]   [{fmt(cert.sigma_jacobi.lower)}, {fmt(cert.sigma_jacobi.upper)}]",
+        f"  {'gamma = 1/sigma' if cert.config.gamma is None else 'gamma (configured)':<26}"
+        f"{fmt(cert.gamma)} s  (Theorem 1 minimum {fmt(cert.theorem1.gamma_min)} s)",
+    ]
+    for m, d in cert.designs.items():
+        mark = " <- used" if m == cert.config.method and cert.gain_source == "theorem1" else ""
+        lines.append(f"  alpha[{m:<11}]        {fmt(None if d is None else d.alpha)}{mark}")
+        if d is not None:
+            lines.extend(f"      ! {f}" for f in d.flags)
+    lines += [
+        f"  small-gain margin         {fmt(cert.small_gain_margin)} 1/s",
+        f"  position loop ||T||       {fmt(cert.position_loop_hinf)} (Theorem 2, k1={cert.config.k1:g})",
+        f"  cross-check               {'ok' if cert.crosscheck.ok else 'DISAGREES'} "
+        f"(max rel {cert.crosscheck.max_rel_diff:.2g})",
+    ]
+    lines.append(
+        f"  gains that run            {'none' if cert.gains is None else cert.gains.describe()}"
+        f"{'  (robust design)' if cert.gain_source == 'robust' else ''}"
+    )
+    lines += ["  closed loop               not certified"] if cert.closed_loop is None else cert.closed_loop.lines()
+    lines += [] if cert.robust is None else cert.robust.lines()
+    lines += [] if cert.actuators is None else cert.actuators.lines()
+    lines += [] if cert.implementation is None else cert.implementation.lines()
+    lines += [f"  CERTIFIED: {'yes' if cert.certified else 'no'}"]
+    lines.extend(f"    - {r}" for r in cert.reasons)
+    return "\n".join(lines)
+
+
+__all__ = ["certificate_text"]
