@@ -72,10 +72,14 @@ def _step(
     impl: Implementation,
     certs: tuple[LagResult, LagResult],
     start: tuple[float, float],
-    bounds: ErrorBounds,
+    state: FloatArray,
     channel: bool,
-) -> tuple[ErrorBounds, ErrorBounds, LagDisturbance, ThrustBounds]:
-    """One fixed-point step: bounds -> (new bounds, ultimate bounds, disturbance, force)."""
+) -> tuple[FloatArray, ErrorBounds, LagDisturbance, ThrustBounds]:
+    """One fixed-point step on ``state = (E_p, E_v, E_psi, E_r, w, w_psi)``.
+
+    Returns the new state, the ultimate bounds, the disturbance and the force bound.
+    """
+    bounds = ErrorBounds(*(float(x) for x in state[:4]))
     force = _force(prob, bounds, impl)
     dist = lag_disturbance(
         prob.params,
@@ -90,6 +94,7 @@ def _step(
         bounds=bounds,
         yaw_jerk=prob.yaw_jerk,
         lag_channel=channel,
+        previous=(float(state[4]), float(state[5])),
     )
     out: list[float] = []
     ult: list[float] = []
@@ -97,7 +102,7 @@ def _step(
         floor = cert.gain * w * w / (2.0 * cert.beta)
         out += _extents(cert.p, max(v0, floor))
         ult += _extents(cert.p, floor)
-    return ErrorBounds(*out), ErrorBounds(*ult), dist, force
+    return np.array([*out, dist.position, dist.heading]), ErrorBounds(*ult), dist, force
 
 
 def _fits(prob: ImplementationProblem, b: ErrorBounds) -> bool:
@@ -149,27 +154,29 @@ def bound_errors(prob: ImplementationProblem, impl: Implementation, start: Error
         return LagBounds(False, (f"no decay rate is certified at sample_time + delay = {lag:.4g} s",))
     pair = (certs[0], certs[1])
     v0 = (_level(pair[0].p, start.position, start.velocity), _level(pair[1].p, start.heading, start.yaw_rate))
-    bounds = ErrorBounds(*_extents(pair[0].p, v0[0]), *_extents(pair[1].p, v0[1]))
+    # the fixed point runs on (error bounds, disturbance bounds): the body accelerations that
+    # bound the disturbance depend on the disturbance itself
+    state = np.array([*_extents(pair[0].p, v0[0]), *_extents(pair[1].p, v0[1]), 0.0, 0.0])
     reasons: list[str] = []
     for _ in range(FIXED_POINT_ITERATIONS):
-        if not _fits(prob, bounds):
+        if not _fits(prob, _bounds(state)):
             reasons.append(
                 "the error bounds leave the envelope: the implementation's disturbance is too large "
-                f"(last bounds |e| <= {bounds.position:.3g} m, |e'| <= {bounds.velocity:.3g} m/s, "
-                f"|e_psi| <= {bounds.heading:.3g} rad)"
+                f"(last bounds |e| <= {state[0]:.3g} m, |e'| <= {state[1]:.3g} m/s, |e_psi| <= {state[2]:.3g} rad)"
             )
             break
-        new, ult, dist, force = _step(prob, impl, pair, v0, bounds, channel)
-        if all(n <= b * (1.0 + 1e-12) + 1e-300 for n, b in zip(_vec(new), _vec(bounds), strict=True)):
+        new = _step(prob, impl, pair, v0, state, channel)[0]
+        if np.all(new <= state * (1.0 + 1e-12) + 1e-300):
             break
-        bounds = ErrorBounds(*np.maximum(_vec(new), _vec(bounds)))
+        state = np.maximum(new, state)
     else:
         reasons.append(f"the error bounds did not settle in {FIXED_POINT_ITERATIONS} iterations")
     if reasons:
         return LagBounds(False, tuple(reasons), decay_rate=min(c.beta for c in pair), certificates=pair)
-    wide = ErrorBounds(*(_vec(bounds) * (1.0 + FIXED_POINT_RTOL)))
-    new, ult, dist, force = _step(prob, impl, pair, v0, wide, channel)
-    if not (np.all(_vec(new) <= _vec(wide)) and _fits(prob, wide)):
+    wide_state = state * (1.0 + FIXED_POINT_RTOL)
+    wide = _bounds(wide_state)
+    new, ult, dist, force = _step(prob, impl, pair, v0, wide_state, channel)
+    if not (np.all(new <= wide_state) and _fits(prob, wide)):
         reasons.append("the error bounds are not self-consistent (fixed-point check failed)")
     if not reasons and prob.actuators is not None and not prob.actuators.admits(force.as_tuple()):
         reasons.append(
@@ -189,8 +196,9 @@ def bound_errors(prob: ImplementationProblem, impl: Implementation, start: Error
     )
 
 
-def _vec(b: ErrorBounds) -> FloatArray:
-    return np.array([b.position, b.velocity, b.heading, b.yaw_rate])
+def _bounds(state: FloatArray) -> ErrorBounds:
+    """The error bounds of a fixed-point state (m, m/s, rad, rad/s)."""
+    return ErrorBounds(*(float(x) for x in state[:4]))
 
 
 __all__ = ["FIXED_POINT_ITERATIONS", "FIXED_POINT_RTOL", "ISS_DECAY_FRACTION", "LagBounds", "bound_errors"]

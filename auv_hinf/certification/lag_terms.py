@@ -78,8 +78,19 @@ def body_rates(
     sigma: float,
     bounds: ErrorBounds,
     force: ThrustBounds,
+    disturbance: tuple[float, float] = (0.0, 0.0),
+    lag_sigma: float = 0.0,
 ) -> tuple[float, float, float]:
     """Bounds of ``|u'|, |v'|`` (m/s^2) and ``|r'|`` (rad/s^2) under the lagged law.
+
+    The smallest of three sound bounds, componentwise:
+
+    * from the error loops themselves: ``nu' = R^T (p_d'' + e'') - S(r) nu`` and
+      ``|e''| <= (|lam| + sigma + alpha) E_v + k1 E_p + |K delta| + |q2| + |w|`` with
+      ``|K delta| <= k1 E_v T + 2 alpha E_v``, ``|q2| <= 2 lag_sigma E_v`` and ``|w|`` bounded by
+      ``disturbance`` (the fixed point carries it; likewise ``r' = psi_d'' + e_psi''``);
+    * the held-force argument below;
+    * the force bound with the drag and Coriolis terms at their largest (crude).
 
     Between samples the force is held, so ``nu' = g(nu)`` (body dynamics with constant force)
     and ``d/dt |nu'|^2 = 2 nu'^T J nu' <= 2 mu |nu'|^2``, ``J = dg/dnu``, ``mu`` a bound of its
@@ -153,10 +164,26 @@ def body_rates(
     np.fill_diagonal(comp, [-d_lin[0] / m11, -d_lin[1] / m22, -d_lin[2] / m33])
     grow = math.exp(max(float(np.linalg.eigvalsh(comp).max()), 0.0) * h)
     loop = grow * d * float(np.linalg.norm(lip, 2))
-    if loop < 1.0:
-        rho = grow * float(np.linalg.norm(a0)) / (1.0 - loop)
-        return tuple(float(min(rho, c)) for c in crude)  # type: ignore[return-value]
-    return crude
+    rho = grow * float(np.linalg.norm(a0)) / (1.0 - loop) if loop < 1.0 else math.inf
+    lag = implementation.max_lag
+    e_acc = (
+        (abs(lam) + sigma + gains.alpha) * bounds.velocity
+        + gains.k1 * bounds.position
+        + (gains.k1 * lag + 2.0 * gains.alpha + 2.0 * lag_sigma) * bounds.velocity
+        + disturbance[0]
+    )
+    psi_acc = (
+        abs(k1p) * bounds.heading
+        + c_hi * bounds.yaw_rate
+        + (abs(k1p) * lag + 2.0 * abs(k2p)) * bounds.yaw_rate
+        + disturbance[1]
+    )
+    loops = (
+        float(tube.accel.max()) + e_acc + r_in * v_in,
+        float(tube.accel.max()) + e_acc + r_in * u_in,
+        float(tube.yaw_accel.max()) + psi_acc,
+    )
+    return tuple(float(min(rho, c, k)) for c, k in zip(crude, loops, strict=True))  # type: ignore[return-value]
 
 
 def course_jerk_bound(speed_min: float, accel: float, jerk: float, snap: float) -> float:
@@ -186,6 +213,7 @@ def lag_disturbance(
     bounds: ErrorBounds,
     yaw_jerk: float = math.inf,
     lag_channel: bool = False,
+    previous: tuple[float, float] = (0.0, 0.0),
 ) -> LagDisturbance:
     """Sound bounds of ``|w|`` and ``|w_psi|`` (see the module docstring).
 
@@ -213,18 +241,23 @@ def lag_disturbance(
     lag_channel : bool
         The position certificate carries the feedforward's dependence on the velocity error's
         change (``q2``); then only the rest of the body velocity's change enters here.
+    previous : tuple of float
+        Bounds of ``|w|``, ``|w_psi|`` assumed while these are computed (the fixed point's
+        previous iterate): they enter the body-acceleration bound (:func:`body_rates`).
     """
     lag, n = implementation.max_lag, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
     u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
+    b_u, b_v, b_r = block_slopes(params)
+    lag_sigma = float(tube.speed[:, 1].max()) * math.hypot(b_u, b_v) if lag_channel else 0.0
     u_rate, v_rate, r_rate = body_rates(
-        params, envelope, tube, gains, implementation, lam=lam, sigma=sigma, bounds=bounds, force=force
+        params, envelope, tube, gains, implementation, lam=lam, sigma=sigma, bounds=bounds, force=force,
+        disturbance=previous, lag_sigma=lag_sigma,
     )
     r_in = min(r_hi, float(np.abs(tube.yaw_rate).max()) + bounds.yaw_rate)
     # change of each state between the measurement and now, noise included
     d_psi = r_in * lag + n.heading
     d_u, d_v, d_r = u_rate * lag + n.velocity, v_rate * lag + n.velocity, r_rate * lag + n.yaw_rate
-    b_u, b_v, b_r = block_slopes(params)
     speed = float(tube.speed[:, 1].max())
     accel = float(tube.accel.max())
     yaw = float(np.abs(tube.yaw_rate).max())
