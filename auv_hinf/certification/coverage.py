@@ -198,6 +198,8 @@ def check_run(
     *,
     actuators: Actuators | None = None,
     start: str = "paper",
+    lazy_thrust: bool = False,
+    on_tube: Callable[[], object] = lambda: None,
 ) -> Coverage:
     """Coverage of the run that tracks ``fleet`` from ``initial`` (see the module docstring).
 
@@ -219,35 +221,18 @@ def check_run(
         What the vehicles can push; the run is covered only if its certified thrust fits.
     start : str
         Start mode recorded in the result.
-    """
-    return _check(cert, params, envelope, gains, fleet, initial, actuators, start)[0]
-
-
-def _check(
-    cert: ClosedLoopCertificate,
-    params: VehicleParams,
-    envelope: Envelope,
-    gains: Gains,
-    fleet: FleetReference,
-    initial: ArrayLike,
-    actuators: Actuators | None,
-    start: str,
-    *,
-    lazy_thrust: bool = False,
-    tick: Callable[[], object] = lambda: None,
-) -> tuple[Coverage, int | None]:
-    """:func:`check_run` and the cell count of its tubes (``None`` when none was built).
-
-    With ``lazy_thrust``, the thrust of a run whose margins already fail is not computed (its
-    ``thrust`` is ``None``): it cannot change the verdict (:func:`cover_start` computes it
-    only for the candidate it reports).
+    lazy_thrust : bool
+        Leave ``thrust`` as ``None`` when the margins already fail: it cannot change the verdict
+        (:func:`cover_start` computes it only for the candidate it reports).
+    on_tube : callable, optional
+        Called after each chunk of :data:`TUBE_CHUNK` vehicles' tubes (progress).
     """
     e, de, ep, dep = initial_errors(fleet, initial)
     p2, q = cert.region.p2, cert.region.q
     if (p2 is None and (np.any(e != 0) or np.any(de != 0))) or (q is None and (np.any(ep != 0) or np.any(dep != 0))):
         nan = ErrorBounds(math.inf, math.inf, math.inf, math.inf)
         why = "the certificate has no Lyapunov function for nonzero initial errors"
-        return Coverage(False, start, fleet, nan, None, None, None, None, why), None
+        return Coverage(False, start, fleet, nan, None, None, None, None, why)
     eye = np.eye(2)
     per = start_bounds(eye if p2 is None else p2, eye if q is None else q, e, de, ep, dep)
     bounds = ErrorBounds(*(float(x) for x in per.max(axis=0)))
@@ -255,12 +240,12 @@ def _check(
     tb, th = (None, None) if sh is None else (sh.blend_time, sh.th)
     if not bounds.heading < 0.5 * math.pi:
         why = f"heading error bound {bounds.heading:.4g} rad reaches pi/2"
-        return Coverage(False, start, fleet, bounds, None, None, tb, th, why), None
+        return Coverage(False, start, fleet, bounds, None, None, tb, th, why)
     try:
-        marg, cells = _fleet_margins(envelope, fleet, bounds, tick)
+        marg, cells = _fleet_margins(envelope, fleet, bounds, on_tube)
         thrust = None if lazy_thrust and not marg.ok else _fleet_thrust(params, envelope, gains, fleet, bounds, cells)
     except AuvHinfError as exc:
-        return Coverage(False, start, fleet, bounds, None, None, tb, th, str(exc)), None
+        return Coverage(False, start, fleet, bounds, None, None, tb, th, str(exc))
     if not marg.ok:
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
         unit = "rad/s" if worst.startswith("r") else "m/s"
@@ -274,7 +259,7 @@ def _check(
         reason = "not covered: " + actuator_shortfall(actuators, thrust.as_tuple())
     else:
         reason = "covered: start inside the certified invariant set, reference inside the envelope"
-    return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, tb, th, reason), cells
+    return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, tb, th, reason)
 
 
 def cover_start(
@@ -336,7 +321,7 @@ def cover_start(
     blends = BLEND_TIMES if blend_time is None else (float(blend_time),)
     order = [(tb, th) for tb in blends for th in ([t for t in TURN_TIMES if t <= tb] or [tb])]
     n_chunks = math.ceil(raw.offsets.shape[0] / TUBE_CHUNK)
-    best: tuple[Coverage, int | None] | None = None
+    best: Coverage | None = None
     desc = f"coverage of the start ({raw.offsets.shape[0]} vehicles, {len(order)} candidate blends)"
     with tqdm(total=len(order) * n_chunks, disable=not progress, delay=PROGRESS_DELAY, desc=desc, unit="tube") as bar:
         for i, (tb, th) in enumerate(order):
@@ -347,22 +332,31 @@ def cover_start(
                     False, start, raw, base.bounds, base.margins, base.thrust, None, None, f"no shaped start: {exc}"
                 )
             bar.update((i * n_chunks) - bar.n)  # a retry with finer cells ticks more than once per chunk
-            tried = _check(
-                cert, params, envelope, gains, fleet, initial, actuators, start, lazy_thrust=True, tick=lambda: bar.update(1)
+            cov = check_run(
+                cert,
+                params,
+                envelope,
+                gains,
+                fleet,
+                initial,
+                actuators=actuators,
+                start=start,
+                lazy_thrust=True,
+                on_tube=lambda: bar.update(1),
             )
-            if tried[0].covered:
+            if cov.covered:
                 bar.update(bar.total - bar.n)  # the search is over
-                return tried[0]
-            if best is None or _score(tried[0]) > _score(best[0]):
-                best = tried
+                return cov
+            if best is None or _score(cov) > _score(best):
+                best = cov
     assert best is not None
-    cov, cells = best
-    if cov.thrust is None and cells is not None:  # skipped while searching: computed as check_run would
-        cov = replace(cov, thrust=_fleet_thrust(params, envelope, gains, cov.reference, cov.bounds, cells))
+    if best.thrust is None and best.margins is not None:  # skipped while searching: computed as check_run would
+        cells = _fleet_margins(envelope, best.reference, best.bounds, lambda: None)[1]
+        best = replace(best, thrust=_fleet_thrust(params, envelope, gains, best.reference, best.bounds, cells))
     return replace(
-        cov,
+        best,
         reason="not covered: no candidate blend time covers this start; the best one: "
-        + cov.reason.removeprefix("not covered: "),
+        + best.reason.removeprefix("not covered: "),
     )
 
 

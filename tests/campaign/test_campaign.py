@@ -204,7 +204,9 @@ def test_the_dask_campaign_bar_moves_while_its_chunks_run(monkeypatch: pytest.Mo
     monkeypatch.setattr(tqdm, "tqdm", Recording)
     runs = 4
     with dask_client(workers=2) as client:
-        camp = run_campaign(preset_config("paper-triangle"), runs, seed=SEED, horizon=300.0, client=client, progress=True)
+        camp = run_campaign(
+            preset_config("paper-triangle"), runs, seed=SEED, horizon=300.0, client=client, progress=True
+        )
     assert len(camp.table) == runs and seen[-1] == runs
     assert all(b >= a for a, b in itertools.pairwise(seen))
     n_chunks = len(chunks(runs, camp.chunk))
