@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import time
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -144,7 +145,12 @@ def _balanced(size: int, runs: int, client: Any) -> int:
 
 
 def _execute(setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, progress: bool) -> list[pd.DataFrame]:
-    """Run the chunks in order (serially) or one Dask task per chunk, gathered in order."""
+    """Run the chunks in order (serially) or one Dask task per chunk, gathered in order.
+
+    The bar counts runs: a chunk moves it by its runs times the fraction of its samples
+    produced so far (:class:`ChunkProgress` on Dask), so it moves as the runs progress and
+    ends at the number of runs.
+    """
     from tqdm import tqdm
 
     total = ranges[-1][1] if ranges else 0
@@ -160,15 +166,45 @@ def _execute(setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, p
                 out.append(run_chunk(setup, lo, hi, progress=advance))
                 bar.update(start + (hi - lo) - bar.n)
             return out
-        from distributed import as_completed
-
         remote = client.scatter(setup, broadcast=True)
-        futures = [client.submit(run_chunk, remote, lo, hi, pure=False) for lo, hi in ranges]
-        sizes = {f.key: hi - lo for f, (lo, hi) in zip(futures, ranges)}
-        for fut in as_completed(futures):  # type: ignore[no-untyped-call]
-            bar.update(sizes[fut.key])
+        topic = f"auv-hinf-campaign-{uuid.uuid4().hex}"
+        futures = [
+            client.submit(run_chunk, remote, lo, hi, progress=ChunkProgress(topic, lo), pure=False) for lo, hi in ranges
+        ]
+        done = dict.fromkeys((lo for lo, _ in ranges), 0.0)  # fraction of each chunk's samples produced
+        while True:
+            for _, (lo, frac) in client.get_events(topic):
+                done[lo] = max(done[lo], float(frac))
+            finished = [f.done() for f in futures]
+            for (lo, _), fin in zip(ranges, finished):
+                done[lo] = 1.0 if fin else done[lo]
+            bar.update(sum(int(done[lo] * (hi - lo)) for lo, hi in ranges) - bar.n)
+            if all(finished):
+                break
+            time.sleep(PROGRESS_POLL)
         parts: list[pd.DataFrame] = client.gather(futures)
         return parts
+
+
+#: Seconds between two looks at the workers' progress events of a Dask campaign.
+PROGRESS_POLL = 0.2
+
+
+@dataclass(frozen=True)
+class ChunkProgress:
+    """``progress`` of :func:`run_chunk` on a Dask worker: each fraction becomes an event on ``topic``.
+
+    The client reads them (``Client.get_events``) and moves the bar as the chunk runs, as the
+    serial path does, instead of once per finished chunk.
+    """
+
+    topic: str
+    lo: int
+
+    def __call__(self, done: float) -> None:
+        from distributed import get_worker
+
+        get_worker().log_event(self.topic, (self.lo, float(done)))
 
 
 #: glibc allocator settings of local Dask workers (set before they start). Dask's default

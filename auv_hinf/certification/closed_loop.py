@@ -16,7 +16,6 @@ two vertices of ``c`` (heading, LMI bisection). The start region and its margins
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -31,7 +30,7 @@ from auv_hinf.design.lmi.lyapunov import lmi_heading_lyapunov, lmi_position_lyap
 from auv_hinf.exceptions import DesignError, SolverError, require_finite
 from auv_hinf.models.envelope import Envelope, abs_range
 from auv_hinf.models.reference import ReferenceTube
-from auv_hinf.models.vehicle import VehicleParams, body_block
+from auv_hinf.models.vehicle import VehicleParams
 
 #: Absolute width (1/s) at which the closed-form decay-rate bisection stops.
 DECAY_ATOL = 1e-12
@@ -289,17 +288,12 @@ def thrust_bounds(
     b_lo = np.minimum(b_env[0], b_hi)
     r_lo = np.clip(tube.yaw_rate[:, 0] - bounds.yaw_rate, envelope.r[0], envelope.r[1])
     r_hi = np.clip(tube.yaw_rate[:, 1] + bounds.yaw_rate, envelope.r[0], envelope.r[1])
-    corners = np.array(list(itertools.product((0, 1), repeat=3)))  # (8, 3): low/high of |u|, |v|, r
-    u = np.where(corners[:, 0], a_hi[:, None], a_lo[:, None])  # (K, 8)
-    v = np.where(corners[:, 1], b_hi[:, None], b_lo[:, None])
-    r = np.where(corners[:, 2], r_hi[:, None], r_lo[:, None])
     # |B R^T p_d'| row by row: R^T p_d' = S (cos d, sin d) with |d| <= |offset| + E_psi, and
     # each entry of B is affine in (|u|, |v|, r), so its modulus peaks at a vertex
     # (and, by Cauchy-Schwarz, by ||row|| S; each row takes the smaller of the two bounds)
-    blocks = body_block(params, u, v, r)  # (K, 8, 2, 2)
-    entries = np.abs(blocks).max(axis=1)  # (K, 2, 2)
+    entries, norms = _block_bounds(params, (a_lo, a_hi), (b_lo, b_hi), (r_lo, r_hi))  # (K, 2, 2), (K, 2)
     along = s_hi[:, None] * entries[:, :, 0] + (s_hi * np.sin(slip))[:, None] * entries[:, :, 1]  # (K, 2)
-    along = np.minimum(along, s_hi[:, None] * np.linalg.norm(blocks, axis=-1).max(axis=1))
+    along = np.minimum(along, s_hi[:, None] * norms)
     k_psi = gains.k_psi
     err = abs(gains.alpha) * bounds.velocity + abs(gains.k1) * bounds.position
     drift = along + tube.accel[:, None]
@@ -313,6 +307,31 @@ def thrust_bounds(
     moment = float(np.max(params.m33 * big_v + abs(params.m11 - params.m22) * a_hi * b_hi))
     k = 1.0 + BOUND_RTOL
     return ThrustBounds(k * float(fx), k * float(fy), k * moment)
+
+
+def _block_bounds(
+    params: VehicleParams,
+    u: tuple[FloatArray, FloatArray],
+    v: tuple[FloatArray, FloatArray],
+    r: tuple[FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray]:
+    """Largest entry moduli ``(K, 2, 2)`` and row norms ``(K, 2)`` (1/s) of :func:`body_block` over the box.
+
+    ``u``, ``v``: low and high ``|u|``, ``|v|`` (m/s); ``r``: low and high yaw rate (rad/s), each
+    of shape ``(K,)``. Entry ``(0, 0)`` depends on ``|u|`` only, ``(1, 1)`` on ``|v|`` only and
+    the off-diagonal ones on ``r`` only, so the maxima over the 8 vertices are maxima over two
+    values each, and a row norm ``sqrt(b0^2 + b1^2)`` peaks where both moduli do. The entries
+    are computed with the same operations as :func:`body_block`, so the result equals its
+    maximum over the vertices to the last bit.
+    """
+    m11, m22 = params.m11, params.m22
+    b00 = np.maximum(*(np.abs(-(params.damping(x, 0.0, 0.0)[0] / m11)) for x in u))
+    b11 = np.maximum(*(np.abs(-(params.damping(0.0, x, 0.0)[1] / m22)) for x in v))
+    b01 = np.maximum(*(np.abs(-x - (-m22 * x / m11)) for x in r))
+    b10 = np.maximum(*(np.abs(x - (m11 * x / m22)) for x in r))
+    entries = np.stack([np.stack([b00, b01], -1), np.stack([b10, b11], -1)], -2)
+    norms: FloatArray = np.sqrt(entries[..., 0] * entries[..., 0] + entries[..., 1] * entries[..., 1])
+    return entries, norms
 
 
 @dataclass(frozen=True)

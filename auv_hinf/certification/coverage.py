@@ -20,12 +20,13 @@ times in order of increasing blend time and keeps the first one that is covered.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
+from tqdm.auto import tqdm
 
 from auv_hinf._typing import FloatArray, FormationFrame
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, ThrustBounds, thrust_bounds
@@ -36,7 +37,7 @@ from auv_hinf.exceptions import AuvHinfError, ParameterError
 from auv_hinf.models.actuators import Actuators, actuator_shortfall
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.paths import MissionReference
-from auv_hinf.models.reference import FleetReference, shaped_start, wrap_angle
+from auv_hinf.models.reference import FleetReference, ReferenceTube, shaped_start, wrap_angle
 from auv_hinf.models.tubes import MAX_CELLS, default_cells, shaped_tube
 from auv_hinf.models.vehicle import VehicleParams
 
@@ -49,6 +50,9 @@ TURN_TIMES: tuple[float, ...] = (20.0, 40.0, 60.0)
 #: Vehicles whose tubes are built at once: bounds the memory of the cell arrays
 #: (about 25,000 cells per vehicle for a 100 s blend).
 TUBE_CHUNK = 16
+#: Seconds the blend-time search runs before its progress bar appears (tqdm ``delay``): a
+#: search that ends sooner, as every start near its slots does, prints nothing.
+PROGRESS_DELAY = 2.0
 
 
 @dataclass(frozen=True)
@@ -147,32 +151,41 @@ def _chunks(fleet: FleetReference) -> Iterable[FleetReference]:
         yield FleetReference(fleet.mission, fleet.offsets[sl], part, fleet.frame)
 
 
-def _chunked_margins(
-    params: VehicleParams,
-    envelope: Envelope,
-    gains: Gains,
-    fleet: FleetReference,
-    bounds: ErrorBounds,
-) -> tuple[list[Margins], list[ThrustBounds]]:
-    """Margins and thrust bounds of ``fleet``, :data:`TUBE_CHUNK` vehicles at a time, on one time grid.
+def _fleet_margins(
+    envelope: Envelope, fleet: FleetReference, bounds: ErrorBounds, tick: Callable[[], object]
+) -> tuple[Margins, int]:
+    """Margins of ``fleet``, :data:`TUBE_CHUNK` vehicles at a time, on one time grid, and its cell count.
 
     The cell count is chosen once for the whole fleet (:func:`~auv_hinf.models.tubes.default_cells`)
     so that the result does not depend on the chunking; it is multiplied by 4 (up to
-    :data:`~auv_hinf.models.tubes.MAX_CELLS`) while some cell's speed cannot be bounded away from zero.
+    :data:`~auv_hinf.models.tubes.MAX_CELLS`) while some cell's speed cannot be bounded away from
+    zero. ``tick`` is called after every chunk.
     """
     cells = default_cells(fleet)
     while True:
         try:
-            margins, thrusts = [], []
+            parts = []
             for part in _chunks(fleet):
-                tube = shaped_tube(part, cells=cells if part.shaping is not None else None)
-                margins.append(envelope_margins(tube, bounds, envelope))
-                thrusts.append(thrust_bounds(params, inflate_envelope(envelope), tube, bounds, gains))
-            return margins, thrusts
+                parts.append(envelope_margins(_tube(part, cells), bounds, envelope))
+                tick()
+            return _merge_margins(parts), cells
         except ParameterError:
             if cells >= MAX_CELLS:
                 raise
             cells = min(MAX_CELLS, 4 * cells)
+
+
+def _fleet_thrust(
+    params: VehicleParams, envelope: Envelope, gains: Gains, fleet: FleetReference, bounds: ErrorBounds, cells: int
+) -> ThrustBounds:
+    """Thrust bounds of ``fleet`` on the grid of ``cells`` cells that :func:`_fleet_margins` settled on."""
+    env = inflate_envelope(envelope)
+    parts = [thrust_bounds(params, env, _tube(part, cells), bounds, gains) for part in _chunks(fleet)]
+    return ThrustBounds(*(max(getattr(t, f) for t in parts) for f in ("force_x", "force_y", "moment")))
+
+
+def _tube(part: FleetReference, cells: int) -> ReferenceTube:
+    return shaped_tube(part, cells=cells if part.shaping is not None else None)
 
 
 def check_run(
@@ -185,6 +198,8 @@ def check_run(
     *,
     actuators: Actuators | None = None,
     start: str = "paper",
+    lazy_thrust: bool = False,
+    on_tube: Callable[[], object] = lambda: None,
 ) -> Coverage:
     """Coverage of the run that tracks ``fleet`` from ``initial`` (see the module docstring).
 
@@ -206,45 +221,31 @@ def check_run(
         What the vehicles can push; the run is covered only if its certified thrust fits.
     start : str
         Start mode recorded in the result.
+    lazy_thrust : bool
+        Leave ``thrust`` as ``None`` when the margins already fail: it cannot change the verdict
+        (:func:`cover_start` computes it only for the candidate it reports).
+    on_tube : callable, optional
+        Called after each chunk of :data:`TUBE_CHUNK` vehicles' tubes (progress).
     """
     e, de, ep, dep = initial_errors(fleet, initial)
     p2, q = cert.region.p2, cert.region.q
     if (p2 is None and (np.any(e != 0) or np.any(de != 0))) or (q is None and (np.any(ep != 0) or np.any(dep != 0))):
         nan = ErrorBounds(math.inf, math.inf, math.inf, math.inf)
-        return Coverage(
-            False,
-            start,
-            fleet,
-            nan,
-            None,
-            None,
-            None,
-            None,
-            "the certificate has no Lyapunov function for nonzero initial errors",
-        )
+        why = "the certificate has no Lyapunov function for nonzero initial errors"
+        return Coverage(False, start, fleet, nan, None, None, None, None, why)
     eye = np.eye(2)
     per = start_bounds(eye if p2 is None else p2, eye if q is None else q, e, de, ep, dep)
     bounds = ErrorBounds(*(float(x) for x in per.max(axis=0)))
     sh = fleet.shaping
     tb, th = (None, None) if sh is None else (sh.blend_time, sh.th)
     if not bounds.heading < 0.5 * math.pi:
-        return Coverage(
-            False,
-            start,
-            fleet,
-            bounds,
-            None,
-            None,
-            tb,
-            th,
-            f"heading error bound {bounds.heading:.4g} rad reaches pi/2",
-        )
+        why = f"heading error bound {bounds.heading:.4g} rad reaches pi/2"
+        return Coverage(False, start, fleet, bounds, None, None, tb, th, why)
     try:
-        margins, thrusts = _chunked_margins(params, envelope, gains, fleet, bounds)
+        marg, cells = _fleet_margins(envelope, fleet, bounds, on_tube)
+        thrust = None if lazy_thrust and not marg.ok else _fleet_thrust(params, envelope, gains, fleet, bounds, cells)
     except AuvHinfError as exc:
         return Coverage(False, start, fleet, bounds, None, None, tb, th, str(exc))
-    marg = _merge_margins(margins)
-    thrust = ThrustBounds(*(max(getattr(t, f) for t in thrusts) for f in ("force_x", "force_y", "moment")))
     if not marg.ok:
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
         unit = "rad/s" if worst.startswith("r") else "m/s"
@@ -254,7 +255,7 @@ def check_run(
             f"not covered: the {channel} speed would cross the envelope's {side} edge "
             f"(certified margin {getattr(marg, worst):.4g} {unit} < 0)"
         )
-    elif actuators is not None and not actuators.admits(thrust.as_tuple()):
+    elif actuators is not None and thrust is not None and not actuators.admits(thrust.as_tuple()):
         reason = "not covered: " + actuator_shortfall(actuators, thrust.as_tuple())
     else:
         reason = "covered: start inside the certified invariant set, reference inside the envelope"
@@ -275,6 +276,7 @@ def cover_start(
     actuators: Actuators | None = None,
     current: tuple[float, float] = (0.0, 0.0),
     frame: FormationFrame = "inertial",
+    progress: bool = False,
 ) -> Coverage:
     """Choose the reference for a run and decide whether the certificate covers it.
 
@@ -300,12 +302,15 @@ def cover_start(
         robust certificate (:mod:`auv_hinf.robust.summary`).
     frame : {"inertial", "path"}
         Frame of the offsets (:class:`~auv_hinf.models.reference.FleetReference`).
+    progress : bool
+        Show a tqdm bar (stderr) over the candidates' tubes once the search has taken
+        :data:`PROGRESS_DELAY` s.
 
     Returns
     -------
     Coverage
-        For ``"shaped"``, the first covered candidate; when none is covered, the raw start's
-        verdict with the reason of the last candidate tried.
+        For ``"shaped"``, the first covered candidate; when none is covered, the candidate
+        with the largest smallest margin (the first of equals), its reason prefixed.
     """
     if start not in ("shaped", "paper"):
         raise ParameterError(f"start must be 'shaped' or 'paper', got {start!r}")
@@ -314,31 +319,43 @@ def cover_start(
     if start == "paper" or base.covered:
         return base
     blends = BLEND_TIMES if blend_time is None else (float(blend_time),)
+    order = [(tb, th) for tb in blends for th in ([t for t in TURN_TIMES if t <= tb] or [tb])]
+    n_chunks = math.ceil(raw.offsets.shape[0] / TUBE_CHUNK)
     best: Coverage | None = None
-    for tb in blends:
-        for th in [t for t in TURN_TIMES if t <= tb] or [tb]:
+    desc = f"coverage of the start ({raw.offsets.shape[0]} vehicles, {len(order)} candidate blends)"
+    with tqdm(total=len(order) * n_chunks, disable=not progress, delay=PROGRESS_DELAY, desc=desc, unit="tube") as bar:
+        for i, (tb, th) in enumerate(order):
             try:
                 fleet = shaped_start(mission, offsets, initial, tb, turn_time=th, current=current, frame=frame)
             except AuvHinfError as exc:
                 return Coverage(
                     False, start, raw, base.bounds, base.margins, base.thrust, None, None, f"no shaped start: {exc}"
                 )
-            cov = check_run(cert, params, envelope, gains, fleet, initial, actuators=actuators, start=start)
+            bar.update((i * n_chunks) - bar.n)  # a retry with finer cells ticks more than once per chunk
+            cov = check_run(
+                cert,
+                params,
+                envelope,
+                gains,
+                fleet,
+                initial,
+                actuators=actuators,
+                start=start,
+                lazy_thrust=True,
+                on_tube=lambda: bar.update(1),
+            )
             if cov.covered:
+                bar.update(bar.total - bar.n)  # the search is over
                 return cov
             if best is None or _score(cov) > _score(best):
                 best = cov
     assert best is not None
-    return Coverage(
-        False,
-        start,
-        best.reference,
-        best.bounds,
-        best.margins,
-        best.thrust,
-        best.blend_time,
-        best.turn_time,
-        "not covered: no candidate blend time covers this start; the best one: "
+    if best.thrust is None and best.margins is not None:  # skipped while searching: computed as check_run would
+        cells = _fleet_margins(envelope, best.reference, best.bounds, lambda: None)[1]
+        best = replace(best, thrust=_fleet_thrust(params, envelope, gains, best.reference, best.bounds, cells))
+    return replace(
+        best,
+        reason="not covered: no candidate blend time covers this start; the best one: "
         + best.reason.removeprefix("not covered: "),
     )
 

@@ -13,8 +13,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from tqdm.auto import tqdm
-
 from auv_hinf._typing import FloatArray
 from auv_hinf.certification.actuation import mission_thrust, within_actuators
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
@@ -66,8 +64,14 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
     return fitted
 
 
-def coverage_for(point: DesignPoint, cert: ClosedLoopCertificate, initial: FloatArray, start: StartMode) -> Coverage:
-    """Coverage of the run of the design's configuration from ``initial`` in ``start`` mode (nominal plant)."""
+def coverage_for(
+    point: DesignPoint, cert: ClosedLoopCertificate, initial: FloatArray, start: StartMode, *, progress: bool = True
+) -> Coverage:
+    """Coverage of the run of the design's configuration from ``initial`` in ``start`` mode (nominal plant).
+
+    With ``progress``, a search over blend times that runs longer than
+    :data:`~auv_hinf.certification.coverage.PROGRESS_DELAY` shows a progress bar (stderr).
+    """
     cfg = point.config
     return cover_start(
         cert,
@@ -82,6 +86,7 @@ def coverage_for(point: DesignPoint, cert: ClosedLoopCertificate, initial: Float
         blend_time=cfg.simulation.blend_time,
         actuators=cfg.actuators,
         current=cfg.simulation.current,
+        progress=progress,
     )
 
 
@@ -197,15 +202,15 @@ class ClosedLoopSummary:
         }
 
 
-def closed_loop_summary(point: DesignPoint, *, progress_min_n: int = 16) -> ClosedLoopSummary:
+def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
     """Certify the closed loop of the design point along its mission and check its configured start.
 
     The start ``simulate`` will run is checked, whatever the fleet size: a declared start
     (``simulation.initial``) enters the verdict; the default start is the fleet on its slots
     (:func:`~auv_hinf.workflow.design_point.initial_states`), at zero error, so the raw mission
     covers it without a blend and the check costs one tube. A declared start far from the
-    slots builds per-vehicle tubes for every candidate blend time it tries (about 0.1-1 s per
-    vehicle); above ``progress_min_n`` vehicles a progress bar is shown.
+    slots builds per-vehicle tubes for the candidate blend times it tries, with a progress bar
+    when that takes more than a few seconds (:func:`coverage_for`).
     """
     cfg = point.config
     reasons: list[str] = []
@@ -217,14 +222,7 @@ def closed_loop_summary(point: DesignPoint, *, progress_min_n: int = 16) -> Clos
         )
     declared = cfg.simulation.initial is not None
     try:
-        with tqdm(
-            total=1,
-            disable=cfg.n <= progress_min_n,
-            unit="start",
-            desc=f"checking the {'declared' if declared else 'default'} start of {cfg.n} vehicles",
-        ) as bar:
-            shaped: Coverage | None = coverage_for(point, cert, initial_states(point), "shaped")
-            bar.update(1)
+        shaped: Coverage | None = coverage_for(point, cert, initial_states(point), "shaped")
     except AuvHinfError as exc:
         shaped = None
         if declared:

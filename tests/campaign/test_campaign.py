@@ -183,3 +183,33 @@ def test_a_chunk_reports_its_progress_as_it_runs() -> None:
     assert len(table) == 3
     assert 50 <= len(seen) <= 101 and all(b >= a + 0.01 for a, b in itertools.pairwise(seen))
     assert 0.0 < seen[0] <= 0.02 and 0.99 <= seen[-1] <= 1.0
+
+
+@pytest.mark.slow
+def test_the_dask_campaign_bar_moves_while_its_chunks_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """On Dask the bar follows the workers' progress events, not only the finished chunks, and ends at the runs."""
+    pytest.importorskip("distributed")
+    import tqdm
+
+    from auv_hinf.campaign.runner import dask_client
+
+    seen: list[int] = []
+
+    class Recording(tqdm.tqdm):  # type: ignore[misc]
+        def update(self, n: float | None = 1) -> bool | None:
+            out = super().update(n)
+            seen.append(int(self.n))
+            return out
+
+    monkeypatch.setattr(tqdm, "tqdm", Recording)
+    runs = 4
+    with dask_client(workers=2) as client:
+        camp = run_campaign(
+            preset_config("paper-triangle"), runs, seed=SEED, horizon=300.0, client=client, progress=True
+        )
+    assert len(camp.table) == runs and seen[-1] == runs
+    assert all(b >= a for a, b in itertools.pairwise(seen))
+    n_chunks = len(chunks(runs, camp.chunk))
+    # a run counted before its chunk finished: a position other than a sum of whole chunks
+    whole = {sum(hi - lo for lo, hi in chunks(runs, camp.chunk)[:k]) for k in range(n_chunks + 1)}
+    assert set(seen) - whole or camp.chunk == 1, (seen, camp.chunk)

@@ -472,3 +472,22 @@ def test_pair_level_is_the_kronecker_quadratic_form(rng: np.random.Generator) ->
     np.testing.assert_allclose(
         pair_level(m, h, dh), np.einsum("si,ij,sj->s", np.c_[h, dh], m, np.c_[h, dh]), rtol=1e-13
     )
+
+
+def test_block_bounds_equal_the_body_block_over_the_box_vertices() -> None:
+    """The entry and row-norm bounds of the thrust are the maxima of ``body_block`` over the 8 vertices, bit for bit."""
+    import itertools
+
+    from auv_hinf.certification.closed_loop import _block_bounds
+    from auv_hinf.models.vehicle import remus100
+
+    rng = np.random.default_rng(11)
+    for params in (paper2011(), remus100()):
+        k = 257
+        u, v = np.sort(rng.uniform(0.0, 2.5, (2, k)), axis=0), np.sort(rng.uniform(0.0, 0.8, (2, k)), axis=0)
+        r = np.sort(rng.uniform(-0.4, 0.4, (2, k)), axis=0)
+        corners = np.array(list(itertools.product((0, 1), repeat=3)))
+        blocks = body_block(params, u[corners[:, 0]].T, v[corners[:, 1]].T, r[corners[:, 2]].T)  # (K, 8, 2, 2)
+        entries, norms = _block_bounds(params, (u[0], u[1]), (v[0], v[1]), (r[0], r[1]))
+        np.testing.assert_array_equal(entries, np.abs(blocks).max(axis=1))
+        np.testing.assert_array_equal(norms, np.linalg.norm(blocks, axis=-1).max(axis=1))

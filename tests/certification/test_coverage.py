@@ -275,3 +275,42 @@ def test_chunked_fleet_margins_agree_to_tube_resolution(tri, monkeypatch):
 def test_chunked_fleet_gives_unchunked_margins(tri, monkeypatch):
     _, chunked, whole = chunked_and_whole(tri, monkeypatch)
     assert chunked.margins == whole.margins and chunked.thrust == whole.thrust
+
+
+def search_as_before(setup: Setup, x: np.ndarray):
+    """The blend-time search as it was written before the lazy thrust: every candidate checked in full, in order."""
+    base = setup.check(x, start="shaped")
+    if base.covered:
+        return base
+    best = None
+    for tb in BLEND_TIMES:
+        for th in [t for t in TURN_TIMES if t <= tb] or [tb]:
+            fleet = shaped_start(setup.fleet.mission, setup.fleet.offsets, x, tb, turn_time=th)
+            cov = setup.check(x, fleet=fleet, start="shaped")
+            if cov.covered:
+                return cov
+            if best is None or (cov.margins.min if cov.margins else -math.inf) > (
+                best.margins.min if best.margins else -math.inf
+            ):
+                best = cov
+    return best
+
+
+def assert_same_search(setup: Setup, x: np.ndarray) -> None:
+    new, old = setup.cover(x, start="shaped"), search_as_before(setup, x)
+    assert (new.covered, new.blend_time, new.turn_time) == (old.covered, old.blend_time, old.turn_time)
+    assert new.bounds == old.bounds and new.margins == old.margins and new.thrust == old.thrust
+    assert new.thrust is not None
+    assert new.reason.endswith(old.reason.removeprefix("not covered: "))
+
+
+def test_search_gives_the_verdict_blend_margins_and_thrust_of_the_full_search(tri):
+    x = far_start(tri, np.random.default_rng(4), dist=25.0)
+    assert_same_search(tri, x)
+
+
+@pytest.mark.slow
+def test_search_of_an_uncovered_start_reports_the_full_search_best_candidate(tri):
+    x = far_start(tri, np.random.default_rng(1), dist=150.0)
+    assert not tri.cover(x, start="shaped").covered
+    assert_same_search(tri, x)
