@@ -58,6 +58,23 @@ class LagDisturbance:
     body_rates: tuple[float, float, float]
 
 
+def operating_box(envelope: Envelope, tube: ReferenceTube, bounds: ErrorBounds) -> tuple[float, float, float]:
+    """Bounds of ``|u|, |v|`` (m/s) and ``|r|`` (rad/s) while the errors stay within ``bounds``.
+
+    The body velocity is the desired one (speed ``S``, pointing along the desired heading up to
+    the tube's heading offset) plus the velocity error, and the yaw rate the desired one plus its
+    error (as in :func:`~auv_hinf.certification.closed_loop.thrust_bounds`), each capped by the envelope.
+    """
+    u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
+    speed = float(tube.speed[:, 1].max())
+    slip = min(0.5 * math.pi, float(np.abs(tube.offset).max()) + bounds.heading)
+    return (
+        min(u_hi, speed + bounds.velocity),
+        min(v_hi, speed * math.sin(slip) + bounds.velocity),
+        min(r_hi, float(np.abs(tube.yaw_rate).max()) + bounds.yaw_rate),
+    )
+
+
 def block_slopes(params: VehicleParams) -> tuple[float, float, float]:
     """Spectral norms of ``dB/d|u|``, ``dB/d|v|``, ``dB/dr`` (``B`` is affine in them), 1/m and 1."""
     base = body_block(params, 0.0, 0.0, 0.0)
@@ -114,16 +131,13 @@ def body_rates(
     )
     # the state the vehicle can be in: desired motion widened by the error bounds, inside the envelope
     speed = float(tube.speed[:, 1].max())
-    slip = min(0.5 * math.pi, float(np.abs(tube.offset).max()) + bounds.heading)
     yaw = float(np.abs(tube.yaw_rate).max())
-    u_in = min(u_hi, speed + bounds.velocity)
-    v_in = min(v_hi, speed * math.sin(slip) + bounds.velocity)
-    r_in = min(r_hi, yaw + bounds.yaw_rate)
+    u_in, v_in, r_in = operating_box(envelope, tube, bounds)
     b_u, b_v, b_r = block_slopes(params)
     k1p, k2p = gains.k_psi
     p_acc = float(tube.accel.max()) + (abs(lam) + sigma + gains.alpha) * bounds.velocity + gains.k1 * bounds.position
-    c_hi = abs(k2p) + float(params.damping(0.0, 0.0, r_hi)[2]) / m33
-    ground_noise = n.velocity + math.hypot(u_hi, v_hi) * n.heading
+    c_hi = abs(k2p) + float(params.damping(0.0, 0.0, r_in)[2]) / m33
+    ground_noise = n.velocity + math.hypot(u_in, v_in) * n.heading
     f_acc = math.hypot(force.force_x / m11, force.force_y / m22)
     xy_noise = (
         gains.alpha * ground_noise
@@ -136,7 +150,7 @@ def body_rates(
         abs(k1p) * n.heading
         + abs(k2p) * n.yaw_rate
         + d33_slope * n.yaw_rate * yaw / m33
-        + abs(m11 - m22) * ((u_hi + v_hi) * n.velocity + n.velocity**2) / m33
+        + abs(m11 - m22) * ((u_in + v_in) * n.velocity + n.velocity**2) / m33
     )
     a0 = np.array(
         [
@@ -146,6 +160,7 @@ def body_rates(
         ]
     )
     d_lin = [float(x) for x in params.damping(0.0, 0.0, 0.0)]
+    d11_in, d22_in, d33_in = (float(x) for x in params.damping(u_in, v_in, r_in))
     slopes = (
         float(params.damping(1.0, 0.0, 0.0)[0]) - d_lin[0],
         float(params.damping(0.0, 1.0, 0.0)[1]) - d_lin[1],
@@ -154,9 +169,9 @@ def body_rates(
     # |dg/dnu| entrywise over the envelope; d(d(u) u)/du = d_lin + 2 d_quad |u|
     lip = np.array(
         [
-            [(d11 + slopes[0] * u_hi) / m11, m22 * r_hi / m11, m22 * v_hi / m11],
-            [m11 * r_hi / m22, (d22 + slopes[1] * v_hi) / m22, m11 * u_hi / m22],
-            [abs(m22 - m11) * v_hi / m33, abs(m22 - m11) * u_hi / m33, (d33 + slopes[2] * r_hi) / m33],
+            [(d11_in + slopes[0] * u_in) / m11, m22 * r_in / m11, m22 * v_in / m11],
+            [m11 * r_in / m22, (d22_in + slopes[1] * v_in) / m22, m11 * u_in / m22],
+            [abs(m22 - m11) * v_in / m33, abs(m22 - m11) * u_in / m33, (d33_in + slopes[2] * r_in) / m33],
         ]
     )
     # comparison matrix of sym(J): the least negative diagonal (-d_lin/m) and the largest off-diagonal moduli
@@ -247,14 +262,23 @@ def lag_disturbance(
     """
     lag, n = implementation.max_lag, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
-    u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
+    _u_hi, _v_hi, _r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
     b_u, b_v, b_r = block_slopes(params)
     lag_sigma = float(tube.speed[:, 1].max()) * math.hypot(b_u, b_v) if lag_channel else 0.0
     u_rate, v_rate, r_rate = body_rates(
-        params, envelope, tube, gains, implementation, lam=lam, sigma=sigma, bounds=bounds, force=force,
-        disturbance=previous, lag_sigma=lag_sigma,
+        params,
+        envelope,
+        tube,
+        gains,
+        implementation,
+        lam=lam,
+        sigma=sigma,
+        bounds=bounds,
+        force=force,
+        disturbance=previous,
+        lag_sigma=lag_sigma,
     )
-    r_in = min(r_hi, float(np.abs(tube.yaw_rate).max()) + bounds.yaw_rate)
+    u_in, v_in, r_in = operating_box(envelope, tube, bounds)
     # change of each state between the measurement and now, noise included
     d_psi = r_in * lag + n.heading
     d_u, d_v, d_r = u_rate * lag + n.velocity, v_rate * lag + n.velocity, r_rate * lag + n.yaw_rate
@@ -269,7 +293,7 @@ def lag_disturbance(
         drift_change = math.hypot(b_u, b_v) * (accel * lag + r_in * lag * (speed + bounds.velocity) + n.velocity)
     else:
         drift_change = b_u * d_u + b_v * d_v
-    ground_noise = n.velocity + math.hypot(u_hi, v_hi) * n.heading  # |R(psi_y) nu_y - R(psi) nu|
+    ground_noise = n.velocity + math.hypot(u_in, v_in) * n.heading  # |R(psi_y) nu_y - R(psi) nu|
     g_measured = abs(lam) + sigma + (b_u + b_v) * n.velocity + b_r * n.yaw_rate
     position = (
         gains.alpha * ground_noise
@@ -279,16 +303,16 @@ def lag_disturbance(
         + g_measured * accel * lag
         + d_psi * math.hypot(force.force_x / m11, force.force_y / m22)
     )
-    d33_y = float(params.damping(0.0, 0.0, r_hi + n.yaw_rate)[2])
+    d33_y = float(params.damping(0.0, 0.0, r_in + n.yaw_rate)[2])
     d33_quad = float(params.damping(0.0, 0.0, 1.0)[2]) - float(params.damping(0.0, 0.0, 0.0)[2])
     heading = (
         abs(gains.k_psi[0]) * n.heading
         + abs(gains.k_psi[1]) * n.yaw_rate
         + min(2.0 * yaw_accel, yaw_jerk * lag if lag > 0 else 0.0)
         + (abs(d33_quad) * d_r * yaw + d33_y * yaw_accel * lag) / m33
-        + abs(m11 - m22) * ((v_hi + n.velocity) * d_u + u_hi * d_v) / m33
+        + abs(m11 - m22) * ((v_in + n.velocity) * d_u + u_in * d_v) / m33
     )
     return LagDisturbance(position=position, heading=heading, body_rates=(u_rate, v_rate, r_rate))
 
 
-__all__ = ["LagDisturbance", "body_rates", "course_jerk_bound", "lag_disturbance"]
+__all__ = ["LagDisturbance", "block_slopes", "body_rates", "course_jerk_bound", "lag_disturbance", "operating_box"]
