@@ -131,12 +131,19 @@ def build_results(
     states: FloatArray,
     exit_times: Sequence[float | None],
     n_steps: Sequence[int],
+    *,
+    commanded: FloatArray | None = None,
+    peaks: FloatArray | None = None,
 ) -> list[SimulationResult]:
     """Post-process ``S`` scenarios sampled as ``states (T, S, N, 6)`` at times ``t (T,)``.
 
     Scenarios that share their reference, mission, law and Jacobi convention (a campaign's
     chunk) are processed together in whole-array calls, with the desired motion evaluated
     once; the others one at a time. Each result holds views of the batched arrays.
+
+    ``commanded (T, S, N, 3)`` is the law's output before saturation at the samples (N, N, N m)
+    when it is not the law at the sampled state (a sampled implementation holds it), and
+    ``peaks (S, 3)`` its peak per channel when that was taken over more instants than ``t``.
     """
     first = scns[0]
     shared = all(
@@ -145,14 +152,25 @@ def build_results(
     shared = shared and all(x.law == first.law for x in scns)
     if not shared and len(scns) > 1:
         return [
-            build_results((x,), t, states[:, k : k + 1], [exit_times[k]], [n_steps[k]])[0] for k, x in enumerate(scns)
+            build_results(
+                (x,),
+                t,
+                states[:, k : k + 1],
+                [exit_times[k]],
+                [n_steps[k]],
+                commanded=None if commanded is None else commanded[:, k : k + 1],
+                peaks=None if peaks is None else peaks[k : k + 1],
+            )[0]
+            for k, x in enumerate(scns)
         ]
     current = np.array([x.current for x in scns], dtype=float)[None, :, None, :]  # (1, S, 1, 2)
     p_dot = ground_velocity(states, current)
     motion = _expand(first.reference.motion(t))
-    commanded = first.law.unsaturated(states, p_dot, motion)
+    if commanded is None:
+        commanded = first.law.unsaturated(states, p_dot, motion)
     forces, active = saturate(commanded, first.law.actuators)
-    peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
+    if peaks is None:
+        peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
     target = motion.p if first.mission is None else first.mission.motion(t).p[:, None]
     form = formation_errors(states[..., 0:2], target, first.jacobi)
     track = tracking_errors(states, p_dot, motion)
