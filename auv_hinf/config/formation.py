@@ -30,9 +30,9 @@ from auv_hinf.config.schema import (
 from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError
 from auv_hinf.models.actuators import VEHICLE_ACTUATORS, Actuators, vehicle_actuators
-from auv_hinf.models.implementation import Implementation, MeasurementNoise
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.implementation import Implementation, MeasurementNoise
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
 from auv_hinf.models.vehicle import VehicleParams
 

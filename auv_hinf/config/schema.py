@@ -309,7 +309,9 @@ class NoiseTable(_Table):
 class ImplementationTable(_Table):
     """``[implementation]``: the controller as it runs (default: continuous, undelayed, exact)."""
 
-    sample_time: float = _field(0.0, "control period, forces held between samples (0: continuous)", "s", ge=0.0, le=60.0)
+    sample_time: float = _field(
+        0.0, "control period, forces held between samples (0: continuous)", "s", ge=0.0, le=60.0
+    )
     delay: float = _field(0.0, "lumped input + measurement delay", "s", ge=0.0, le=60.0)
     varying_delay: bool = _field(False, "false: every sample late by exactly delay; true: by any value in [0, delay]")
     noise: NoiseTable = Field(default_factory=NoiseTable, description="bounds of the measurement errors")
