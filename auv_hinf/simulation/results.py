@@ -53,8 +53,12 @@ class SimulationResult:
         Accepted integration steps (the largest over the scenario's systems).
     scenario : Scenario
     commanded_peak : tuple of float
-        Largest ``|tau_x|, |tau_y|, |tau_psi|`` the law commanded at the output samples,
-        before saturation (N, N, N m), over all vehicles.
+        Largest ``|tau_x|, |tau_y|, |tau_psi|`` the law commanded at the output samples (at
+        every control sample for a sampled implementation), before saturation (N, N, N m),
+        over all vehicles.
+    diverged_at : float or None
+        When a sampled run was stopped as diverged (s; see
+        :data:`~auv_hinf.simulation.sampled_loop.DIVERGED_RATE`); None if it was not.
     """
 
     t: FloatArray
@@ -72,6 +76,7 @@ class SimulationResult:
     n_steps: int
     scenario: Scenario = field(repr=False)
     commanded_peak: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    diverged_at: float | None = None
 
     def error_at(self, time: float) -> tuple[float, float]:
         """Shape and centre error (m) at the sample nearest to ``time`` (s)."""
@@ -106,6 +111,7 @@ class SimulationResult:
             "actuator_limits": None if self.scenario.law.actuators is None else self.scenario.law.actuators.to_dict(),
             "stayed_in_envelope": stayed,
             "first_exit_time": exit_time,
+            "diverged_at": self.diverged_at,
         }
 
     def save_npz(self, path: str | Path) -> None:

@@ -10,6 +10,7 @@ continuous; :mod:`auv_hinf.simulation.sampled_loop` says how it is integrated.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.simulation.integrators import SampleSink
@@ -54,7 +55,7 @@ def simulate_sampled_batch(batch: ScenarioBatch) -> list[SimulationResult]:
     assert sol.y is not None and sol.commanded is not None
     states = sol.y.reshape(sol.t.size, n_s, n, 6)
     exits = [None if math.isnan(e) else float(e) for e in sol.event_time]
-    return build_results(
+    results = build_results(
         batch.scenarios,
         sol.t,
         states,
@@ -63,6 +64,8 @@ def simulate_sampled_batch(batch: ScenarioBatch) -> list[SimulationResult]:
         commanded=sol.commanded,
         peaks=sol.commanded_peak,
     )
+    gone = sol.diverged
+    return [r if math.isnan(g) else replace(r, diverged_at=float(g)) for r, g in zip(results, gone)]
 
 
 __all__ = ["integrate_sampled", "simulate_sampled_batch"]

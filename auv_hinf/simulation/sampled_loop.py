@@ -111,11 +111,11 @@ class SampledSolution:
         Largest ``|tau_x|, |tau_y|, |tau_psi|`` commanded at any sample (N, N, N m).
     saturated_fraction : ndarray, shape (S,)
         Fraction of the samples at which some vehicle's command saturates.
+    diverged : ndarray, shape (S,)
+        When each run was stopped as diverged (s, :data:`DIVERGED_RATE`); NaN if it was not.
     period : float
         Control period (s).
     trace : SampleTrace or None
-    diverged : ndarray, shape (S,)
-        When each run was stopped as diverged (s, :data:`DIVERGED_RATE`); NaN if it was not.
     """
 
     t: FloatArray
@@ -125,9 +125,9 @@ class SampledSolution:
     n_steps: NDArray[np.int_]
     commanded_peak: FloatArray
     saturated_fraction: FloatArray
+    diverged: FloatArray
     period: float
     trace: SampleTrace | None = None
-    diverged: FloatArray | None = None
 
 
 class SampledLoop:
