@@ -228,8 +228,8 @@ def dopri5(
         storing them: memory stays ``O(B d)`` for any number of samples, and the solution's
         ``y`` is None.
     first_step : ndarray, shape (B,), optional
-        Starting step sizes (s, > 0), e.g. a previous call's ``next_step``; default: Hairer's
-        estimate.
+        Starting step sizes (s, > 0), e.g. a previous call's ``next_step``; default (and where
+        NaN): Hairer's estimate.
 
     Raises
     ------
@@ -250,7 +250,11 @@ def dopri5(
     f = rhs(t, y)
     if not np.all(np.isfinite(f)):
         raise SolverError("non-finite derivative at the initial state")
-    h = _initial_step(rhs, t0, t1, y, f, rtol, atol) if first_step is None else np.minimum(first_step, t1 - t0)
+    if first_step is None or np.isnan(first_step).any():  # estimated per system: NaN asks for the estimate
+        h = _initial_step(rhs, t0, t1, y, f, rtol, atol)
+        h = h if first_step is None else np.where(np.isnan(first_step), h, np.minimum(first_step, t1 - t0))
+    else:
+        h = np.minimum(first_step, t1 - t0)
     if not np.all(np.isfinite(h) & (h > 0)):
         raise SolverError("no finite initial step: the derivative is not finite near the initial state")
     event_time = np.full(n_sys, np.nan)

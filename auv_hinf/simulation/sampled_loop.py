@@ -207,7 +207,7 @@ class SampledLoop:
             atol=self.atol,
             event=live_ev,
             event_bound=None if live_ev is None or self.env is None else envelope_bound(self.env, self.n),
-            first_step=None if np.isnan(last).any() else np.minimum(last / length[sel], 1.0),
+            first_step=np.minimum(last / length[sel], 1.0),  # NaN (a first segment): estimated
         )
         assert sol.next_step is not None
         self.step[sel] = sol.next_step * length[sel]
