@@ -27,7 +27,7 @@ most that period to the delay (10 % of a delay of 10 ms or more).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,7 +36,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.models.implementation import Implementation
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.draws import ImplementationDraws
-from auv_hinf.simulation.integrators import ATOL, RTOL, SampleSink, dopri5
+from auv_hinf.simulation.integrators import ATOL, RTOL, BatchSolution, SampleSink, dopri5
 from auv_hinf.simulation.law import saturate
 from auv_hinf.simulation.plant import plant_derivative
 from auv_hinf.simulation.postprocess import envelope_bound, envelope_event, envelope_margin, ground_velocity
@@ -91,22 +91,22 @@ class SampleTrace:
     forces: FloatArray
 
 
+def _none() -> FloatArray:
+    return np.zeros(0)
+
+
 @dataclass(frozen=True)
-class SampledSolution:
-    """Output samples and per-run numbers of a sampled batch.
+class SampledSolution(BatchSolution):
+    """A :class:`~auv_hinf.simulation.integrators.BatchSolution` of ``S`` runs, and what their controller did.
+
+    ``y`` is ``(T, S, 6 N)`` (None when the samples went to a sink), ``event_time`` each run's
+    first envelope exit (s, NaN if none) on the integrator's interpolant, ``n_steps`` its accepted
+    steps over all segments.
 
     Attributes
     ----------
-    t : ndarray, shape (T,)
-        Output times (s).
-    y : ndarray, shape (T, S, 6 N), or None
-        States at the output times; None when they went to a sink.
     commanded : ndarray, shape (T, S, N, 3), or None
         The held command (before saturation) at the output times (N, N, N m).
-    event_time : ndarray, shape (S,)
-        First envelope exit (s, NaN if none), located linearly between substep ends.
-    n_steps : ndarray of int, shape (S,)
-        RK4 substeps per run.
     commanded_peak : ndarray, shape (S, 3)
         Largest ``|tau_x|, |tau_y|, |tau_psi|`` commanded at any sample (N, N, N m).
     saturated_fraction : ndarray, shape (S,)
@@ -118,15 +118,11 @@ class SampledSolution:
     trace : SampleTrace or None
     """
 
-    t: FloatArray
-    y: FloatArray | None
-    commanded: FloatArray | None
-    event_time: FloatArray
-    n_steps: NDArray[np.int_]
-    commanded_peak: FloatArray
-    saturated_fraction: FloatArray
-    diverged: FloatArray
-    period: float
+    commanded: FloatArray | None = None
+    commanded_peak: FloatArray = field(default_factory=_none)
+    saturated_fraction: FloatArray = field(default_factory=_none)
+    diverged: FloatArray = field(default_factory=_none)
+    period: float = 0.0
     trace: SampleTrace | None = None
 
 
@@ -307,6 +303,7 @@ class SampledLoop:
             commanded=self.cmd_out,
             event_time=self.exit,
             n_steps=self.steps,
+            n_rejected=np.zeros(self.s, dtype=int),
             commanded_peak=self.peak,
             saturated_fraction=self.saturated / self.k_count,
             period=self.h,
