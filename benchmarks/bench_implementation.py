@@ -1,4 +1,4 @@
-"""Table 8: the cost of the implementation (sampled-data) certificate.
+"""Table 9: the cost of the implementation (sampled-data) certificate.
 
 Peers measured in the same run: the continuous closed-loop certificate of the same design
 (what ``certify`` computed before ``[implementation]`` existed) and the exact discretisation scan
@@ -6,7 +6,7 @@ alone (python-control ``sample_system`` re-check included). The user's path is `
 certify`` on a TOML file with and without an ``[implementation]`` table (wall time of the whole
 command, in a fresh process).
 
-Run alone with ``python benchmarks/bench_implementation.py`` (rewrites only table 8 of RESULTS.md).
+Run alone with ``python benchmarks/bench_implementation.py`` (rewrites only table 9 of RESULTS.md).
 """
 
 from __future__ import annotations
@@ -131,13 +131,13 @@ def _table(rows: list[list[str]]) -> str:
     return "\n".join([TITLE, "", line, sep, *body, "", note, ""])
 
 
-TITLE = f"### 8. The implementation certificate: cost against the continuous certificate (medians of {REPEATS})"
+TITLE = f"### 9. The implementation certificate: cost against the continuous certificate (medians of {REPEATS})"
 
 
 def _rewrite_results(section: str) -> None:
     path = Path(__file__).with_name("RESULTS.md")
     text = path.read_text(encoding="utf-8")
-    start = text.find("### 8.")
+    start = text.find("### 9.")
     if start < 0:
         text = text.rstrip("\n") + "\n\n" + section
     else:

@@ -94,6 +94,13 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "composition": _composition(s, k),
         "uncertainty_box": {c: list(b) for c, b in zip(COEFFICIENTS, s.box.tolist()) if b != [1.0, 1.0]},
         "current_speed": s.current_speed,
+        "implementation": {
+            **s.implementation.to_dict(),
+            "description": s.implementation.describe(),
+            "draws": "per run, seeded by runs.parquet's implementation_seed (from the campaign seed and the run index)"
+            if not s.implementation.continuous
+            else None,
+        },
         "counts": {
             "runs": k,
             "certificate_applies": n_app,

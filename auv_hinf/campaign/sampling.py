@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -24,12 +24,14 @@ from auv_hinf.certification.region import start_bounds
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.implementation import Implementation
 from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.engine import first_exits, integrate_batch
 from auv_hinf.simulation.integrators import ATOL, RTOL
 from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.metrics import ErrorSink, RunMetrics
+from auv_hinf.simulation.sampled import integrate_sampled
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
 from auv_hinf.workflow.design_point import design_point
 from auv_hinf.workflow.nominal import closed_loop_for
@@ -55,6 +57,8 @@ MAX_CHUNK = 4096
 CHUNK_BYTES = 256 * 2**20
 #: Arrays of the batch state's size held at the peak of a chunk (measured 49, with margin).
 WORKING_ARRAYS = 64
+#: Second spawn-key word of a run's implementation draws (its inputs use ``(index,)`` alone).
+IMPLEMENTATION_STREAM = 1
 #: A measured error counts as inside its certified bound ``b`` if it is ``<= b (1 + tol) + tol``
 #: with ``tol`` = this factor times the integrator's tolerance: the trajectory is known to
 #: about rtol/atol = 1e-8, so a larger excess is a real violation, not integration noise.
@@ -98,6 +102,9 @@ class CampaignSetup:
         against it.
     robust_reason : str or None
         Why a declared box or current is not checked (the robust certificate does not cover).
+    implementation : Implementation
+        How the controller runs in every run; a sampled one draws its noise and delays per run
+        from :func:`implementation_seed`.
     """
 
     name: str
@@ -118,6 +125,7 @@ class CampaignSetup:
     certificate_applies: bool
     robust: RobustStart | None = None
     robust_reason: str | None = None
+    implementation: Implementation = field(default_factory=Implementation)
 
     @property
     def n(self) -> int:
@@ -195,6 +203,16 @@ def _plant(setup: CampaignSetup, mult: FloatArray) -> VehicleParams:
     return VehicleParams(**{k: getattr(base, k) * float(m) for k, m in zip(COEFFICIENTS, mult)}, name="sampled")
 
 
+def implementation_seed(seed: int, index: int) -> int:
+    """Seed of the noise and delay draws of run ``index`` (:mod:`auv_hinf.simulation.draws`).
+
+    From ``SeedSequence(seed, spawn_key=(index, IMPLEMENTATION_STREAM))``, a stream apart from the
+    run's sampled inputs (:func:`sample_run`): it depends on neither the chunking nor the executor.
+    """
+    state = np.random.SeedSequence(seed, spawn_key=(index, IMPLEMENTATION_STREAM)).generate_state(2, np.uint32)
+    return int(state[0]) << 32 | int(state[1])
+
+
 def run_scenario(setup: CampaignSetup, index: int, inputs: RunInputs) -> Scenario:
     """The scenario of run ``index`` with its sampled ``inputs`` (see :func:`sample_run`)."""
     return Scenario(
@@ -207,6 +225,8 @@ def run_scenario(setup: CampaignSetup, index: int, inputs: RunInputs) -> Scenari
         envelope=setup.envelope,
         samples=setup.samples,
         name=f"{setup.name}[{index}]",
+        implementation=setup.implementation,
+        seed=implementation_seed(setup.seed, index),
     )
 
 
@@ -247,8 +267,29 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float]
         progress=progress,
         law=setup.law,
     )
-    sol = integrate_batch(batch, sink=sink)
-    return _rows(setup, lo, inputs, batch, sink.result(), first_exits(sol, hi - lo), sol.n_steps)
+    if setup.implementation.continuous:
+        sol = integrate_batch(batch, sink=sink)
+        return _rows(setup, lo, inputs, batch, sink.result(), first_exits(sol, hi - lo), sol.n_steps)
+    return _sampled_rows(setup, lo, inputs, batch, sink)
+
+
+def _sampled_rows(
+    setup: CampaignSetup, lo: int, inputs: list[RunInputs], batch: ScenarioBatch, sink: ErrorSink
+) -> pd.DataFrame:
+    """:func:`run_chunk` under a sampled implementation: the forces are the held commands.
+
+    The sink folds the states in; the peak command and the saturated fraction are taken at the
+    control samples (:class:`~auv_hinf.simulation.sampled_loop.SampledSolution`). A run stopped
+    as diverged counts as leaving the envelope when it diverged (if it had not left before).
+    """
+    sol = integrate_sampled(batch, sink=sink)
+    met = replace(sink.result(), commanded_peak=sol.commanded_peak, saturated_fraction=sol.saturated_fraction)
+    ends = np.fmin(sol.event_time, sol.diverged)
+    exits = [None if math.isnan(e) else float(e) for e in ends]
+    table = _rows(setup, lo, inputs, batch, met, exits, sol.n_steps)
+    table["implementation_seed"] = [s.seed for s in batch.scenarios]
+    table["diverged_at"] = sol.diverged
+    return table
 
 
 def _rows(
@@ -353,6 +394,7 @@ def prepare(
         certificate_applies=bool(applies),
         robust=rob,
         robust_reason=why,
+        implementation=cfg.implementation,
     )
     return setup, cert
 
@@ -374,6 +416,7 @@ __all__ = [
     "COEFFICIENTS",
     "ERROR_KINDS",
     "FORCE_COLUMNS",
+    "IMPLEMENTATION_STREAM",
     "MAX_CHUNK",
     "SAMPLE_INTERVAL",
     "WORKING_ARRAYS",
@@ -381,6 +424,7 @@ __all__ = [
     "RunInputs",
     "chunks",
     "default_chunk",
+    "implementation_seed",
     "initial_state",
     "prepare",
     "run_chunk",

@@ -175,10 +175,19 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(_dump(summary))
     else:
         for key, val in summary.items():
-            if key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
+            if key == "implementation":  # one line: what ran, and the seed of its draws
+                print(
+                    f"{key:>24}: {val['description']}"
+                    + ("" if val["control_period"] is None else f", seed {val['seed']}")
+                )
+            elif key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
                 print(f"{key:>24}: {_short(val)}")
     if plan.certificate is None:
         return _verdict(False, "; ".join(plan.notes))
+    if result.diverged_at is not None:
+        return _verdict(
+            False, f"the run diverged at t = {result.diverged_at:.4g} s ({plan.scenario.implementation.describe()})"
+        )
     if not summary["stayed_in_envelope"]:
         why = f"left the certified envelope at t = {summary['first_exit_time']:.4g} s"
         if not plan.covered:

@@ -14,14 +14,15 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.reference import Motion
-from auv_hinf.models.vehicle import VehicleParams, rhs
-from auv_hinf.simulation.integrators import ATOL, RTOL, BatchSolution, EventBound, EventFn, SampleSink, dopri5
+from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.simulation.integrators import ATOL, RTOL, BatchSolution, EventFn, SampleSink, dopri5
 from auv_hinf.simulation.law import VehicleLaw, VehicleMotionSource
-from auv_hinf.simulation.postprocess import envelope_margin, ground_velocity
+from auv_hinf.simulation.plant import plant_derivative
+from auv_hinf.simulation.postprocess import envelope_bound, envelope_event, envelope_margin, ground_velocity
 from auv_hinf.simulation.results import SimulationResult, build_results
 from auv_hinf.simulation.rk45 import rk45_reference
+from auv_hinf.simulation.sampled import simulate_sampled_batch
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
 
 Method = Literal["dopri", "rk45"]
@@ -34,9 +35,7 @@ def fleet_derivative(
     """Closed-loop ``d/dt`` of states ``(..., N, 6)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s)."""
     cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))  # shared by the law and the plant
     p_dot = ground_velocity(states, current, cs)
-    d = rhs(plant, states, law.forces(states, p_dot, motion, cs), cs)
-    d[..., 0:2] = p_dot
-    return d
+    return plant_derivative(plant, current, states, law.forces(states, p_dot, motion, cs), cs, p_dot)
 
 
 def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
@@ -76,28 +75,7 @@ def batch_system(
         states = np.asfortranarray(y.reshape(n_s, n, 6))  # scenario axis fastest: see auv_hinf.arrays
         return fleet_derivative(law, plant, current, states, ref.motion(t)).reshape(n_s, -1)
 
-    def ev_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
-        assert env is not None
-        margin: FloatArray = envelope_margin(env, y.reshape((*y.shape[:-1], n, 6))).min(axis=-1)
-        return margin
-
-    return f_scenario, (None if env is None else ev_scenario)
-
-
-def envelope_bound(envelope: Envelope, n: int) -> EventBound:
-    """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
-
-    Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
-    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
-    vehicles per system (1 for vehicle systems).
-    """
-
-    def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
-        s, rad = y.reshape(*y.shape[:-1], n, 6), radius.reshape(*radius.shape[:-1], n, 6)
-        low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
-        return low
-
-    return bound
+    return f_scenario, (None if env is None else envelope_event(env, n))
 
 
 def integrate_batch(
@@ -191,7 +169,12 @@ def simulate_batch(
 
     The integration is :func:`integrate_batch` (same parameters); every result holds the
     samples and the metrics of :class:`~auv_hinf.simulation.results.SimulationResult`.
+    A batch whose implementation is not the continuous, exact law runs sampled instead
+    (:func:`~auv_hinf.simulation.sampled.simulate_sampled_batch`: the integration parameters
+    do not apply, its scheme is its own).
     """
+    if not batch.scenarios[0].implementation.continuous:
+        return simulate_sampled_batch(batch)
     sol = integrate_batch(batch, method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions)
     n_s, n = batch.initial.shape[:2]
     states = cast(FloatArray, sol.y).reshape(sol.t.size, n_s, n, 6)

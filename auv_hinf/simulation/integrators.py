@@ -94,6 +94,9 @@ class BatchSolution:
         First time (s) the event function is negative; NaN if never (or no event given).
     n_steps, n_rejected : ndarray of int, shape (B,)
         Accepted and rejected steps per system.
+    next_step : ndarray, shape (B,), or None
+        The step size each system would take next (s; :func:`dopri5` only), to continue
+        without a new starting-step estimate.
     """
 
     t: FloatArray
@@ -101,6 +104,7 @@ class BatchSolution:
     event_time: FloatArray
     n_steps: NDArray[np.int_]
     n_rejected: NDArray[np.int_]
+    next_step: FloatArray | None = None
 
 
 def _rms(x: FloatArray) -> FloatArray:
@@ -191,6 +195,7 @@ def dopri5(
     max_steps: int = 1_000_000,
     event_bound: EventBound | None = None,
     sink: SampleSink | None = None,
+    first_step: FloatArray | None = None,
 ) -> BatchSolution:
     """Integrate ``B`` independent systems with per-system Dormand-Prince 5(4) steps.
 
@@ -222,6 +227,9 @@ def dopri5(
         Receives the output samples as they are produced (:data:`SampleSink`) instead of
         storing them: memory stays ``O(B d)`` for any number of samples, and the solution's
         ``y`` is None.
+    first_step : ndarray, shape (B,), optional
+        Starting step sizes (s, > 0), e.g. a previous call's ``next_step``; default (and where
+        NaN): Hairer's estimate.
 
     Raises
     ------
@@ -242,7 +250,11 @@ def dopri5(
     f = rhs(t, y)
     if not np.all(np.isfinite(f)):
         raise SolverError("non-finite derivative at the initial state")
-    h = _initial_step(rhs, t0, t1, y, f, rtol, atol)
+    if first_step is None or np.isnan(first_step).any():  # estimated per system: NaN asks for the estimate
+        h = _initial_step(rhs, t0, t1, y, f, rtol, atol)
+        h = h if first_step is None else np.where(np.isnan(first_step), h, np.minimum(first_step, t1 - t0))
+    else:
+        h = np.minimum(first_step, t1 - t0)
     if not np.all(np.isfinite(h) & (h > 0)):
         raise SolverError("no finite initial step: the derivative is not finite near the initial state")
     event_time = np.full(n_sys, np.nan)
@@ -287,7 +299,7 @@ def dopri5(
             n_steps[sel] += 1
     else:
         raise SolverError(f"dopri5 did not reach t = {t1} s within {max_steps} steps")
-    return BatchSolution(t=te, y=out, event_time=event_time, n_steps=n_steps, n_rejected=n_rej)
+    return BatchSolution(t=te, y=out, event_time=event_time, n_steps=n_steps, n_rejected=n_rej, next_step=h)
 
 
 def _store(out: FloatArray) -> SampleSink:

@@ -15,6 +15,7 @@ from auv_hinf.arrays import stack_last
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.jacobi_maps import jacobi_coordinates
 from auv_hinf.models.reference import Motion, wrap_angle
+from auv_hinf.simulation.integrators import EventBound, EventFn
 
 
 def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
@@ -35,6 +36,32 @@ def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
         ]
     )
     return margin
+
+
+def envelope_event(envelope: Envelope, n: int) -> EventFn:
+    """The exit event of flat states ``(..., 6 n)``: the smallest envelope margin of their ``n`` vehicles."""
+
+    def event(t: FloatArray, y: FloatArray) -> FloatArray:
+        margin: FloatArray = envelope_margin(envelope, y.reshape((*y.shape[:-1], n, 6))).min(axis=-1)
+        return margin
+
+    return event
+
+
+def envelope_bound(envelope: Envelope, n: int) -> EventBound:
+    """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
+
+    Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
+    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
+    vehicles per system (1 for vehicle systems).
+    """
+
+    def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
+        s, rad = y.reshape(*y.shape[:-1], n, 6), radius.reshape(*radius.shape[:-1], n, 6)
+        low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
+        return low
+
+    return bound
 
 
 def ground_velocity(
@@ -143,6 +170,8 @@ def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind
 __all__ = [
     "FormationErrors",
     "TrackingErrors",
+    "envelope_bound",
+    "envelope_event",
     "envelope_margin",
     "formation_errors",
     "ground_velocity",

@@ -59,8 +59,12 @@ class SimulationResult:
         Accepted integration steps (the largest over the scenario's systems).
     scenario : Scenario
     commanded_peak : tuple of float
-        Largest ``|tau_x|, |tau_y|, |tau_psi|`` the law commanded at the output samples,
-        before saturation (N, N, N m), over all vehicles.
+        Largest ``|tau_x|, |tau_y|, |tau_psi|`` the law commanded at the output samples (at
+        every control sample for a sampled implementation), before saturation (N, N, N m),
+        over all vehicles.
+    diverged_at : float or None
+        When a sampled run was stopped as diverged (s; see
+        :data:`~auv_hinf.simulation.sampled_loop.DIVERGED_RATE`); None if it was not.
     shape_components : ndarray (T, N-1, 2) or None
         Error of each Jacobi shape vector against the unshaped mission in the scenario's
         ``frame`` (m): ``[along, cross]`` track in the path frame (rotated by the path's course),
@@ -83,6 +87,7 @@ class SimulationResult:
     scenario: Scenario = field(repr=False)
     commanded_peak: tuple[float, float, float] = (0.0, 0.0, 0.0)
     shape_components: FloatArray | None = field(default=None, repr=False)
+    diverged_at: float | None = None
 
     def error_at(self, time: float) -> tuple[float, float]:
         """Shape and centre error (m) at the sample nearest to ``time`` (s)."""
@@ -118,6 +123,7 @@ class SimulationResult:
             "stayed_in_envelope": stayed,
             "first_exit_time": exit_time,
             "shape_errors": self.shape_errors(),
+            "diverged_at": self.diverged_at,
         }
 
     def shape_errors(self) -> dict[str, Any]:
@@ -154,12 +160,19 @@ def build_results(
     states: FloatArray,
     exit_times: Sequence[float | None],
     n_steps: Sequence[int],
+    *,
+    commanded: FloatArray | None = None,
+    peaks: FloatArray | None = None,
 ) -> list[SimulationResult]:
     """Post-process ``S`` scenarios sampled as ``states (T, S, N, 6)`` at times ``t (T,)``.
 
     Scenarios that share their reference, mission, law and Jacobi convention (a campaign's
     chunk) are processed together in whole-array calls, with the desired motion evaluated
     once; the others one at a time. Each result holds views of the batched arrays.
+
+    ``commanded (T, S, N, 3)`` is the law's output before saturation at the samples (N, N, N m)
+    when it is not the law at the sampled state (a sampled implementation holds it), and
+    ``peaks (S, 3)`` its peak per channel when that was taken over more instants than ``t``.
     """
     first = scns[0]
     shared = all(
@@ -168,14 +181,25 @@ def build_results(
     shared = shared and all(x.law == first.law for x in scns)
     if not shared and len(scns) > 1:
         return [
-            build_results((x,), t, states[:, k : k + 1], [exit_times[k]], [n_steps[k]])[0] for k, x in enumerate(scns)
+            build_results(
+                (x,),
+                t,
+                states[:, k : k + 1],
+                [exit_times[k]],
+                [n_steps[k]],
+                commanded=None if commanded is None else commanded[:, k : k + 1],
+                peaks=None if peaks is None else peaks[k : k + 1],
+            )[0]
+            for k, x in enumerate(scns)
         ]
     current = np.array([x.current for x in scns], dtype=float)[None, :, None, :]  # (1, S, 1, 2)
     p_dot = ground_velocity(states, current)
     motion = _expand(first.reference.motion(t))
-    commanded = first.law.unsaturated(states, p_dot, motion)
+    if commanded is None:
+        commanded = first.law.unsaturated(states, p_dot, motion)
     forces, active = saturate(commanded, first.law.actuators)
-    peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
+    if peaks is None:
+        peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
     desired = None if first.mission is None else first.mission.motion(t)
     target = motion.p if desired is None else desired.p[:, None]
     form = formation_errors(states[..., 0:2], target, first.jacobi)

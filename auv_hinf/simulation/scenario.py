@@ -12,10 +12,12 @@ from dataclasses import dataclass, field
 from typing import cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from auv_hinf._typing import FORMATION_FRAMES, FloatArray, FormationFrame, JacobiKind
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.implementation import Implementation
 from auv_hinf.models.path_frame import PathFrameReference
 from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
@@ -57,6 +59,11 @@ class Scenario:
         Frame of the reported shape-error components (along/cross track in the path frame);
         default: the frame of a :class:`~auv_hinf.models.reference.FleetReference` or
         ``"path"`` for a :class:`~auv_hinf.models.path_frame.PathFrameReference`, else inertial.
+    implementation : Implementation
+        How the controller runs (sample time, delay, noise). The default is the continuous,
+        exact law; any other runs in :mod:`auv_hinf.simulation.sampled`.
+    seed : int
+        Seed of the run's noise and delay draws (:mod:`auv_hinf.simulation.draws`, >= 0).
     """
 
     law: VehicleLaw
@@ -71,6 +78,8 @@ class Scenario:
     mission: MotionSource | None = None
     jacobi: JacobiKind = "paper"
     frame: FormationFrame | None = None
+    implementation: Implementation = field(default_factory=Implementation)
+    seed: int = 0
 
     def __post_init__(self) -> None:
         init = np.asarray(self.initial, dtype=float)
@@ -85,6 +94,10 @@ class Scenario:
         cur = tuple(require_finite("current", c) for c in self.current)
         if len(cur) != 2:
             raise ParameterError(f"current must be a pair (m/s), got {self.current!r}")
+        if not isinstance(self.implementation, Implementation):
+            raise ParameterError(f"implementation must be an Implementation, got {self.implementation!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ParameterError(f"seed must be an integer >= 0, got {self.seed!r}")
         object.__setattr__(self, "initial", init)
         object.__setattr__(self, "current", cur)
         if self.frame is None:
@@ -142,13 +155,15 @@ class PlantBatch:
     def __getitem__(self, s: int) -> VehicleParams:
         return VehicleParams(**{k: float(getattr(self, k)[s]) for k in _COEFFS}, name=f"plant[{s}]")
 
-    def coefficients(self, trailing: int) -> VehicleParams:
+    def coefficients(self, trailing: int, rows: NDArray[np.int_] | None = None) -> VehicleParams:
         """Duck-typed parameters with arrays of shape ``(S,) + (1,) * trailing`` for :func:`vehicle.rhs`.
 
         ``vehicle.rhs`` reads only the nine coefficients and ``damping``, which broadcast.
+        ``rows``: only those scenarios (then ``S = rows.size``).
         """
-        shape = (len(self),) + (1,) * trailing
-        return cast(VehicleParams, _Coefficients({k: getattr(self, k).reshape(shape) for k in _COEFFS}))
+        pick = slice(None) if rows is None else rows
+        shape = (-1,) + (1,) * trailing
+        return cast(VehicleParams, _Coefficients({k: getattr(self, k)[pick].reshape(shape) for k in _COEFFS}))
 
 
 class _Coefficients:
@@ -164,8 +179,9 @@ class _Coefficients:
 class ScenarioBatch:
     """``S`` scenarios integrated together as one vectorised system of shape ``(S, N, 6)``.
 
-    All scenarios share the law, horizon, samples, envelope and N; they may differ in
-    plant parameters, initial states, currents and (through ``reference``) desired motion.
+    All scenarios share the law, horizon, samples, envelope, N and implementation; they may
+    differ in plant parameters, initial states, currents, seeds and (through ``reference``)
+    desired motion.
 
     Parameters
     ----------
@@ -193,7 +209,7 @@ class ScenarioBatch:
         if not scn:
             raise ParameterError("a scenario batch needs at least one scenario")
         first = scn[0]
-        for name in ("law", "horizon", "samples", "envelope", "jacobi", "frame", "n"):
+        for name in ("law", "horizon", "samples", "envelope", "jacobi", "frame", "n", "implementation"):
             if any(getattr(s, name) != getattr(first, name) for s in scn):
                 raise ParameterError(f"all scenarios of a batch must share {name!r}")
         if self.reference is None:

@@ -25,6 +25,7 @@ from auv_hinf.simulation.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
 from auv_hinf.simulation.results import SimulationResult
+from auv_hinf.simulation.sampled_loop import control_period
 from auv_hinf.simulation.scenario import Scenario
 from auv_hinf.workflow.design_point import DesignPoint, design_point, initial_states
 from auv_hinf.workflow.nominal import closed_loop_for, coverage_for
@@ -157,6 +158,8 @@ def plan_run(
         name=cfg.name,
         jacobi=cfg.jacobi,
         frame=cfg.frame,
+        implementation=cfg.implementation,
+        seed=sim.seed,
     )
     nominal = cov is not None and cov.covered and not notes
     rob = None
@@ -184,27 +187,55 @@ def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -
     return None if math.isnan(rate) else rate
 
 
+def measured_errors(result: SimulationResult, start: int = 0) -> dict[str, float]:
+    """Sup over the samples from index ``start`` and the vehicles of each tracking error (m, m/s, rad, rad/s)."""
+    tr = result.tracking
+    return {
+        "position_error": float(np.linalg.norm(tr.e[start:], axis=-1).max()),
+        "velocity_error": float(np.linalg.norm(tr.e_dot[start:], axis=-1).max()),
+        "heading_error": float(np.abs(tr.e_psi[start:]).max()),
+        "yaw_rate_error": float(np.abs(tr.e_psi_dot[start:]).max()),
+    }
+
+
+def certified_errors(plan: RunPlan) -> dict[str, float] | None:
+    """The per-vehicle error bounds (m, m/s, rad, rad/s) the run's measured errors are compared with.
+
+    The one place :func:`run_report` reads them from: today the nominal coverage's bounds, never
+    below :data:`~auv_hinf.simulation.integrators.NUMERICAL_FLOOR` (the exact solution obeys the
+    bounds; the simulated one to the integrator's accuracy). ``None`` when no certificate
+    bounds the run. A sampled implementation (``plan.scenario.implementation``) does not change
+    them here.
+    """
+    cov = plan.coverage
+    if cov is None:
+        return None
+    b = cov.bounds
+    return {
+        "position_error": max(b.position, NUMERICAL_FLOOR),
+        "velocity_error": max(b.velocity, NUMERICAL_FLOOR),
+        "heading_error": max(b.heading, NUMERICAL_FLOOR),
+        "yaw_rate_error": max(b.yaw_rate, NUMERICAL_FLOOR),
+    }
+
+
+def implementation_report(scn: Scenario) -> dict[str, Any]:
+    """What implementation a run simulated: the declared one, its seed, the law's period (s)."""
+    impl = scn.implementation
+    return {
+        **impl.to_dict(),
+        "seed": scn.seed,
+        "control_period": None if impl.continuous else control_period(impl, scn.horizon),
+        "description": impl.describe(),
+    }
+
+
 def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
     """The simulation summary plus the certificate's verdict and bounds next to the measured ones."""
     out = result.summary()
-    tr = result.tracking
-    measured = {
-        "position_error": float(np.linalg.norm(tr.e, axis=-1).max()),
-        "velocity_error": float(np.linalg.norm(tr.e_dot, axis=-1).max()),
-        "heading_error": float(np.abs(tr.e_psi).max()),
-        "yaw_rate_error": float(np.abs(tr.e_psi_dot).max()),
-    }
+    measured = measured_errors(result)
     cov = plan.coverage
-    certified = None
-    if cov is not None:
-        b = cov.bounds
-        # the exact solution obeys the bounds; the simulated one to the integrator's accuracy
-        certified = {
-            "position_error": max(b.position, NUMERICAL_FLOOR),
-            "velocity_error": max(b.velocity, NUMERICAL_FLOOR),
-            "heading_error": max(b.heading, NUMERICAL_FLOOR),
-            "yaw_rate_error": max(b.yaw_rate, NUMERICAL_FLOOR),
-        }
+    certified = certified_errors(plan)
     cert = plan.certificate
     out.update(
         {
@@ -216,6 +247,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
             "certified_decay_rate": None if cert is None else cert.rate,
             "measured_errors": measured,
+            "measured_tail_errors": measured_errors(result, result.t.size // 2),
             "certified_errors": certified,
             "numerical_floor": NUMERICAL_FLOOR,
             "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
@@ -224,6 +256,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "robust_reason": None if plan.robust is None else plan.robust.reason,
             **plan.design.require_gains().to_dict(),
             "gain_source": plan.design.source,
+            "implementation": implementation_report(plan.scenario),
         }
     )
     out["null_reasons"] = {k: _NULL_REASONS.get(k, "not applicable to this run") for k, v in out.items() if v is None}
@@ -238,6 +271,9 @@ DEFINITIONS = {
     "sqrt(N) for equal per-vehicle errors",
     "final_position_error": "largest |p_i - p_d,i| over the vehicles at the end (m)",
     "measured_errors": "sup over samples and vehicles of each tracking error (m, m/s, rad, rad/s)",
+    "measured_tail_errors": "the same sup over the second half of the run (where ultimate bounds apply)",
+    "implementation": "how the controller ran: sample time and delay (s), noise bounds, seed of the draws, "
+    "the law's period (s; null: continuous)",
     "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
     "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
     "shape_errors": "error of each Jacobi shape vector against the mission, in the formation's frame (along and "
@@ -261,6 +297,7 @@ _NULL_REASONS = {
     "robust_bounds": "no robust bound for this run (none declared, or not covered)",
     "robust_reason": "no [uncertainty] box or [disturbance] current declared",
     "actuator_limits": "no [actuators] declared: unlimited thrust",
+    "diverged_at": "the run did not diverge",
 }
 
 

@@ -20,6 +20,7 @@ from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
 from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
 from auv_hinf.exceptions import ParameterError
+from auv_hinf.models.implementation import Implementation, MeasurementNoise
 
 RUNS, HORIZON, SEED = 8, 20.0, 7
 
@@ -213,3 +214,16 @@ def test_the_dask_campaign_bar_moves_while_its_chunks_run(monkeypatch: pytest.Mo
     # a run counted before its chunk finished: a position other than a sum of whole chunks
     whole = {sum(hi - lo for lo, hi in chunks(runs, camp.chunk)[:k]) for k in range(n_chunks + 1)}
     assert set(seen) - whole or camp.chunk == 1, (seen, camp.chunk)
+
+
+def test_sampled_campaign_draws_per_run_and_does_not_depend_on_the_chunk():
+    impl = Implementation(0.1, 0.1, varying_delay=True, noise=MeasurementNoise(0.05, 0.02, 0.01, 0.005))
+    cfg = replace(preset_config("paper-triangle"), implementation=impl)
+    whole = run_campaign(cfg, 3, seed=4, chunk=3, horizon=5.0)
+    single = run_campaign(cfg, 3, seed=4, chunk=1, horizon=5.0)
+    cols = ["max_position_error", "max_velocity_error", "final_position_error", "max_force_x"]
+    np.testing.assert_allclose(whole.table[cols].to_numpy(), single.table[cols].to_numpy(), rtol=1e-9, atol=1e-12)
+    seeds = whole.table["implementation_seed"]
+    assert seeds.nunique() == 3 and (seeds == single.table["implementation_seed"]).all()
+    assert whole.table["diverged_at"].isna().all()
+    assert summarize(whole)["implementation"]["sample_time"] == 0.1

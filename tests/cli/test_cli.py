@@ -219,3 +219,44 @@ def test_simulate_vector_options_reject_bad_input(bad, capsys):
     assert main(["simulate", "--preset", "paper-triangle", *bad]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+SAMPLED_TOML = """
+name = "tri-sampled"
+[simulation]
+horizon = 10.0
+seed = 7
+[implementation]
+sample_time = 0.1
+delay = 0.1
+[implementation.noise]
+position = 0.05
+velocity = 0.02
+heading = 0.01
+yaw_rate = 0.005
+"""
+
+
+def test_simulate_json_reports_the_implementation_it_ran(tmp_path, capsys):
+    path = tmp_path / "sampled.toml"
+    path.write_text(SAMPLED_TOML)
+    _, out, _ = run(["simulate", "--config", str(path), "--json"], capsys)
+    data = json.loads(out)
+    impl = data["implementation"]
+    assert impl["sample_time"] == 0.1 and impl["delay"] == 0.1 and impl["seed"] == 7
+    assert impl["noise"] == {"position": 0.05, "velocity": 0.02, "heading": 0.01, "yaw_rate": 0.005}
+    assert impl["control_period"] == 0.1 and "10 Hz" in impl["description"]
+    # noise keeps the errors away from zero: the tail errors are of the noise's size, not of the integrator's
+    assert 1e-3 < data["measured_tail_errors"]["position_error"] <= data["measured_errors"]["position_error"]
+    assert data["final_position_error"] > 0 and data["diverged_at"] is None
+    _, out_again, _ = run(["simulate", "--config", str(path), "--json"], capsys)
+    assert json.loads(out_again)["measured_errors"] == data["measured_errors"]  # seeded: reproducible
+    _, text, _ = run(["simulate", "--config", str(path)], capsys)
+    assert "implementation: 10 Hz (0.1 s ZOH), delay 0.1 s, noise <= 0.05 m" in text and "seed 7" in text
+
+
+def test_simulate_json_of_the_continuous_default_says_so(capsys):
+    _, out, _ = run(["simulate", "--preset", "paper-triangle", "--horizon", "5", "--json"], capsys)
+    impl = json.loads(out)["implementation"]
+    assert impl["sample_time"] == 0.0 and impl["control_period"] is None
+    assert "continuous" in impl["description"]
