@@ -6,6 +6,17 @@ import numpy as np
 
 from auv_hinf.models.reference import FleetReference
 
+#: Four BlueROV2 Heavy on a gentle sine with Theorem 1 gains (gamma = 0.1, method minimal): a loop gentle
+#: enough to be sampled, and a mission that keeps it inside its envelope.
+BLUEROV_SLOW = {
+    "vehicle": {"preset": "bluerov2-heavy"},
+    "formation": {"n": 4, "shape": [[0.0, -4.0], [0.0, -6.0], [0.0, -8.0]]},
+    "envelope": {"u": [-0.5, 1.0], "v": [-0.5, 0.5], "r": [-0.5, 0.5]},
+    "design": {"method": "minimal", "gamma": 0.1, "k1": 0.5},
+    "reference": {"kind": "sine", "speed": 0.4, "amplitude": 2.0, "omega": 0.05},
+    "actuators": {"preset": "bluerov2-heavy"},
+}
+
 
 def starts_from_errors(fleet: FleetReference, errors: np.ndarray) -> np.ndarray:
     """Initial states ``(..., n, 6)`` whose errors against ``fleet`` at ``t = 0`` are ``errors``."""

@@ -162,7 +162,7 @@ class ImplementationSummary:
 
 
 def implementation_summary(
-    point: DesignPoint, nominal: ClosedLoopCertificate | None, continuous_ok: bool
+    point: DesignPoint, nominal: ClosedLoopCertificate | None, continuous_ok: bool, *, search: bool = True
 ) -> ImplementationSummary:
     """Certify the declared implementation of ``point`` (see the module docstring).
 
@@ -174,6 +174,9 @@ def implementation_summary(
     continuous_ok : bool
         The continuous certificates (closed loop, robust when declared) hold: the verdict of the
         continuous default.
+    search : bool
+        When the declared implementation is not covered, search the largest sample time that is
+        (a few more certificates).
     """
     impl = point.config.implementation
     if nominal is None or point.gains is None:
@@ -184,7 +187,7 @@ def implementation_summary(
         cert = certify_implementation(prob, impl, start, limits)
         if impl.continuous:
             return ImplementationSummary(impl, cert, continuous_ok, ())
-        covered = None if cert.covers else covered_sample_time(prob, impl, start, limits)
+        covered = None if cert.covers or not search else covered_sample_time(prob, impl, start, limits)
     except AuvHinfError as exc:
         return ImplementationSummary(impl, None, False, (f"implementation not certified: {exc}",))
     reasons = list(cert.reasons)
@@ -193,7 +196,7 @@ def implementation_summary(
             f"with delay {impl.delay:.4g} s and this noise, sample times up to {covered:.4g} s "
             f"({1.0 / covered:.3g} Hz) are covered"
         )
-    elif not cert.covers:
+    elif not cert.covers and search:
         reasons.append("no sample time is covered with this delay and noise: reduce them, or lower the gains")
     if point.declared:
         reasons.append(BOX_NOT_COVERED)

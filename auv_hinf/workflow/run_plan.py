@@ -28,6 +28,7 @@ from auv_hinf.simulation.results import SimulationResult
 from auv_hinf.simulation.sampled_loop import control_period
 from auv_hinf.simulation.scenario import Scenario
 from auv_hinf.workflow.design_point import DesignPoint, design_point, initial_states
+from auv_hinf.workflow.implementation_part import ImplementationSummary, implementation_summary
 from auv_hinf.workflow.nominal import closed_loop_for, coverage_for
 from auv_hinf.workflow.robust_part import RobustRunCheck, check_robust_run
 
@@ -54,6 +55,9 @@ class RunPlan:
         The start mode of the run.
     robust : RobustRunCheck or None
         The robust certificate's verdict when the configuration declares a box or a current.
+    implementation : ImplementationSummary or None
+        The implementation certificate when the configuration declares a sampled, delayed or
+        noisy controller (``None`` for the continuous law): the run is covered only if it covers.
     """
 
     design: DesignPoint
@@ -64,6 +68,7 @@ class RunPlan:
     notes: tuple[str, ...]
     start: str = "shaped"
     robust: RobustRunCheck | None = None
+    implementation: ImplementationSummary | None = None
 
     def uncertified_gains(self) -> str | None:
         """Why no certificate covers the gains of this run's configuration, or ``None``.
@@ -161,11 +166,32 @@ def plan_run(
         implementation=cfg.implementation,
         seed=sim.seed,
     )
+    impl = _implementation_check(point, cert, cov, notes)
     nominal = cov is not None and cov.covered and not notes
     rob = None
     if point.declared:
         rob = check_robust_run(point, reference, initial)
-    return RunPlan(point, cert, cov, nominal or (rob is not None and rob.covered), scn, tuple(notes), mode, rob)
+    covered = (nominal or (rob is not None and rob.covered)) and (impl is None or impl.covers)
+    return RunPlan(point, cert, cov, covered, scn, tuple(notes), mode, rob, impl)
+
+
+def _implementation_check(
+    point: DesignPoint, cert: ClosedLoopCertificate | None, cov: Coverage | None, notes: list[str]
+) -> ImplementationSummary | None:
+    """The implementation certificate of a sampled, delayed or noisy run (``None`` when continuous).
+
+    Its bounds are about starts measured against the raw mission, so a run that needs a blended
+    start is not covered by it; its reasons are added to ``notes``.
+    """
+    if point.config.implementation.continuous:
+        return None
+    impl = implementation_summary(point, cert, continuous_ok=False, search=False)
+    if cov is not None and cov.blend_time is not None:
+        why = "the implementation certificate covers starts on the raw mission; this start needs a blended reference"
+        impl = replace(impl, covers=False, reasons=(*impl.reasons, why))
+    if not impl.covers:
+        notes.append("implementation not covered: " + "; ".join(impl.reasons))
+    return impl
 
 
 def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:
@@ -203,14 +229,19 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
 
     The one place :func:`run_report` reads them from: today the nominal coverage's bounds, never
     below :data:`~auv_hinf.simulation.integrators.NUMERICAL_FLOOR` (the exact solution obeys the
-    bounds; the simulated one to the integrator's accuracy). ``None`` when no certificate
-    bounds the run. A sampled implementation (``plan.scenario.implementation``) does not change
-    them here.
+    bounds; the simulated one to the integrator's accuracy). For a sampled, delayed or noisy
+    implementation they are the implementation certificate's bounds over the whole run.
+    ``None`` when no certificate bounds the run.
     """
-    cov = plan.coverage
-    if cov is None:
+    if plan.implementation is not None:
+        c = plan.implementation.certificate
+        if not plan.implementation.covers or c is None or c.bounds is None:
+            return None
+        b = c.bounds
+    elif plan.coverage is None:
         return None
-    b = cov.bounds
+    else:
+        b = plan.coverage.bounds
     return {
         "position_error": max(b.position, NUMERICAL_FLOOR),
         "velocity_error": max(b.velocity, NUMERICAL_FLOOR),

@@ -15,17 +15,8 @@ from auv_hinf.workflow.certificate import certify
 from auv_hinf.workflow.design_point import design_point
 from auv_hinf.workflow.implementation_part import implementation_problem, start_errors
 from auv_hinf.workflow.nominal import closed_loop_for
+from tests.helpers import BLUEROV_SLOW
 
-#: A BlueROV2 Heavy line with Theorem 1 gains (gamma = 0.1, method minimal): a loop gentle
-#: enough to be sampled, and a mission that keeps it inside its envelope.
-BLUEROV_SLOW = {
-    "vehicle": {"preset": "bluerov2-heavy"},
-    "formation": {"n": 4, "shape": [[0.0, -4.0], [0.0, -6.0], [0.0, -8.0]]},
-    "envelope": {"u": [-0.5, 1.0], "v": [-0.5, 0.5], "r": [-0.5, 0.5]},
-    "design": {"method": "minimal", "gamma": 0.1, "k1": 0.5},
-    "reference": {"kind": "sine", "speed": 0.4, "amplitude": 2.0, "omega": 0.05},
-    "actuators": {"preset": "bluerov2-heavy"},
-}
 SMALL_NOISE = MeasurementNoise(0.001, 0.001, 0.001, 0.001)
 
 
