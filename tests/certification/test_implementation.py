@@ -102,6 +102,7 @@ def test_the_continuous_default_reports_limits_and_the_continuous_verdict():
     assert d["tightness"] == pytest.approx(d["max_sample_time"] / d["exact_max_sample_time"])
 
 
+@pytest.mark.slow
 def test_the_largest_covered_sample_time_is_itself_covered():
     cfg = config_from_dict({**BLUEROV_SLOW, "implementation": {"sample_time": 0.2, "noise": SMALL_NOISE.to_dict()}})
     cert = certify(cfg)

@@ -237,6 +237,7 @@ yaw_rate = 0.005
 """
 
 
+@pytest.mark.slow
 def test_simulate_json_reports_the_implementation_it_ran(tmp_path, capsys):
     path = tmp_path / "sampled.toml"
     path.write_text(SAMPLED_TOML)

@@ -131,6 +131,7 @@ def test_a_run_gives_the_same_numbers_in_any_batch(triangle):
     assert not np.allclose(both[0].states, both[1].states)
 
 
+@pytest.mark.slow
 def test_an_unstable_implementation_is_stopped_and_reported():
     plan = plan_run(preset_config("remus-line"), horizon=30.0, samples=301)
     res = simulate(replace(plan.scenario, implementation=Implementation(0.1, 0.1)))

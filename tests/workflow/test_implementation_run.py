@@ -43,6 +43,7 @@ def test_covered_runs_stay_inside_the_certified_bounds(sample_time, delay, varyi
     assert report["implementation"]["varying_delay"] is varying
 
 
+@pytest.mark.slow
 def test_an_uncovered_implementation_is_reported_and_has_no_bounds():
     cfg = config_from_dict(_config(0.1, 0.1, 1e-3))
     plan = plan_run(cfg)
