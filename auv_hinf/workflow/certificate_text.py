@@ -2,13 +2,68 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from auv_hinf.workflow.certificate import Certificate
+from typing import Any, Protocol
 
 
-def certificate_text(cert: Certificate) -> str:
+class CertificateView(Protocol):
+    """What the table reads from a :class:`~auv_hinf.workflow.certificate.Certificate`."""
+
+    @property
+    def config(self) -> Any: ...
+
+    @property
+    def lam(self) -> float: ...
+
+    @property
+    def sigma(self) -> Any: ...
+
+    @property
+    def sigma_jacobi(self) -> Any: ...
+
+    @property
+    def gamma(self) -> float: ...
+
+    @property
+    def theorem1(self) -> Any: ...
+
+    @property
+    def designs(self) -> dict[str, Any]: ...
+
+    @property
+    def small_gain_margin(self) -> float | None: ...
+
+    @property
+    def position_loop_hinf(self) -> float | None: ...
+
+    @property
+    def crosscheck(self) -> Any: ...
+
+    @property
+    def certified(self) -> bool: ...
+
+    @property
+    def reasons(self) -> tuple[str, ...]: ...
+
+    @property
+    def closed_loop(self) -> Any: ...
+
+    @property
+    def robust(self) -> Any: ...
+
+    @property
+    def gains(self) -> Any: ...
+
+    @property
+    def gain_source(self) -> str: ...
+
+    @property
+    def actuators(self) -> Any: ...
+
+    @property
+    def implementation(self) -> Any: ...
+
+
+def certificate_text(cert: CertificateView) -> str:
     """One line per quantity, with units; the verdict and its reasons last."""
 
     def fmt(x: float | None) -> str:
@@ -46,4 +101,4 @@ def certificate_text(cert: Certificate) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["certificate_text"]
+__all__ = ["CertificateView", "certificate_text"]

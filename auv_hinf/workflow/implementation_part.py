@@ -27,6 +27,7 @@ from auv_hinf.certification.lag_terms import course_jerk_bound
 from auv_hinf.certification.margins import ErrorBounds
 from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.models.implementation import Implementation, MeasurementNoise
+from auv_hinf.simulation.sampled_loop import control_period
 from auv_hinf.workflow.design_point import DesignPoint, initial_states
 from auv_hinf.workflow.nominal import closed_loop_for
 
@@ -153,8 +154,11 @@ class ImplementationSummary:
                 "error_bounds": None,
             }
         )
+        period = None if self.certificate is None else self.certificate.implementation.sample_time
         return {
             **base,
+            **self.implementation.to_dict(),
+            "control_period": None if self.implementation.continuous else period,
             "covers": self.covers,
             "covered_sample_time": self.covered_sample_time,
             "reasons": list(self.reasons),
@@ -162,7 +166,12 @@ class ImplementationSummary:
 
 
 def implementation_summary(
-    point: DesignPoint, nominal: ClosedLoopCertificate | None, continuous_ok: bool, *, search: bool = True
+    point: DesignPoint,
+    nominal: ClosedLoopCertificate | None,
+    continuous_ok: bool,
+    *,
+    search: bool = True,
+    horizon: float | None = None,
 ) -> ImplementationSummary:
     """Certify the declared implementation of ``point`` (see the module docstring).
 
@@ -177,8 +186,17 @@ def implementation_summary(
     search : bool
         When the declared implementation is not covered, search the largest sample time that is
         (a few more certificates).
+    horizon : float, optional
+        The run's horizon (s; default the configured one): with ``sample_time = 0`` and a delay
+        or noise the law runs at a fine period that depends on it
+        (:func:`~auv_hinf.simulation.sampled_loop.control_period`), and the certificate is for
+        that period.
     """
-    impl = point.config.implementation
+    declared = point.config.implementation
+    impl = declared
+    if not declared.continuous and declared.sample_time == 0.0:
+        period = control_period(declared, horizon if horizon is not None else point.config.simulation.horizon)
+        impl = replace(declared, sample_time=period)
     if nominal is None or point.gains is None:
         return ImplementationSummary(impl, None, False, ("no closed-loop certificate to extend to the implementation",))
     try:
@@ -186,10 +204,10 @@ def implementation_summary(
         limits = lag_limits(prob.loops, prob.nominal_dampings, impl.delay)
         cert = certify_implementation(prob, impl, start, limits)
         if impl.continuous:
-            return ImplementationSummary(impl, cert, continuous_ok, ())
+            return ImplementationSummary(declared, cert, continuous_ok, ())
         covered = None if cert.covers or not search else covered_sample_time(prob, impl, start, limits)
     except AuvHinfError as exc:
-        return ImplementationSummary(impl, None, False, (f"implementation not certified: {exc}",))
+        return ImplementationSummary(declared, None, False, (f"implementation not certified: {exc}",))
     reasons = list(cert.reasons)
     if covered is not None:
         reasons.append(
@@ -200,7 +218,7 @@ def implementation_summary(
         reasons.append("no sample time is covered with this delay and noise: reduce them, or lower the gains")
     if point.declared:
         reasons.append(BOX_NOT_COVERED)
-    return ImplementationSummary(impl, cert, cert.covers and not point.declared, tuple(reasons), covered)
+    return ImplementationSummary(declared, cert, cert.covers and not point.declared, tuple(reasons), covered)
 
 
 def covered_sample_time(

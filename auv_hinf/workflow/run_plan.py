@@ -166,7 +166,7 @@ def plan_run(
         implementation=cfg.implementation,
         seed=sim.seed,
     )
-    impl = _implementation_check(point, cert, cov, notes)
+    impl = _implementation_check(point, cert, cov, notes, scn.horizon)
     nominal = cov is not None and cov.covered and not notes
     rob = None
     if point.declared:
@@ -176,7 +176,7 @@ def plan_run(
 
 
 def _implementation_check(
-    point: DesignPoint, cert: ClosedLoopCertificate | None, cov: Coverage | None, notes: list[str]
+    point: DesignPoint, cert: ClosedLoopCertificate | None, cov: Coverage | None, notes: list[str], horizon: float
 ) -> ImplementationSummary | None:
     """The implementation certificate of a sampled, delayed or noisy run (``None`` when continuous).
 
@@ -185,7 +185,7 @@ def _implementation_check(
     """
     if point.config.implementation.continuous:
         return None
-    impl = implementation_summary(point, cert, continuous_ok=False, search=False)
+    impl = implementation_summary(point, cert, continuous_ok=False, search=False, horizon=horizon)
     if cov is not None and cov.blend_time is not None:
         why = "the implementation certificate covers starts on the raw mission; this start needs a blended reference"
         impl = replace(impl, covers=False, reasons=(*impl.reasons, why))
