@@ -28,7 +28,7 @@ from auv_hinf.certification.region import largest_fitting
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.path_frame import turn_radius, with_turn_radius
 from auv_hinf.models.paths import MissionReference
-from auv_hinf.models.reference import FleetReference, reference_from_dict
+from auv_hinf.models.reference import FleetReference, ReferenceTube, reference_from_dict
 from auv_hinf.models.tubes import PATH_FRAME_CELLS, path_frame_tube
 
 #: Channel and edge of each margin (same order as :data:`~auv_hinf.certification.margins.MARGIN_NAMES`).
@@ -167,9 +167,18 @@ def vehicle_margins(
     n = off.shape[0]
     own = off if frame == "path" else np.zeros((1, 2))  # inertial: every vehicle moves as the centre
     tube = path_frame_tube(mission, own)
-    cells = cell_margins(tube, ErrorBounds(0.0, 0.0, 0.0, 0.0), envelope).reshape(own.shape[0], PATH_FRAME_CELLS, 6)
-    moving = (tube.speed[:, 0] > 0.0).reshape(own.shape[0], PATH_FRAME_CELLS)
-    out = np.where(moving[..., None], cells, np.inf).min(axis=1)
+    moving_cells = tube.speed[:, 0] > 0.0
+    flat = np.full((moving_cells.size, 6), np.inf)
+    if moving_cells.any():  # cells where a vehicle may stop have no heading offset: the surge bound below decides
+        part = ReferenceTube(
+            speed=tube.speed[moving_cells],
+            offset=tube.offset[moving_cells],
+            yaw_rate=tube.yaw_rate[moving_cells],
+            accel=tube.accel[moving_cells],
+            yaw_accel=tube.yaw_accel[moving_cells],
+        )
+        flat[moving_cells] = cell_margins(part, ErrorBounds(0.0, 0.0, 0.0, 0.0), envelope)
+    out = flat.reshape(own.shape[0], PATH_FRAME_CELLS, 6).min(axis=1)
     b = mission.bounds()
     along = b.speed_min - np.maximum(own[:, 1] * b.turn_rate_min, own[:, 1] * b.turn_rate_max)
     out[:, 1] = np.where(along > 0.0, out[:, 1], np.minimum(out[:, 1], along))

@@ -36,6 +36,18 @@ SCAN_FACTOR = 1.02
 SCAN_START = 1e-3
 #: Periods beyond this many times the slowest time constant are reported as unlimited.
 SCAN_SPAN = 1e4
+#: Relative back-off of the certified lag below the bisection's feasible end, so that the LMI
+#: holds there with a positive decay rate (at the supremum itself only beta = 0 is certified).
+LAG_BACKOFF_RTOL = 1e-3
+
+
+def lag_floor(loop: LagLoop) -> float:
+    """Smallest lag (s) the LMI is solved at: :data:`SCAN_START` of the loop's fastest time constant.
+
+    Certifying a larger lag bound is sound (it covers every smaller lag) and keeps ``1/tau`` in
+    the LMI well scaled; below it the solver's accuracy, not the loop, would decide.
+    """
+    return SCAN_START * _time_constants(loop.dampings[0], loop.k, loop.b)[0]
 
 
 def _bisect(ok: Callable[[float], bool], lo: float, hi: float, rtol: float) -> float:
@@ -69,17 +81,19 @@ def certified_lag(loop: LagLoop) -> float:
         lo *= 2.0
         if lo > SCAN_SPAN * slow:
             return math.inf
-    return _bisect(ok, lo, 2.0 * lo, LIMIT_RTOL)
+    return _bisect(ok, lo, 2.0 * lo, LIMIT_RTOL) * (1.0 - LAG_BACKOFF_RTOL)
 
 
 def decay_at(loop: LagLoop, tau: float) -> float:
-    """Largest decay rate ``beta`` (1/s) certified at lag bound ``tau`` (0 if only ``beta = 0`` is)."""
+    """Largest decay rate ``beta`` (1/s) certified at lag bound ``max(tau, lag_floor)`` (0 if only ``beta = 0`` is)."""
+    tau = max(tau, lag_floor(loop)) if tau > 0 else tau
     eig = max(abs(a) for a in loop.dampings) + abs(loop.b) + math.sqrt(abs(loop.k))
     return _bisect(lambda b: lmi_lag(loop, tau, b) is not None, 0.0, eig, DECAY_RTOL)
 
 
 def iss_certificate(loop: LagLoop, tau: float, beta: float, weight: FloatArray) -> LagResult | None:
-    """:func:`lmi_lag` with the smallest ISS gain at ``(tau, beta)`` and ``P >= weight``."""
+    """:func:`lmi_lag` with the smallest ISS gain at ``(max(tau, lag_floor), beta)`` and ``P >= weight``."""
+    tau = max(tau, lag_floor(loop)) if tau > 0 else tau
     return lmi_lag(loop, tau, beta, weight=weight)
 
 
@@ -195,5 +209,6 @@ __all__ = [
     "exact_limit",
     "held_plant",
     "iss_certificate",
+    "lag_floor",
     "spectral_radius",
 ]

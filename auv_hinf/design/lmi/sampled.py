@@ -273,10 +273,8 @@ def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None
     LagResult or None
         ``None`` when the LMI is not strictly feasible or the eigenvalue re-check fails.
 
-    Raises
-    ------
-    SolverError
-        When Clarabel does not reach ``optimal`` (never cvxpy's own error).
+    Clarabel's statuses other than ``optimal`` (after its retries) count as "not certified"
+    (``None``); cvxpy's own errors never escape.
     """
     if not (tau >= 0 and beta >= 0 and math.isfinite(tau) and math.isfinite(beta)):
         raise DesignError(f"need finite tau >= 0 (s) and beta >= 0 (1/s), got {tau!r}, {beta!r}")
@@ -296,9 +294,10 @@ def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None
     try:
         solve(problem, "lagged-loop Lyapunov-Krasovskii LMI")
     except SolverError:
-        if gain:
-            return None  # infeasible gain problem: Clarabel reports it as not optimal
-        raise
+        # an infeasible gain problem, or a numerically hopeless one (e.g. a lag far below the
+        # loop's time constants, where 1/tau dominates): nothing is certified at this point,
+        # which the callers treat as infeasible (conservative)
+        return None
     p = np.asarray(var["p"].value, dtype=float)
     r = np.asarray(var["r"].value, dtype=float)
     p, r = 0.5 * (p + p.T), 0.5 * (r + r.T)
