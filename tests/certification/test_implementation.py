@@ -115,3 +115,11 @@ def test_the_largest_covered_sample_time_is_itself_covered():
     )
     assert again.implementation is not None and again.implementation.covers
     assert ErrorBounds(0, 0, 0, 0) == start_errors(design_point(cfg))
+
+
+@pytest.mark.parametrize("h", [1e-12, 1e-6])
+def test_tiny_sample_times_are_certified_like_fast_ones(slow, h):
+    prob, start = slow
+    cert = certify_implementation(prob, Implementation(h, 0.0, noise=SMALL_NOISE), start)
+    fast = certify_implementation(prob, Implementation(1e-3, 0.0, noise=SMALL_NOISE), start)
+    assert cert.covers == fast.covers and math.isfinite(cert.max_sample_time)

@@ -57,3 +57,18 @@ def test_inertial_frame_every_vehicle_moves_as_the_centre():
     slow = Envelope(u=(0.0, 1.0), v=(-0.3, 0.3), r=(-0.3, 0.3))
     bad = reference_fit(mower(30.0), LINE_ABREAST, "inertial", slow)
     assert bad.inside == (False, False, False) and bad.largest_offset is None and bad.smallest_radius is None
+
+
+def test_a_path_frame_turn_where_a_vehicle_would_stop_is_refused_by_name_not_by_an_error():
+    """The paper triangle's sine (amplitude 30 m) turns tighter than its offsets in the path frame."""
+    from auv_hinf.config.formation import config_from_dict
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.workflow.certificate import certify
+
+    doc = preset_config("paper-triangle").to_toml_dict()
+    doc.pop("simulation", None)
+    doc["formation"]["frame"] = "path"
+    cert = certify(config_from_dict(doc))
+    assert not cert.certified
+    why = " ".join(cert.reasons)
+    assert "vehicle" in why and "smallest turn radius that fits" in why
