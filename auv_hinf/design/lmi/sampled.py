@@ -13,11 +13,11 @@ second norm-bounded term ``|q2| <= sigma2 |delta_2|`` driven by the change of th
 over the lag (position: the drift feedforward evaluated at the old state). So ``x' = Gamma zeta``
 with ``zeta = (x, delta, q, q2, w)`` and ``Gamma = [A - BK, BK, B, B, B]``.
 
-The functional (Fridman, *Introduction to Time-Delay Systems*, 2014, sec. 3.5 and 7.1)
+The functional (Fridman, *Introduction to Time-Delay Systems*, 2014, sec. 3.5 and 7.1)::
 
     V = x^T P x + int_{-tau}^0 int_{t+theta}^t exp(2 beta (s - t)) x'(s)^T R x'(s) ds dtheta
 
-satisfies, by Jensen's inequality over ``[t - eta, t]`` (``eta <= tau``),
+satisfies, by Jensen's inequality over ``[t - eta, t]`` (``eta <= tau``)::
 
     V' + 2 beta V - g |w|^2 <= zeta^T [He(E0^T P Gamma) + 2 beta E0^T P E0
                                  - exp(-2 beta tau)/tau Ed^T R Ed + tau Gamma^T R Gamma
