@@ -153,8 +153,8 @@ def certify_implementation(
             f"{limits.exact_sample_time:.4g} s); lower the gains' bandwidth or sample faster"
         )
         return _certificate(impl, limits, LagBounds(False, (why,)))
-    attempts = [bound_errors(prob, impl, start, channel) for channel in (True, False)]
-    return _certificate(impl, limits, next((a for a in attempts if a.covers), attempts[-1]))
+    first = bound_errors(prob, impl, start, True)
+    return _certificate(impl, limits, first if first.covers else bound_errors(prob, impl, start, False))
 
 
 def _certificate(impl: Implementation, limits: LagLimits, b: LagBounds) -> ImplementationCertificate:

@@ -117,7 +117,7 @@ def test_the_largest_covered_sample_time_is_itself_covered():
     assert ErrorBounds(0, 0, 0, 0) == start_errors(design_point(cfg))
 
 
-@pytest.mark.parametrize("h", [1e-12, 1e-6])
+@pytest.mark.parametrize("h", [1e-12, pytest.param(1e-6, marks=pytest.mark.slow)])
 def test_tiny_sample_times_are_certified_like_fast_ones(slow, h):
     prob, start = slow
     cert = certify_implementation(prob, Implementation(h, 0.0, noise=SMALL_NOISE), start)

@@ -25,7 +25,7 @@ def _config(sample_time: float, delay: float, noise: float, **impl: object) -> d
 @pytest.mark.parametrize(
     ("sample_time", "delay", "varying"),
     [
-        (0.01, 0.0, False),
+        pytest.param(0.01, 0.0, False, marks=pytest.mark.slow),
         pytest.param(0.008, 0.004, True, marks=pytest.mark.slow),
         pytest.param(0.005, 0.005, False, marks=pytest.mark.slow),
     ],

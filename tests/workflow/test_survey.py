@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 import json
 from dataclasses import replace
 
@@ -17,6 +19,7 @@ from auv_hinf.workflow.design_point import design_point
 from auv_hinf.workflow.run_plan import plan_run, run_report
 
 
+@pytest.mark.slow
 def test_survey_certifies_and_a_simulation_is_covered_with_the_v_facing_forward_on_every_leg():
     cfg = preset_config("remus-survey")
     cert = certify(cfg)
