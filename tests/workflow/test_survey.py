@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import pytest
-
 import json
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from auv_hinf.cli.args import EXIT_NEGATIVE
 from auv_hinf.cli.main import main
