@@ -24,6 +24,7 @@ from auv_hinf.certification.closed_loop import ThrustBounds, thrust_bounds
 from auv_hinf.certification.lag_problem import ImplementationProblem
 from auv_hinf.certification.lag_terms import LagDisturbance, lag_disturbance
 from auv_hinf.certification.margins import MAX_HEADING_ERROR, ErrorBounds, envelope_margins, inflate_envelope
+from auv_hinf.certification.region import box_level, level_extent
 from auv_hinf.certification.sampling import decay_at, iss_certificate
 from auv_hinf.design.lmi.sampled import LagResult
 from auv_hinf.models.implementation import Implementation
@@ -35,17 +36,6 @@ FIXED_POINT_ITERATIONS = 200
 #: Fraction of the largest certified decay rate used for the ISS certificate: halfway keeps
 #: both the decay and the ISS gain finite (at the largest rate the gain blows up).
 ISS_DECAY_FRACTION = 0.5
-
-
-def _level(p: FloatArray, r1: float, r2: float) -> float:
-    """Largest ``x^T P x`` over ``|x1| <= r1, |x2| <= r2`` (planar pairs, exact)."""
-    return float(p[0, 0] * r1 * r1 + 2.0 * abs(p[0, 1]) * r1 * r2 + p[1, 1] * r2 * r2)
-
-
-def _extents(p: FloatArray, level: float) -> tuple[float, float]:
-    """Sup of ``|x1|``, ``|x2|`` over ``{x^T P x <= level}``."""
-    inv = np.linalg.inv(p)
-    return math.sqrt(max(level, 0.0) * inv[0, 0]), math.sqrt(max(level, 0.0) * inv[1, 1])
 
 
 def _force(prob: ImplementationProblem, bounds: ErrorBounds, impl: Implementation) -> ThrustBounds:
@@ -100,8 +90,8 @@ def _step(
     ult: list[float] = []
     for cert, w, v0 in zip(certs, (dist.position, dist.heading), start, strict=True):
         floor = cert.gain * w * w / (2.0 * cert.beta)
-        out += _extents(cert.p, max(v0, floor))
-        ult += _extents(cert.p, floor)
+        out += level_extent(cert.p, max(v0, floor))
+        ult += level_extent(cert.p, floor)
     return np.array([*out, dist.position, dist.heading]), ErrorBounds(*ult), dist, force
 
 
@@ -153,10 +143,10 @@ def bound_errors(prob: ImplementationProblem, impl: Implementation, start: Error
     if certs[0] is None or certs[1] is None:
         return LagBounds(False, (f"no decay rate is certified at sample_time + delay = {lag:.4g} s",))
     pair = (certs[0], certs[1])
-    v0 = (_level(pair[0].p, start.position, start.velocity), _level(pair[1].p, start.heading, start.yaw_rate))
+    v0 = (box_level(pair[0].p, start.position, start.velocity), box_level(pair[1].p, start.heading, start.yaw_rate))
     # the fixed point runs on (error bounds, disturbance bounds): the body accelerations that
     # bound the disturbance depend on the disturbance itself
-    state = np.array([*_extents(pair[0].p, v0[0]), *_extents(pair[1].p, v0[1]), 0.0, 0.0])
+    state = np.array([*level_extent(pair[0].p, v0[0]), *level_extent(pair[1].p, v0[1]), 0.0, 0.0])
     reasons: list[str] = []
     for _ in range(FIXED_POINT_ITERATIONS):
         if not _fits(prob, _bounds(state)):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from auv_hinf.certification.lag_terms import block_slopes
+from auv_hinf.certification.lag_terms import lag_channel_sigma
 from auv_hinf.design.gains import Gains
 from auv_hinf.design.lmi.sampled import LagLoop
 from auv_hinf.models.actuators import Actuators
@@ -72,10 +72,9 @@ class ImplementationProblem:
 
         The lag channel is the drift feedforward ``G(y) p_d'`` evaluated at the old state: its
         part driven by the velocity error's change is at most ``max |p_d'| hypot(b_u, b_v)
-        |delta_2|`` (:func:`~auv_hinf.certification.lag_terms.block_slopes`).
+        |delta_2|`` (:func:`~auv_hinf.certification.lag_terms.lag_channel_sigma`).
         """
-        b_u, b_v, _ = block_slopes(self.params)
-        lag_sigma = float(self.tube.speed[:, 1].max()) * math.hypot(b_u, b_v) if channel else 0.0
+        lag_sigma = lag_channel_sigma(self.params, self.tube) if channel else 0.0
         return position_lag_loop(self.gains, self.lam, self.sigma, lag_sigma), heading_lag_loop(
             self.gains, self.c_range
         )

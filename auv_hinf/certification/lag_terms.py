@@ -84,6 +84,16 @@ def block_slopes(params: VehicleParams) -> tuple[float, float, float]:
     )
 
 
+def lag_channel_sigma(params: VehicleParams, tube: ReferenceTube) -> float:
+    """Bound (1/s) of the drift feed-forward's change per unit change of the velocity error over the lag.
+
+    ``|(G(x) - G(y)) p_d'| <= max |p_d'| hypot(b_u, b_v) |delta nu|`` (:func:`block_slopes`): the
+    position LMI's lag channel ``|q2| <= lag_sigma |delta_2|``.
+    """
+    b_u, b_v, _ = block_slopes(params)
+    return float(tube.speed[:, 1].max()) * math.hypot(b_u, b_v)
+
+
 def body_rates(
     params: VehicleParams,
     envelope: Envelope,
@@ -264,7 +274,7 @@ def lag_disturbance(
     m11, m22, m33 = params.m11, params.m22, params.m33
     _u_hi, _v_hi, _r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
     b_u, b_v, b_r = block_slopes(params)
-    lag_sigma = float(tube.speed[:, 1].max()) * math.hypot(b_u, b_v) if lag_channel else 0.0
+    lag_sigma = lag_channel_sigma(params, tube) if lag_channel else 0.0
     u_rate, v_rate, r_rate = body_rates(
         params,
         envelope,
@@ -315,4 +325,12 @@ def lag_disturbance(
     return LagDisturbance(position=position, heading=heading, body_rates=(u_rate, v_rate, r_rate))
 
 
-__all__ = ["LagDisturbance", "block_slopes", "body_rates", "course_jerk_bound", "lag_disturbance", "operating_box"]
+__all__ = [
+    "LagDisturbance",
+    "block_slopes",
+    "body_rates",
+    "course_jerk_bound",
+    "lag_channel_sigma",
+    "lag_disturbance",
+    "operating_box",
+]

@@ -87,21 +87,32 @@ class Region:
         return asdict(self)
 
 
+def box_level(m: FloatArray, r1: float, r2: float) -> float:
+    """Largest ``x^T M x`` over the box ``|x1| <= r1, |x2| <= r2``: ``m11 r1^2 + 2 |m12| r1 r2 + m22 r2^2`` (exact)."""
+    return float(m[0, 0]) * r1 * r1 + 2.0 * abs(float(m[0, 1])) * r1 * r2 + float(m[1, 1]) * r2 * r2
+
+
+def level_extent(m: FloatArray, rho: float) -> tuple[float, float]:
+    """Sup of ``|x1|`` and ``|x2|`` over ``{x^T M x <= rho}``: ``sqrt(rho (M^-1)_ii)``.
+
+    Both are inflated by :data:`BOUND_RTOL` for round-off; units follow ``x``.
+    """
+    m11, m12, m22 = float(m[0, 0]), float(m[0, 1]), float(m[1, 1])
+    if rho <= 0.0:
+        return 0.0, 0.0
+    det = m11 * m22 - m12 * m12
+    k = 1.0 + BOUND_RTOL
+    return k * math.sqrt(rho * m22 / det), k * math.sqrt(rho * m11 / det)
+
+
 def ellipsoid_extent(m: FloatArray, r1: float, r2: float) -> tuple[float, float]:
     """Sup of ``|x1|`` and ``|x2|`` over ``{x^T M x <= rho}``, rho the max over the start box.
 
     For ``M = M2`` (or ``M2 kron I2`` with ``x1, x2`` planar vectors) and the start set
-    ``|x1| <= r1, |x2| <= r2``, ``rho = m11 r1^2 + 2 |m12| r1 r2 + m22 r2^2`` exactly, and
-    the extents are ``sqrt(rho (M^-1)_11)``, ``sqrt(rho (M^-1)_22)``; both are inflated by
-    :data:`BOUND_RTOL` for round-off. Units follow ``r1, r2``.
+    ``|x1| <= r1, |x2| <= r2``, ``rho`` is :func:`box_level` and the extents are
+    :func:`level_extent` (inflated by :data:`BOUND_RTOL` for round-off). Units follow ``r1, r2``.
     """
-    m11, m12, m22 = float(m[0, 0]), float(m[0, 1]), float(m[1, 1])
-    rho = m11 * r1 * r1 + 2.0 * abs(m12) * r1 * r2 + m22 * r2 * r2
-    det = m11 * m22 - m12 * m12
-    if rho == 0.0:
-        return 0.0, 0.0
-    k = 1.0 + BOUND_RTOL
-    return k * math.sqrt(rho * m22 / det), k * math.sqrt(rho * m11 / det)
+    return level_extent(m, box_level(m, r1, r2))
 
 
 def pair_level(m: FloatArray, x: ArrayLike, dx: ArrayLike, planar: bool = False) -> FloatArray:
@@ -378,9 +389,11 @@ def certify_region(
 __all__ = [
     "Region",
     "RegionCertificate",
+    "box_level",
     "certify_region",
     "ellipsoid_extent",
     "largest_fitting",
+    "level_extent",
     "pair_level",
     "start_bounds",
 ]

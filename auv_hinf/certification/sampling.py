@@ -87,15 +87,19 @@ def certified_lag(loop: LagLoop) -> float:
 
 def decay_at(loop: LagLoop, tau: float) -> float:
     """Largest decay rate ``beta`` (1/s) certified at lag bound ``max(tau, lag_floor)`` (0 if only ``beta = 0`` is)."""
-    tau = max(tau, lag_floor(loop)) if tau > 0 else tau
+    tau = _solved_lag(loop, tau)
     eig = max(abs(a) for a in loop.dampings) + abs(loop.b) + math.sqrt(abs(loop.k))
     return _bisect(lambda b: lmi_lag(loop, tau, b) is not None, 0.0, eig, DECAY_RTOL)
 
 
 def iss_certificate(loop: LagLoop, tau: float, beta: float, weight: FloatArray) -> LagResult | None:
     """:func:`lmi_lag` with the smallest ISS gain at ``(max(tau, lag_floor), beta)`` and ``P >= weight``."""
-    tau = max(tau, lag_floor(loop)) if tau > 0 else tau
-    return lmi_lag(loop, tau, beta, weight=weight)
+    return lmi_lag(loop, _solved_lag(loop, tau), beta, weight=weight)
+
+
+def _solved_lag(loop: LagLoop, tau: float) -> float:
+    """The lag bound the LMI is solved at: ``tau`` raised to :func:`lag_floor` (0 stays 0, no lag)."""
+    return max(tau, lag_floor(loop)) if tau > 0 else tau
 
 
 def _nominal_matrices(a: float) -> tuple[FloatArray, FloatArray]:
