@@ -217,7 +217,9 @@ def test_dask_chunks_report_their_progress_as_events_and_the_bar_ends_at_the_run
             return read(topic)
 
         mp.setattr(client, "get_events", spy)
-        camp = run_campaign(preset_config("paper-triangle"), runs, seed=SEED, horizon=60.0, client=client, progress=True)
+        camp = run_campaign(
+            preset_config("paper-triangle"), runs, seed=SEED, horizon=60.0, client=client, progress=True
+        )
         (topic,) = topics
         logged = read(topic)
     assert len(camp.table) == runs and seen[-1] == runs
