@@ -244,6 +244,7 @@ def thrust_bounds(
     bounds: ErrorBounds,
     gains: Gains,
     current: float = 0.0,
+    integral: float = 0.0,
 ) -> ThrustBounds:
     """Sound bounds of ``|tau_x|, |tau_y|, |tau_psi|`` while the errors stay within ``bounds``.
 
@@ -274,6 +275,9 @@ def thrust_bounds(
         The gains of the law.
     current : float
         Bound of the water current's speed (m/s).
+    integral : float
+        Bound of the integrator state ``|z|`` (m s) when the gains have integral action: the
+        feedback then also has ``ki |z|``.
     """
     s_hi = tube.speed[:, 1]
     a_env, b_env = abs_range(*envelope.u), abs_range(*envelope.v)
@@ -295,7 +299,7 @@ def thrust_bounds(
     along = s_hi[:, None] * entries[:, :, 0] + (s_hi * np.sin(slip))[:, None] * entries[:, :, 1]  # (K, 2)
     along = np.minimum(along, s_hi[:, None] * norms)
     k_psi = gains.k_psi
-    err = abs(gains.alpha) * bounds.velocity + abs(gains.k1) * bounds.position
+    err = abs(gains.alpha) * bounds.velocity + abs(gains.k1) * bounds.position + gains.ki * integral
     drift = along + tube.accel[:, None]
     fx, fy = np.array([params.m11, params.m22]) * (err + drift.max(axis=0))
     r_abs = np.maximum(np.abs(r_lo), np.abs(r_hi))

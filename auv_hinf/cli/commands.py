@@ -182,7 +182,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                 )
             elif key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
                 print(f"{key:>24}: {_short(val)}")
-    if plan.certificate is None:
+    if plan.certificate is None and not plan.covered:  # integral action: covered by the robust certificate
         return _verdict(False, "; ".join(plan.notes))
     if result.diverged_at is not None:
         return _verdict(

@@ -19,6 +19,7 @@ from auv_hinf.config.fields import SynthesisKind
 from auv_hinf.config.messages import parse_config, plain_data, set_fields, validate_table
 from auv_hinf.config.schema import (
     DEFAULT_FRAME,
+    DEFAULT_INTEGRAL,
     DEFAULT_K1,
     DEFAULT_METHOD,
     DEFAULT_POLES,
@@ -75,6 +76,9 @@ class FormationConfig:
     synthesis : {"bandwidth", "lmi"}
         How the robust design chooses its gains: the bandwidth family or LMI synthesis
         (:mod:`auv_hinf.robust.synthesis`).
+    integral : bool
+        Integral action in the position loop (``[design] integral``; needs ``robust``): the
+        robust design adds ``ki`` (:func:`~auv_hinf.design.gains.integral_gain`) to each candidate.
     actuators : Actuators or None
         What the vehicles can push (``None``: none declared, unlimited thrust).
     implementation : Implementation
@@ -108,6 +112,7 @@ class FormationConfig:
     heading_poles: tuple[float, float] = DEFAULT_POLES
     robust: bool = False
     synthesis: SynthesisKind = DEFAULT_SYNTHESIS
+    integral: bool = DEFAULT_INTEGRAL
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
@@ -134,6 +139,12 @@ class FormationConfig:
         form = validate_table(FormationTable, plain_data(self._formation_table()), ("formation",))
         design = self._design_table()
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
+        if self.integral and not self.implementation.continuous:
+            raise ConfigError(
+                "design.integral: integral action runs with the continuous, exact implementation only in this "
+                "version (the implementation certificate does not cover the integrator); remove the "
+                "[implementation] sample time, delay and noise, or set integral = false"
+            )
         init = self.simulation.initial
         if init is not None and len(init) != form.n:
             raise ConfigError(f"simulation.initial must have one row per vehicle ({form.n}), got {len(init)}")
@@ -161,6 +172,7 @@ class FormationConfig:
             "heading_poles": list(self.heading_poles),
             "robust": self.robust,
             "synthesis": self.synthesis,
+            "integral": self.integral,
         }
 
     @property
@@ -274,6 +286,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
         heading_poles=(cf.design.heading_poles[0], cf.design.heading_poles[1]),
         robust=cf.design.robust,
         synthesis=cf.design.synthesis,
+        integral=cf.design.integral,
         reference=ReferenceConfig(cf.reference.kind, tuple(cf.reference.model_dump(exclude={"kind"}).items())),
         simulation=SimulationConfig(
             horizon=sim.horizon,

@@ -204,6 +204,11 @@ class DesignTable(_Table):
         "two distinct negative closed-loop poles of the heading loop",
         "1/s",
     )
+    integral: bool = _field(
+        False,
+        "integral action in the position loop (needs robust = true: the robust certificate covers it, "
+        "with the integrator starting at zero)",
+    )
 
     @field_validator("heading_poles")
     @classmethod
@@ -211,6 +216,15 @@ class DesignTable(_Table):
         if value[0] == value[1]:
             raise ValueError(f"heading poles must be distinct (single-input pole placement), got {value}")
         return value
+
+    @model_validator(mode="after")
+    def _integral_is_robust(self) -> DesignTable:
+        if self.integral and not self.robust:
+            raise ValueError(
+                "integral = true needs robust = true: integral action is designed and certified by the robust "
+                "design (add an [uncertainty] box or a [disturbance] current, or leave them empty)"
+            )
+        return self
 
 
 class PlantTable(_Table):
@@ -336,6 +350,7 @@ DEFAULT_METHOD: GainMethod = schema_default(DesignTable, "method")
 DEFAULT_FRAME: FormationFrame = schema_default(FormationTable, "frame")
 DEFAULT_K1: float = schema_default(DesignTable, "k1")
 DEFAULT_SYNTHESIS: SynthesisKind = schema_default(DesignTable, "synthesis")
+DEFAULT_INTEGRAL: bool = schema_default(DesignTable, "integral")
 DEFAULT_POLES: tuple[float, float] = schema_default(DesignTable, "heading_poles")
 DEFAULT_HORIZON: float = schema_default(SimulationTable, "horizon")
 DEFAULT_START: StartKind = schema_default(SimulationTable, "start")

@@ -15,7 +15,7 @@ same type.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import control as ct
@@ -39,16 +39,20 @@ class Gains:
         Position gain ``K1 = k1 I`` (1/s^2), > 0.
     k_psi : tuple of float
         Heading gains ``(k1_psi, k2_psi)`` (1/s^2, 1/s).
+    ki : float
+        Integral gain of the position loop (1/s^3): ``w_i = ... - ki z_i`` with
+        ``z_i' = p_i - p_id``. Zero (the default, the paper's law) means no integral action.
 
     Raises
     ------
     DesignError
-        If a gain is not finite or ``k1 <= 0``.
+        If a gain is not finite, ``k1 <= 0`` or ``ki < 0``.
     """
 
     alpha: float
     k1: float
     k_psi: tuple[float, float]
+    ki: float = 0.0
 
     def __post_init__(self) -> None:
         alpha = float(require_finite("alpha", self.alpha))
@@ -58,20 +62,68 @@ class Gains:
         k_psi = tuple(float(require_finite("k_psi", x)) for x in self.k_psi)
         if len(k_psi) != 2:
             raise DesignError(f"k_psi must be two numbers (k1_psi, k2_psi), got {self.k_psi!r}")
+        ki = float(require_finite("ki", self.ki))
+        if ki < 0.0:
+            raise DesignError(f"the integral gain ki must be >= 0, got {ki!r}")
         object.__setattr__(self, "alpha", alpha)
         object.__setattr__(self, "k1", k1)
         object.__setattr__(self, "k_psi", k_psi)
+        object.__setattr__(self, "ki", ki)
+
+    @property
+    def integral(self) -> bool:
+        """Whether the position loop has integral action (``ki > 0``)."""
+        return self.ki > 0.0
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"alpha": 1/s, "k1": 1/s^2, "k_psi": [1/s^2, 1/s]}``."""
-        return {"alpha": self.alpha, "k1": self.k1, "k_psi": list(self.k_psi)}
+        """``{"alpha": 1/s, "k1": 1/s^2, "k_psi": [1/s^2, 1/s]}``, and ``"ki"`` (1/s^3) when integral."""
+        out: dict[str, Any] = {"alpha": self.alpha, "k1": self.k1, "k_psi": list(self.k_psi)}
+        if self.integral:
+            out["ki"] = self.ki
+        return out
 
     def describe(self) -> str:
         """One line with units, as the reports print it."""
-        return (
+        line = (
             f"alpha {self.alpha:.6g} 1/s, k1 {self.k1:.6g} 1/s^2, "
             f"k_psi ({self.k_psi[0]:.6g} 1/s^2, {self.k_psi[1]:.6g} 1/s)"
         )
+        return line + (f", ki {self.ki:.6g} 1/s^3" if self.integral else "")
+
+
+#: Rate of the integrator's closed-loop pole as a share of the slower pole of the position
+#: loop without it (1). A third keeps the integrator slower than the loop it corrects, so the
+#: two remaining poles stay close to the proportional design's (the phase it costs is small),
+#: while the offset a constant current leaves still decays within a few slow time constants.
+INTEGRAL_POLE_SHARE = 1.0 / 3.0
+
+
+def integral_gain(alpha: float, k1: float, lam: float, input_gain: float) -> float:
+    """The integral gain ``ki`` (1/s^3) that adds a real pole at ``-rho`` to the centre position loop.
+
+    The centre loop ``s^2 + b s + k``, ``b = l alpha - lam``, ``k = l k1`` (``l`` the input gain
+    ``m_hat/m``, 1 for an exact model) with integral action becomes
+    ``s^3 + b s^2 + k s + l ki``. Choosing ``l ki = rho (k - rho (b - rho))`` factors it as
+    ``(s + rho) (s^2 + (b - rho) s + k - rho (b - rho))``, with ``rho`` =
+    :data:`INTEGRAL_POLE_SHARE` times the slower root's rate of ``s^2 + b s + k``: all three
+    poles stay in the open left half plane.
+
+    Raises
+    ------
+    DesignError
+        If the loop without integral action is not stable (``b <= 0`` or ``k <= 0``).
+    """
+    b, k = input_gain * alpha - lam, input_gain * k1
+    if not (b > 0.0 and k > 0.0):
+        raise DesignError(f"integral action needs a stable position loop, got l alpha - lam = {b:g}, l k1 = {k:g}")
+    slow = float(np.roots([1.0, b, k]).real.max())  # the slower root (closest to zero), < 0
+    rho = -INTEGRAL_POLE_SHARE * slow
+    return rho * (k - rho * (b - rho)) / input_gain
+
+
+def with_integral(gains: Gains, lam: float, input_gain: float) -> Gains:
+    """``gains`` with the integral gain of :func:`integral_gain` for their ``alpha`` and ``k1``."""
+    return replace(gains, ki=integral_gain(gains.alpha, gains.k1, lam, input_gain))
 
 
 def heading_gains(params: VehicleParams, poles: tuple[float, float]) -> tuple[float, float]:
@@ -136,4 +188,4 @@ def theorem1_gains(
     return Gains(alpha, k1, heading_gains(params, heading_poles))
 
 
-__all__ = ["Gains", "heading_gains", "theorem1_gains"]
+__all__ = ["INTEGRAL_POLE_SHARE", "Gains", "heading_gains", "integral_gain", "theorem1_gains", "with_integral"]

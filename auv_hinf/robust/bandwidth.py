@@ -25,7 +25,7 @@ from typing import Any
 from tqdm.auto import tqdm
 
 from auv_hinf.certification.margins import inflate_envelope
-from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.design.gains import Gains, heading_gains, with_integral
 from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.reference import ReferenceTube
@@ -83,16 +83,17 @@ class RobustDesign:
         }
 
 
-def family_gains(box: ParameterBox, envelope: Envelope, w: float) -> Gains:
-    """Gains of the family at bandwidth ``w`` (rad/s)."""
+def family_gains(box: ParameterBox, envelope: Envelope, w: float, integral: bool = False) -> Gains:
+    """Gains of the family at bandwidth ``w`` (rad/s); with ``integral``, plus ``ki`` (:func:`integral_gain`)."""
     lam, _ = box_lambda(box, inflate_envelope(envelope))
     lc, _ = box.input_gain()
     h = HEADING_RATIO * w
-    return Gains(
+    gains = Gains(
         alpha=(2.0 * POSITION_DAMPING * w + lam) / lc,
         k1=w * w / lc,
         k_psi=heading_gains(box.nominal, (-h, -1.5 * h)),
     )
+    return with_integral(gains, lam, lc) if integral else gains
 
 
 def design_robust(
@@ -104,14 +105,15 @@ def design_robust(
     *,
     progress: bool = False,
     fallback: bool = True,
+    integral: bool = False,
 ) -> RobustDesign:
-    """Choose the robust gains (see the module docstring)."""
+    """Choose the robust gains (see the module docstring); ``integral``: each with integral action."""
     tried: list[tuple[float, float, bool]] = []
     cap = box.max_scale if box.declared else math.inf
 
     def covers(w: float, s: float) -> bool:
         b = box.scaled(min(s, cap)) if box.declared else box
-        c = robust_certificate(b, envelope, tube, family_gains(box, envelope, w), current * s, actuators)
+        c = robust_certificate(b, envelope, tube, family_gains(box, envelope, w, integral), current * s, actuators)
         tried.append((w, s, c.covers))
         return c.covers
 
@@ -134,7 +136,7 @@ def design_robust(
                             else:
                                 lo = mid
                     bar.update(total - bar.n)  # the search is over: the bar ends full
-                    gains = family_gains(box, envelope, hi)
+                    gains = family_gains(box, envelope, hi, integral)
                     cert = robust_certificate(box, envelope, tube, gains, current, actuators)
                     why = (
                         f"gentlest bandwidth {hi:.4g} rad/s of the family (zeta = {POSITION_DAMPING:g}, heading "
@@ -146,7 +148,7 @@ def design_robust(
         # nothing fits the actuators: take the gentlest design that covers the box without them,
         # whose certificate then says by how much it exceeds them (the most aggressive
         # bandwidth would need the most force of all)
-        free = design_robust(box, envelope, tube, current, None, progress=progress)
+        free = design_robust(box, envelope, tube, current, None, progress=progress, integral=integral)
         if free.target > 0.0:
             cert = robust_certificate(box, envelope, tube, free.gains, current, actuators)
             why = (
@@ -155,7 +157,7 @@ def design_robust(
             )
             return RobustDesign(free.gains, free.bandwidth, 0.0, cert, tuple(tried) + free.tried, why)
     w = BANDWIDTHS[-1]
-    gains = family_gains(box, envelope, w)
+    gains = family_gains(box, envelope, w, integral)
     cert = robust_certificate(box, envelope, tube, gains, current, actuators)
     return RobustDesign(
         gains,

@@ -117,13 +117,17 @@ class RobustCertificate:
     thrust: ThrustBounds | None = None
     reasons: tuple[str, ...] = field(default=())
     method: str = METHOD
+    integral_bound: float | None = None
 
     def equilibrium_shift(self, current: ArrayLike) -> FloatArray:
-        """``e_c = -lam c/(l k1)`` (m): the current-shifted equilibrium the position ellipsoid is about.
+        """The current-shifted equilibrium the position ellipsoid is about, shape of ``current``.
 
-        ``current`` is the inertial current (m/s), shape ``(..., 2)``.
+        Without integral action ``e_c = -lam c/(l k1)`` (m) in the position error; with it the
+        integrator absorbs the constant part, ``z* = -lam c/(l ki)`` (m s), and the position
+        error's equilibrium is zero. ``current`` is the inertial current (m/s), shape ``(..., 2)``.
         """
-        out: FloatArray = -self.lam * np.asarray(current, dtype=float) / (self.gain_centre * self.gains.k1)
+        gain = self.gains.ki if self.gains.integral else self.gains.k1
+        out: FloatArray = -self.lam * np.asarray(current, dtype=float) / (self.gain_centre * gain)
         return out
 
     def start_inside(
@@ -139,7 +143,12 @@ class RobustCertificate:
         pos, head, hp, d = self.position_ellipsoid, self.heading_ellipsoid, self.heading, self.position_disturbance
         if pos is None or head is None or hp is None or d is None:
             return False
-        vp = pair_level(pos.matrix, e - self.equilibrium_shift(current), de, planar=True)
+        shift = self.equilibrium_shift(current)
+        if self.gains.integral:  # (z~, e, e') with the integrator starting at z = 0
+            x = np.stack(np.broadcast_arrays(-shift, np.asarray(e, dtype=float), np.asarray(de, dtype=float)), -1)
+            vp = np.einsum("...ak,kl,...al->...", x, pos.matrix, x)
+        else:
+            vp = pair_level(pos.matrix, e - shift, de, planar=True)
         vh = pair_level(head.matrix, epsi, depsi)
         return bool(np.all(vp <= d**2) and np.all(vh <= hp.disturbance**2))
 
@@ -164,6 +173,7 @@ class RobustCertificate:
             "envelope_margins": None if self.margins is None else self.margins.to_dict(),
             "thrust": None if self.thrust is None else self.thrust.to_dict(),
             "current_speed": self.current,
+            "integral_bound": self.integral_bound,
             "reasons": list(self.reasons),
             "method": self.method,
         }
@@ -178,6 +188,33 @@ def _heading_rate(hp: HeadingPerturbation) -> float:
     k, c = hp.stiffness[0], hp.damping[0]
     roots = np.roots([1.0, c, k])
     return float(-2.0 * roots.real.max())
+
+
+def _position_loop(
+    box: ParameterBox, env: Envelope, summ: TubeSummary, gains: Gains, current: float, lam: float, sigma: float
+) -> tuple[FloatArray, FloatArray, float, float | None]:
+    """Centre matrix, delta-channel row, ``|z*|`` bound (m s) and ``P_zz`` cap of the position loop.
+
+    With integral action the state is ``(z~, e, e')``, ``z~ = z - z*``, and the integrator starts
+    at ``z = 0``: the start ``z~ = -z*`` must lie in ``{V <= d^2}`` for every admissible current.
+    The disturbance bound ``d`` only grows with the assumed heading error, so its value at zero
+    heading error is a lower bound, and ``P_zz <= (d_0/|z*|_max)^2`` keeps every such start inside.
+    """
+    lc, _ = box.input_gain()
+    if not gains.integral:
+        return (
+            np.array([[0.0, 1.0], [-lc * gains.k1, lam - lc * gains.alpha]]),
+            np.array([gains.k1, gains.alpha]),
+            0.0,
+            None,
+        )
+    a0 = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-lc * gains.ki, -lc * gains.k1, lam - lc * gains.alpha]])
+    c2 = np.array([gains.ki, gains.k1, gains.alpha])
+    z_star = abs(lam) * current / (lc * gains.ki)
+    if z_star == 0.0:
+        return a0, c2, 0.0, None
+    d0 = position_disturbance(box, env, summ, current, 0.0, lam, sigma)
+    return a0, c2, z_star, (d0 / z_star) ** 2
 
 
 def _heading_at(
@@ -232,18 +269,18 @@ def robust_certificate(
             stable=False, covers=False, bounds=None, assumptions=None, decay_rate=None, reasons=(reason,), **base, **kw
         )
 
-    a0 = np.array([[0.0, 1.0], [-lc * gains.k1, lam - lc * gains.alpha]])
-    if not np.all(np.linalg.eigvals(a0).real < 0):
-        return fail("the centre of the perturbed position loop is not stable (alpha or k1 too small)")
-    wp = VELOCITY_WEIGHT / (lc * gains.k1)
-    pos = best_ellipsoid(
-        lambda a: position_ellipsoid(a0, sigma, spread, np.array([gains.k1, gains.alpha]), a, wp), _stable_rate(a0), wp
-    )
-    if pos is None:
-        return fail(
-            f"no invariant ellipsoid of the position loop (sigma = {sigma:.4g} 1/s, input-gain spread {spread:.3g})"
-        )
     summ = TubeSummary.of(tube)
+    a0, c2, z_star, cap = _position_loop(box, env, summ, gains, current, lam, sigma)
+    if not np.all(np.linalg.eigvals(a0).real < 0):
+        return fail("the centre of the perturbed position loop is not stable (alpha, k1 or ki)")
+    wp = VELOCITY_WEIGHT / (lc * gains.k1)
+    pos = best_ellipsoid(lambda a: position_ellipsoid(a0, sigma, spread, c2, a, wp, cap), _stable_rate(a0), wp)
+    if pos is None:
+        start = " that holds the integrator's start" if cap is not None else ""
+        return fail(
+            f"no invariant ellipsoid of the position loop{start} (sigma = {sigma:.4g} 1/s, "
+            f"input-gain spread {spread:.3g})"
+        )
     e_h = 0.0
     for _ in range(FIXED_POINT_ITERATIONS):
         e_v = position_disturbance(box, env, summ, current, e_h, lam, sigma) * pos.extents[1]
@@ -270,7 +307,8 @@ def robust_certificate(
         if head is None:
             continue
         b_h, b_r = hp.disturbance * head.extents[0], hp.disturbance * head.extents[1]
-        b_p, b_v = dbar * pos.extents[0] + current_offset(box, lam, current, gains.k1), dbar * pos.extents[1]
+        offset = 0.0 if gains.integral else current_offset(box, lam, current, gains.k1)
+        b_p, b_v = dbar * pos.extents[0] + offset, dbar * pos.extents[1]
         if b_h <= a_h and b_v <= a_v and a_h < MAX_HEADING_ERROR:
             break
     else:
@@ -293,11 +331,19 @@ def robust_certificate(
         reasons.append(f"envelope margins: {exc}")
     if margins is not None and not margins.ok:
         reasons.append(f"the envelope does not hold with these error bounds (smallest margin {margins.min:.4g})")
-    thrust = thrust_bounds(box.nominal, env, tube, bounds, gains, current)
+    b_z = dbar * pos.integral_extent + z_star if gains.integral else None  # |z| <= |z~| + |z*| (m s)
+    thrust = thrust_bounds(box.nominal, env, tube, bounds, gains, current, b_z or 0.0)
     if actuators is not None and not actuators.admits(thrust.as_tuple()):
         reasons.append(actuator_shortfall(actuators, thrust.as_tuple()))
     return RobustCertificate(
-        stable=True, covers=not reasons, margins=margins, thrust=thrust, reasons=tuple(reasons), **base, **rest
+        stable=True,
+        covers=not reasons,
+        margins=margins,
+        thrust=thrust,
+        reasons=tuple(reasons),
+        integral_bound=b_z,
+        **base,
+        **rest,
     )
 
 

@@ -149,10 +149,10 @@ def _error_rhs(
     )
 
     def f(z: FloatArray) -> FloatArray:
-        s = np.asarray(z, dtype=float).reshape(1, 6)
+        s = np.asarray(z, dtype=float).reshape(1, law.width)  # with integral action: the integrator last
         p_dot = ground_velocity(s, current)
-        d = rhs(plant, s, law.forces(s, p_dot, motion))[0]
-        return np.array([p_dot[0, 0] - speed, p_dot[0, 1], d[2], d[3], d[4], d[5]])
+        d = rhs(plant, s[:, :6], law.forces(s, p_dot, motion))[0]
+        return np.array([p_dot[0, 0] - speed, p_dot[0, 1], d[2], d[3], d[4], d[5], *s[0, 0 : law.width - 6]])
 
     return f
 
@@ -163,15 +163,17 @@ def trim_max_real(law: VehicleLaw, plant: VehicleParams, speed: float, current: 
     ``None`` when no trim is found (then nothing is exhibited).
     """
     f = _error_rhs(law, plant, speed, current)
-    z0 = np.array([0.0, 0.0, 0.0, speed - current[0], -current[1], 0.0])
+    w = law.width
+    z0 = np.zeros(w)
+    z0[3:5] = speed - current[0], -current[1]
     sol = root(f, z0, method="hybr")
     if not sol.success or not np.all(np.abs(f(sol.x)) <= TRIM_RTOL * max(1.0, speed)):
         return None
     z = sol.x
-    jac = np.empty((6, 6))
-    for k in range(6):
+    jac = np.empty((w, w))
+    for k in range(w):
         h = 1e-6 * max(1.0, abs(z[k]))
-        dz = np.zeros(6)
+        dz = np.zeros(w)
         dz[k] = h
         jac[:, k] = (f(z + dz) - f(z - dz)) / (2.0 * h)
     eig = np.linalg.eigvals(jac)

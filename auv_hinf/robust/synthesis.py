@@ -25,7 +25,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from auv_hinf.certification.margins import inflate_envelope
-from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.design.gains import Gains, heading_gains, with_integral
 from auv_hinf.design.lmi.synthesis import synthesise_position
 from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.envelope import Envelope
@@ -64,8 +64,12 @@ def synthesise_robust(
     actuators: Actuators | None = None,
     *,
     progress: bool = False,
+    integral: bool = False,
 ) -> RobustDesign:
     """The synthesised robust design (see the module docstring).
+
+    With ``integral`` every candidate gets the integral gain of
+    :func:`~auv_hinf.design.gains.integral_gain` for its ``(alpha, k1)`` before it is certified.
 
     Returns
     -------
@@ -92,7 +96,8 @@ def synthesise_robust(
                 continue
             k1, alpha = found.k1, found.alpha
             h = HEADING_RATIO * math.sqrt(lc * k1)
-            candidates.append((Gains(alpha, k1, heading_gains(box.nominal, (-h, -1.5 * h))), math.sqrt(lc * k1)))
+            gains = Gains(alpha, k1, heading_gains(box.nominal, (-h, -1.5 * h)))
+            candidates.append((with_integral(gains, lam, lc) if integral else gains, math.sqrt(lc * k1)))
     tried: list[tuple[float, float, bool]] = []
     best: tuple[float, Gains, float, float] | None = None
     cap_scale = box.max_scale if box.declared else math.inf
@@ -115,6 +120,7 @@ def synthesise_robust(
         rated = [(g, w, robust_certificate(box, envelope, tube, g, current, actuators)) for g, w in candidates]
         if not rated:
             gains = Gains(-lam / lc + 1.0, 1.0, heading_gains(box.nominal, (-1.0, -1.5)))
+            gains = with_integral(gains, lam, lc) if integral else gains
             cert = robust_certificate(box, envelope, tube, gains, current, actuators)
             return RobustDesign(gains, 1.0, 0.0, cert, tuple(tried), "the synthesis LMI is infeasible at every rate")
         k = int(np.argmin([_score(c, None) if c.thrust is not None else math.inf for _, _, c in rated]))

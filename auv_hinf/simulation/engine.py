@@ -32,15 +32,28 @@ Systems = Literal["scenario", "vehicle"]
 def fleet_derivative(
     law: VehicleLaw, plant: VehicleParams, current: FloatArray, states: FloatArray, motion: Motion
 ) -> FloatArray:
-    """Closed-loop ``d/dt`` of states ``(..., N, 6)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s)."""
+    """Closed-loop ``d/dt`` of states ``(..., N, law.width)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s).
+
+    With integral action the last two columns are the integrator ``z`` (m s), ``z' = p - p_d``.
+    """
     cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))  # shared by the law and the plant
     p_dot = ground_velocity(states, current, cs)
-    return plant_derivative(plant, current, states, law.forces(states, p_dot, motion, cs), cs, p_dot)
+    plant_states = states[..., :6]
+    d = plant_derivative(plant, current, plant_states, law.forces(states, p_dot, motion, cs), cs, p_dot)
+    if states.shape[-1] == 6:
+        return d
+    return np.concatenate([d, plant_states[..., 0:2] - motion.p], axis=-1)
+
+
+def initial_with_controller(law: VehicleLaw, initial: FloatArray) -> FloatArray:
+    """Plant states ``(..., N, 6)`` followed by the controller's: the integrator starts at zero."""
+    pad = np.zeros((*initial.shape[:-1], law.width - 6))
+    return np.concatenate([initial, pad], axis=-1)
 
 
 def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
-    """Time derivative of the flat state ``y`` (6N,) of one scenario at time ``t`` (s)."""
-    s = np.asarray(y, dtype=float).reshape(-1, 6)
+    """Time derivative of the flat state ``y`` (``law.width N``,) of one scenario at time ``t`` (s)."""
+    s = np.asarray(y, dtype=float).reshape(-1, scn.law.width)
     return fleet_derivative(scn.law, scn.plant, np.asarray(scn.current), s, scn.reference.motion(t)).ravel()
 
 
@@ -49,12 +62,14 @@ def batch_system(
 ) -> tuple[Callable[[FloatArray, FloatArray], FloatArray], EventFn | None]:
     """Batched rhs ``(t (B,), y (B, d)) -> (B, d)`` and envelope event of ``batch``.
 
-    ``systems="scenario"``: ``B = S``, ``d = 6N``. ``systems="vehicle"``: ``B = S N``,
-    ``d = 6``, each vehicle with its own time (the law has no shared state, so the fleet is
-    decoupled); needs a :class:`VehicleMotionSource`.
+    ``systems="scenario"``: ``B = S``, ``d = w N``. ``systems="vehicle"``: ``B = S N``,
+    ``d = w``, with ``w`` the law's :attr:`~auv_hinf.simulation.law.VehicleLaw.width`; each
+    vehicle with its own time (the law has no shared state, so the fleet is decoupled); needs a
+    :class:`VehicleMotionSource`.
     """
     n_s, n = batch.initial.shape[:2]
     law, ref, env = batch.scenarios[0].law, batch.source, batch.scenarios[0].envelope
+    wd = law.width
     plant = batch.plant.coefficients(1)
     current = np.asfortranarray(batch.current)[:, None, :]
     if systems == "vehicle":
@@ -63,8 +78,8 @@ def batch_system(
         vref = ref
 
         def f_vehicle(t: FloatArray, y: FloatArray) -> FloatArray:
-            s = y.reshape(n_s, n, 6)
-            return fleet_derivative(law, plant, current, s, vref.motion_per_vehicle(t.reshape(n_s, n))).reshape(-1, 6)
+            s = y.reshape(n_s, n, wd)
+            return fleet_derivative(law, plant, current, s, vref.motion_per_vehicle(t.reshape(n_s, n))).reshape(-1, wd)
 
         ev_v = None if env is None else (lambda t, y: envelope_margin(env, y))
         return f_vehicle, ev_v
@@ -72,10 +87,10 @@ def batch_system(
         raise ParameterError(f"systems must be 'scenario' or 'vehicle', got {systems!r}")
 
     def f_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
-        states = np.asfortranarray(y.reshape(n_s, n, 6))  # scenario axis fastest: see auv_hinf.arrays
+        states = np.asfortranarray(y.reshape(n_s, n, wd))  # scenario axis fastest: see auv_hinf.arrays
         return fleet_derivative(law, plant, current, states, ref.motion(t)).reshape(n_s, -1)
 
-    return f_scenario, (None if env is None else envelope_event(env, n))
+    return f_scenario, (None if env is None else envelope_event(env, n, wd))
 
 
 def integrate_batch(
@@ -109,10 +124,13 @@ def integrate_batch(
     Returns
     -------
     BatchSolution
-        ``y`` of shape ``(T, S, 6 N)`` for scenario systems, ``(T, S N, 6)`` for vehicle systems.
+        ``y`` of shape ``(T, S, w N)`` for scenario systems, ``(T, S N, w)`` for vehicle systems
+        (``w = law.width``: 6, or 8 with the integrator).
     """
     first = batch.scenarios[0]
     n_s, n = batch.initial.shape[:2]
+    wd = first.law.width
+    initial = initial_with_controller(first.law, batch.initial)
     span = (0.0, float(first.horizon))
     if method == "rk45" and systems == "scenario" and sink is None:
         singles = [ScenarioBatch((scn,)) for scn in batch.scenarios] if n_s > 1 else [batch]
@@ -120,7 +138,15 @@ def integrate_batch(
         for one in singles:
             f1, ev1 = batch_system(one, "scenario")
             parts.append(
-                rk45_reference(f1, span, one.initial.reshape(1, 6 * n), first.times, rtol=rtol, atol=atol, event=ev1)
+                rk45_reference(
+                    f1,
+                    span,
+                    initial_with_controller(first.law, one.initial).reshape(1, wd * n),
+                    first.times,
+                    rtol=rtol,
+                    atol=atol,
+                    event=ev1,
+                )
             )
         return BatchSolution(
             t=first.times,
@@ -134,8 +160,8 @@ def integrate_batch(
             f"method must be 'dopri', or 'rk45' with scenario systems and no sink, got {method!r}/{systems!r}"
         )
     f, event = batch_system(batch, systems)
-    y0 = batch.initial.reshape(n_s * n, 6) if systems == "vehicle" else batch.initial.reshape(n_s, 6 * n)
-    screen = None if first.envelope is None else envelope_bound(first.envelope, 1 if systems == "vehicle" else n)
+    y0 = initial.reshape(n_s * n, wd) if systems == "vehicle" else initial.reshape(n_s, wd * n)
+    screen = None if first.envelope is None else envelope_bound(first.envelope, 1 if systems == "vehicle" else n, wd)
     return dopri5(
         f,
         span,
@@ -177,7 +203,7 @@ def simulate_batch(
         return simulate_sampled_batch(batch)
     sol = integrate_batch(batch, method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions)
     n_s, n = batch.initial.shape[:2]
-    states = cast(FloatArray, sol.y).reshape(sol.t.size, n_s, n, 6)
+    states = cast(FloatArray, sol.y).reshape(sol.t.size, n_s, n, batch.scenarios[0].law.width)
     steps = sol.n_steps.reshape(n_s, -1).max(axis=1)
     return build_results(batch.scenarios, sol.t, states, first_exits(sol, n_s), [int(x) for x in steps])
 

@@ -96,6 +96,10 @@ class RigidReference:
         return Motion(p=q + self.offsets, v=qd, a=qdd, psi=psi, r=r, r_dot=r_dot)
 
 
+#: State size per vehicle with integral action: ``[x, y, psi, u, v, r, z_x, z_y]``.
+INTEGRAL_WIDTH = 8
+
+
 def heading_torque(
     params: VehicleParams,
     k_psi: tuple[float, float],
@@ -166,6 +170,11 @@ class VehicleLaw:
         if self.actuators is not None and not isinstance(self.actuators, Actuators):
             raise ParameterError(f"actuators must be an Actuators or None, got {self.actuators!r}")
 
+    @property
+    def width(self) -> int:
+        """State size per vehicle in the closed loop: 6, or :data:`INTEGRAL_WIDTH` with integral action."""
+        return INTEGRAL_WIDTH if self.gains.integral else 6
+
     def unsaturated(
         self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None
     ) -> FloatArray:
@@ -173,8 +182,9 @@ class VehicleLaw:
 
         Parameters
         ----------
-        states : ndarray, shape (..., N, 6)
-            Measured ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s).
+        states : ndarray, shape (..., N, 6) or (..., N, 8)
+            Measured ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s), followed with
+            integral action by the integrator state ``z = int (p - p_d) dt`` (m s).
         p_dot : ndarray, shape (..., N, 2)
             Measured inertial (ground) velocity (m/s).
         motion : Motion
@@ -188,6 +198,8 @@ class VehicleLaw:
         # inertial part of w_i without the drift term: -alpha e' - k1 e + p_id''
         g = self.gains
         w = -g.alpha * (p_dot - motion.v) - g.k1 * (states[..., 0:2] - motion.p) + motion.a
+        if states.shape[-1] == INTEGRAL_WIDTH:  # integral action on z = int (p - p_d) dt
+            w = w - g.ki * states[..., 6:8]
         # everything in the body frame: R^T w and R^T G v_d = B R^T v_d
         wx, wy = c * w[..., 0] + s * w[..., 1], -s * w[..., 0] + c * w[..., 1]
         vx = c * motion.v[..., 0] + s * motion.v[..., 1]
@@ -265,6 +277,7 @@ class FormationController:
 
 
 __all__ = [
+    "INTEGRAL_WIDTH",
     "FormationController",
     "MotionSource",
     "RigidReference",

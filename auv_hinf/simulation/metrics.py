@@ -144,8 +144,8 @@ class ErrorSink:
         self._progress, self._reported = progress, 0.0
 
     def __call__(self, idx: NDArray[np.int_], systems: NDArray[np.int_], values: FloatArray) -> None:
-        """Fold samples ``idx`` of runs ``systems`` (flat states ``values (m, 6 N)``) in."""
-        states = np.asfortranarray(values.reshape(-1, self._n, 6))  # run axis fastest (auv_hinf.arrays)
+        """Fold samples ``idx`` of runs ``systems`` (flat states ``values (m, w N)``, ``w`` 6 or 8) in."""
+        states = np.asfortranarray(values.reshape(-1, self._n, values.shape[-1] // self._n))  # run axis fastest
         motion = self._ref.motion(self._t[idx])
         cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))
         p_dot = ground_velocity(states, self._current[systems, None, :], cs)

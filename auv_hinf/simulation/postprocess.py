@@ -38,26 +38,30 @@ def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
     return margin
 
 
-def envelope_event(envelope: Envelope, n: int) -> EventFn:
-    """The exit event of flat states ``(..., 6 n)``: the smallest envelope margin of their ``n`` vehicles."""
+def envelope_event(envelope: Envelope, n: int, width: int = 6) -> EventFn:
+    """The exit event of flat states ``(..., width n)``: the smallest envelope margin of their ``n`` vehicles.
+
+    ``width`` is the state size per vehicle: 6, or 8 with an integrator (see
+    :attr:`~auv_hinf.simulation.law.VehicleLaw.width`).
+    """
 
     def event(t: FloatArray, y: FloatArray) -> FloatArray:
-        margin: FloatArray = envelope_margin(envelope, y.reshape((*y.shape[:-1], n, 6))).min(axis=-1)
+        margin: FloatArray = envelope_margin(envelope, y.reshape((*y.shape[:-1], n, width))).min(axis=-1)
         return margin
 
     return event
 
 
-def envelope_bound(envelope: Envelope, n: int) -> EventBound:
+def envelope_bound(envelope: Envelope, n: int, width: int = 6) -> EventBound:
     """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
 
     Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
     it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
-    vehicles per system (1 for vehicle systems).
+    vehicles per system (1 for vehicle systems), ``width`` the state size per vehicle.
     """
 
     def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
-        s, rad = y.reshape(*y.shape[:-1], n, 6), radius.reshape(*radius.shape[:-1], n, 6)
+        s, rad = y.reshape(*y.shape[:-1], n, width), radius.reshape(*radius.shape[:-1], n, width)
         low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
         return low
 

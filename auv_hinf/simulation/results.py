@@ -164,7 +164,10 @@ def build_results(
     commanded: FloatArray | None = None,
     peaks: FloatArray | None = None,
 ) -> list[SimulationResult]:
-    """Post-process ``S`` scenarios sampled as ``states (T, S, N, 6)`` at times ``t (T,)``.
+    """Post-process ``S`` scenarios sampled as ``states (T, S, N, w)`` at times ``t (T,)``.
+
+    ``w`` is 6, or 8 with the integrator of integral action (the law reads it; the results keep
+    the plant's 6 columns).
 
     Scenarios that share their reference, mission, law and Jacobi convention (a campaign's
     chunk) are processed together in whole-array calls, with the desired motion evaluated
@@ -196,7 +199,8 @@ def build_results(
     p_dot = ground_velocity(states, current)
     motion = _expand(first.reference.motion(t))
     if commanded is None:
-        commanded = first.law.unsaturated(states, p_dot, motion)
+        commanded = first.law.unsaturated(states, p_dot, motion)  # with the integrator columns, if any
+    states = states[..., :6]
     forces, active = saturate(commanded, first.law.actuators)
     if peaks is None:
         peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles

@@ -178,9 +178,9 @@ def largest_certifiable(point: DesignPoint, act: Actuators) -> dict[str, Any]:
     def redesign_fits(scale: float, speed: float) -> bool:
         b = box.scaled(scale)
         if cfg.synthesis == "lmi":
-            design = synthesise_robust(b, cfg.envelope, point.tube, speed, act)
+            design = synthesise_robust(b, cfg.envelope, point.tube, speed, act, integral=cfg.integral)
         else:
-            design = design_robust(b, cfg.envelope, point.tube, speed, act, fallback=False)
+            design = design_robust(b, cfg.envelope, point.tube, speed, act, fallback=False, integral=cfg.integral)
         return design.target > 0.0 and robust_certificate(b, cfg.envelope, point.tube, design.gains, speed, act).covers
 
     def answer(scale_of: Any, top: float) -> float | None:

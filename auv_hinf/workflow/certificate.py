@@ -305,8 +305,8 @@ def certify(config: FormationConfig, *, jacobi_samples: int = 5000, refine_jacob
         # the robust design replaces Theorem 1's gain: its verdict is the robust certificate's
         reasons = [r for r in reasons if r.startswith("cross-check")]
         reasons.extend(r for r in point.reasons if r.startswith("robust design"))
-    if point.gains is not None and (config.robust or not reasons):
-        loop = closed_loop_summary(point)
+    if point.gains is not None and (config.robust or not reasons) and not point.gains.integral:
+        loop = closed_loop_summary(point)  # integral action: the robust certificate is the verdict
         reasons.extend(loop.reasons)
     nominal = None if loop is None else loop.certificate
     rob = robust_summary(point, nominal=nominal)

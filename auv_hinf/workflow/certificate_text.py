@@ -92,7 +92,12 @@ def certificate_text(cert: CertificateView) -> str:
         f"  gains that run            {'none' if cert.gains is None else cert.gains.describe()}"
         f"{'  (robust design)' if cert.gain_source == 'robust' else ''}"
     )
-    lines += ["  closed loop               not certified"] if cert.closed_loop is None else cert.closed_loop.lines()
+    if cert.closed_loop is not None:
+        lines += cert.closed_loop.lines()
+    elif cert.gains is not None and cert.gains.integral:
+        lines += ["  closed loop (paper's law) not applicable: integral action is certified by the robust certificate"]
+    else:
+        lines += ["  closed loop               not certified"]
     lines += [] if cert.robust is None else cert.robust.lines()
     lines += [] if cert.actuators is None else cert.actuators.lines()
     lines += [] if cert.implementation is None else cert.implementation.lines()

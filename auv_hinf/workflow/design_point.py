@@ -114,8 +114,8 @@ class DesignPoint:
 
     @property
     def declared(self) -> bool:
-        """A parameter box or a current is declared (the robust certificate applies)."""
-        return self.box.declared or self.current > 0.0
+        """A parameter box or a current is declared, or integral action (the robust certificate applies)."""
+        return self.box.declared or self.current > 0.0 or self.config.integral
 
     def summary(self) -> dict[str, Any]:
         """The ``design`` object of ``auv-hinf certify --json``: method, structure, objective, value, gains."""
@@ -232,6 +232,7 @@ def _design(cfg: FormationConfig) -> DesignPoint:
                 float(cfg.disturbance.current_speed or 0.0),
                 cfg.actuators,
                 progress=True,
+                integral=cfg.integral,
             )
             gains = robust.gains
         except AuvHinfError as exc:

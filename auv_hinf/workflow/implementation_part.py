@@ -118,6 +118,8 @@ class ImplementationSummary:
         impl, c = self.implementation, self.certificate
         out = [f"  implementation            {impl.describe()}"]
         if c is None:
+            if self.covers:  # the continuous exact law, certified by the continuous certificates
+                return [*out, "  implementation covered    yes (the continuous certificates)"]
             return [*out, "  implementation            not certified"]
         ex = c.exact_max_sample_time
         tight = "" if c.tightness is None else f", {c.tightness:.2f} of the exact nominal limit {ex:.4g} s"
@@ -207,6 +209,9 @@ def implementation_summary(
     if not declared.continuous and declared.sample_time == 0.0:
         period = control_period(declared, horizon if horizon is not None else point.config.simulation.horizon)
         impl = replace(declared, sample_time=period)
+    if point.gains is not None and point.gains.integral:  # continuous only (the config refuses the rest)
+        why = () if continuous_ok else ("the continuous certificates do not hold",)
+        return ImplementationSummary(declared, None, continuous_ok, why)
     if nominal is None or point.gains is None:
         return ImplementationSummary(impl, None, False, ("no closed-loop certificate to extend to the implementation",))
     try:

@@ -18,6 +18,7 @@ from auv_hinf.certification.actuation import mission_thrust, within_actuators
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
 from auv_hinf.certification.coverage import Coverage, StartMode, cover_start
 from auv_hinf.certification.reference_fit import ReferenceFit
+from auv_hinf.design.gains import Gains
 from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.models.actuators import actuator_shortfall
 from auv_hinf.workflow.design_point import DesignPoint, initial_states
@@ -25,6 +26,27 @@ from auv_hinf.workflow.design_point import DesignPoint, initial_states
 #: A heading range counts as the full circle when its width is 2 pi up to this relative
 #: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
 FULL_CIRCLE_RTOL = 1e-12
+
+
+def mission_checks(point: DesignPoint) -> Gains:
+    """The design's gains, after the checks every certificate needs: full heading range, mission in the envelope.
+
+    Raises
+    ------
+    DesignError
+        As :func:`closed_loop_for`, for these checks.
+    """
+    cfg = point.config
+    width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
+    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+        raise DesignError(
+            f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
+            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
+        )
+    gains = point.require_gains()
+    if not point.fit.ok:
+        raise DesignError(point.fit.reason())
+    return gains
 
 
 def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
@@ -39,18 +61,16 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
         If there are no gains, the envelope's heading range is narrower than the full
         circle, some vehicle's desired motion leaves the envelope even at zero error (the
         message names the vehicle, the turn and the smallest turn radius that fits), the
-        small-gain condition fails, or the mission alone needs more force than the actuators give.
+        small-gain condition fails, the mission alone needs more force than the actuators give, or
+        the gains have integral action (the robust certificate covers those).
     """
     cfg = point.config
-    width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
-    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+    gains = mission_checks(point)
+    if gains.integral:
         raise DesignError(
-            f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
-            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
+            "the nominal closed-loop certificate covers the paper's law; integral action is certified by the "
+            "robust certificate only"
         )
-    gains = point.require_gains()
-    if not point.fit.ok:
-        raise DesignError(point.fit.reason())
     cert = closed_loop_certificate(cfg.vehicle, cfg.envelope, point.tube, gains, lam=point.lam, sigma=point.sigma.upper)
     if cfg.actuators is None:
         return cert

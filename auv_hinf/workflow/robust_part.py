@@ -9,7 +9,7 @@ and gives its certified bounds.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -28,7 +28,7 @@ from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
 from auv_hinf.robust.certificate import RobustCertificate, robust_certificate
 from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest_corner
 from auv_hinf.workflow.design_point import DesignPoint
-from auv_hinf.workflow.nominal import closed_loop_for
+from auv_hinf.workflow.nominal import closed_loop_for, mission_checks
 
 #: Largest fleet whose own shaped tube is built to check a run (the tube costs ~0.1-1 s a vehicle).
 RUN_TUBE_MAX_N = 16
@@ -63,6 +63,7 @@ class RobustSummary:
     nominal_rate: float | None
     reasons: tuple[str, ...]
     gains: Gains | None = None
+    without_integral: RobustCertificate | None = None
 
     @property
     def covers(self) -> bool:
@@ -93,7 +94,34 @@ class RobustSummary:
             )
         if self.margin is not None:
             out.append(f"    box scale certified up to {self.margin.lower:.4g} (1 = the declared box)")
+        integral = self.integral()
+        if integral is not None:
+            without = integral["position_bound_without"]
+            out.append(
+                f"    integral action ki {integral['ki']:.4g} 1/s^3: |e| <= {integral['position_bound']:.4g} m; "
+                "the same alpha, k1 without it: "
+                + (f"|e| <= {without:.4g} m" if without is not None else "not certified")
+            )
         return out
+
+    def integral(self) -> dict[str, Any] | None:
+        """The ``integral`` object of ``robust``: the position bound with and without integral action (m).
+
+        ``None`` without integral action. ``position_bound_without`` is the certified bound of the
+        same ``alpha``, ``k1`` and heading gains with ``ki = 0`` (``None`` when that does not cover),
+        ``integral_bound`` the bound of the integrator state ``|z|`` (m s).
+        """
+        c = self.certificate
+        if c is None or not c.gains.integral:
+            return None
+        w = self.without_integral
+        return {
+            "ki": c.gains.ki,
+            "position_bound": None if c.bounds is None else c.bounds.position,
+            "integral_bound": c.integral_bound,
+            "position_bound_without": None if w is None or not w.covers or w.bounds is None else w.bounds.position,
+            "covers_without": bool(w is not None and w.covers),
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The ``robust`` object of ``auv-hinf certify --json``."""
@@ -116,6 +144,7 @@ class RobustSummary:
             "gains": None if gains is None else gains.to_dict(),
             "design": None if self.design is None else self.design.to_dict(),
             "details": None if c is None else c.to_dict(),
+            "integral": self.integral(),
             "reasons": list(self.reasons) + ([] if c is None else list(c.reasons)),
         }
 
@@ -136,13 +165,13 @@ def robust_summary(
     design = point.robust_design
     tube, speed = point.tube, TubeSummary.of(point.tube).speed[1]
     try:
-        gains = point.require_gains()
-        if nominal is None:
+        gains = mission_checks(point)
+        if nominal is None and not gains.integral:  # integral action: the robust certificate alone
             nominal = closed_loop_for(point)
     except AuvHinfError as exc:
         return RobustSummary(declared, None, None, None, design, None, (f"not certified: {exc}",))
-    if not declared:
-        return RobustSummary(False, None, None, None, design, nominal.rate, (), gains)
+    if not declared:  # integral action is declared: here the nominal certificate exists
+        return RobustSummary(False, None, None, None, design, None if nominal is None else nominal.rate, (), gains)
     reasons: list[str] = []
     if cfg.disturbance.current_rate:
         reasons.append(
@@ -157,7 +186,10 @@ def robust_summary(
 
         margin = robust_margin(box, gains, speed, current, covers)
     worst = weakest_corner(box, gains, speed, current)
-    return RobustSummary(True, cert, margin, worst, design, None, tuple(reasons), gains)
+    without = None
+    if gains.integral:
+        without = robust_certificate(box, cfg.envelope, tube, replace(gains, ki=0.0), current, cfg.actuators)
+    return RobustSummary(True, cert, margin, worst, design, None, tuple(reasons), gains, without)
 
 
 @dataclass(frozen=True)

@@ -77,11 +77,14 @@ class RunPlan:
         set); this is about the gains: no nominal closed-loop certificate (small gain, envelope,
         actuators), or a declared box and current the robust certificate does not cover.
         """
-        if self.certificate is None:
+        integral = self.design.gains is not None and self.design.gains.integral
+        if self.certificate is None and not integral:
             why = "; ".join(n for n in self.notes if n.startswith("design not certified"))
             return why or "no closed-loop certificate"
         if self.robust is not None and self.robust.design_covered is False:
             return f"the robust certificate does not cover the declared box and current: {self.robust.reason}"
+        if integral and self.robust is None:
+            return "integral action is certified by the robust certificate, which was not evaluated"
         return None
 
 
@@ -138,10 +141,13 @@ def plan_run(
     cert: ClosedLoopCertificate | None = None
     cov: Coverage | None = None
     try:
-        cert = closed_loop_for(point)
-        cov = coverage_for(point, cert, initial, mode)
-        if not cov.covered:
-            notes.append(cov.reason)
+        if gains.integral:
+            notes.append("integral action: the robust certificate decides (the nominal one is for the paper's law)")
+        else:
+            cert = closed_loop_for(point)
+            cov = coverage_for(point, cert, initial, mode)
+            if not cov.covered:
+                notes.append(cov.reason)
     except AuvHinfError as exc:
         notes.append(f"design not certified: {exc}")
     plant = sim.plant_params(cfg.vehicle)

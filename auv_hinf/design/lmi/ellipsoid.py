@@ -51,9 +51,12 @@ class Ellipsoid:
     rate : float
         ``a`` (1/s): ``V - 1`` decays at least as ``exp(-a t)``.
     extents : tuple of float
-        Half-widths ``sqrt((P^-1)_11)``, ``sqrt((P^-1)_22)`` per unit disturbance.
+        Half-widths of the last two states (``e``, ``e'``; m and m/s per unit disturbance):
+        ``sqrt((P^-1)_kk)``.
     max_eig, margin : float
         Largest eigenvalue of the verified LMI matrices and the round-off margin it cleared.
+    integral_extent : float
+        Half-width of the integrator state ``z`` (m s per unit disturbance; 0 without one).
     """
 
     matrix: FloatArray
@@ -61,26 +64,39 @@ class Ellipsoid:
     extents: tuple[float, float]
     max_eig: float
     margin: float
+    integral_extent: float = 0.0
 
 
 def _sym(m: Any) -> Any:
     return 0.5 * (m + m.T)
 
 
-def _schur(p: cp.Variable, t: cp.Variable, k: int) -> cp.Constraint:
-    e = np.zeros((2, 1))
+def _unit(n: int, k: int) -> FloatArray:
+    e = np.zeros((n, 1))
     e[k, 0] = 1.0
+    return e
+
+
+def _schur(p: cp.Variable, t: cp.Variable, k: int) -> cp.Constraint:
+    e = _unit(p.shape[0], k)
     return _sym(_CP.bmat([[p, e], [e.T, _CP.reshape(t, (1, 1), order="C")]])) >> 0
 
 
-@lru_cache(maxsize=1)
-def _position_sdp() -> tuple[cp.Problem, dict[str, cp.Parameter], cp.Variable, tuple[cp.Variable, cp.Variable]]:
-    a0, s1, s2 = cp.Parameter((2, 2)), cp.Parameter((2, 2), PSD=True), cp.Parameter((2, 2), PSD=True)
+@lru_cache(maxsize=3)
+def _position_sdp(
+    n: int, capped: bool
+) -> tuple[cp.Problem, dict[str, cp.Parameter], cp.Variable, tuple[cp.Variable, cp.Variable]]:
+    """The position SDP on ``n`` states: ``(e, e')`` (n = 2) or ``(z, e, e')`` with integral action (n = 3).
+
+    ``capped``: with a parameter ``cap`` bounding ``P_11`` (the integrator's start, see
+    :func:`position_ellipsoid`).
+    """
+    a0, s1, s2 = cp.Parameter((n, n)), cp.Parameter((n, n), PSD=True), cp.Parameter((n, n), PSD=True)
     rate, weight = cp.Parameter(nonneg=True), cp.Parameter(nonneg=True)
-    p = cp.Variable((2, 2), symmetric=True)
+    p = cp.Variable((n, n), symmetric=True)
     t1, t2 = cp.Variable(nonneg=True), cp.Variable(nonneg=True)
     te, tv = cp.Variable(), cp.Variable()
-    pb = p @ _B
+    pb = p @ _unit(n, n - 1)
     z = np.zeros((1, 1))
     top = a0.T @ p + p @ a0 + rate * p + t1 * s1 + t2 * s2
     m = _CP.bmat(
@@ -91,22 +107,34 @@ def _position_sdp() -> tuple[cp.Problem, dict[str, cp.Parameter], cp.Variable, t
             [pb.T, z, z, -_CP.reshape(rate, (1, 1), order="C")],
         ]
     )
-    cons = [_sym(m) << -LYAP_STRICT_RTOL * _CP.trace(p) * np.eye(5), p >> 0, _schur(p, te, 0), _schur(p, tv, 1)]
+    cons = [
+        _sym(m) << -LYAP_STRICT_RTOL * _CP.trace(p) * np.eye(n + 3),
+        p >> 0,
+        _schur(p, te, n - 2),
+        _schur(p, tv, n - 1),
+    ]
+    par: dict[str, cp.Parameter] = {"a0": a0, "s1": s1, "s2": s2, "rate": rate, "weight": weight}
+    if capped:
+        # the start: the integrator begins at z = 0, i.e. z~ = -z* off the equilibrium, which must
+        # lie in {V <= d^2}: P_zz |z*|^2 <= d^2 (the caller gives cap = (d_min / |z*|_max)^2)
+        par["cap"] = cp.Parameter(nonneg=True)
+        cons.append(p[0, 0] <= par["cap"])
     prob = cp.Problem(cp.Minimize(te + weight * tv), cons)
-    return prob, {"a0": a0, "s1": s1, "s2": s2, "rate": rate, "weight": weight}, p, (t1, t2)
+    return prob, par, p, (t1, t2)
 
 
 def position_matrix(
     p: FloatArray, taus: tuple[float, float], a0: FloatArray, s1: FloatArray, s2: FloatArray, rate: float
 ) -> FloatArray:
-    """The 5x5 position LMI matrix (numpy), for the re-verification."""
-    pb = p @ _B
-    m = np.zeros((5, 5))
-    m[:2, :2] = a0.T @ p + p @ a0 + rate * p + taus[0] * s1 + taus[1] * s2
-    for k in (2, 3, 4):
-        m[:2, k : k + 1] = pb
-        m[k : k + 1, :2] = pb.T
-    m[2, 2], m[3, 3], m[4, 4] = -taus[0], -taus[1], -rate
+    """The ``(n + 3) x (n + 3)`` position LMI matrix (numpy), for the re-verification."""
+    n = p.shape[0]
+    pb = p @ _unit(n, n - 1)
+    m = np.zeros((n + 3, n + 3))
+    m[:n, :n] = a0.T @ p + p @ a0 + rate * p + taus[0] * s1 + taus[1] * s2
+    for k in (n, n + 1, n + 2):
+        m[:n, k : k + 1] = pb
+        m[k : k + 1, :n] = pb.T
+    m[n, n], m[n + 1, n + 1], m[n + 2, n + 2] = -taus[0], -taus[1], -rate
     return m
 
 
@@ -121,31 +149,46 @@ def _ellipsoid(p: FloatArray, rate: float, mats: list[FloatArray]) -> Ellipsoid 
     t, m = strict_nsd_gap(-p)
     if t >= -m:
         return None
-    inv = np.linalg.inv(p)
-    ext = (math.sqrt(max(inv[0, 0], 0.0)), math.sqrt(max(inv[1, 1], 0.0)))
-    return Ellipsoid(p, rate, ext, top, margin)
+    half = np.sqrt(np.maximum(np.diag(np.linalg.inv(p)), 0.0))
+    n = p.shape[0]
+    ext = (float(half[n - 2]), float(half[n - 1]))
+    return Ellipsoid(p, rate, ext, top, margin, float(half[0]) if n == 3 else 0.0)
 
 
 def position_ellipsoid(
-    a0: FloatArray, sigma: float, delta: float, c2: FloatArray, rate: float, weight: float
+    a0: FloatArray,
+    sigma: float,
+    delta: float,
+    c2: FloatArray,
+    rate: float,
+    weight: float,
+    start_cap: float | None = None,
 ) -> Ellipsoid | None:
     """Invariant ellipsoid of the position loop at rate ``rate``; ``None`` if none is verified.
 
-    ``a0 = [[0, 1], [-l k1, lam - l alpha]]``, ``c2 = [k1, alpha]``, ``sigma`` bounds ``||D||``
-    and ``delta`` the spread of the input gain ``L`` about its centre ``l``.
+    Without integral action ``a0 = [[0, 1], [-l k1, lam - l alpha]]`` and ``c2 = [k1, alpha]``;
+    with it the state is ``(z, e, e')``, ``a0 = [[0, 1, 0], [0, 0, 1], [-l ki, -l k1, lam - l alpha]]``,
+    ``c2 = [ki, k1, alpha]`` and ``start_cap`` bounds ``P_zz`` (the start of the integrator,
+    see :func:`_position_sdp`). ``sigma`` bounds ``||D||`` (acting on ``e'``) and ``delta`` the
+    spread of the input gain ``L`` about its centre ``l``.
     """
-    prob, par, p, (t1, t2) = _position_sdp()
-    s1 = sigma**2 * np.array([[0.0, 0.0], [0.0, 1.0]])
-    c = np.asarray(c2, dtype=float).reshape(1, 2)
+    n = a0.shape[0]
+    prob, par, p, (t1, t2) = _position_sdp(n, start_cap is not None)
+    s1 = sigma**2 * _unit(n, n - 1) @ _unit(n, n - 1).T
+    c = np.asarray(c2, dtype=float).reshape(1, n)
     s2 = delta**2 * (c.T @ c)
     par["a0"].value, par["s1"].value, par["s2"].value = a0, s1, 0.5 * (s2 + s2.T)
     par["rate"].value, par["weight"].value = rate, weight
+    if start_cap is not None:
+        par["cap"].value = start_cap
     try:
         solve(prob, "robust position-loop ellipsoid LMI")
     except SolverError:
         return None
     pv = np.asarray(p.value, dtype=float)
     pv = 0.5 * (pv + pv.T)
+    if start_cap is not None and pv[0, 0] > start_cap:
+        return None  # the solver's tolerance let the start slip out: not certified
     taus = (float(t1.value), float(t2.value))
     return _ellipsoid(pv, rate, [position_matrix(pv, taus, a0, s1, s2, rate)])
 
