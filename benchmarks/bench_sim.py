@@ -21,7 +21,8 @@ from common import (
 )
 
 from auv_hinf.campaign.runner import dask_client
-from auv_hinf.campaign.sampling import default_chunk, prepare, run_chunk, run_scenario, sample_run
+from auv_hinf.campaign.sampling import run_chunk, run_scenario, sample_run
+from auv_hinf.campaign.setup import default_chunk, prepare
 from auv_hinf.config.presets import preset_config
 from auv_hinf.simulation.engine import simulate
 from auv_hinf.workflow.certificate import certify

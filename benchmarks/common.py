@@ -16,7 +16,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import auv_hinf.simulation.engine as simulation
-from auv_hinf.campaign.sampling import CampaignSetup, initial_state, prepare, sample_run
+from auv_hinf.campaign.sampling import initial_state, sample_run
+from auv_hinf.campaign.setup import CampaignSetup, prepare
 from auv_hinf.config.formation import FormationConfig, config_from_dict
 from auv_hinf.config.presets import preset_config
 from auv_hinf.models.formation import JacobiTransform

@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from auv_hinf.campaign.sampling import COEFFICIENTS, ERROR_KINDS, FORCE_COLUMNS
+from auv_hinf.campaign.sampling import ERROR_KINDS, FORCE_COLUMNS
+from auv_hinf.campaign.setup import COEFFICIENTS
 from auv_hinf.models.actuators import CHANNELS
 from auv_hinf.workflow.codec import json_safe
 

@@ -41,13 +41,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from auv_hinf.campaign.sampling import (
-    CampaignSetup,
-    chunks,
-    default_chunk,
-    prepare,
-    run_chunk,
-)
+from auv_hinf.campaign.sampling import run_chunk
+from auv_hinf.campaign.setup import CampaignSetup, chunks, default_chunk, prepare
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.exceptions import ParameterError

@@ -1,15 +1,15 @@
-"""Campaign runs: the worker set-up, the reproducible sampling of one run, and one chunk.
+"""Campaign runs: the reproducible sampling of one run, and one chunk.
 
 See :mod:`auv_hinf.campaign.runner` for the sampling rules. Every function here is a pure function
-of a :class:`CampaignSetup` and run indices, so a chunk computes the same rows on any
-executor.
+of a :class:`~auv_hinf.campaign.setup.CampaignSetup` and run indices, so a chunk computes the
+same rows on any executor.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -17,120 +17,27 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.campaign.starts import RobustStart, robust_start, vertex_current
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup
+from auv_hinf.campaign.starts import vertex_current
 from auv_hinf.certification.coverage import initial_errors
 from auv_hinf.certification.region import start_bounds
-from auv_hinf.config.formation import FormationConfig
-from auv_hinf.exceptions import ParameterError
-from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.implementation import Implementation
-from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.engine import first_exits, integrate_batch
 from auv_hinf.simulation.integrators import ATOL, RTOL
-from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.metrics import ErrorSink, RunMetrics
 from auv_hinf.simulation.sampled import integrate_sampled
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.nominal import closed_loop_for
 
-#: Plant coefficients that the ``[uncertainty]`` box may scale, in sampling order.
-COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
 #: Error kinds, in the order of :func:`~auv_hinf.certification.region.start_bounds` (m, m/s, rad, rad/s).
 ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
 #: Table columns of the peak commanded force per channel, ``(tau_x, tau_y, tau_psi)`` (N, N, N m).
 FORCE_COLUMNS = ("max_force_x", "max_force_y", "max_moment")
-#: Output sample interval (s): the measured sup of the errors is taken on these samples.
-SAMPLE_INTERVAL = 0.1
-#: Default chunk: at most this many scenarios per batch. The per-step Python overhead of the
-#: batched integrator is amortised over the chunk; measured on the paper triangle (one core,
-#: 100 s runs): 1024 runs 40k, 2048 runs 48k, 4096 runs 56k vehicle-seconds per second, and
-#: 8192 no faster than 4096 (50 s runs: 45.9k against 45.7k): beyond it the numpy work
-#: dominates and larger chunks only coarsen the progress bar ...
-MAX_CHUNK = 4096
-#: ... and at most this many bytes of working set per chunk. The samples are not stored (the
-#: metrics are accumulated as they are produced, :class:`~auv_hinf.simulation.metrics.ErrorSink`), so
-#: the working set is the integrator's stages and the right-hand side's temporaries: measured
-#: peak about 49 arrays of the batch state ``(S, 6 N)``, budgeted as :data:`WORKING_ARRAYS`.
-CHUNK_BYTES = 256 * 2**20
-#: Arrays of the batch state's size held at the peak of a chunk (measured 49, with margin).
-WORKING_ARRAYS = 64
 #: Second spawn-key word of a run's implementation draws (its inputs use ``(index,)`` alone).
 IMPLEMENTATION_STREAM = 1
 #: A measured error counts as inside its certified bound ``b`` if it is ``<= b (1 + tol) + tol``
 #: with ``tol`` = this factor times the integrator's tolerance: the trajectory is known to
 #: about rtol/atol = 1e-8, so a larger excess is a real violation, not integration noise.
 BOUND_SLACK = 100.0
-
-
-@dataclass(frozen=True)
-class CampaignSetup:
-    """Everything a worker needs to run chunks of a campaign (picklable, small).
-
-    Attributes
-    ----------
-    name : str
-    law : VehicleLaw
-    nominal : VehicleParams
-        Nominal plant (the controller's model).
-    reference : FleetReference
-        Raw mission reference, shared by every run.
-    start : ndarray, shape (N, 4, 2)
-        Desired position (m), velocity (m/s), and ``(psi, r)`` (rad, rad/s) at ``t = 0``.
-    radii : ndarray, shape (4,)
-        Certified start-region radii (m, m/s, rad, rad/s).
-    p2, q : ndarray, shape (2, 2)
-        Lyapunov matrices of the region (identity when the loop's radii are zero).
-    certificate : ClosedLoopCertificate
-        Its decay Lyapunov matrices give the measured decay rate.
-    box : ndarray, shape (9, 2)
-        Multiplier ranges of :data:`COEFFICIENTS` (``[1, 1]`` when undeclared).
-    current_speed : float
-        Bound of the current (m/s).
-    envelope : Envelope
-    horizon : float
-        s.
-    samples : int
-    seed : int
-    certificate_applies : bool
-        False when the certified thrust exceeds the configured limit (saturation voids it).
-    robust : RobustStart or None
-        Start sets and bounds of the robust certificate, when a box or a current is declared
-        and it covers them (:mod:`auv_hinf.campaign.starts`); then every run is checked
-        against it.
-    robust_reason : str or None
-        Why a declared box or current is not checked (the robust certificate does not cover).
-    implementation : Implementation
-        How the controller runs in every run; a sampled one draws its noise and delays per run
-        from :func:`implementation_seed`.
-    """
-
-    name: str
-    law: VehicleLaw
-    nominal: VehicleParams
-    reference: FleetReference
-    start: FloatArray
-    radii: FloatArray
-    p2: FloatArray
-    q: FloatArray
-    certificate: ClosedLoopCertificate
-    box: FloatArray
-    current_speed: float
-    envelope: Envelope
-    horizon: float
-    samples: int
-    seed: int
-    certificate_applies: bool
-    robust: RobustStart | None = None
-    robust_reason: str | None = None
-    implementation: Implementation = field(default_factory=Implementation)
-
-    @property
-    def n(self) -> int:
-        """Number of vehicles."""
-        return int(self.start.shape[0])
 
 
 def _uniform_disc_radius(rng: np.random.Generator, radius: float, size: int) -> FloatArray:
@@ -149,7 +56,7 @@ class RunInputs:
     errors : tuple of ndarray
         Start errors ``e (N, 2)`` m, ``e' (N, 2)`` m/s, ``e_psi (N,)`` rad, ``e_psi' (N,)`` rad/s.
     multipliers : ndarray, shape (9,)
-        Plant multipliers of :data:`COEFFICIENTS`.
+        Plant multipliers of :data:`~auv_hinf.campaign.setup.COEFFICIENTS`.
     current : ndarray, shape (2,)
         Inertial current (m/s).
     """
@@ -343,90 +250,14 @@ def _rows(
     return pd.DataFrame(cols)
 
 
-def prepare(
-    cfg: FormationConfig, *, seed: int = 0, horizon: float | None = None
-) -> tuple[CampaignSetup, ClosedLoopCertificate]:
-    """Gains, closed-loop certificate and the worker set-up of a campaign on ``cfg``.
-
-    Raises
-    ------
-    DesignError
-        If the design has no gain or no closed-loop certificate (no start region to sample).
-    ParameterError
-        For a negative seed or a non-positive horizon.
-    """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ParameterError(f"seed must be an integer >= 0, got {seed!r}")
-    hor = float(cfg.simulation.horizon if horizon is None else horizon)
-    if not (math.isfinite(hor) and hor > 0):
-        raise ParameterError(f"horizon must be > 0 s, got {horizon!r}")
-    point = design_point(cfg)
-    gains = point.require_gains()
-    cert = closed_loop_for(point)
-    reg = cert.region
-    ref = point.fleet()
-    m0 = ref.motion(0.0)
-    start = np.stack([m0.p, m0.v, np.column_stack([m0.psi, m0.r])], axis=1)
-    box = np.ones((len(COEFFICIENTS), 2))
-    for k, (lo, hi) in cfg.uncertainty.box:
-        box[COEFFICIENTS.index(k)] = (lo, hi)
-    rob, why = robust_start(point, box, cert)
-    limit = cfg.actuators
-    t = cert.thrust
-    applies = limit is None or limit.admits(t.as_tuple())
-    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=limit)
-    setup = CampaignSetup(
-        name=cfg.name,
-        law=law,
-        nominal=cfg.vehicle,
-        reference=ref,
-        start=start,
-        radii=reg.region.as_array(),
-        p2=np.eye(2) if reg.p2 is None else reg.p2,
-        q=np.eye(2) if reg.q is None else reg.q,
-        certificate=cert,
-        box=box,
-        current_speed=float(cfg.disturbance.current_speed or 0.0),
-        envelope=cfg.envelope,
-        horizon=hor,
-        samples=round(hor / SAMPLE_INTERVAL) + 1,
-        seed=int(seed),
-        certificate_applies=bool(applies),
-        robust=rob,
-        robust_reason=why,
-        implementation=cfg.implementation,
-    )
-    return setup, cert
-
-
-def default_chunk(setup: CampaignSetup) -> int:
-    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the working set would exceed :data:`CHUNK_BYTES`."""
-    per_run = WORKING_ARRAYS * setup.n * 6 * 8
-    return max(1, min(MAX_CHUNK, CHUNK_BYTES // per_run))
-
-
-def chunks(runs: int, chunk: int) -> list[tuple[int, int]]:
-    """``[lo, hi)`` index ranges of ``runs`` runs in chunks of ``chunk``."""
-    return [(lo, min(runs, lo + chunk)) for lo in range(0, runs, chunk)]
-
-
 __all__ = [
     "BOUND_SLACK",
-    "CHUNK_BYTES",
-    "COEFFICIENTS",
     "ERROR_KINDS",
     "FORCE_COLUMNS",
     "IMPLEMENTATION_STREAM",
-    "MAX_CHUNK",
-    "SAMPLE_INTERVAL",
-    "WORKING_ARRAYS",
-    "CampaignSetup",
     "RunInputs",
-    "chunks",
-    "default_chunk",
     "implementation_seed",
     "initial_state",
-    "prepare",
     "run_chunk",
     "run_scenario",
     "sample_run",

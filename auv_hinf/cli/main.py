@@ -22,7 +22,7 @@ else:  # pragma: no cover - Python 3.10
 
 from auv_hinf._typing import GAIN_METHODS
 from auv_hinf._version import __version__
-from auv_hinf.campaign.sampling import MAX_CHUNK
+from auv_hinf.campaign.setup import MAX_CHUNK
 from auv_hinf.cli.args import (
     DESIGN_MAX_N,
     EXIT_BAD_INPUT,

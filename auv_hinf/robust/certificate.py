@@ -173,10 +173,9 @@ class RobustCertificate:
             "envelope_margins": None if self.margins is None else self.margins.to_dict(),
             "thrust": None if self.thrust is None else self.thrust.to_dict(),
             "current_speed": self.current,
-            "integral_bound": self.integral_bound,
             "reasons": list(self.reasons),
             "method": self.method,
-        }
+        } | ({} if self.integral_bound is None else {"integral_bound": self.integral_bound})
 
 
 def _stable_rate(a0: np.ndarray) -> float:

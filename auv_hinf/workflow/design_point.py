@@ -170,12 +170,17 @@ def initial_states(point: DesignPoint) -> FloatArray:
     return slot_states(point.fleet())
 
 
-def slot_states(fleet: FleetReference) -> FloatArray:
-    """States ``(N, 6)`` ``[x, y, psi, u, v, r]`` with zero error against ``fleet`` at ``t = 0`` (no current)."""
+def slot_states(fleet: FleetReference, current: tuple[float, float] = (0.0, 0.0)) -> FloatArray:
+    """States ``(N, 6)`` ``[x, y, psi, u, v, r]`` with zero error against ``fleet`` at ``t = 0``.
+
+    ``current`` (inertial, m/s): the body velocities are relative to the water, so a zero
+    ground-velocity error needs ``[u, v] = R(psi)^T (p_d' - current)``.
+    """
     m = fleet.motion(0.0)
     c, s = np.cos(m.psi), np.sin(m.psi)
-    u = c * m.v[:, 0] + s * m.v[:, 1]
-    v = -s * m.v[:, 0] + c * m.v[:, 1]
+    rel = m.v - np.asarray(current, dtype=float)
+    u = c * rel[:, 0] + s * rel[:, 1]
+    v = -s * rel[:, 0] + c * rel[:, 1]
     return np.column_stack([m.p, m.psi, u, v, m.r])
 
 

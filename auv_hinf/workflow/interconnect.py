@@ -44,6 +44,8 @@ from auv_hinf.simulation.postprocess import ground_velocity
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 #: Names of one vehicle's body forces.
 FORCE_NAMES = ("tau_x", "tau_y", "tau_psi")
+#: Names of one vehicle's integrator state (m s) when the law has integral action.
+INTEGRATOR_NAMES = ("z_x", "z_y")
 #: Name of the controller subsystem.
 CONTROLLER_NAME = "formation_controller"
 
@@ -73,29 +75,41 @@ def formation_controller(
     Returns
     -------
     control.NonlinearIOSystem
-        No states; ``6 n`` inputs ``x[i] .. r[i]``; ``3 n`` outputs ``tau_x[i] .. tau_psi[i]``
-        (N, N, N m, body frame).
+        No states (with integral action: ``2 n`` states ``z_x[i], z_y[i]``, m s, starting at
+        zero, ``z' = p - p_d``); ``6 n`` inputs ``x[i] .. r[i]``; ``3 n`` outputs
+        ``tau_x[i] .. tau_psi[i]`` (N, N, N m, body frame).
     """
 
     # python-control evaluates a static subsystem several times per right-hand side (fixed-point
     # passes over the algebraic loop), always at the same t: keep the last desired motion.
     last: dict[float, Motion] = {}
 
-    def outfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
+    def motion_at(t: float) -> Motion:
         tt = float(t)
         motion = last.get(tt)
         if motion is None:
             motion = reference.motion(tt)
             last.clear()
             last[tt] = motion
+        return motion
+
+    def outfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
         states = np.asarray(u, dtype=float).reshape(n, 6)
         p_dot = ground_velocity(states, np.zeros(2))
-        out: FloatArray = law.forces(states, p_dot, motion).ravel()
+        if law.gains.integral:  # the law reads the integrator after the measured state
+            states = np.hstack([states, np.asarray(x, dtype=float).reshape(n, 2)])
+        out: FloatArray = law.forces(states, p_dot, motion_at(t)).ravel()
         return out
 
-    return ct.nlsys(
-        None, outfcn, inputs=fleet_signals(STATE_NAMES, n), outputs=fleet_signals(FORCE_NAMES, n), name=name
-    )
+    def updfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
+        states = np.asarray(u, dtype=float).reshape(n, 6)
+        out: FloatArray = (states[:, 0:2] - motion_at(t).p).ravel()  # z' = p - p_d
+        return out
+
+    signals = {"inputs": fleet_signals(STATE_NAMES, n), "outputs": fleet_signals(FORCE_NAMES, n), "name": name}
+    if law.gains.integral:
+        return ct.nlsys(updfcn, outfcn, states=fleet_signals(INTEGRATOR_NAMES, n), **signals)
+    return ct.nlsys(None, outfcn, **signals)
 
 
 def fleet_closed_loop(
@@ -115,8 +129,8 @@ def fleet_closed_loop(
     Returns
     -------
     control.NonlinearIOSystem
-        ``6 n`` states (vehicle-major ``[x, y, psi, u, v, r]``), no inputs, outputs
-        ``x[i] .. r[i]`` equal to the states.
+        ``6 n`` states (vehicle-major ``[x, y, psi, u, v, r]``; then the controller's ``2 n``
+        integrator states with integral action), no inputs, outputs ``x[i] .. r[i]``.
     """
     ctrl = formation_controller(law, reference, n)
     plants = [vehicle_nlsys(plant, name=f"auv{i}") for i in range(n)]
@@ -138,6 +152,7 @@ def fleet_closed_loop(
 
 __all__ = [
     "CONTROLLER_NAME",
+    "INTEGRATOR_NAMES",
     "FORCE_NAMES",
     "STATE_NAMES",
     "fleet_closed_loop",

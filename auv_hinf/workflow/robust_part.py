@@ -144,9 +144,8 @@ class RobustSummary:
             "gains": None if gains is None else gains.to_dict(),
             "design": None if self.design is None else self.design.to_dict(),
             "details": None if c is None else c.to_dict(),
-            "integral": self.integral(),
             "reasons": list(self.reasons) + ([] if c is None else list(c.reasons)),
-        }
+        } | ({} if self.integral() is None else {"integral": self.integral()})
 
 
 def robust_summary(

@@ -14,7 +14,8 @@ import pytest
 
 from auv_hinf.campaign.report import passed, summarize
 from auv_hinf.campaign.runner import run_campaign
-from auv_hinf.campaign.sampling import FORCE_COLUMNS, chunks, initial_state, prepare, run_chunk, sample_run
+from auv_hinf.campaign.sampling import FORCE_COLUMNS, initial_state, run_chunk, sample_run
+from auv_hinf.campaign.setup import chunks, prepare
 from auv_hinf.certification.coverage import initial_errors
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config

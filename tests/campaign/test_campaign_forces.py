@@ -13,7 +13,8 @@ import pytest
 
 from auv_hinf.campaign.report import force_summary, passed, summarize, write_outputs
 from auv_hinf.campaign.runner import Campaign, run_campaign
-from auv_hinf.campaign.sampling import FORCE_COLUMNS, prepare, run_scenario, sample_run
+from auv_hinf.campaign.sampling import FORCE_COLUMNS, run_scenario, sample_run
+from auv_hinf.campaign.setup import prepare
 from auv_hinf.config.presets import preset_config
 from auv_hinf.models.actuators import CHANNELS, Actuators
 from auv_hinf.simulation.engine import integrate_batch, simulate_batch

@@ -10,7 +10,8 @@ import pytest
 
 from auv_hinf.campaign.report import summarize
 from auv_hinf.campaign.runner import run_campaign
-from auv_hinf.campaign.sampling import COEFFICIENTS, initial_state, prepare, sample_run
+from auv_hinf.campaign.sampling import initial_state, sample_run
+from auv_hinf.campaign.setup import COEFFICIENTS, prepare
 from auv_hinf.config.presets import preset_config
 from auv_hinf.config.tables import SimulationConfig
 from auv_hinf.workflow.design_point import design_point

@@ -25,7 +25,9 @@ from auv_hinf.robust.box import ParameterBox
 from auv_hinf.simulation.engine import closed_loop_rhs, simulate
 from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.scenario import Scenario
-from auv_hinf.workflow.design_point import design_point, initial_states
+from auv_hinf.workflow.certificate import Certificate
+from auv_hinf.workflow.design_point import design_point, initial_states, slot_states
+from auv_hinf.workflow.persist import load_certificate
 
 #: Final position error integral action must reach in a constant current (m): the issue's 1 mm.
 FINAL_ERROR = 1e-3
@@ -140,16 +142,6 @@ def _current_config() -> object:
     )
 
 
-def _zero_error_start(point: object, current: np.ndarray) -> np.ndarray:
-    """The fleet on its slots with zero ground-velocity error in ``current`` (water-relative body velocity)."""
-    x = initial_states(point)
-    c, s = np.cos(x[:, 2]), np.sin(x[:, 2])
-    ground = np.column_stack([c * x[:, 3] - s * x[:, 4], s * x[:, 3] + c * x[:, 4]])
-    rel = ground - current
-    x[:, 3], x[:, 4] = c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]
-    return x
-
-
 @pytest.mark.slow
 def test_integral_action_is_certified_in_a_current_and_runs_converge_below_a_millimetre() -> None:
     """Box vertices first, currents at the bound: inside the certified bounds, thrust, final error < 1 mm."""
@@ -165,7 +157,7 @@ def test_integral_action_is_certified_in_a_current_and_runs_converge_below_a_mil
     for mult in plants:
         ang = rng.uniform(0, 2 * np.pi)
         cur = 0.2 * np.array([np.cos(ang), np.sin(ang)])
-        x0 = _zero_error_start(point, cur)
+        x0 = slot_states(point.fleet(), (float(cur[0]), float(cur[1])))
         m0 = point.fleet().motion(0.0)
         assert cert.start_inside(x0[:, 0:2] - m0.p, np.zeros((cfg.n, 2)), np.zeros(cfg.n), np.zeros(cfg.n), cur)
         scn = Scenario(
@@ -196,9 +188,36 @@ def test_cli_reports_the_bound_with_and_without_integral_action(tmp_path: Path, 
     text = annotated_toml(_current_config())
     path = tmp_path / "integral.toml"
     path.write_text(text)
-    assert main(["certify", "--config", str(path), "--json"]) == 0
+    assert main(["certify", "--config", str(path), "--json", "--out", str(tmp_path / "cert")]) == 0
     out = json.loads(capsys.readouterr().out)
     integral = out["robust"]["integral"]
     assert out["certified"] and integral["ki"] == out["gains"]["ki"] > 0
     assert integral["position_bound"] == out["robust"]["ultimate_bounds"]["position"]
     assert set(integral) >= {"position_bound_without", "covers_without", "integral_bound"}
+    # the saved certificate reloads with the gains that run, integrator included
+    loaded = load_certificate(tmp_path / "cert" / "certificate.json", Certificate)
+    assert loaded.gains is not None and loaded.gains.ki == out["gains"]["ki"]
+
+
+def test_the_python_control_closed_loop_with_the_integrator_matches_simulate() -> None:
+    """fleet_closed_loop carries the integrator as controller states; its response is simulate's."""
+    import control as ct
+
+    from auv_hinf.workflow.interconnect import fleet_closed_loop
+
+    cfg = preset_config("paper-triangle")
+    point = design_point(cfg)
+    gains = with_integral(point.require_gains(), -1.0, 1.0)
+    law = VehicleLaw(cfg.vehicle, gains)
+    x0 = initial_states(point)
+    x0[:, 0:2] += np.array([[0.4, -0.3], [-0.2, 0.1], [0.0, 0.3]])
+    scn = Scenario(law=law, reference=point.fleet(), plant=cfg.vehicle, initial=x0, horizon=10.0, samples=51)
+    sys = fleet_closed_loop(law, point.fleet(), cfg.vehicle, cfg.n)
+    assert sys.nstates == 8 * cfg.n and sys.noutputs == 6 * cfg.n
+    y0 = np.concatenate([x0.ravel(), np.zeros(2 * cfg.n)])
+    resp = ct.input_output_response(
+        sys, scn.times, 0.0, y0, solve_ivp_method="RK45", solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-10}
+    )
+    ours = simulate(scn, rtol=1e-10, atol=1e-10)
+    states = resp.outputs.T.reshape(-1, cfg.n, 6)
+    assert np.abs(states - ours.states).max() < 1e-6

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from auv_hinf.campaign.sampling import prepare
+from auv_hinf.campaign.setup import prepare
 from auv_hinf.config.presets import preset_config
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.engine import integrate_batch, simulate_batch

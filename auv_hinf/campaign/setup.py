@@ -1,0 +1,197 @@
+"""The worker set-up of a campaign: what every chunk needs, and how the runs are chunked.
+
+:func:`prepare` designs and certifies the configuration once; the :class:`CampaignSetup` it
+returns is small and picklable, so Dask workers receive it once
+(:mod:`auv_hinf.campaign.runner`) and :mod:`auv_hinf.campaign.sampling` draws every run from it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.campaign.starts import RobustStart, robust_start
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.config.formation import FormationConfig
+from auv_hinf.exceptions import DesignError, ParameterError
+from auv_hinf.models.envelope import Envelope
+from auv_hinf.models.implementation import Implementation
+from auv_hinf.models.reference import FleetReference
+from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.simulation.law import VehicleLaw
+from auv_hinf.workflow.design_point import design_point
+from auv_hinf.workflow.nominal import closed_loop_for
+
+#: Plant coefficients that the ``[uncertainty]`` box may scale, in sampling order.
+COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+#: Output sample interval (s): the measured sup of the errors is taken on these samples.
+SAMPLE_INTERVAL = 0.1
+#: Default chunk: at most this many scenarios per batch. The per-step Python overhead of the
+#: batched integrator is amortised over the chunk; measured on the paper triangle (one core,
+#: 100 s runs): 1024 runs 40k, 2048 runs 48k, 4096 runs 56k vehicle-seconds per second, and
+#: 8192 no faster than 4096 (50 s runs: 45.9k against 45.7k): beyond it the numpy work
+#: dominates and larger chunks only coarsen the progress bar ...
+MAX_CHUNK = 4096
+#: ... and at most this many bytes of working set per chunk. The samples are not stored (the
+#: metrics are accumulated as they are produced, :class:`~auv_hinf.simulation.metrics.ErrorSink`), so
+#: the working set is the integrator's stages and the right-hand side's temporaries: measured
+#: peak about 49 arrays of the batch state ``(S, 6 N)``, budgeted as :data:`WORKING_ARRAYS`.
+CHUNK_BYTES = 256 * 2**20
+#: Arrays of the batch state's size held at the peak of a chunk (measured 49, with margin).
+WORKING_ARRAYS = 64
+
+
+@dataclass(frozen=True)
+class CampaignSetup:
+    """Everything a worker needs to run chunks of a campaign (picklable, small).
+
+    Attributes
+    ----------
+    name : str
+    law : VehicleLaw
+    nominal : VehicleParams
+        Nominal plant (the controller's model).
+    reference : FleetReference
+        Raw mission reference, shared by every run.
+    start : ndarray, shape (N, 4, 2)
+        Desired position (m), velocity (m/s), and ``(psi, r)`` (rad, rad/s) at ``t = 0``.
+    radii : ndarray, shape (4,)
+        Certified start-region radii (m, m/s, rad, rad/s).
+    p2, q : ndarray, shape (2, 2)
+        Lyapunov matrices of the region (identity when the loop's radii are zero).
+    certificate : ClosedLoopCertificate
+        Its decay Lyapunov matrices give the measured decay rate.
+    box : ndarray, shape (9, 2)
+        Multiplier ranges of :data:`COEFFICIENTS` (``[1, 1]`` when undeclared).
+    current_speed : float
+        Bound of the current (m/s).
+    envelope : Envelope
+    horizon : float
+        s.
+    samples : int
+    seed : int
+    certificate_applies : bool
+        False when the certified thrust exceeds the configured limit (saturation voids it).
+    robust : RobustStart or None
+        Start sets and bounds of the robust certificate, when a box or a current is declared
+        and it covers them (:mod:`auv_hinf.campaign.starts`); then every run is checked
+        against it.
+    robust_reason : str or None
+        Why a declared box or current is not checked (the robust certificate does not cover).
+    implementation : Implementation
+        How the controller runs in every run; a sampled one draws its noise and delays per run
+        from :func:`implementation_seed`.
+    """
+
+    name: str
+    law: VehicleLaw
+    nominal: VehicleParams
+    reference: FleetReference
+    start: FloatArray
+    radii: FloatArray
+    p2: FloatArray
+    q: FloatArray
+    certificate: ClosedLoopCertificate
+    box: FloatArray
+    current_speed: float
+    envelope: Envelope
+    horizon: float
+    samples: int
+    seed: int
+    certificate_applies: bool
+    robust: RobustStart | None = None
+    robust_reason: str | None = None
+    implementation: Implementation = field(default_factory=Implementation)
+
+    @property
+    def n(self) -> int:
+        """Number of vehicles."""
+        return int(self.start.shape[0])
+
+
+def prepare(
+    cfg: FormationConfig, *, seed: int = 0, horizon: float | None = None
+) -> tuple[CampaignSetup, ClosedLoopCertificate]:
+    """Gains, closed-loop certificate and the worker set-up of a campaign on ``cfg``.
+
+    Raises
+    ------
+    DesignError
+        If the design has no gain or no closed-loop certificate (no start region to sample).
+    ParameterError
+        For a negative seed or a non-positive horizon.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError(f"seed must be an integer >= 0, got {seed!r}")
+    hor = float(cfg.simulation.horizon if horizon is None else horizon)
+    if not (math.isfinite(hor) and hor > 0):
+        raise ParameterError(f"horizon must be > 0 s, got {horizon!r}")
+    point = design_point(cfg)
+    gains = point.require_gains()
+    if gains.integral:
+        raise DesignError(
+            "campaigns sample the nominal certificate's start region, which does not cover integral action; "
+            "run `simulate` (the robust certificate covers it), or set [design] integral = false"
+        )
+    cert = closed_loop_for(point)
+    reg = cert.region
+    ref = point.fleet()
+    m0 = ref.motion(0.0)
+    start = np.stack([m0.p, m0.v, np.column_stack([m0.psi, m0.r])], axis=1)
+    box = np.ones((len(COEFFICIENTS), 2))
+    for k, (lo, hi) in cfg.uncertainty.box:
+        box[COEFFICIENTS.index(k)] = (lo, hi)
+    rob, why = robust_start(point, box, cert)
+    limit = cfg.actuators
+    t = cert.thrust
+    applies = limit is None or limit.admits(t.as_tuple())
+    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=limit)
+    setup = CampaignSetup(
+        name=cfg.name,
+        law=law,
+        nominal=cfg.vehicle,
+        reference=ref,
+        start=start,
+        radii=reg.region.as_array(),
+        p2=np.eye(2) if reg.p2 is None else reg.p2,
+        q=np.eye(2) if reg.q is None else reg.q,
+        certificate=cert,
+        box=box,
+        current_speed=float(cfg.disturbance.current_speed or 0.0),
+        envelope=cfg.envelope,
+        horizon=hor,
+        samples=round(hor / SAMPLE_INTERVAL) + 1,
+        seed=int(seed),
+        certificate_applies=bool(applies),
+        robust=rob,
+        robust_reason=why,
+        implementation=cfg.implementation,
+    )
+    return setup, cert
+
+
+def default_chunk(setup: CampaignSetup) -> int:
+    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the working set would exceed :data:`CHUNK_BYTES`."""
+    per_run = WORKING_ARRAYS * setup.n * 6 * 8
+    return max(1, min(MAX_CHUNK, CHUNK_BYTES // per_run))
+
+
+def chunks(runs: int, chunk: int) -> list[tuple[int, int]]:
+    """``[lo, hi)`` index ranges of ``runs`` runs in chunks of ``chunk``."""
+    return [(lo, min(runs, lo + chunk)) for lo in range(0, runs, chunk)]
+
+
+__all__ = [
+    "CHUNK_BYTES",
+    "COEFFICIENTS",
+    "MAX_CHUNK",
+    "SAMPLE_INTERVAL",
+    "WORKING_ARRAYS",
+    "CampaignSetup",
+    "chunks",
+    "default_chunk",
+    "prepare",
+]
