@@ -152,8 +152,8 @@ def fleet_closed_loop(
 
 __all__ = [
     "CONTROLLER_NAME",
-    "INTEGRATOR_NAMES",
     "FORCE_NAMES",
+    "INTEGRATOR_NAMES",
     "STATE_NAMES",
     "fleet_closed_loop",
     "fleet_signals",
