@@ -144,8 +144,9 @@ def force_summary(camp: Campaign) -> dict[str, Any]:
     ``certified_thrust`` and ``actuator_limits`` (None when undeclared) are ``{force_x, force_y,
     moment}`` (N, N, N m); ``max_commanded`` is the peak over all runs before saturation;
     ``worst_ratio`` the largest peak / certified bound over the runs a certificate applies to
-    (None when there are none); ``within_certified_force`` and ``exceeded_certified_force``
-    count those runs.
+    (None when there are none) and ``tightness`` its inverse, how many times the worst sampled
+    run the certified bound is (the bound's conservatism as measured; at least 1 when sound);
+    ``within_certified_force`` and ``exceeded_certified_force`` count those runs.
     """
     t = camp.table
     within = t["within_certified_force"]
@@ -153,13 +154,13 @@ def force_summary(camp: Campaign) -> dict[str, Any]:
     n_app, n_in = int(app.sum()), int(within.fillna(False).astype(bool).sum())
     bound = certified_thrust(camp)
     act = camp.setup.law.actuators
+    worst = {c: float(t.loc[app, col].max() / bound[c]) if n_app else None for c, col in zip(CHANNELS, FORCE_COLUMNS)}
     return {
         "certified_thrust": bound,
         "actuator_limits": None if act is None else act.to_dict(),
         "max_commanded": {c: float(t[col].max()) for c, col in zip(CHANNELS, FORCE_COLUMNS)},
-        "worst_ratio": {
-            c: float(t.loc[app, col].max() / bound[c]) if n_app else None for c, col in zip(CHANNELS, FORCE_COLUMNS)
-        },
+        "worst_ratio": worst,
+        "tightness": {c: None if r is None or r <= 0.0 else 1.0 / r for c, r in worst.items()},
         "within_certified_force": n_in,
         "exceeded_certified_force": n_app - n_in,
         "max_saturated_fraction": float(t["saturated_fraction"].max()),

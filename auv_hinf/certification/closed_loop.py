@@ -245,6 +245,7 @@ def thrust_bounds(
     gains: Gains,
     current: float = 0.0,
     integral: float = 0.0,
+    feedback: float | None = None,
 ) -> ThrustBounds:
     """Sound bounds of ``|tau_x|, |tau_y|, |tau_psi|`` while the errors stay within ``bounds``.
 
@@ -278,6 +279,10 @@ def thrust_bounds(
     integral : float
         Bound of the integrator state ``|z|`` (m s) when the gains have integral action: the
         feedback then also has ``ki |z|``.
+    feedback : float, optional
+        A sound bound of the whole feedback ``|alpha e' + k1 e + ki z|`` (m/s^2), e.g. its
+        maximum over an invariant ellipsoid (:func:`ellipsoid_feedback`); the smaller of it and
+        the sum of the terms' bounds is used.
     """
     s_hi = tube.speed[:, 1]
     a_env, b_env = abs_range(*envelope.u), abs_range(*envelope.v)
@@ -300,6 +305,8 @@ def thrust_bounds(
     along = np.minimum(along, s_hi[:, None] * norms)
     k_psi = gains.k_psi
     err = abs(gains.alpha) * bounds.velocity + abs(gains.k1) * bounds.position + gains.ki * integral
+    if feedback is not None:
+        err = min(err, feedback)
     drift = along + tube.accel[:, None]
     fx, fy = np.array([params.m11, params.m22]) * (err + drift.max(axis=0))
     r_abs = np.maximum(np.abs(r_lo), np.abs(r_hi))
@@ -311,6 +318,18 @@ def thrust_bounds(
     moment = float(np.max(params.m33 * big_v + abs(params.m11 - params.m22) * a_hi * b_hi))
     k = 1.0 + BOUND_RTOL
     return ThrustBounds(k * float(fx), k * float(fy), k * moment)
+
+
+def ellipsoid_feedback(matrix: FloatArray, row: FloatArray, level: float) -> float:
+    """``max |c^T x|`` over ``{x^T P x <= level}`` for planar errors, ``sqrt(level c^T P^-1 c)``.
+
+    The planar feedback ``F = sum_k c_k x_k`` (each ``x_k`` in R^2, the form is ``P kron I2``)
+    obeys ``|F|^2 = sum_axes (c^T x_a)^2 <= (c^T P^-1 c) sum_axes x_a^T P x_a`` (Cauchy-Schwarz
+    in the ``P`` inner product), so the bound holds on the whole ellipsoid and is attained on it.
+    ``matrix`` is ``P`` (n x n), ``row`` the gains ``c`` (e.g. ``[k1, alpha]``).
+    """
+    c = np.asarray(row, dtype=float)
+    return float(math.sqrt(max(level, 0.0) * float(c @ np.linalg.solve(matrix, c))))
 
 
 def _block_bounds(
@@ -409,6 +428,7 @@ def closed_loop_certificate(
 
 
 __all__ = [
+    "ellipsoid_feedback",
     "ClosedLoopCertificate",
     "DecayCertificate",
     "ThrustBounds",

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.certification.closed_loop import ThrustBounds, thrust_bounds
+from auv_hinf.certification.closed_loop import ThrustBounds, ellipsoid_feedback, thrust_bounds
 from auv_hinf.certification.margins import MAX_HEADING_ERROR, ErrorBounds, Margins, envelope_margins, inflate_envelope
 from auv_hinf.certification.region import pair_level
 from auv_hinf.design.gains import Gains
@@ -331,7 +331,10 @@ def robust_certificate(
     if margins is not None and not margins.ok:
         reasons.append(f"the envelope does not hold with these error bounds (smallest margin {margins.min:.4g})")
     b_z = dbar * pos.integral_extent + z_star if gains.integral else None  # |z| <= |z~| + |z*| (m s)
-    thrust = thrust_bounds(box.nominal, env, tube, bounds, gains, current, b_z or 0.0)
+    # the feedback on the ellipsoid about the shifted equilibrium, plus the shift's own share
+    shift = gains.ki * z_star if gains.integral else gains.k1 * current_offset(box, lam, current, gains.k1)
+    feedback = ellipsoid_feedback(pos.matrix, c2, dbar**2) + shift
+    thrust = thrust_bounds(box.nominal, env, tube, bounds, gains, current, b_z or 0.0, feedback)
     if actuators is not None and not actuators.admits(thrust.as_tuple()):
         reasons.append(actuator_shortfall(actuators, thrust.as_tuple()))
     return RobustCertificate(
