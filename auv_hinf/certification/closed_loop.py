@@ -428,11 +428,11 @@ def closed_loop_certificate(
 
 
 __all__ = [
-    "ellipsoid_feedback",
     "ClosedLoopCertificate",
     "DecayCertificate",
     "ThrustBounds",
     "closed_loop_certificate",
+    "ellipsoid_feedback",
     "heading_decay_rate",
     "heading_decay_upper",
     "lmi_position_decay_rate",
