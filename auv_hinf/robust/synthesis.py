@@ -101,14 +101,24 @@ def synthesise_robust(
     tried: list[tuple[float, float, bool]] = []
     best: tuple[float, Gains, float, float] | None = None
     cap_scale = box.max_scale if box.declared else math.inf
+    declared: dict[int, RobustCertificate] = {}  # each candidate's certificate on the declared box, once
+
+    def on_declared(k: int) -> RobustCertificate:
+        if k not in declared:
+            declared[k] = robust_certificate(box, envelope, tube, candidates[k][0], current, actuators)
+        return declared[k]
+
     with tqdm(total=len(candidates), disable=not progress, desc="LMI synthesis", unit="candidate") as bar:
-        for gains, w in candidates:
+        for k, (gains, w) in enumerate(candidates):
             bar.update(1)
             for target in (TARGET_MARGIN, 1.0):
-                if target > cap_scale:
-                    continue
-                b = box.scaled(target) if box.declared else box
-                cert = robust_certificate(b, envelope, tube, gains, current * target, actuators)
+                if target > cap_scale or (best is not None and target < best[2]):
+                    continue  # a candidate covering only the smaller box cannot beat one covering the larger
+                if target == 1.0:
+                    cert = on_declared(k)
+                else:
+                    b = box.scaled(target) if box.declared else box
+                    cert = robust_certificate(b, envelope, tube, gains, current * target, actuators)
                 tried.append((w, target, cert.covers))
                 if cert.covers:
                     score = _score(cert, actuators) / (1.0 + 1e-9 * target)  # prefer the larger target on ties
@@ -117,7 +127,7 @@ def synthesise_robust(
                     break
     if best is None:
         # nothing covers: show the candidate with the best objective on the declared box
-        rated = [(g, w, robust_certificate(box, envelope, tube, g, current, actuators)) for g, w in candidates]
+        rated = [(g, w, on_declared(k)) for k, (g, w) in enumerate(candidates)]
         if not rated:
             gains = Gains(-lam / lc + 1.0, 1.0, heading_gains(box.nominal, (-1.0, -1.5)))
             gains = with_integral(gains, lam, lc) if integral else gains
@@ -128,7 +138,7 @@ def synthesise_robust(
         why = "no synthesised candidate covers the declared box; showing the one needing the least force"
         return RobustDesign(g, w, 0.0, cert, tuple(tried), why)
     score, gains, target, w = best
-    cert = robust_certificate(box, envelope, tube, gains, current, actuators)
+    cert = on_declared(next(k for k, (g, _) in enumerate(candidates) if g is gains))
     unit = "of the actuator limits" if actuators is not None else "N"
     why = (
         f"LMI synthesis ({len(candidates)} candidates): {OBJECTIVE}; best {score:.4g} {unit} "
