@@ -4,7 +4,7 @@ force fits.
 :func:`~auv_hinf.certification.region.certify_region` makes the start region as large as the
 operating envelope allows. With declared actuator limits the region must also keep the
 commanded force inside them. The thrust bound of
-:func:`~auv_hinf.certification.closed_loop.thrust_bounds` is ``t0 + t1(E)``: ``t0`` is what
+:func:`~auv_hinf.certification.thrust.thrust_bounds` is ``t0 + t1(E)``: ``t0`` is what
 the mission itself needs at zero error (feed-forward and model cancellation along the tube),
 ``t1`` grows with the error bounds ``E``. The error bounds are the extents of one level set
 of the certified Lyapunov functions (P2 for the position loop, Q for the heading loop); for
@@ -21,9 +21,10 @@ from __future__ import annotations
 
 import dataclasses
 
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate, ThrustBounds, thrust_bounds
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.margins import ErrorBounds, envelope_margins, inflate_envelope
 from auv_hinf.certification.region import largest_fitting
+from auv_hinf.certification.thrust import ThrustBounds, thrust_bounds
 from auv_hinf.design.gains import Gains
 from auv_hinf.models.actuators import Actuators
 from auv_hinf.models.envelope import Envelope
@@ -51,7 +52,7 @@ def actuator_fraction(
     """Largest ``kappa`` in ``[0, 1]`` whose scaled start region keeps the thrust within ``actuators``.
 
     The thrust bound of the region scaled by ``kappa`` is nondecreasing in ``kappa`` (every term
-    of :func:`~auv_hinf.certification.closed_loop.thrust_bounds` grows with the error bounds),
+    of :func:`~auv_hinf.certification.thrust.thrust_bounds` grows with the error bounds),
     so the fitting fractions form an interval ``[0, kappa*]``, found by bisection to
     :data:`KAPPA_RTOL`; the value returned always fits. Returns ``None`` when the mission alone
     (zero error) needs more than a limit.

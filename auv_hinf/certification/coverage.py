@@ -29,9 +29,10 @@ from numpy.typing import ArrayLike
 from tqdm.auto import tqdm
 
 from auv_hinf._typing import FloatArray, FormationFrame
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate, ThrustBounds, thrust_bounds
+from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.margins import ErrorBounds, Margins, envelope_margins, inflate_envelope
 from auv_hinf.certification.region import start_bounds
+from auv_hinf.certification.thrust import ThrustBounds, thrust_bounds
 from auv_hinf.design.gains import Gains
 from auv_hinf.exceptions import AuvHinfError, ParameterError
 from auv_hinf.models.actuators import Actuators, actuator_shortfall

@@ -16,12 +16,12 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from auv_hinf.certification.closed_loop import ThrustBounds
 from auv_hinf.certification.lag_bounds import LagBounds, bound_errors
 from auv_hinf.certification.lag_problem import ImplementationProblem
 from auv_hinf.certification.lag_terms import LagDisturbance
 from auv_hinf.certification.margins import ErrorBounds
 from auv_hinf.certification.sampling import certified_lag, exact_limit
+from auv_hinf.certification.thrust import ThrustBounds
 from auv_hinf.design.lmi.sampled import LagLoop, LagResult
 from auv_hinf.models.implementation import Implementation
 

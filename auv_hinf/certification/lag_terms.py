@@ -32,8 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auv_hinf.certification.closed_loop import ThrustBounds
 from auv_hinf.certification.margins import ErrorBounds
+from auv_hinf.certification.thrust import ThrustBounds
 from auv_hinf.design.gains import Gains
 from auv_hinf.models.envelope import Envelope, abs_range
 from auv_hinf.models.implementation import Implementation
@@ -63,7 +63,7 @@ def operating_box(envelope: Envelope, tube: ReferenceTube, bounds: ErrorBounds) 
 
     The body velocity is the desired one (speed ``S``, pointing along the desired heading up to
     the tube's heading offset) plus the velocity error, and the yaw rate the desired one plus its
-    error (as in :func:`~auv_hinf.certification.closed_loop.thrust_bounds`), each capped by the envelope.
+    error (as in :func:`~auv_hinf.certification.thrust.thrust_bounds`), each capped by the envelope.
     """
     u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
     speed = float(tube.speed[:, 1].max())

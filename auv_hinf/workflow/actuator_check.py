@@ -1,7 +1,7 @@
 """The actuator part of a certificate: the force the law commands against what the vehicle can push.
 
 The certified peak is the elementwise largest of the thrust bounds the certificate proves
-(:func:`~auv_hinf.certification.closed_loop.thrust_bounds`: feed-forward, model
+(:func:`~auv_hinf.certification.thrust.thrust_bounds`: feed-forward, model
 cancellation, current compensation and feedback, over the certified set and the whole
 mission): the nominal closed loop over its start region, the configured shaped start when it
 is checked, and the robust certificate of the declared box and current. The design is

@@ -30,7 +30,16 @@ from typing import Any
 
 import numpy as np
 
-from auv_hinf.certification import closed_loop, coverage, implementation, lag_terms, margins, reference_fit, region
+from auv_hinf.certification import (
+    closed_loop,
+    coverage,
+    implementation,
+    lag_terms,
+    margins,
+    reference_fit,
+    region,
+    thrust,
+)
 from auv_hinf.design import alpha, crosscheck, gains, sigma, theorem1
 from auv_hinf.design.lmi import ellipsoid, sampled
 from auv_hinf.exceptions import AuvHinfError, ConfigError
@@ -72,6 +81,7 @@ _STORED_MODULES = (
     shaping,
     sigma,
     theorem1,
+    thrust,
     vehicle,
 )
 

@@ -27,10 +27,10 @@ from auv_hinf.certification.closed_loop import (
     position_decay_certificate,
     position_decay_rate,
     shifted_peak,
-    thrust_bounds,
 )
 from auv_hinf.certification.margins import ErrorBounds, envelope_margins, inflate_envelope
 from auv_hinf.certification.region import ellipsoid_extent, pair_level, start_bounds
+from auv_hinf.certification.thrust import thrust_bounds
 from auv_hinf.config.schema import DEFAULT_POLES
 from auv_hinf.design.alpha import alpha_stabilizing
 from auv_hinf.design.blocks import hinf_norm
@@ -478,7 +478,7 @@ def test_block_bounds_equal_the_body_block_over_the_box_vertices() -> None:
     """The entry and row-norm bounds of the thrust are the maxima of ``body_block`` over the 8 vertices, bit for bit."""
     import itertools
 
-    from auv_hinf.certification.closed_loop import _block_bounds
+    from auv_hinf.certification.thrust import _block_bounds
     from auv_hinf.models.vehicle import remus100
 
     rng = np.random.default_rng(11)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from auv_hinf.certification.actuation import actuator_fraction, mission_thrust, within_actuators
-from auv_hinf.certification.closed_loop import thrust_bounds
 from auv_hinf.certification.margins import ErrorBounds, inflate_envelope
+from auv_hinf.certification.thrust import thrust_bounds
 from auv_hinf.cli.main import main
 from auv_hinf.config.formation import config_from_dict, load_config
 from auv_hinf.config.presets import preset_config
