@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind
+from auv_hinf.config.conditions import ActuatorsTable, ImplementationTable
 from auv_hinf.config.fields import SynthesisKind
 from auv_hinf.config.messages import parse_config, plain_data, set_fields, validate_table
 from auv_hinf.config.schema import (
@@ -24,10 +25,8 @@ from auv_hinf.config.schema import (
     DEFAULT_METHOD,
     DEFAULT_POLES,
     DEFAULT_SYNTHESIS,
-    ActuatorsTable,
     DesignTable,
     FormationTable,
-    ImplementationTable,
 )
 from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError

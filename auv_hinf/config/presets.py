@@ -16,19 +16,10 @@ from numpy.typing import ArrayLike
 from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
+from auv_hinf.config.conditions import ActuatorsTable, DisturbanceTable, PlantTable, UncertaintyTable
 from auv_hinf.config.fields import REFERENCE_MODELS
 from auv_hinf.config.formation import FormationConfig
-from auv_hinf.config.schema import (
-    ActuatorsTable,
-    DesignTable,
-    DisturbanceTable,
-    EnvelopeTable,
-    FormationTable,
-    PlantTable,
-    SimulationTable,
-    UncertaintyTable,
-    VehicleTable,
-)
+from auv_hinf.config.schema import DesignTable, EnvelopeTable, FormationTable, SimulationTable, VehicleTable
 from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.models.actuators import vehicle_actuators

@@ -10,16 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any
 
+from auv_hinf.config.conditions import DisturbanceTable, UncertaintyTable
 from auv_hinf.config.fields import REFERENCE_MODELS, ReferenceKind, StartKind
 from auv_hinf.config.messages import as_dict, plain_data, set_fields, validate_table
-from auv_hinf.config.schema import (
-    DEFAULT_HORIZON,
-    DEFAULT_SEED,
-    DEFAULT_START,
-    DisturbanceTable,
-    SimulationTable,
-    UncertaintyTable,
-)
+from auv_hinf.config.schema import DEFAULT_HORIZON, DEFAULT_SEED, DEFAULT_START, SimulationTable
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.models.vehicle import VehicleParams
 

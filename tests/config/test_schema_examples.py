@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from auv_hinf.config.conditions import ActuatorsTable
 from auv_hinf.config.fields import REFERENCE_MODELS
 from auv_hinf.config.formation import config_from_dict
-from auv_hinf.config.schema import ActuatorsTable
 
 
 @pytest.mark.parametrize("kind", sorted(REFERENCE_MODELS))
