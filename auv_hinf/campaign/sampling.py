@@ -20,7 +20,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup
 from auv_hinf.campaign.starts import vertex_current
 from auv_hinf.certification.coverage import initial_errors
-from auv_hinf.certification.region import start_bounds
+from auv_hinf.certification.levels import start_bounds
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.engine import first_exits, integrate_batch
 from auv_hinf.simulation.integrators import ATOL, RTOL
@@ -28,7 +28,7 @@ from auv_hinf.simulation.metrics import ErrorSink, RunMetrics
 from auv_hinf.simulation.sampled import integrate_sampled
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
 
-#: Error kinds, in the order of :func:`~auv_hinf.certification.region.start_bounds` (m, m/s, rad, rad/s).
+#: Error kinds, in the order of :func:`~auv_hinf.certification.levels.start_bounds` (m, m/s, rad, rad/s).
 ERROR_KINDS = ("position", "velocity", "heading", "yaw_rate")
 #: Table columns of the peak commanded force per channel, ``(tau_x, tau_y, tau_psi)`` (N, N, N m).
 FORCE_COLUMNS = ("max_force_x", "max_force_y", "max_moment")

@@ -6,7 +6,7 @@ envelope for all time (see ``docs/derivations/closed_loop.md``):
 
 1. the errors at ``t = 0`` against the reference actually used give, through the certified
    non-increasing Lyapunov functions (:class:`~auv_hinf.certification.region.RegionCertificate`), bounds of
-   every later error (:func:`~auv_hinf.certification.region.start_bounds`);
+   every later error (:func:`~auv_hinf.certification.levels.start_bounds`);
 2. the reference's sound tube (:mod:`auv_hinf.models.tubes`) plus those bounds keeps every margin
    ``>= 0`` (:func:`~auv_hinf.certification.margins.envelope_margins`);
 3. the thrust the law needs stays below the configured limits (saturation voids the argument).
@@ -30,8 +30,8 @@ from tqdm.auto import tqdm
 
 from auv_hinf._typing import FloatArray, FormationFrame
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate
+from auv_hinf.certification.levels import start_bounds
 from auv_hinf.certification.margins import ErrorBounds, Margins, envelope_margins, inflate_envelope
-from auv_hinf.certification.region import start_bounds
 from auv_hinf.certification.thrust import ThrustBounds, thrust_bounds
 from auv_hinf.design.gains import Gains
 from auv_hinf.exceptions import AuvHinfError, ParameterError

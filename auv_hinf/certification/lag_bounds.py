@@ -22,8 +22,8 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.certification.lag_problem import ImplementationProblem
 from auv_hinf.certification.lag_terms import LagDisturbance, lag_disturbance
+from auv_hinf.certification.levels import box_level, level_extent
 from auv_hinf.certification.margins import MAX_HEADING_ERROR, ErrorBounds, envelope_margins, inflate_envelope
-from auv_hinf.certification.region import box_level, level_extent
 from auv_hinf.certification.sampling import decay_at, iss_certificate
 from auv_hinf.certification.thrust import ThrustBounds, thrust_bounds
 from auv_hinf.design.lmi.sampled import LagResult

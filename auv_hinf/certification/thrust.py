@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.certification.levels import BOUND_RTOL
 from auv_hinf.certification.margins import ErrorBounds
-from auv_hinf.certification.region import BOUND_RTOL
 from auv_hinf.design.gains import Gains
 from auv_hinf.models.envelope import Envelope, abs_range
 from auv_hinf.models.reference import ReferenceTube

@@ -25,8 +25,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.certification.levels import pair_level
 from auv_hinf.certification.margins import MAX_HEADING_ERROR, ErrorBounds, Margins, envelope_margins, inflate_envelope
-from auv_hinf.certification.region import pair_level
 from auv_hinf.certification.thrust import ThrustBounds, ellipsoid_feedback, thrust_bounds
 from auv_hinf.design.gains import Gains
 from auv_hinf.design.lmi.ellipsoid import Ellipsoid, best_ellipsoid, heading_ellipsoid, position_ellipsoid

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.arrays import stack_last
-from auv_hinf.certification.region import pair_level
+from auv_hinf.certification.levels import pair_level
 from auv_hinf.exceptions import SolverError
 from auv_hinf.simulation.law import MotionSource, VehicleLaw, saturate
 from auv_hinf.simulation.postprocess import TrackingErrors, ground_velocity, tracking_errors

@@ -3,7 +3,7 @@
 The certificate (``docs/derivations/closed_loop.md``) claims that from every start in the
 reported simultaneous region, tracking the raw mission, each vehicle stays inside the
 envelope, its errors stay below the invariant-ellipsoid bounds of its own start
-(:func:`auv_hinf.certification.region.start_bounds`) and its Lyapunov norm decays at the certified rate.
+(:func:`auv_hinf.certification.levels.start_bounds`) and its Lyapunov norm decays at the certified rate.
 Here those three claims are checked on batched simulations of many sampled starts (the
 1000-start test on the paper triangle, fewer starts on other vehicles, missions and
 envelopes), on shaped starts, through the CLI, and the region's tightness is measured.
@@ -27,7 +27,8 @@ import pytest
 
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.coverage import check_run, cover_start, initial_errors
-from auv_hinf.certification.region import Region, start_bounds
+from auv_hinf.certification.levels import start_bounds
+from auv_hinf.certification.region import Region
 from auv_hinf.cli.main import main
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.config.presets import DEMO_ENVELOPE, TRIANGLE_SHAPE, preset_config

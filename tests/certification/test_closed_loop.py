@@ -28,8 +28,8 @@ from auv_hinf.certification.closed_loop import (
     position_decay_rate,
     shifted_peak,
 )
+from auv_hinf.certification.levels import ellipsoid_extent, pair_level, start_bounds
 from auv_hinf.certification.margins import ErrorBounds, envelope_margins, inflate_envelope
-from auv_hinf.certification.region import ellipsoid_extent, pair_level, start_bounds
 from auv_hinf.certification.thrust import thrust_bounds
 from auv_hinf.config.schema import DEFAULT_POLES
 from auv_hinf.design.alpha import alpha_stabilizing

@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from auv_hinf.certification.region import start_bounds
+from auv_hinf.certification.levels import start_bounds
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.config.presets import TRIANGLE_SHAPE, preset_config
 from auv_hinf.config.tables import ReferenceConfig, SimulationConfig
