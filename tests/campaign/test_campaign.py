@@ -188,16 +188,9 @@ def test_a_chunk_reports_its_progress_as_it_runs() -> None:
 
 
 @pytest.mark.slow
-def test_dask_chunks_report_their_progress_as_events_and_the_bar_ends_at_the_runs() -> None:
-    """On Dask every chunk logs fractions below one while it runs; the bar is monotone and ends at the runs.
-
-    When the events reach the client depends on the machine's load, so the bar positions
-    are checked with a scripted client (next test); here the events themselves are.
-    """
-    pytest.importorskip("distributed")
+def _record_bar(mp: pytest.MonkeyPatch) -> list[int]:
+    """Patch tqdm's bar to record its position after every update; returns the record."""
     import tqdm
-
-    from auv_hinf.campaign.runner import dask_client
 
     seen: list[int] = []
 
@@ -207,9 +200,22 @@ def test_dask_chunks_report_their_progress_as_events_and_the_bar_ends_at_the_run
             seen.append(int(self.n))
             return out
 
+    mp.setattr(tqdm, "tqdm", Recording)
+    return seen
+
+
+def test_dask_chunks_report_their_progress_as_events_and_the_bar_ends_at_the_runs() -> None:
+    """On Dask every chunk logs fractions below one while it runs; the bar is monotone and ends at the runs.
+
+    When the events reach the client depends on the machine's load, so the bar positions
+    are checked with a scripted client (next test); here the events themselves are.
+    """
+    pytest.importorskip("distributed")
+    from auv_hinf.campaign.runner import dask_client
+
     runs = 4
     with pytest.MonkeyPatch.context() as mp, dask_client(workers=2) as client:
-        mp.setattr(tqdm, "tqdm", Recording)
+        seen = _record_bar(mp)
         topics: set[str] = set()
         read = client.get_events
 
@@ -232,17 +238,9 @@ def test_dask_chunks_report_their_progress_as_events_and_the_bar_ends_at_the_run
 
 def test_the_dask_bar_moves_with_the_chunk_events_before_the_chunks_finish(monkeypatch: pytest.MonkeyPatch) -> None:
     """A scripted client: half of each chunk is reported before any chunk finishes; the bar shows it."""
-    import tqdm
-
     from auv_hinf.campaign import runner
 
-    seen: list[int] = []
-
-    class Recording(tqdm.tqdm):  # type: ignore[misc]
-        def update(self, n: float | None = 1) -> bool | None:
-            out = super().update(n)
-            seen.append(int(self.n))
-            return out
+    seen = _record_bar(monkeypatch)
 
     class Future:
         def __init__(self, client: Scripted) -> None:
@@ -270,7 +268,6 @@ def test_the_dask_bar_moves_with_the_chunk_events_before_the_chunks_finish(monke
         def gather(self, futures: list[Future]) -> list[pd.DataFrame]:
             return [pd.DataFrame() for _ in futures]
 
-    monkeypatch.setattr(tqdm, "tqdm", Recording)
     monkeypatch.setattr(runner, "PROGRESS_POLL", 0.0)
     runner._execute(None, [(0, 4), (4, 8)], Scripted(), progress=True)  # type: ignore[arg-type]
     assert 4 in seen and seen[-1] == 8, seen
