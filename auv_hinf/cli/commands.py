@@ -168,8 +168,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
         (args.out / "summary.json").write_text(_dump(summary))
         result.save_npz(args.out / "trajectory.npz")
-        cov = plan.coverage  # the bound that applies to this run (None when it is not covered)
-        bound = cov.thrust.as_tuple() if plan.covered and cov is not None and cov.thrust is not None else None
+        cov, rob = plan.coverage, plan.robust  # the bound that applies to this run (None when it is not covered)
+        thrust = rob.thrust if rob is not None and rob.covered else (None if cov is None else cov.thrust)
+        bound = thrust.as_tuple() if plan.covered and thrust is not None else None
         save_simulation_plots(result, args.out, certified=bound)
     if args.json:
         print(_dump(summary))

@@ -18,6 +18,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.certification.closed_loop import ClosedLoopCertificate
 from auv_hinf.certification.coverage import initial_errors
 from auv_hinf.certification.margins import ErrorBounds
+from auv_hinf.certification.thrust import ThrustBounds
 from auv_hinf.config.formation import FormationConfig
 from auv_hinf.design.gains import Gains
 from auv_hinf.exceptions import AuvHinfError
@@ -204,12 +205,15 @@ class RobustRunCheck:
     design_covered : bool or None
         The robust certificate of the gains covers the declared box and current along the
         mission, whatever this run's plant and start (``None`` when not evaluated).
+    thrust : ThrustBounds or None
+        The certificate's bound of the commanded force when it covers the run (N, N, N m).
     """
 
     covered: bool
     bounds: dict[str, float] | None
     reason: str
     design_covered: bool | None = None
+    thrust: ThrustBounds | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary."""
@@ -263,9 +267,8 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
     e, de, epsi, depsi = initial_errors(fleet, initial, (float(cur[0]), float(cur[1])))
     if not cert.start_inside(e, de, epsi, depsi, cur):
         return RobustRunCheck(False, bounds, "the start is outside the certified invariant set", design_covered=True)
-    return RobustRunCheck(
-        True, bounds, "covered: plant and current declared, start inside the certified set", design_covered=True
-    )
+    why = "covered: plant and current declared, start inside the certified set"
+    return RobustRunCheck(True, bounds, why, design_covered=True, thrust=cert.thrust)
 
 
 __all__ = ["RobustRunCheck", "RobustSummary", "check_robust_run", "robust_summary"]
