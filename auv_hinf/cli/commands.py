@@ -146,6 +146,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from auv_hinf.workflow.run_plan import plan_run, run_report
 
     _prepare_out(args.out)
+    if args.save is not None and args.save.suffix != ".parquet":
+        raise BadInput(f"--save writes Parquet: give a file name ending in .parquet, got {str(args.save)!r}")
     cfg = _with_actuators(_load(args), args.actuators)
     if args.current is not None:
         cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
@@ -163,6 +165,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         )
     result = simulate(plan.scenario)
     summary = run_report(plan, result)
+    if args.save is not None:
+        from auv_hinf.simulation.stream import save_trajectories
+
+        try:
+            summary["saved_trajectories"] = str(save_trajectories(plan.scenario, args.save))
+        except OSError as exc:
+            raise BadInput(f"--save {str(args.save)!r}: {exc.strerror or exc}") from None
     if args.out:
         from auv_hinf.plots import save_simulation_plots
 

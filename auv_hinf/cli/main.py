@@ -85,6 +85,13 @@ def build_parser() -> argparse.ArgumentParser:
                 help="constant current, inertial frame, m/s (e.g. --current 0.1,0)",
             )
             c.add_argument(
+                "--save",
+                type=Path,
+                metavar="FILE.parquet",
+                help="also write every vehicle's state every 0.1 s to this Parquet file, streamed in row "
+                "groups (memory O(N) at any N; one more integration of the run)",
+            )
+            c.add_argument(
                 "--uncertified",
                 action="store_true",
                 help="simulate even when no certificate covers the gains (the run is then reported as not covered)",
