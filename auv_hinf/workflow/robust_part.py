@@ -28,6 +28,7 @@ from auv_hinf.robust.bandwidth import RobustDesign
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
 from auv_hinf.robust.certificate import RobustCertificate, robust_certificate
 from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest_corner
+from auv_hinf.simulation.integrators import NUMERICAL_FLOOR
 from auv_hinf.workflow.design_point import DesignPoint
 from auv_hinf.workflow.nominal import closed_loop_for, mission_checks
 
@@ -93,7 +94,7 @@ class RobustSummary:
                 f"    thrust |tau_x| <= {t.force_x:.5g} N, |tau_y| <= {t.force_y:.5g} N, "
                 f"|tau_psi| <= {t.moment:.5g} N m"
             )
-        if self.margin is not None:
+        if self.margin is not None and c is not None and (c.box.declared or c.current > 0.0):
             out.append(f"    box scale certified up to {self.margin.lower:.4g} (1 = the declared box)")
         integral = self.integral()
         if integral is not None:
@@ -262,8 +263,8 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
     if not cert.covers or cert.bounds is None:
         why = "; ".join(cert.reasons) or "the robust certificate does not cover"
         return RobustRunCheck(False, None, why, design_covered=False if fleet.shaping is None else None)
-    b = cert.bounds
-    bounds = {"position": b.position, "velocity": b.velocity, "heading": b.heading, "yaw_rate": b.yaw_rate}
+    b = cert.bounds  # raised to the integrator's floor: the simulated run obeys them to its accuracy
+    bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in b.to_dict().items()}
     e, de, epsi, depsi = initial_errors(fleet, initial, (float(cur[0]), float(cur[1])))
     if not cert.start_inside(e, de, epsi, depsi, cur):
         return RobustRunCheck(False, bounds, "the start is outside the certified invariant set", design_covered=True)

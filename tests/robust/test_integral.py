@@ -221,3 +221,24 @@ def test_the_python_control_closed_loop_with_the_integrator_matches_simulate() -
     ours = simulate(scn, rtol=1e-10, atol=1e-10)
     states = resp.outputs.T.reshape(-1, cfg.n, 6)
     assert np.abs(states - ours.states).max() < 1e-6
+
+
+@pytest.mark.slow
+def test_integral_action_without_box_or_current_is_covered_and_measured_below_its_floor() -> None:
+    """Nothing declared: the bounds are zero up to the integrator's floor, and the run obeys them."""
+    from auv_hinf.config.tables import UncertaintyConfig
+    from auv_hinf.workflow.run_plan import plan_run, run_report
+
+    cfg = replace(
+        preset_config("bluerov2-line"),
+        integral=True,
+        uncertainty=UncertaintyConfig(()),
+        disturbance=DisturbanceConfig(None, None),
+        actuators=None,
+    )
+    plan = plan_run(cfg, horizon=30.0)
+    report = run_report(plan, simulate(plan.scenario))
+    assert plan.covered and report["robust_covers_run"]
+    measured, bounds = report["measured_errors"], report["robust_bounds"]
+    for kind in ("position", "velocity", "heading", "yaw_rate"):
+        assert measured[f"{kind}_error"] <= bounds[kind]
