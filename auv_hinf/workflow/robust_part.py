@@ -79,9 +79,10 @@ class RobustSummary:
         if not self.declared:
             return []
         c = self.certificate
-        out = [
-            f"  robust certificate        {'covers' if self.covers else 'does NOT cover'} the declared box and current"
-        ]
+        what = "the declared box and current"
+        if c is not None and not (c.box.declared or c.current > 0.0):
+            what = "the controller's model (no box or current declared)"
+        out = [f"  robust certificate        {'covers' if self.covers else 'does NOT cover'} {what}"]
         if c is not None and c.bounds is not None and c.decay_rate is not None:
             b = c.bounds
             out.append(
