@@ -133,7 +133,9 @@ class DesignPoint:
             value = None if self.robust_design is None else self.robust_design.bandwidth
         return {
             "method": method,
-            "structure": "scalar: alpha (1/s), k1 (1/s^2), k_psi (1/s^2, 1/s), the same for every vehicle",
+            "structure": "scalar: alpha (1/s), k1 (1/s^2), "
+            + ("ki (1/s^3, integral action), " if cfg.integral else "")
+            + "k_psi (1/s^2, 1/s), the same for every vehicle",
             "objective": objective,
             "value": value,
             "reason": None if self.robust_design is None else self.robust_design.reason,
