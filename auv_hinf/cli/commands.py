@@ -146,8 +146,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from auv_hinf.workflow.run_plan import plan_run, run_report
 
     _prepare_out(args.out)
-    if args.save is not None and args.save.suffix != ".parquet":
-        raise BadInput(f"--save writes Parquet: give a file name ending in .parquet, got {str(args.save)!r}")
+    if args.save is not None:
+        if args.save.suffix != ".parquet":
+            raise BadInput(f"--save writes Parquet: give a file name ending in .parquet, got {str(args.save)!r}")
+        _prepare_out(args.save.parent)  # before any computation, as --out
     cfg = _with_actuators(_load(args), args.actuators)
     if args.current is not None:
         cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))

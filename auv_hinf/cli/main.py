@@ -88,8 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
                 "--save",
                 type=Path,
                 metavar="FILE.parquet",
-                help="also write every vehicle's state every 0.1 s to this Parquet file, streamed in row "
-                "groups (memory O(N) at any N; one more integration of the run)",
+                help="also write every vehicle's state every 0.1 s to this Parquet file (its folder is created), "
+                "streamed in row groups (memory O(N) at any N; one more integration of the run)",
             )
             c.add_argument(
                 "--uncertified",
