@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from auv_hinf.campaign.sampling import ERROR_KINDS, FORCE_COLUMNS
-from auv_hinf.campaign.setup import COEFFICIENTS
+from auv_hinf.campaign.setup import COEFFICIENTS, nominal_certificate
 from auv_hinf.models.actuators import CHANNELS
 from auv_hinf.workflow.codec import json_safe
 
@@ -60,7 +60,7 @@ def passed(table: pd.DataFrame) -> pd.Series:
 
 def summarize(camp: Campaign) -> dict[str, Any]:
     """The ``summary.json`` object: counts, fractions, worst ratios, forces (N, N m), throughput (s, runs/s)."""
-    t, s, cert = camp.table, camp.setup, camp.certificate
+    t, s = camp.table, camp.setup
     k = len(t)
     applicable = t["inside_bounds"].notna()
     n_app = int(applicable.sum())
@@ -89,7 +89,9 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "chunk": camp.chunk,
         "executor": camp.executor,
         "certificate": "nominal" if s.robust is None else "robust",
-        "start_region": cert.region.region.to_dict() if s.robust is None else "robust invariant ellipsoids",
+        "start_region": nominal_certificate(s).region.region.to_dict()
+        if s.robust is None
+        else "robust invariant ellipsoids",
         "region_error_bounds": certified_bounds(camp),
         "box_vertex_runs": 0 if s.robust is None else s.robust.vertex_runs(k),
         "composition": _composition(s, k),
@@ -117,7 +119,7 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "worst_ratio": worst,
         "worst_tail_position_ratio": float(t.loc[applicable, "ratio_tail_position_error"].max()) if n_app else None,
         "forces": forces,
-        "certified_decay_rate": cert.rate if s.robust is None else s.robust.decay_rate,
+        "certified_decay_rate": nominal_certificate(s).rate if s.robust is None else s.robust.decay_rate,
         "min_measured_decay_rate": float(rates.min()) if len(rates) else None,
         "throughput": {
             "runs_per_second": k / wall if wall > 0 else None,
@@ -135,7 +137,7 @@ def certified_thrust(camp: Campaign) -> dict[str, float]:
     rob = camp.setup.robust
     if rob is not None:
         return {c: float(b) for c, b in zip(CHANNELS, rob.thrust)}
-    return dict(camp.certificate.thrust.to_dict())
+    return dict(nominal_certificate(camp.setup).thrust.to_dict())
 
 
 def force_summary(camp: Campaign) -> dict[str, Any]:
@@ -172,7 +174,7 @@ def certified_bounds(camp: Campaign) -> dict[str, float]:
     rob = camp.setup.robust
     if rob is not None:
         return {kind: float(b) for kind, b in zip(ERROR_KINDS, rob.bounds)}
-    return dict(camp.certificate.region.bounds.to_dict())
+    return dict(nominal_certificate(camp.setup).region.bounds.to_dict())
 
 
 def save_histograms(camp: Campaign, out: Path) -> list[Path]:

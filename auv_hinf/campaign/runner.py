@@ -57,7 +57,8 @@ class Campaign:
     table : pandas.DataFrame
         One row per run, ordered by run index (columns: see :func:`run_chunk`).
     setup : CampaignSetup
-    certificate : ClosedLoopCertificate
+    certificate : ClosedLoopCertificate or None
+        The nominal certificate (``None`` with integral action: the robust one covers it).
     chunk : int
     executor : str
         ``"serial"`` or the Dask scheduler address.
@@ -67,7 +68,7 @@ class Campaign:
 
     table: pd.DataFrame
     setup: CampaignSetup
-    certificate: ClosedLoopCertificate
+    certificate: ClosedLoopCertificate | None
     chunk: int
     executor: str
     setup_time: float
@@ -235,9 +236,12 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
             raise ParameterError(f"workers must be an integer >= 1, got {workers!r}")
         environ = {f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in WORKER_MALLOC.items()}
+        # dashboard_address ":0": any free port for the scheduler's HTTP server. None means the
+        # default 8787, and a second cluster on the machine (parallel tests, another campaign)
+        # then fails to start with "Port 8787 is already in use".
         with (
             dask.config.set(environ),
-            LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=None) as cluster,  # type: ignore[no-untyped-call]
+            LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=":0") as cluster,  # type: ignore[no-untyped-call]
             Client(cluster) as client,  # type: ignore[no-untyped-call]
         ):
             yield client

@@ -17,7 +17,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup
+from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup, nominal_certificate
 from auv_hinf.campaign.starts import vertex_current
 from auv_hinf.certification.coverage import initial_errors
 from auv_hinf.certification.levels import start_bounds
@@ -163,14 +163,14 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float]
     """
     inputs = [sample_run(setup, i) for i in range(lo, hi)]
     batch = ScenarioBatch(tuple(run_scenario(setup, i, x) for i, x in zip(range(lo, hi), inputs)))
-    cert = setup.certificate
+    cert = setup.certificate  # None with integral action: the rate is then measured on the identity
     sink = ErrorSink(
         setup.reference,
         batch.scenarios[0].times,
         batch.current,
         setup.n,
-        cert.position.matrix,
-        cert.heading.matrix,
+        np.eye(2) if cert is None else cert.position.matrix,
+        np.eye(2) if cert is None else cert.heading.matrix,
         progress=progress,
         law=setup.law,
     )
@@ -226,7 +226,7 @@ def _rows(
         tail = np.where(bound[..., 0] > 0, met.tail_position / bound[..., 0], math.inf)
     tol = BOUND_SLACK * max(RTOL, ATOL)
     inside = np.all(measured <= bound * (1.0 + tol) + tol, axis=(1, 2)) & stayed
-    thrust = np.array(setup.certificate.thrust.as_tuple()) if setup.robust is None else setup.robust.thrust
+    thrust = setup.robust.thrust if setup.robust is not None else np.array(nominal_certificate(setup).thrust.as_tuple())
     peak = met.commanded_peak  # (S, 3)
     within = np.all(peak <= thrust * (1.0 + tol) + tol, axis=1)
     cols: dict[str, Any] = {"run": np.arange(lo, lo + len(inputs)), "seed": setup.seed}

@@ -62,8 +62,10 @@ class CampaignSetup:
         Certified start-region radii (m, m/s, rad, rad/s).
     p2, q : ndarray, shape (2, 2)
         Lyapunov matrices of the region (identity when the loop's radii are zero).
-    certificate : ClosedLoopCertificate
-        Its decay Lyapunov matrices give the measured decay rate.
+    certificate : ClosedLoopCertificate or None
+        Its decay Lyapunov matrices give the measured decay rate; ``None`` with integral
+        action (the robust certificate, ``robust``, covers it; the rate is then measured on
+        the identity).
     box : ndarray, shape (9, 2)
         Multiplier ranges of :data:`COEFFICIENTS` (``[1, 1]`` when undeclared).
     current_speed : float
@@ -94,7 +96,7 @@ class CampaignSetup:
     radii: FloatArray
     p2: FloatArray
     q: FloatArray
-    certificate: ClosedLoopCertificate
+    certificate: ClosedLoopCertificate | None
     box: FloatArray
     current_speed: float
     envelope: Envelope
@@ -114,13 +116,14 @@ class CampaignSetup:
 
 def prepare(
     cfg: FormationConfig, *, seed: int = 0, horizon: float | None = None
-) -> tuple[CampaignSetup, ClosedLoopCertificate]:
+) -> tuple[CampaignSetup, ClosedLoopCertificate | None]:
     """Gains, closed-loop certificate and the worker set-up of a campaign on ``cfg``.
 
     Raises
     ------
     DesignError
-        If the design has no gain or no closed-loop certificate (no start region to sample).
+        If the design has no gain or no certificate to sample the starts from (the nominal
+        one, or with integral action the robust one).
     ParameterError
         For a negative seed or a non-positive horizon.
     """
@@ -131,13 +134,7 @@ def prepare(
         raise ParameterError(f"horizon must be > 0 s, got {horizon!r}")
     point = design_point(cfg)
     gains = point.require_gains()
-    if gains.integral:
-        raise DesignError(
-            "campaigns sample the nominal certificate's start region, which does not cover integral action; "
-            "run `simulate` (the robust certificate covers it), or set [design] integral = false"
-        )
-    cert = closed_loop_for(point)
-    reg = cert.region
+    cert = None if gains.integral else closed_loop_for(point)  # integral action: the robust certificate only
     ref = point.fleet()
     m0 = ref.motion(0.0)
     start = np.stack([m0.p, m0.v, np.column_stack([m0.psi, m0.r])], axis=1)
@@ -145,9 +142,15 @@ def prepare(
     for k, (lo, hi) in cfg.uncertainty.box:
         box[COEFFICIENTS.index(k)] = (lo, hi)
     rob, why = robust_start(point, box, cert)
+    if cert is not None:
+        thrust = cert.thrust.as_tuple()
+    elif rob is not None:
+        thrust = (float(rob.thrust[0]), float(rob.thrust[1]), float(rob.thrust[2]))
+    else:
+        raise DesignError(f"integral action is certified by the robust certificate, which does not cover this: {why}")
     limit = cfg.actuators
-    t = cert.thrust
-    applies = limit is None or limit.admits(t.as_tuple())
+    applies = limit is None or limit.admits(thrust)
+    reg = None if cert is None else cert.region
     law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=limit)
     setup = CampaignSetup(
         name=cfg.name,
@@ -155,9 +158,9 @@ def prepare(
         nominal=cfg.vehicle,
         reference=ref,
         start=start,
-        radii=reg.region.as_array(),
-        p2=np.eye(2) if reg.p2 is None else reg.p2,
-        q=np.eye(2) if reg.q is None else reg.q,
+        radii=np.zeros(4) if reg is None else reg.region.as_array(),
+        p2=np.eye(2) if reg is None or reg.p2 is None else reg.p2,
+        q=np.eye(2) if reg is None or reg.q is None else reg.q,
         certificate=cert,
         box=box,
         current_speed=float(cfg.disturbance.current_speed or 0.0),
@@ -171,6 +174,13 @@ def prepare(
         implementation=cfg.implementation,
     )
     return setup, cert
+
+
+def nominal_certificate(setup: CampaignSetup) -> ClosedLoopCertificate:
+    """The nominal certificate of a campaign whose runs it decides (without a robust one there always is one)."""
+    if setup.certificate is None:  # pragma: no cover - prepare refuses integral action without the robust one
+        raise DesignError("this campaign has no nominal certificate (integral action): the robust one decides")
+    return setup.certificate
 
 
 def default_chunk(setup: CampaignSetup) -> int:
@@ -193,5 +203,6 @@ __all__ = [
     "CampaignSetup",
     "chunks",
     "default_chunk",
+    "nominal_certificate",
     "prepare",
 ]

@@ -7,7 +7,8 @@ against its bounds:
 
 * **Starts.** Per vehicle, ``(e - e_c, e')`` uniform in the 4-D position ellipsoid
   ``sum_axes [e~, e'] P [e~, e']^T <= d^2`` (``e_c = -lam c/(l k1)``, the certificate's
-  current-shifted equilibrium) and ``(e_psi, e_psi')`` uniform in the heading ellipse
+  current-shifted equilibrium; with integral action, the slice of the ``(z~, e, e')``
+  ellipsoid at the integrator's start ``z~ = -z*``) and ``(e_psi, e_psi')`` uniform in the heading ellipse
   ``[e_psi, e_psi'] Q [e_psi, e_psi']^T <= h^2``. Uniform in volume puts most starts near the
   boundary, where the bounds are tight.
 * **Plants.** Every :data:`CORNER_PERIOD`-th run (run ``i`` with ``i % CORNER_PERIOD == 0``)
@@ -131,10 +132,16 @@ class RobustStart:
         """
         pos, head, d, h = self._sets()
         scale = 1.0 - START_SHRINK
-        w = _ball(rng, n, 4) * (d * scale)  # (n, 4): [x-axis pair, y-axis pair]
-        li = np.linalg.inv(np.linalg.cholesky(pos.matrix).T)  # z = L^-T w gives z^T P z = |w|^2
-        xa, ya = w[:, :2] @ li.T, w[:, 2:] @ li.T
-        e = np.column_stack([xa[:, 0], ya[:, 0]]) + self.certificate.equilibrium_shift(current)
+        shift = self.certificate.equilibrium_shift(current)
+        p, radius = pos.matrix, d
+        centre: FloatArray = np.zeros((2, 2))
+        if p.shape[0] == 3:  # integral action: the slice z~ = -z* of the (z~, e, e') ellipsoid
+            p, centre, radius = _integrator_slice(p, -shift, d)
+            shift = np.zeros(2)  # the position error's equilibrium is zero
+        w = _ball(rng, n, 4) * (radius * scale)  # (n, 4): [x-axis pair, y-axis pair]
+        li = np.linalg.inv(np.linalg.cholesky(p).T)  # z = L^-T w gives z^T P z = |w|^2
+        xa, ya = w[:, :2] @ li.T + centre[0], w[:, 2:] @ li.T + centre[1]
+        e = np.column_stack([xa[:, 0], ya[:, 0]]) + shift
         de = np.column_stack([xa[:, 1], ya[:, 1]])
         hv = _ball(rng, n, 2) * (h * scale) @ np.linalg.inv(np.linalg.cholesky(head.matrix).T).T
         return e, de, hv[:, 0], hv[:, 1]
@@ -152,6 +159,21 @@ class RobustStart:
         return mult
 
 
+def _integrator_slice(p: FloatArray, z: FloatArray, level: float) -> tuple[FloatArray, FloatArray, float]:
+    """The ``(e, e')`` ellipse of ``{sum_axes x_a^T P x_a <= level^2}`` at fixed integrator states ``z (2,)``.
+
+    With ``P = [[p_zz, p_zy], [p_yz, P_yy]]`` and ``y_a = (e_a, e'_a)``, completing the square gives
+    ``sum_axes (y_a - m_a)^T P_yy (y_a - m_a) <= level^2 - s |z|^2``, ``m_a = -z_a P_yy^-1 p_yz``
+    and ``s = p_zz - p_zy P_yy^-1 p_yz``. Returns ``P_yy``, the centres ``m (2 axes, 2)`` and the
+    radius ``sqrt(level^2 - s |z|^2)`` (0 when the slice is empty).
+    """
+    pyy, pyz = p[1:, 1:], p[1:, 0]
+    g = np.linalg.solve(pyy, pyz)
+    s = float(p[0, 0] - pyz @ g)
+    centre: FloatArray = -np.outer(z, g)
+    return pyy, centre, math.sqrt(max(level * level - s * float(z @ z), 0.0))
+
+
 def _ball(rng: np.random.Generator, n: int, dim: int) -> FloatArray:
     """``n`` points uniform in the unit ball of ``R^dim``."""
     g = rng.standard_normal((n, dim))
@@ -160,7 +182,7 @@ def _ball(rng: np.random.Generator, n: int, dim: int) -> FloatArray:
 
 
 def robust_start(
-    point: DesignPoint, box: FloatArray, nominal: ClosedLoopCertificate
+    point: DesignPoint, box: FloatArray, nominal: ClosedLoopCertificate | None
 ) -> tuple[RobustStart | None, str | None]:
     """The robust start sets of a design point, or ``None`` with the reason the robust check does not apply.
 

@@ -62,7 +62,7 @@ def test_nominal_runs_stay_inside_their_certified_bounds(serial: pd.DataFrame) -
 def test_dask_in_process_gives_an_identical_table(serial: pd.DataFrame) -> None:
     distributed = pytest.importorskip("distributed")
     # no warning filter: an in-process cluster without a dashboard starts and stops silently
-    with distributed.Client(processes=False, n_workers=2, threads_per_worker=1, dashboard_address=None) as client:
+    with distributed.Client(processes=False, n_workers=2, threads_per_worker=1, dashboard_address=":0") as client:
         table = run_campaign(
             preset_config("paper-triangle"), RUNS, seed=SEED, chunk=3, horizon=HORIZON, client=client
         ).table

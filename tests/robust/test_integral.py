@@ -242,3 +242,25 @@ def test_integral_action_without_box_or_current_is_covered_and_measured_below_it
     measured, bounds = report["measured_errors"], report["robust_bounds"]
     for kind in ("position", "velocity", "heading", "yaw_rate"):
         assert measured[f"{kind}_error"] <= bounds[kind]
+
+
+@pytest.mark.slow
+def test_a_campaign_with_integral_action_samples_the_integrator_slice_and_stays_inside() -> None:
+    """Starts drawn in the slice z~ = -z* are inside the certified set; every run passes its checks."""
+    from auv_hinf.campaign.report import summarize
+    from auv_hinf.campaign.runner import run_campaign
+    from auv_hinf.campaign.setup import prepare
+    from auv_hinf.campaign.starts import vertex_current
+
+    cfg = _current_config()
+    setup, nominal = prepare(cfg, seed=3, horizon=20.0)
+    assert nominal is None and setup.robust is not None
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        cur = vertex_current(rng, 0.2 * rng.random())
+        e, de, epsi, depsi = setup.robust.sample_errors(rng, cfg.n, cur)
+        assert setup.robust.inside(e, de, epsi, depsi, cur)
+    camp = run_campaign(cfg, 6, seed=3, horizon=20.0)
+    summary = summarize(camp)
+    assert summary["counts"]["certificate_applies"] == 6 and summary["counts"]["passed"] == 6, summary["counts"]
+    assert summary["forces"]["exceeded_certified_force"] == 0
