@@ -147,9 +147,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     _prepare_out(args.out)
     if args.save is not None:
-        if args.save.suffix != ".parquet":
-            raise BadInput(f"--save writes Parquet: give a file name ending in .parquet, got {str(args.save)!r}")
-        _prepare_out(args.save.parent)  # before any computation, as --out
+        from auv_hinf.simulation.stream import parquet_path
+
+        _prepare_out(parquet_path(args.save).parent)  # before any computation, as --out
     cfg = _with_actuators(_load(args), args.actuators)
     if args.current is not None:
         cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))

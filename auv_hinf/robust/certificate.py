@@ -331,9 +331,9 @@ def robust_certificate(
     if margins is not None and not margins.ok:
         reasons.append(f"the envelope does not hold with these error bounds (smallest margin {margins.min:.4g})")
     b_z = dbar * pos.integral_extent + z_star if gains.integral else None  # |z| <= |z~| + |z*| (m s)
-    # the feedback on the ellipsoid about the shifted equilibrium, plus the shift's own share
-    shift = gains.ki * z_star if gains.integral else gains.k1 * current_offset(box, lam, current, gains.k1)
-    feedback = ellipsoid_feedback(pos.matrix, c2, dbar**2) + shift
+    # the feedback on the ellipsoid about the shifted equilibrium, plus the equilibrium's own:
+    # l times it cancels -lam c, so |k1 e_c| = |ki z*| = |lam| c / l with or without integral action
+    feedback = ellipsoid_feedback(pos.matrix, c2, dbar**2) + abs(lam) * current / lc
     thrust = thrust_bounds(box.nominal, env, tube, bounds, gains, current, b_z or 0.0, feedback)
     if actuators is not None and not actuators.admits(thrust.as_tuple()):
         reasons.append(actuator_shortfall(actuators, thrust.as_tuple()))

@@ -99,7 +99,7 @@ def synthesise_robust(
             gains = Gains(alpha, k1, heading_gains(box.nominal, (-h, -1.5 * h)))
             candidates.append((with_integral(gains, lam, lc) if integral else gains, math.sqrt(lc * k1)))
     tried: list[tuple[float, float, bool]] = []
-    best: tuple[float, Gains, float, float] | None = None
+    best: tuple[float, int, float] | None = None  # (score, candidate, box scale)
     cap_scale = box.max_scale if box.declared else math.inf
     declared: dict[int, RobustCertificate] = {}  # each candidate's certificate on the declared box, once
 
@@ -114,7 +114,7 @@ def synthesise_robust(
         if cert.covers:
             score = _score(cert, actuators) / (1.0 + 1e-9 * target)  # prefer the larger target on ties
             if best is None or (target, -score) > (best[2], -best[0]):
-                best = (score, candidates[k][0], target, candidates[k][1])
+                best = (score, k, target)
         return cert.covers
 
     big = TARGET_MARGIN if TARGET_MARGIN <= cap_scale else None
@@ -141,8 +141,9 @@ def synthesise_robust(
         g, w, cert = rated[k]
         why = "no synthesised candidate covers the declared box; showing the one needing the least force"
         return RobustDesign(g, w, 0.0, cert, tuple(tried), why)
-    score, gains, target, w = best
-    cert = on_declared(next(k for k, (g, _) in enumerate(candidates) if g is gains))
+    score, k, target = best
+    gains, w = candidates[k]
+    cert = on_declared(k)
     unit = "of the actuator limits" if actuators is not None else "N"
     why = (
         f"LMI synthesis ({len(candidates)} candidates): {OBJECTIVE}; best {score:.4g} {unit} "

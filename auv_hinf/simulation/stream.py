@@ -35,6 +35,20 @@ STATE_COLUMNS = ("x", "y", "psi", "u", "v", "r")
 INTEGRATOR_COLUMNS = ("z_x", "z_y")
 
 
+def parquet_path(path: str | Path) -> Path:
+    """``path`` as the Parquet file :func:`save_trajectories` writes.
+
+    Raises
+    ------
+    ParameterError
+        If the file name does not end in ``.parquet``.
+    """
+    out = Path(path)
+    if out.suffix != ".parquet":
+        raise ParameterError(f"--save writes Parquet: give a file name ending in .parquet, got {str(out)!r}")
+    return out
+
+
 def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_INTERVAL) -> Path:
     """Integrate ``scn`` again and stream every vehicle's state every ``interval`` s to ``path``.
 
@@ -60,9 +74,7 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    out = Path(path)
-    if out.suffix != ".parquet":
-        raise ParameterError(f"--save writes Parquet: give a file name ending in .parquet, got {str(out)!r}")
+    out = parquet_path(path)
     if not (np.isfinite(interval) and interval > 0.0):
         raise ParameterError(f"the save interval must be > 0 s, got {interval!r}")
     samples = max(2, round(scn.horizon / interval) + 1)
@@ -98,4 +110,11 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
     return out
 
 
-__all__ = ["INTEGRATOR_COLUMNS", "ROW_GROUP_ROWS", "SAVE_INTERVAL", "STATE_COLUMNS", "save_trajectories"]
+__all__ = [
+    "INTEGRATOR_COLUMNS",
+    "ROW_GROUP_ROWS",
+    "SAVE_INTERVAL",
+    "STATE_COLUMNS",
+    "parquet_path",
+    "save_trajectories",
+]

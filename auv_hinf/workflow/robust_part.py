@@ -148,7 +148,7 @@ class RobustSummary:
             "design": None if self.design is None else self.design.to_dict(),
             "details": None if c is None else c.to_dict(),
             "reasons": list(self.reasons) + ([] if c is None else list(c.reasons)),
-        } | ({} if self.integral() is None else {"integral": self.integral()})
+        } | ({} if (integral := self.integral()) is None else {"integral": integral})
 
 
 def robust_summary(
