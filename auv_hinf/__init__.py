@@ -5,21 +5,30 @@ for Autonomous Underwater Vehicles*. See the README for a tour.
 """
 
 from auv_hinf._version import __version__
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate, closed_loop_certificate
-from auv_hinf.certification.coverage import Coverage, cover_start
-from auv_hinf.certification.margins import ErrorBounds
-from auv_hinf.certification.reference_fit import ReferenceFit, reference_fit
-from auv_hinf.certification.region import Region
-from auv_hinf.config.formation import FormationConfig, load_config
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.design_point import DesignPoint, design_point
+from auv_hinf.certificate.run_plan import RunPlan, plan_run, run_report
+from auv_hinf.closed_loop.coverage import Coverage, cover_start
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_certificate
+from auv_hinf.closed_loop.region import Region
 from auv_hinf.config.presets import PRESETS, preset_config
-from auv_hinf.design.alpha import GainDesign, alpha_minimal, alpha_paper, alpha_stabilizing, design_alpha, position_loop
+from auv_hinf.config.settings import FormationConfig, load_config
 from auv_hinf.design.blocks import hinf_norm, hinf_norm_peak, position_block, velocity_block
+from auv_hinf.design.brl import lmi_hinf_norm
 from auv_hinf.design.crosscheck import CrosscheckReport, crosscheck
-from auv_hinf.design.gains import Gains, heading_gains, theorem1_gains
 from auv_hinf.design.jacobi_sigma import jacobi_sigma_bounds
-from auv_hinf.design.lmi.theorem1 import lmi_hinf_norm
 from auv_hinf.design.sigma import SigmaBounds, sigma_grid, sigma_max_2x2, vehicle_sigma
-from auv_hinf.design.theorem1 import Theorem1Conditions, theorem1_conditions
+from auv_hinf.design.theorem1 import (
+    GainDesign,
+    Theorem1Conditions,
+    alpha_minimal,
+    alpha_paper,
+    alpha_stabilizing,
+    design_alpha,
+    position_loop,
+    theorem1_conditions,
+    theorem1_gains,
+)
 from auv_hinf.exceptions import (
     AuvHinfError,
     ConfigError,
@@ -29,8 +38,14 @@ from auv_hinf.exceptions import (
     ParameterError,
     SolverError,
 )
+from auv_hinf.law.formation_law import FormationController, VehicleLaw
+from auv_hinf.law.gains import Gains, heading_gains
+from auv_hinf.mission.fit import ReferenceFit, reference_fit
+from auv_hinf.mission.fleet import FleetReference, PathFrameReference, shaped_start
+from auv_hinf.mission.margins import ErrorBounds
+from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference, SineReference
 from auv_hinf.models.envelope import Envelope, envelope_lambda
-from auv_hinf.models.formation import (
+from auv_hinf.models.jacobi import (
     FormationMatrices,
     JacobiTransform,
     formation_matrices,
@@ -38,10 +53,6 @@ from auv_hinf.models.formation import (
     regular_polygon,
     shape_from_offsets,
 )
-from auv_hinf.models.lawnmower import LawnmowerReference
-from auv_hinf.models.path_frame import PathFrameReference
-from auv_hinf.models.paths import CircleReference, LineReference, SineReference
-from auv_hinf.models.reference import FleetReference, shaped_start
 from auv_hinf.models.vehicle import (
     VehicleParams,
     body_block,
@@ -53,12 +64,8 @@ from auv_hinf.models.vehicle import (
     vehicle_nlsys,
 )
 from auv_hinf.simulation.engine import simulate, simulate_batch
-from auv_hinf.simulation.law import FormationController, VehicleLaw
 from auv_hinf.simulation.results import SimulationResult
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
-from auv_hinf.workflow.certificate import Certificate, certify
-from auv_hinf.workflow.design_point import DesignPoint, design_point
-from auv_hinf.workflow.run_plan import RunPlan, plan_run, run_report
 
 __all__ = [
     "PRESETS",

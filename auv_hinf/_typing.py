@@ -27,3 +27,20 @@ RiccatiSolver = Literal["control", "scipy"]
 #: Frame of the formation offsets: fixed in the earth frame (the paper) or turning with the path.
 FormationFrame = Literal["inertial", "path"]
 FORMATION_FRAMES: tuple[FormationFrame, ...] = get_args(FormationFrame)
+
+#: Robust gain synthesis: the bandwidth family or LMI synthesis of the least-force gains.
+SynthesisKind = Literal["bandwidth", "lmi"]
+
+
+__all__ = [
+    "FORMATION_FRAMES",
+    "GAIN_METHODS",
+    "JACOBI_KINDS",
+    "FloatArray",
+    "FormationFrame",
+    "GainMethod",
+    "JacobiKind",
+    "OrientationLaw",
+    "RiccatiSolver",
+    "SynthesisKind",
+]

@@ -83,3 +83,16 @@ def require_fleet_size(n: Any, minimum: int = 2) -> int:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < minimum:
         raise FormationError(f"number of vehicles n must be an integer >= {minimum}, got {n!r}")
     return int(n)
+
+
+__all__ = [
+    "AuvHinfError",
+    "ConfigError",
+    "DesignError",
+    "EnvelopeError",
+    "FormationError",
+    "ParameterError",
+    "SolverError",
+    "require_finite",
+    "require_fleet_size",
+]

@@ -7,13 +7,12 @@ import numpy as np
 import scipy.linalg as sla
 from common import REPEATS, fleet, table, timed
 
+from auv_hinf.certificate.design_point import design_point
 from auv_hinf.config.presets import preset_config
-from auv_hinf.design.alpha import alpha_stabilizing
-from auv_hinf.design.lmi.theorem1 import lmi_stabilizing_alpha
-from auv_hinf.design.theorem1 import riccati_c
-from auv_hinf.models.reference import Motion
+from auv_hinf.design.brl import lmi_stabilizing_alpha
+from auv_hinf.design.theorem1 import alpha_stabilizing, riccati_c
+from auv_hinf.mission.fleet import Motion
 from auv_hinf.simulation.engine import fleet_derivative
-from auv_hinf.workflow.design_point import design_point
 
 #: Estimated floating-point work of one vehicle-rhs (law + reference + plant), counting a
 #: sin/cos/atan2 as ~20 flops: law ~70, heading law ~25, plant ~45, sine mission + course ~60,

@@ -21,14 +21,14 @@ from common import (
 )
 
 from auv_hinf.campaign.runner import dask_client
-from auv_hinf.campaign.sampling import run_chunk, run_scenario, sample_run
+from auv_hinf.campaign.runs import run_chunk, run_scenario, sample_run
 from auv_hinf.campaign.setup import default_chunk, prepare
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.config.presets import preset_config
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.nominal import closed_loop_for
-from auv_hinf.workflow.run_plan import plan_run
 
 #: Old dense path: horizon actually run (s) per N (absent: not run); shorter ones are
 #: extrapolated linearly to 300 s.

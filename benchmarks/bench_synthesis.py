@@ -8,12 +8,12 @@ from dataclasses import replace
 
 from common import REPEATS, table
 
+from auv_hinf.actuation.limits import Actuators
+from auv_hinf.certificate.design_point import design_point
 from auv_hinf.config.presets import preset_config
-from auv_hinf.design.gains import Gains
-from auv_hinf.models.actuators import Actuators
+from auv_hinf.law.gains import Gains
 from auv_hinf.robust.bandwidth import design_robust
 from auv_hinf.robust.synthesis import synthesise_robust
-from auv_hinf.workflow.design_point import design_point
 
 
 def _timed_design(fn: object, *args: object) -> tuple[float, object]:

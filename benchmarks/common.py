@@ -16,17 +16,16 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import auv_hinf.simulation.engine as simulation
-from auv_hinf.campaign.sampling import initial_state, sample_run
+from auv_hinf.campaign.runs import initial_state, sample_run
 from auv_hinf.campaign.setup import CampaignSetup, prepare
-from auv_hinf.config.formation import FormationConfig, config_from_dict
 from auv_hinf.config.presets import preset_config
-from auv_hinf.models.formation import JacobiTransform
-from auv_hinf.models.reference import FleetReference
-from auv_hinf.models.vehicle import rhs
+from auv_hinf.config.settings import FormationConfig, config_from_dict
+from auv_hinf.law.formation_law import FormationController
+from auv_hinf.mission.fleet import FleetReference
+from auv_hinf.models.jacobi import JacobiTransform
+from auv_hinf.models.vehicle import ground_velocity, rhs
+from auv_hinf.numerics.integrators import ATOL, RTOL
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.simulation.integrators import ATOL, RTOL
-from auv_hinf.simulation.law import FormationController
-from auv_hinf.simulation.postprocess import ground_velocity
 from auv_hinf.simulation.results import SimulationResult, build_result
 from auv_hinf.simulation.scenario import Scenario
 

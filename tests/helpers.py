@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from auv_hinf.models.reference import FleetReference
+from auv_hinf.mission.fleet import FleetReference
 
 #: Four BlueROV2 Heavy on a gentle sine with Theorem 1 gains (gamma = 0.1, method minimal): a loop gentle
 #: enough to be sampled, and a mission that keeps it inside its envelope.

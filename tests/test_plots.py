@@ -17,10 +17,11 @@ from matplotlib.collections import QuadMesh
 from matplotlib.contour import ContourSet
 from matplotlib.quiver import Quiver
 
-from auv_hinf import plots, sigma_figure
+from auv_hinf.actuation.limits import Actuators
 from auv_hinf.design.sigma import vehicle_sigma
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.models.actuators import Actuators
+from auv_hinf.figures import sigma as sigma_figure
+from auv_hinf.figures import simulation as plots
 from auv_hinf.models.envelope import Envelope, envelope_lambda
 from auv_hinf.models.vehicle import VehicleParams, paper2011
 
@@ -299,9 +300,9 @@ def test_force_figure_of_a_simulated_run_with_actuators(tmp_path):
     """A real (short) certified run: the law's limits are drawn, its forces stay within the bound."""
     from dataclasses import replace
 
+    from auv_hinf.certificate.run_plan import plan_run
     from auv_hinf.config.presets import preset_config
     from auv_hinf.simulation.engine import simulate
-    from auv_hinf.workflow.run_plan import plan_run
 
     cfg = replace(preset_config("paper-triangle"), actuators=Actuators(1400.0, 400.0, 250.0))
     plan = plan_run(cfg, horizon=5.0, samples=51)

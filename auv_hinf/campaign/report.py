@@ -16,17 +16,17 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from auv_hinf.campaign.sampling import ERROR_KINDS, FORCE_COLUMNS
+from auv_hinf.actuation.limits import CHANNELS
+from auv_hinf.campaign.runs import ERROR_KINDS, FORCE_COLUMNS
 from auv_hinf.campaign.setup import COEFFICIENTS, nominal_certificate
-from auv_hinf.models.actuators import CHANNELS
-from auv_hinf.workflow.codec import json_safe
+from auv_hinf.certificate.document import json_safe
 
 if TYPE_CHECKING:
     import pandas as pd
 
     from auv_hinf.campaign.runner import Campaign
 
-#: Units of the error kinds of :data:`~auv_hinf.campaign.sampling.ERROR_KINDS`.
+#: Units of the error kinds of :data:`~auv_hinf.campaign.runs.ERROR_KINDS`.
 UNITS = {"position": "m", "velocity": "m/s", "heading": "rad", "yaw_rate": "rad/s"}
 #: Note added to the summary when some runs are outside the nominal certificate's scope.
 ROBUST_NOTE = (

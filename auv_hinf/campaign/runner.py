@@ -5,7 +5,7 @@ exactly on the raw mission at ``t = 0``) and integrates them in chunks, each chu
 :class:`~auv_hinf.simulation.scenario.ScenarioBatch` (one step size per scenario). Per run ``i``:
 
 * start errors of every vehicle against the raw mission at ``t = 0``, inside the certified
-  simultaneous start region (:attr:`RegionCertificate.region <auv_hinf.certification.region.RegionCertificate>`):
+  simultaneous start region (:attr:`RegionCertificate.region <auv_hinf.closed_loop.region.RegionCertificate>`):
   position and velocity errors with magnitude uniform on ``[0, radius)`` and direction
   uniform on the circle, heading and yaw-rate errors uniform on ``(-radius, radius)``; the
   state is built from the mission's motion at ``t = 0`` (body velocities ``R(psi)^T (v - c)``);
@@ -41,10 +41,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from auv_hinf.campaign.sampling import run_chunk
+from auv_hinf.campaign.runs import run_chunk
 from auv_hinf.campaign.setup import CampaignSetup, chunks, default_chunk, prepare
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate
-from auv_hinf.config.formation import FormationConfig
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ParameterError
 
 
@@ -254,4 +254,4 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
         yield client
 
 
-__all__ = ["WORKER_MALLOC", "Campaign", "dask_client", "run_campaign"]
+__all__ = ["PROGRESS_POLL", "WORKER_MALLOC", "Campaign", "ChunkProgress", "dask_client", "run_campaign"]

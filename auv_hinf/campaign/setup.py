@@ -2,7 +2,7 @@
 
 :func:`prepare` designs and certifies the configuration once; the :class:`CampaignSetup` it
 returns is small and picklable, so Dask workers receive it once
-(:mod:`auv_hinf.campaign.runner`) and :mod:`auv_hinf.campaign.sampling` draws every run from it.
+(:mod:`auv_hinf.campaign.runner`) and :mod:`auv_hinf.campaign.runs` draws every run from it.
 """
 
 from __future__ import annotations
@@ -14,16 +14,16 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.campaign.starts import RobustStart, robust_start
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate
-from auv_hinf.config.formation import FormationConfig
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import DesignError, ParameterError
+from auv_hinf.implementation.model import Implementation
+from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.implementation import Implementation
-from auv_hinf.models.reference import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
-from auv_hinf.simulation.law import VehicleLaw
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.nominal import closed_loop_for
 
 #: Plant coefficients that the ``[uncertainty]`` box may scale, in sampling order.
 COEFFICIENTS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")

@@ -1,7 +1,7 @@
 """The robust certificate as a campaign samples and checks it: start sets, box vertices, bounds.
 
 When a configuration declares an ``[uncertainty]`` box or a ``[disturbance]`` current and its
-robust certificate (:func:`~auv_hinf.workflow.robust_part.robust_summary`) covers them, a campaign
+robust certificate (:func:`~auv_hinf.certificate.parts.robust.robust_summary`) covers them, a campaign
 draws every run inside what that certificate is about, and checks every vehicle of every run
 against its bounds:
 
@@ -30,12 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate
-from auv_hinf.design.lmi.ellipsoid import Ellipsoid
+from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.parts.robust import robust_summary
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.robust.certificate import RobustCertificate
-from auv_hinf.workflow.design_point import DesignPoint
-from auv_hinf.workflow.robust_part import robust_summary
+from auv_hinf.robust.invariant_set import Ellipsoid, RobustCertificate
 
 #: Every CORNER_PERIOD-th run is a box vertex (until all are used): at most 1/CORNER_PERIOD of a
 #: campaign's runs are corners, interleaved with interior samples.
@@ -206,4 +205,4 @@ def vertex_current(rng: np.random.Generator, speed: float) -> FloatArray:
     return np.array([speed * math.cos(ang), speed * math.sin(ang)]) + 0.0
 
 
-__all__ = ["START_SHRINK", "RobustStart", "robust_start", "vertex_current"]
+__all__ = ["CORNER_PERIOD", "START_SHRINK", "RobustStart", "robust_start", "vertex_current"]

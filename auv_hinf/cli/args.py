@@ -108,3 +108,18 @@ def join_numbers(argv: Sequence[str]) -> list[str]:
         out.append(tok)
         i += 1
     return out
+
+
+__all__ = [
+    "DESIGN_MAX_N",
+    "NUMERIC_OPTIONS",
+    "PROG",
+    "BadInput",
+    "Negative",
+    "Parser",
+    "UsageError",
+    "join_numbers",
+    "number",
+    "numeric",
+    "vector",
+]

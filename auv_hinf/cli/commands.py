@@ -17,19 +17,13 @@ from pathlib import Path
 from typing import Any
 
 from auv_hinf._typing import GAIN_METHODS
-from auv_hinf.cli.args import (
-    EXIT_NEGATIVE,
-    EXIT_OK,
-    PROG,
-    BadInput,
-    Negative,
-)
-from auv_hinf.config.formation import FormationConfig
-from auv_hinf.config.hygiene import input_warnings
+from auv_hinf.actuation.limits import Actuators
+from auv_hinf.certificate.document import json_safe
+from auv_hinf.certificate.run_plan import RunPlan
+from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative
+from auv_hinf.config.messages import input_warnings
+from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import AuvHinfError, DesignError, SolverError
-from auv_hinf.models.actuators import Actuators
-from auv_hinf.workflow.codec import json_safe
-from auv_hinf.workflow.run_plan import RunPlan
 
 
 def _dump(obj: Any) -> str:
@@ -49,8 +43,8 @@ def _prepare_out(path: Path | None) -> None:
 
 
 def _load(args: argparse.Namespace) -> Any:
-    from auv_hinf.config.formation import read_config
     from auv_hinf.config.presets import preset_config
+    from auv_hinf.config.settings import read_config
 
     if args.preset:
         return preset_config(args.preset)
@@ -94,7 +88,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
 
 def _design_without_crosscheck(args: argparse.Namespace, exc: Exception) -> dict[str, Any]:
     """``design --json`` when a numerical cross-check route fails: the closed forms and the failure."""
-    from auv_hinf.design.alpha import design_alpha
+    from auv_hinf.design.theorem1 import design_alpha
 
     alpha: dict[str, float | None] = {}
     for method in GAIN_METHODS:
@@ -122,7 +116,7 @@ def _verdict(ok: bool, reason: str) -> int:
 
 
 def _cmd_certify(args: argparse.Namespace) -> int:
-    from auv_hinf.workflow.certificate import certify
+    from auv_hinf.certificate.assembly import certify
 
     _prepare_out(args.out)
     cfg = _with_actuators(_load(args), args.actuators)
@@ -133,7 +127,7 @@ def _cmd_certify(args: argparse.Namespace) -> int:
     cert = certify(cfg, refine_jacobi=args.refine_jacobi)
     data = cert.to_dict()
     if args.out:
-        from auv_hinf.sigma_figure import save_sigma_heatmap
+        from auv_hinf.figures.sigma import save_sigma_heatmap
 
         cert.save(args.out / "certificate.json")  # the file Certificate.load reads
         save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
@@ -142,8 +136,8 @@ def _cmd_certify(args: argparse.Namespace) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    from auv_hinf.certificate.run_plan import plan_run, run_report
     from auv_hinf.simulation.engine import simulate
-    from auv_hinf.workflow.run_plan import plan_run, run_report
 
     _prepare_out(args.out)
     if args.save is not None:
@@ -175,7 +169,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise BadInput(f"--save {str(args.save)!r}: {exc.strerror or exc}") from None
     if args.out:
-        from auv_hinf.plots import save_simulation_plots
+        from auv_hinf.figures.simulation import save_simulation_plots
 
         (args.out / "summary.json").write_text(_dump(summary))
         result.save_npz(args.out / "trajectory.npz")

@@ -40,8 +40,8 @@ from auv_hinf.cli.args import (
 )
 from auv_hinf.cli.commands import COMMANDS
 from auv_hinf.config.presets import PRESETS
-from auv_hinf.config.schema import DEFAULT_K1
 from auv_hinf.exceptions import AuvHinfError, SolverError
+from auv_hinf.law.gains import DEFAULT_K1
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -206,3 +206,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+__all__ = ["build_parser", "main"]

@@ -1,5 +1,5 @@
 """Configuration.
 
-The strict TOML schema, validation messages, runtime tables, FormationConfig and the
-preset registry.
+The strict TOML schema, the frozen runtime settings, validation messages and warnings,
+the preset registry and the generated reference page.
 """

@@ -8,6 +8,7 @@ Pydantic's errors are rewritten as ``design.gamma must be > 0.0 s, got -1``,
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -27,6 +28,8 @@ _TYPE_NAMES = {
     "model_attributes_type": "a table",
     "dict_type": "a table",
 }
+
+
 _BOUNDS = {
     "greater_than": ("gt", ">"),
     "greater_than_equal": ("ge", ">="),
@@ -174,3 +177,57 @@ def set_fields(obj: Any, **values: Any) -> None:
     """Normalise the fields of a frozen dataclass in its ``__post_init__``."""
     for key, val in values.items():
         object.__setattr__(obj, key, val)
+
+
+#: Magnitude (rad) beyond which an angle looks like degrees: one full turn.
+DEGREES_THRESHOLD = 2.0 * math.pi
+
+
+def _angles(data: dict[str, Any]) -> list[tuple[str, float]]:
+    """``(TOML path, value)`` of every angle (rad) the file sets."""
+    out: list[tuple[str, float]] = []
+    env = data.get("envelope", {})
+    if isinstance(env, dict) and isinstance(env.get("psi"), list):
+        out += [(f"envelope.psi[{k}]", v) for k, v in enumerate(env["psi"]) if isinstance(v, (int, float))]
+    ref = data.get("reference", {})
+    if isinstance(ref, dict) and isinstance(ref.get("heading"), (int, float)):
+        out.append(("reference.heading", ref["heading"]))
+    sim = data.get("simulation", {})
+    rows = sim.get("initial") if isinstance(sim, dict) else None
+    if isinstance(rows, list):
+        for k, row in enumerate(rows):
+            if isinstance(row, list) and len(row) > 2 and isinstance(row[2], (int, float)):
+                out.append((f"simulation.initial[{k}][2] (heading)", row[2]))
+    return out
+
+
+def input_warnings(data: Any) -> list[str]:
+    """One readable line per suspicious entry of a parsed TOML document (empty: nothing to say).
+
+    Parameters
+    ----------
+    data : dict
+        The parsed configuration file.
+    """
+    if not isinstance(data, dict):
+        return []
+    if not data:
+        return ["the configuration file sets nothing: every table takes its defaults (see docs/config.md)"]
+    return [
+        f"{path} = {value:g} rad is more than a full turn: angles are in radians "
+        f"(did you mean {math.radians(value):.4g}?)"
+        for path, value in _angles(data)
+        if not isinstance(value, bool) and abs(float(value)) > DEGREES_THRESHOLD
+    ]
+
+
+__all__ = [
+    "DEGREES_THRESHOLD",
+    "as_dict",
+    "format_errors",
+    "input_warnings",
+    "parse_config",
+    "plain_data",
+    "set_fields",
+    "validate_table",
+]

@@ -16,15 +16,29 @@ from numpy.typing import ArrayLike
 from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
-from auv_hinf.config.conditions import ActuatorsTable, DisturbanceTable, PlantTable, UncertaintyTable
-from auv_hinf.config.fields import REFERENCE_MODELS
-from auv_hinf.config.formation import FormationConfig
-from auv_hinf.config.schema import DesignTable, EnvelopeTable, FormationTable, SimulationTable, VehicleTable
-from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
+from auv_hinf.actuation.limits import vehicle_actuators
+from auv_hinf.config.schema import (
+    REFERENCE_MODELS,
+    ActuatorsTable,
+    DesignTable,
+    DisturbanceTable,
+    EnvelopeTable,
+    FormationTable,
+    PlantTable,
+    SimulationTable,
+    UncertaintyTable,
+    VehicleTable,
+)
+from auv_hinf.config.settings import (
+    DisturbanceConfig,
+    FormationConfig,
+    ReferenceConfig,
+    SimulationConfig,
+    UncertaintyConfig,
+)
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.models.actuators import vehicle_actuators
 from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope
-from auv_hinf.models.formation import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
+from auv_hinf.models.jacobi import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
 from auv_hinf.models.vehicle import bluerov2_heavy, paper2011, remus100
 
@@ -179,7 +193,7 @@ SURVEY_V = ((0.0, 0.0), (-5.0, 10.0), (-5.0, -10.0), (-10.0, 20.0), (-10.0, -20.
 #: The certificate's smallest turn radius for this V in ``REMUS_ENVELOPE`` is 30.06 m (the outer
 #: vehicles' surge 1.5 (1 -+ 20/R) m/s and the lead's sideslip 1.5 x 6/R m/s bind); 60 m leaves the
 #: margin the tracking errors need. The legs are 240 m apart because a 180-degree turn of this
-#: pattern spans 3.97 turn radii (:class:`~auv_hinf.models.lawnmower.LawnmowerReference`).
+#: pattern spans 3.97 turn radii (:class:`~auv_hinf.mission.paths.LawnmowerReference`).
 SURVEY_PATH = (("speed", REMUS_SPEED), ("leg_length", 400.0), ("spacing", 240.0), ("turn_radius", 60.0))
 #: Simulated time of ``remus-survey`` (s): two legs, both 180-degree turns and the start of the third.
 SURVEY_HORIZON = 1200.0
@@ -277,7 +291,7 @@ def annotated_toml(cfg: FormationConfig) -> str:
     """``cfg`` as a TOML file with a comment (meaning, unit, range) above every key.
 
     Keys that are not set appear commented out with an example value; the text is read
-    back by :func:`~auv_hinf.config.formation.load_config` into an equal configuration (up to the name).
+    back by :func:`~auv_hinf.config.settings.load_config` into an equal configuration (up to the name).
     """
     data = cfg.to_toml_dict()
     vehicle = data["vehicle"]
@@ -333,6 +347,11 @@ def annotated_toml(cfg: FormationConfig) -> str:
 
 
 __all__ = [
+    "BLUEROV_BOX",
+    "BLUEROV_CURRENT",
+    "BLUEROV_ENVELOPE",
+    "BLUEROV_OFFSETS",
+    "BLUEROV_SPEED",
     "DEMO_ENVELOPE",
     "HEXAGON_ENVELOPE",
     "HEXAGON_RADIUS",
@@ -340,7 +359,13 @@ __all__ = [
     "PRESETS",
     "PRESET_REGISTRY",
     "REMUS_BOX",
+    "REMUS_CURRENT",
     "REMUS_ENVELOPE",
+    "REMUS_PLANT",
+    "REMUS_SPEED",
+    "SURVEY_HORIZON",
+    "SURVEY_PATH",
+    "SURVEY_V",
     "TRIANGLE_ENVELOPE",
     "TRIANGLE_SHAPE",
     "annotated_toml",

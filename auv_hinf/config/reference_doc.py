@@ -1,7 +1,7 @@
 """The configuration reference (``docs/config.md``), rendered from the TOML schema.
 
 Every table, key, type, unit, range and default on that page is read from the pydantic models of
-:mod:`auv_hinf.config.schema` and :mod:`auv_hinf.config.fields`, so the page cannot drift from
+:mod:`auv_hinf.config.schema` and :mod:`auv_hinf.config.schema`, so the page cannot drift from
 the schema: ``tests/config/test_config_reference.py`` compares the stored page with
 :func:`config_reference`. Regenerate it with::
 
@@ -59,8 +59,8 @@ _INTRO = """\
 A configuration is one TOML file, read by `auv-hinf certify`, `simulate` and `campaign` with
 `--config FILE` (the built-in presets are the same objects, chosen with `--preset NAME`).
 `auv-hinf init --out my_fleet.toml` writes an annotated starting file and `auv-hinf schema`
-prints the JSON Schema of the format. From Python, {func}`~auv_hinf.config.formation.load_config`
-reads a file into a {class}`~auv_hinf.config.formation.FormationConfig`.
+prints the JSON Schema of the format. From Python, {func}`~auv_hinf.config.settings.load_config`
+reads a file into a {class}`~auv_hinf.config.settings.FormationConfig`.
 
 This page is generated from the schema ({mod}`auv_hinf.config.schema`, the single source of every
 default) by {func}`~auv_hinf.config.reference_doc.config_reference`;

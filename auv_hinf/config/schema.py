@@ -1,54 +1,236 @@
-"""The TOML configuration format as strict pydantic models.
-
-Every table is a model with ``extra="forbid"`` and strict types: a string is never read
-as a number, a float never as an integer (an integer is fine where a float is expected),
-NaN and infinities are refused. Each physical field carries its unit (``unit`` in the
-JSON Schema) and its valid range. :func:`auv_hinf.config.messages.parse_config` turns a parsed TOML document into a
-validated :class:`ConfigFile`; every problem becomes one line of a
-:class:`~auv_hinf.exceptions.ConfigError` that names its TOML path (``design.gamma``) and,
-for a misspelled key, the closest valid name.
-"""
+"""Building blocks of the TOML schema: field helpers, the strict base table, the parameter list
+and the ``[reference]`` models (one per mission kind). :mod:`auv_hinf.config.schema` assembles them."""
 
 from __future__ import annotations
 
 import difflib
-from typing import Any
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind
-from auv_hinf.config.conditions import (
-    ActuatorsTable,
-    DisturbanceTable,
-    ImplementationTable,
-    NoiseTable,
-    PlantTable,
-    UncertaintyTable,
-)
-from auv_hinf.config.fields import (
-    DEFAULT_HEADING_POLES,
-    DEFAULT_POLYGON_RADIUS,
-    MAX_COORDINATE,
-    MAX_HORIZON,
-    MAX_VEHICLES,
-    PARAMETERS,
-    REFERENCE_MODELS,
-    NegativePair,
-    Pair,
-    Point,
-    ReferenceTable,
-    SineReference,
-    StartKind,
-    StateRow,
-    SynthesisKind,
-    VehiclePreset,
-    _field,
-    _Table,
-)
+from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
+from auv_hinf.law.gains import DEFAULT_K1
 from auv_hinf.models.envelope import PAPER_ENVELOPE, check_interval
-from auv_hinf.models.formation import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
-from auv_hinf.models.jacobi_maps import closest_pair
+from auv_hinf.models.jacobi import (
+    JacobiTransform,
+    closest_pair,
+    offsets_from_shape,
+    regular_polygon,
+    shape_from_offsets,
+)
 from auv_hinf.models.vehicle import VehicleParams
+
+#: The nine model parameters: name -> (unit, lower-bound kind). Masses are > 0, damping >= 0.
+PARAMETERS: dict[str, tuple[str, str]] = {
+    "m11": ("kg", "gt"),
+    "m22": ("kg", "gt"),
+    "m33": ("kg m^2", "gt"),
+    "d11_lin": ("kg/s", "ge"),
+    "d11_quad": ("kg/m", "ge"),
+    "d22_lin": ("kg/s", "ge"),
+    "d22_quad": ("kg/m", "ge"),
+    "d33_lin": ("kg m^2/s", "ge"),
+    "d33_quad": ("kg m^2", "ge"),
+}
+
+
+VehiclePreset = Literal["paper2011", "remus100", "bluerov2-heavy"]
+
+
+ActuatorPreset = Literal["remus100", "bluerov2-heavy"]
+
+
+ReferenceKind = Literal["sine", "line", "circle", "lawnmower"]
+
+
+StartKind = Literal["shaped", "paper"]
+
+
+DEFAULT_POLYGON_RADIUS = 15.0  # m
+
+
+DEFAULT_HEADING_POLES = (-1.0, -1.5)  # 1/s
+
+
+#: Largest fleet accepted: certification is O(N) time and memory (about 0.5 s per 1000
+#: vehicles); beyond this the configuration is refused with a ConfigError.
+MAX_VEHICLES = 100_000
+
+
+MAX_HORIZON = 1e5  # s
+
+
+MAX_COORDINATE = 1e6  # m: offsets and radii beyond 1000 km are refused
+
+
+def _field(default: Any, description: str, unit: str = "", **kw: Any) -> Any:
+    """A pydantic ``Field`` whose description ends with the unit, which is also kept in the schema."""
+    text = f"{description} [{unit}]" if unit else description
+    return Field(
+        default,
+        description=text,
+        json_schema_extra={"unit": unit} if unit else None,
+        **kw,
+    )
+
+
+Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+
+Point = Annotated[
+    list[Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE)]],
+    Field(min_length=2, max_length=2),
+]
+
+
+NegativePair = Annotated[list[Annotated[float, Field(lt=0.0)]], Field(min_length=2, max_length=2)]
+
+
+StateRow = Annotated[list[float], Field(min_length=6, max_length=6)]
+
+
+class _Table(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+_KIND_TEXT = "path kind: sine, line, circle or lawnmower, each with its own keys (see `auv-hinf schema`)"
+
+
+class _Reference(_Table):
+    speed: float = _field(1.0, "speed of the formation centre along the path", "m/s", gt=0.0)
+
+
+class SineReference(_Reference):
+    """Sine path ``[speed t, amplitude sin(omega t)]`` (the paper's Section V)."""
+
+    kind: Literal["sine"] = _field("sine", _KIND_TEXT)
+    amplitude: float = _field(30.0, "amplitude of the lateral sine", "m", ge=0.0)
+    omega: float = _field(0.1, "angular frequency of the sine", "rad/s", gt=0.0)
+
+
+class LineReference(_Reference):
+    """Straight line at constant heading."""
+
+    kind: Literal["line"] = _field("line", _KIND_TEXT)
+    heading: float = _field(0.0, "direction of travel from the x axis", "rad")
+
+
+class CircleReference(_Reference):
+    """Circle of given radius."""
+
+    kind: Literal["circle"] = _field("circle", _KIND_TEXT)
+    radius: float = _field(..., "circle radius", "m", gt=0.0, examples=[50.0])
+
+
+class LawnmowerReference(_Reference):
+    """Survey pattern: straight legs joined by turns."""
+
+    kind: Literal["lawnmower"] = _field("lawnmower", _KIND_TEXT)
+    leg_length: float = _field(..., "length of one straight leg", "m", gt=0.0, examples=[200.0])
+    spacing: float = _field(
+        ...,
+        "distance between neighbouring legs; at least about 3.97 turn_radius (two turns fit)",
+        "m",
+        gt=0.0,
+        examples=[100.0],
+    )
+    turn_radius: float = _field(
+        ..., "smallest radius of the turns; at most about spacing / 3.97", "m", gt=0.0, examples=[20.0]
+    )
+
+
+REFERENCE_MODELS: dict[str, type[_Reference]] = {
+    "sine": SineReference,
+    "line": LineReference,
+    "circle": CircleReference,
+    "lawnmower": LawnmowerReference,
+}
+
+
+ReferenceTable = Annotated[
+    SineReference | LineReference | CircleReference | LawnmowerReference,
+    Field(discriminator="kind"),
+]
+
+
+class PlantTable(_Table):
+    """``[simulation.plant]``: the true plant as multipliers (> 0) of the controller's parameters."""
+
+    m11: float | None = _field(None, "multiplier of m11", gt=0.0)
+    m22: float | None = _field(None, "multiplier of m22", gt=0.0)
+    m33: float | None = _field(None, "multiplier of m33", gt=0.0)
+    d11_lin: float | None = _field(None, "multiplier of d11_lin", gt=0.0)
+    d11_quad: float | None = _field(None, "multiplier of d11_quad", gt=0.0)
+    d22_lin: float | None = _field(None, "multiplier of d22_lin", gt=0.0)
+    d22_quad: float | None = _field(None, "multiplier of d22_quad", gt=0.0)
+    d33_lin: float | None = _field(None, "multiplier of d33_lin", gt=0.0)
+    d33_quad: float | None = _field(None, "multiplier of d33_quad", gt=0.0)
+
+
+class UncertaintyTable(_Table):
+    """``[uncertainty]``: declared box of relative multipliers ``[lo, hi]``, 0 < lo <= 1 <= hi."""
+
+    m11: Pair | None = _field(None, "relative range [lo, hi] of m11")
+    m22: Pair | None = _field(None, "relative range [lo, hi] of m22")
+    m33: Pair | None = _field(None, "relative range [lo, hi] of m33")
+    d11_lin: Pair | None = _field(None, "relative range [lo, hi] of d11_lin")
+    d11_quad: Pair | None = _field(None, "relative range [lo, hi] of d11_quad")
+    d22_lin: Pair | None = _field(None, "relative range [lo, hi] of d22_lin")
+    d22_quad: Pair | None = _field(None, "relative range [lo, hi] of d22_quad")
+    d33_lin: Pair | None = _field(None, "relative range [lo, hi] of d33_lin")
+    d33_quad: Pair | None = _field(None, "relative range [lo, hi] of d33_quad")
+
+    @field_validator(*PARAMETERS)
+    @classmethod
+    def _box(cls, value: list[float] | None, info: Any) -> list[float] | None:
+        if value is not None and not (0.0 < value[0] <= 1.0 <= value[1]):
+            raise ValueError(f"a relative range [lo, hi] must satisfy 0 < lo <= 1 <= hi, got {value}")
+        return value
+
+
+class ActuatorsTable(_Table):
+    """``[actuators]``: what the vehicle can push; the certificate checks the law's peak force against it."""
+
+    preset: ActuatorPreset | None = _field(None, "published limits of a vehicle preset (see docs/vehicles.md)")
+    tau_x: float | None = _field(None, "largest surge force", "N", gt=0.0, examples=[86.0])
+    tau_y: float | None = _field(None, "largest sway force", "N", gt=0.0, examples=[86.0])
+    tau_psi: float | None = _field(None, "largest yaw moment", "N m", gt=0.0, examples=[23.0])
+
+    @model_validator(mode="after")
+    def _one_source(self) -> ActuatorsTable:
+        given = [k for k in ("tau_x", "tau_y", "tau_psi") if getattr(self, k) is not None]
+        if self.preset is not None and given:
+            raise ValueError(f"give either preset or the limits, not both (got preset and {', '.join(given)})")
+        if self.preset is None and len(given) != 3:
+            raise ValueError("give all three limits tau_x, tau_y, tau_psi (N, N, N m), or a preset")
+        return self
+
+
+class NoiseTable(_Table):
+    """``[implementation.noise]``: bounds of the measurement errors (default: exact)."""
+
+    position: float = _field(0.0, "bound of the horizontal position error (Euclidean)", "m", ge=0.0, le=MAX_COORDINATE)
+    velocity: float = _field(0.0, "bound of the body-velocity error |(u, v)| (Euclidean)", "m/s", ge=0.0, le=100.0)
+    heading: float = _field(0.0, "bound of the heading error", "rad", ge=0.0, le=3.14159)
+    yaw_rate: float = _field(0.0, "bound of the yaw-rate error", "rad/s", ge=0.0, le=100.0)
+
+
+class ImplementationTable(_Table):
+    """``[implementation]``: the controller as it runs (default: continuous, undelayed, exact)."""
+
+    sample_time: float = _field(
+        0.0, "control period, forces held between samples (0: continuous)", "s", ge=0.0, le=60.0
+    )
+    delay: float = _field(0.0, "lumped input + measurement delay", "s", ge=0.0, le=60.0)
+    varying_delay: bool = _field(False, "false: every sample late by exactly delay; true: by any value in [0, delay]")
+    noise: NoiseTable = Field(default_factory=NoiseTable, description="bounds of the measurement errors")
+
+
+class DisturbanceTable(_Table):
+    """``[disturbance]``: declared bounds of the ocean current."""
+
+    current_speed: float | None = _field(None, "bound on |current|", "m/s", ge=0.0)
+    current_rate: float | None = _field(None, "bound on |d current / dt|", "m/s^2", ge=0.0)
 
 
 def schema_default(table: type[BaseModel], key: str) -> Any:
@@ -195,7 +377,7 @@ class DesignTable(_Table):
         lt=0.0,
         alias="lambda",
     )
-    k1: float = _field(0.5, "Theorem 2 position gain", "1/s^2", gt=0.0)
+    k1: float = _field(DEFAULT_K1, "Theorem 2 position gain", "1/s^2", gt=0.0)
     robust: bool = _field(
         False,
         "use the robust design: alpha, k1 and the heading gains chosen for the [uncertainty] box and "
@@ -274,13 +456,26 @@ class SimulationTable(_Table):
 #: Defaults that the runtime dataclasses, the design functions and the CLI read (each is the
 #: default its table above declares: the schema is the one source).
 DEFAULT_METHOD: GainMethod = schema_default(DesignTable, "method")
+
+
 DEFAULT_FRAME: FormationFrame = schema_default(FormationTable, "frame")
-DEFAULT_K1: float = schema_default(DesignTable, "k1")
+
+
 DEFAULT_SYNTHESIS: SynthesisKind = schema_default(DesignTable, "synthesis")
+
+
 DEFAULT_INTEGRAL: bool = schema_default(DesignTable, "integral")
+
+
 DEFAULT_POLES: tuple[float, float] = schema_default(DesignTable, "heading_poles")
+
+
 DEFAULT_HORIZON: float = schema_default(SimulationTable, "horizon")
+
+
 DEFAULT_START: StartKind = schema_default(SimulationTable, "start")
+
+
 DEFAULT_SEED: int = schema_default(SimulationTable, "seed")
 
 
@@ -361,14 +556,49 @@ def json_schema() -> dict[str, Any]:
 
 
 __all__ = [
+    "DEFAULT_FRAME",
+    "DEFAULT_HEADING_POLES",
+    "DEFAULT_HORIZON",
+    "DEFAULT_INTEGRAL",
+    "DEFAULT_METHOD",
+    "DEFAULT_POLES",
+    "DEFAULT_POLYGON_RADIUS",
+    "DEFAULT_SEED",
+    "DEFAULT_START",
+    "DEFAULT_SYNTHESIS",
+    "MAX_COORDINATE",
+    "MAX_HORIZON",
+    "MAX_VEHICLES",
+    "PARAMETERS",
+    "REFERENCE_MODELS",
     "TABLES",
+    "ActuatorPreset",
+    "ActuatorsTable",
+    "CircleReference",
     "ConfigFile",
     "DesignTable",
+    "DisturbanceTable",
     "EnvelopeTable",
     "FormationTable",
+    "ImplementationTable",
+    "LawnmowerReference",
+    "LineReference",
+    "NegativePair",
+    "NoiseTable",
+    "Pair",
+    "PlantTable",
+    "Point",
+    "ReferenceKind",
+    "ReferenceTable",
     "SimulationTable",
+    "SineReference",
+    "StartKind",
+    "StateRow",
+    "UncertaintyTable",
+    "VehiclePreset",
     "VehicleTable",
     "json_schema",
+    "schema_default",
     "suggest_key",
     "table_keys",
     "unknown_key_hints",

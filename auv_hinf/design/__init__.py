@@ -1,5 +1,5 @@
-"""Gain design.
+"""Theorem 1 gain design and its checks.
 
-Theorem 1, the Riccati and LMI routes, python-control blocks, sigma bounds, cross-checks
-and the Gains type.
+The three alphas, sigma over the envelope (vehicle and Jacobi coordinates), the Riccati and
+bounded-real-lemma routes, python-control blocks and the four-way cross-check.
 """

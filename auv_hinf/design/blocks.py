@@ -196,3 +196,17 @@ def hinf_norm_peak(sys: ct.StateSpace, *, rtol: float = PEAK_RTOL) -> HinfPeak:
         if not improved:
             return HinfPeak(norm=best, omega_peak=w_best, upper=g, iterations=it)
     raise SolverError(f"hinf_norm_peak did not converge in {PEAK_MAX_ITER} iterations")
+
+
+__all__ = [
+    "IMAG_AXIS_RTOL",
+    "NORM_RTOL",
+    "PEAK_MAX_ITER",
+    "PEAK_RTOL",
+    "SEED_POINTS",
+    "HinfPeak",
+    "hinf_norm",
+    "hinf_norm_peak",
+    "position_block",
+    "velocity_block",
+]

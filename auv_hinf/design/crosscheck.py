@@ -4,7 +4,7 @@
 2. LMIs in cvxpy solved by Clarabel (:mod:`auv_hinf.design.lmi`);
 3. python-control ``StateSpace`` models of the per-block closed loops and their H-infinity
    norms from ``control.norm`` (:mod:`auv_hinf.design.blocks`);
-4. the exact values ``1/(alpha - lam)`` of :mod:`auv_hinf.design.alpha`.
+4. the exact values ``1/(alpha - lam)`` of :mod:`auv_hinf.design.theorem1`.
 
 Every comparison is relative to the compared quantity itself (never to an absolute floor
 that could swamp it): alphas relative to alpha, norms relative to the norm, the BRL
@@ -20,14 +20,13 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
-from auv_hinf.config.schema import DEFAULT_K1
-from auv_hinf.design.alpha import alpha_minimal, alpha_paper, alpha_stabilizing, position_loop
 from auv_hinf.design.blocks import NORM_RTOL, hinf_norm, position_block, velocity_block
-from auv_hinf.design.lmi.core import LMI_RTOL
-from auv_hinf.design.lmi.theorem1 import lmi_hinf_norm, lmi_minimal_alpha, lmi_stabilizing_alpha
+from auv_hinf.design.brl import lmi_hinf_norm, lmi_minimal_alpha, lmi_stabilizing_alpha
 from auv_hinf.design.riccati import ARE_RTOL, riccati_alpha, root_condition
-from auv_hinf.design.theorem1 import theorem1_conditions
+from auv_hinf.design.theorem1 import alpha_minimal, alpha_paper, alpha_stabilizing, position_loop, theorem1_conditions
 from auv_hinf.exceptions import DesignError, require_finite, require_fleet_size
+from auv_hinf.law.gains import DEFAULT_K1
+from auv_hinf.numerics.lmi import LMI_RTOL
 
 #: Relative tolerance of ``max |L - alpha I|`` against alpha: the Riccati solvers return a
 #: multiple of the identity up to round-off of a 2N x 2N Schur form (~1e-15 of alpha).
@@ -263,3 +262,6 @@ def crosscheck(lam: float, gamma: float, n: int = 3, k1: float = DEFAULT_K1) -> 
         checks=tuple(checks),
         formulations=formulations,
     )
+
+
+__all__ = ["LMI_STRUCTURE_RTOL", "STRUCTURE_RTOL", "Check", "CrosscheckReport", "crosscheck"]

@@ -164,3 +164,13 @@ def root_condition(lam: float, gamma: float) -> float:
     c = riccati_c(gamma)
     s = math.sqrt(max(lam * lam - c, 0.0))
     return min(ROOT_CONDITION_CAP, 1.0 + abs(lam) / s) if s > 0 else ROOT_CONDITION_CAP
+
+
+__all__ = [
+    "ARE_RTOL",
+    "ROOT_CONDITION_CAP",
+    "RiccatiResult",
+    "require_real_solution",
+    "riccati_alpha",
+    "root_condition",
+]

@@ -201,3 +201,6 @@ def sigma_grid(
     else:
         blocks = body_block(params, other, xx, rr)
     return sigma_max_2x2(blocks - lam * np.eye(2))
+
+
+__all__ = ["ROUNDOFF_RTOL", "SigmaBounds", "SigmaWitness", "sigma_grid", "sigma_max_2x2", "vehicle_sigma"]

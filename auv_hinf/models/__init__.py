@@ -1,5 +1,5 @@
 """The physical world.
 
-Vehicles, envelopes, formations and Jacobi maps, mission paths, fleet references and
-their tubes.
+The 3-DOF vehicle and its batched plants, the operating envelope and its lambda, and the
+Jacobi formation coordinates.
 """

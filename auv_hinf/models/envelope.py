@@ -9,8 +9,10 @@ from typing import Any
 
 import numpy as np
 
+from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import EnvelopeError
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.integrators import EventBound, EventFn
 
 #: Names of the envelope ranges, in order: surge, sway (m/s), yaw rate (rad/s), heading (rad).
 ENVELOPE_FIELDS = ("u", "v", "r", "psi")
@@ -128,3 +130,67 @@ def envelope_lambda(params: VehicleParams, envelope: Envelope) -> float:
     vmax = abs_range(*envelope.v)[1]
     d11, d22, _ = params.damping(umax, vmax, 0.0)
     return float(min(-d11 / params.m11, -d22 / params.m22))
+
+
+def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
+    """Smallest distance of ``(u, v, r)`` to the envelope's bounds, shape ``states.shape[:-1]``.
+
+    Positive inside, zero on the boundary, negative outside. Units mix m/s and rad/s; only
+    the sign and the roots matter (the first root is the first exit time).
+    """
+    u, v, r = states[..., 3], states[..., 4], states[..., 5]
+    margin: FloatArray = np.minimum.reduce(
+        [
+            u - envelope.u[0],
+            envelope.u[1] - u,
+            v - envelope.v[0],
+            envelope.v[1] - v,
+            r - envelope.r[0],
+            envelope.r[1] - r,
+        ]
+    )
+    return margin
+
+
+def envelope_event(envelope: Envelope, n: int, width: int = 6) -> EventFn:
+    """The exit event of flat states ``(..., width n)``: the smallest envelope margin of their ``n`` vehicles.
+
+    ``width`` is the state size per vehicle: 6, or 8 with an integrator (see
+    :attr:`~auv_hinf.law.formation_law.VehicleLaw.width`).
+    """
+
+    def event(t: FloatArray, y: FloatArray) -> FloatArray:
+        margin: FloatArray = envelope_margin(envelope, y.reshape((*y.shape[:-1], n, width))).min(axis=-1)
+        return margin
+
+    return event
+
+
+def envelope_bound(envelope: Envelope, n: int, width: int = 6) -> EventBound:
+    """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
+
+    Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
+    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
+    vehicles per system (1 for vehicle systems), ``width`` the state size per vehicle.
+    """
+
+    def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
+        s, rad = y.reshape(*y.shape[:-1], n, width), radius.reshape(*radius.shape[:-1], n, width)
+        low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
+        return low
+
+    return bound
+
+
+__all__ = [
+    "ENVELOPE_FIELDS",
+    "PAPER_ENVELOPE",
+    "PSI_MAX_WIDTH",
+    "Envelope",
+    "abs_range",
+    "check_interval",
+    "envelope_bound",
+    "envelope_event",
+    "envelope_lambda",
+    "envelope_margin",
+]

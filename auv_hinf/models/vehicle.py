@@ -21,19 +21,21 @@ with ``d11 = d11_lin + d11_quad |u|`` and likewise for sway (|v|) and yaw (|r|).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import control as ct
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.arrays import stack_last
 from auv_hinf.exceptions import ParameterError, require_finite
+from auv_hinf.numerics.arrays import stack_last
 
 _MASS_FIELDS = ("m11", "m22", "m33")
+
+
 _DAMPING_FIELDS = ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
 
 
@@ -200,7 +202,7 @@ def bluerov2_heavy() -> VehicleParams:
     ``Y_v = N_r = 0``, quadratic damping ``X_u|u| = 141 kg/m``, ``Y_v|v| = 217 kg/m``,
     ``N_r|r| = 1.5 kg m^2``. So ``m11 = m + X_udot``, ``m22 = m + Y_vdot``, ``m33 = I_z + N_rdot``,
     ``d11 = 13.7 + 141|u|``, ``d22 = 217|v|``, ``d33 = 1.5|r|``. The model has no lift terms,
-    hence no design speed. Its thrusters are :func:`auv_hinf.models.thrusters.bluerov2_heavy_thrusters`.
+    hence no design speed. Its thrusters are :func:`auv_hinf.actuation.thrusters.bluerov2_heavy_thrusters`.
     """
     m, izz = 13.5, 0.37
     return VehicleParams(
@@ -336,3 +338,117 @@ def vehicle_nlsys(params: VehicleParams, name: str = "auv") -> ct.NonlinearIOSys
         outputs=["x", "y", "psi", "u", "v", "r"],
         name=name,
     )
+
+
+def plant_derivative(
+    plant: VehicleParams,
+    current: FloatArray,
+    states: FloatArray,
+    forces: FloatArray,
+    cs: tuple[FloatArray, FloatArray],
+    p_dot: FloatArray | None = None,
+) -> FloatArray:
+    """``d/dt`` of states ``(..., N, 6)`` under body forces ``(..., N, 3)`` (N, N, N m).
+
+    The position rate is the ground velocity ``R(psi) [u, v] + current`` (``current``
+    broadcasts to ``(..., N, 2)``, inertial, m/s); ``cs`` is ``(cos psi, sin psi)``, and
+    ``p_dot`` that ground velocity when the caller has it.
+    """
+    ground = ground_velocity(states, current, cs) if p_dot is None else p_dot
+    d = rhs(plant, states, forces, cs)
+    d[..., 0:2] = ground
+    return d
+
+
+def ground_velocity(
+    states: FloatArray, current: FloatArray | tuple[float, float], cs: tuple[FloatArray, FloatArray] | None = None
+) -> FloatArray:
+    """Inertial velocity ``R(psi) [u, v] + current`` of states ``(..., N, 6)`` (m/s).
+
+    ``current`` (inertial, m/s) broadcasts against ``(..., N, 2)``; ``cs`` is
+    ``(cos psi, sin psi)`` when the caller has them.
+    """
+    c, s = (np.cos(states[..., 2]), np.sin(states[..., 2])) if cs is None else cs
+    u, v = states[..., 3], states[..., 4]
+    out: FloatArray = stack_last([c * u - s * v, s * u + c * v]) + np.asarray(current, dtype=float)
+    return out
+
+
+_COEFFS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+
+
+@dataclass(frozen=True)
+class PlantBatch:
+    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,)."""
+
+    m11: FloatArray
+    m22: FloatArray
+    m33: FloatArray
+    d11_lin: FloatArray
+    d11_quad: FloatArray
+    d22_lin: FloatArray
+    d22_quad: FloatArray
+    d33_lin: FloatArray
+    d33_quad: FloatArray
+
+    def __post_init__(self) -> None:
+        arrays = [np.atleast_1d(np.asarray(getattr(self, k), dtype=float)) for k in _COEFFS]
+        if any(a.ndim != 1 or a.shape != arrays[0].shape for a in arrays):
+            raise ParameterError("plant coefficients must be 1-D arrays of one common length S")
+        for k, a in zip(_COEFFS, arrays):
+            object.__setattr__(self, k, a)
+        for s in range(len(self)):
+            self[s]  # VehicleParams checks signs and finiteness, naming the field
+
+    @classmethod
+    def from_params(cls, params: Sequence[VehicleParams]) -> PlantBatch:
+        """Stack a list of :class:`VehicleParams`."""
+        if len(params) == 0:
+            raise ParameterError("a plant batch needs at least one VehicleParams")
+        return cls(**{k: np.array([getattr(p, k) for p in params]) for k in _COEFFS})
+
+    def __len__(self) -> int:
+        return int(self.m11.shape[0])
+
+    def __getitem__(self, s: int) -> VehicleParams:
+        return VehicleParams(**{k: float(getattr(self, k)[s]) for k in _COEFFS}, name=f"plant[{s}]")
+
+    def coefficients(self, trailing: int, rows: NDArray[np.int_] | None = None) -> VehicleParams:
+        """Duck-typed parameters with arrays of shape ``(S,) + (1,) * trailing`` for :func:`vehicle.rhs`.
+
+        ``vehicle.rhs`` reads only the nine coefficients and ``damping``, which broadcast.
+        ``rows``: only those scenarios (then ``S = rows.size``).
+        """
+        pick = slice(None) if rows is None else rows
+        shape = (-1,) + (1,) * trailing
+        return cast(VehicleParams, _Coefficients({k: getattr(self, k)[pick].reshape(shape) for k in _COEFFS}))
+
+
+class _Coefficients:
+    """Array-valued stand-in for :class:`VehicleParams` (see :meth:`PlantBatch.coefficients`)."""
+
+    damping = VehicleParams.damping
+
+    def __init__(self, values: dict[str, FloatArray]) -> None:
+        self.__dict__.update(values)
+
+
+__all__ = [
+    "PRESETS",
+    "REMUS100_LIMITS",
+    "PlantBatch",
+    "VehicleParams",
+    "bluerov2_heavy",
+    "body_block",
+    "coriolis_damping_matrix",
+    "ground_velocity",
+    "inertial_block",
+    "input_matrix",
+    "paper2011",
+    "plant_derivative",
+    "preset",
+    "remus100",
+    "rhs",
+    "rotation",
+    "vehicle_nlsys",
+]

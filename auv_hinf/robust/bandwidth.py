@@ -6,7 +6,7 @@ One bandwidth ``w`` (rad/s) sets every gain of a family with fixed shape:
   ``k1 = w^2/l`` and ``alpha = (2 zeta w + lam)/l`` with :data:`POSITION_DAMPING` ``zeta``:
   heavy damping keeps velocity excursions (which decide the envelope) small;
 * heading: poles ``(-h w, -1.5 h w)`` placed on the nominal heading model
-  (:func:`~auv_hinf.design.gains.heading_gains`), ``h =`` :data:`HEADING_RATIO`.
+  (:func:`~auv_hinf.law.gains.heading_gains`), ``h =`` :data:`HEADING_RATIO`.
 
 Larger ``w`` shrinks every error bound and raises the heading stiffness that the Munk-moment
 mismatch erodes, at the price of thrust. The design takes the *gentlest* ``w`` on the grid
@@ -24,13 +24,13 @@ from typing import Any
 
 from tqdm.auto import tqdm
 
-from auv_hinf.certification.margins import inflate_envelope
-from auv_hinf.design.gains import Gains, heading_gains, with_integral
-from auv_hinf.models.actuators import Actuators
+from auv_hinf.actuation.limits import Actuators
+from auv_hinf.law.gains import Gains, heading_gains, with_integral
+from auv_hinf.mission.fleet import ReferenceTube
+from auv_hinf.mission.margins import inflate_envelope
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.reference import ReferenceTube
 from auv_hinf.robust.box import ParameterBox, box_lambda
-from auv_hinf.robust.certificate import RobustCertificate, robust_certificate
+from auv_hinf.robust.invariant_set import RobustCertificate, robust_certificate
 
 #: Damping ratio of the nominal position loop of the family.
 POSITION_DAMPING = 4.0
@@ -173,6 +173,7 @@ __all__ = [
     "BANDWIDTHS",
     "HEADING_RATIO",
     "POSITION_DAMPING",
+    "REFINE_STEPS",
     "TARGET_MARGIN",
     "RobustDesign",
     "design_robust",

@@ -26,10 +26,10 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.certification.margins import cos_range
 from auv_hinf.exceptions import ParameterError, require_finite
+from auv_hinf.mission.fleet import ReferenceTube
+from auv_hinf.mission.margins import cos_range
 from auv_hinf.models.envelope import Envelope, abs_range
-from auv_hinf.models.reference import ReferenceTube
 from auv_hinf.models.vehicle import VehicleParams
 
 #: The nine coefficients a box may scale, in order.

@@ -1,4 +1,5 @@
 """Closed-loop simulation.
 
-The per-vehicle law, batched integrators, scenarios, results and streamed metrics.
+Scenarios and batches, the continuous engine (the sampled loop is in
+:mod:`auv_hinf.implementation`), results, streamed metrics and Parquet trajectories.
 """

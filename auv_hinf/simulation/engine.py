@@ -14,15 +14,13 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.models.reference import Motion
-from auv_hinf.models.vehicle import VehicleParams
-from auv_hinf.simulation.integrators import ATOL, RTOL, BatchSolution, EventFn, SampleSink, dopri5
-from auv_hinf.simulation.law import VehicleLaw, VehicleMotionSource
-from auv_hinf.simulation.plant import plant_derivative
-from auv_hinf.simulation.postprocess import envelope_bound, envelope_event, envelope_margin, ground_velocity
+from auv_hinf.implementation.sampled_loop import simulate_sampled_batch
+from auv_hinf.law.formation_law import VehicleLaw, VehicleMotionSource
+from auv_hinf.mission.fleet import Motion
+from auv_hinf.models.envelope import envelope_bound, envelope_event, envelope_margin
+from auv_hinf.models.vehicle import VehicleParams, ground_velocity, plant_derivative
+from auv_hinf.numerics.integrators import ATOL, RTOL, BatchSolution, EventFn, SampleSink, dopri5, rk45_reference
 from auv_hinf.simulation.results import SimulationResult, build_results
-from auv_hinf.simulation.rk45 import rk45_reference
-from auv_hinf.simulation.sampled import simulate_sampled_batch
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
 
 Method = Literal["dopri", "rk45"]
@@ -63,7 +61,7 @@ def batch_system(
     """Batched rhs ``(t (B,), y (B, d)) -> (B, d)`` and envelope event of ``batch``.
 
     ``systems="scenario"``: ``B = S``, ``d = w N``. ``systems="vehicle"``: ``B = S N``,
-    ``d = w``, with ``w`` the law's :attr:`~auv_hinf.simulation.law.VehicleLaw.width`; each
+    ``d = w``, with ``w`` the law's :attr:`~auv_hinf.law.formation_law.VehicleLaw.width`; each
     vehicle with its own time (the law has no shared state, so the fleet is decoupled); needs a
     :class:`VehicleMotionSource`.
     """
@@ -87,7 +85,7 @@ def batch_system(
         raise ParameterError(f"systems must be 'scenario' or 'vehicle', got {systems!r}")
 
     def f_scenario(t: FloatArray, y: FloatArray) -> FloatArray:
-        states = np.asfortranarray(y.reshape(n_s, n, wd))  # scenario axis fastest: see auv_hinf.arrays
+        states = np.asfortranarray(y.reshape(n_s, n, wd))  # scenario axis fastest: see auv_hinf.numerics.arrays
         return fleet_derivative(law, plant, current, states, ref.motion(t)).reshape(n_s, -1)
 
     return f_scenario, (None if env is None else envelope_event(env, n, wd))
@@ -109,17 +107,17 @@ def integrate_batch(
     ----------
     method : {"dopri", "rk45"}
         ``"dopri"``: vectorised Dormand-Prince with per-system step control
-        (:func:`~auv_hinf.simulation.integrators.dopri5`); ``"rk45"``: scipy ``solve_ivp`` per
+        (:func:`~auv_hinf.numerics.integrators.dopri5`); ``"rk45"``: scipy ``solve_ivp`` per
         scenario (the reference; scenario systems only).
     systems : {"scenario", "vehicle"}
         What one independently step-controlled system is.
     rtol, atol : float
-        Tolerances (default :data:`~auv_hinf.simulation.integrators.RTOL`, ``ATOL``).
+        Tolerances (default :data:`~auv_hinf.numerics.integrators.RTOL`, ``ATOL``).
     subdivisions : int
         Sub-grid points per step on which the envelope margin is checked before brentq.
     sink : callable, optional
         Receives the output samples instead of storing them (``"dopri"`` only; see
-        :data:`~auv_hinf.simulation.integrators.SampleSink`); the solution's ``y`` is then None.
+        :data:`~auv_hinf.numerics.integrators.SampleSink`); the solution's ``y`` is then None.
 
     Returns
     -------
@@ -196,7 +194,7 @@ def simulate_batch(
     The integration is :func:`integrate_batch` (same parameters); every result holds the
     samples and the metrics of :class:`~auv_hinf.simulation.results.SimulationResult`.
     A batch whose implementation is not the continuous, exact law runs sampled instead
-    (:func:`~auv_hinf.simulation.sampled.simulate_sampled_batch`: the integration parameters
+    (:func:`~auv_hinf.implementation.sampled_loop.simulate_sampled_batch`: the integration parameters
     do not apply, its scheme is its own).
     """
     if not batch.scenarios[0].implementation.continuous:
@@ -224,10 +222,13 @@ def simulate(
 
 
 __all__ = [
+    "Method",
+    "Systems",
     "batch_system",
     "closed_loop_rhs",
     "first_exits",
     "fleet_derivative",
+    "initial_with_controller",
     "integrate_batch",
     "simulate",
     "simulate_batch",

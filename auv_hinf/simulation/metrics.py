@@ -4,12 +4,12 @@ A campaign needs, per run and vehicle, only the sup of the four tracking errors,
 the position error over the second half of the run, the final position error, the
 measured decay rate of the certified Lyapunov norm and, given the law, the peak commanded
 force per channel and the fraction of samples at which it saturates. :class:`ErrorSink` receives the
-integrator's output samples (:data:`~auv_hinf.simulation.integrators.SampleSink`) and keeps these
+integrator's output samples (:data:`~auv_hinf.numerics.integrators.SampleSink`) and keeps these
 running values, so a batch needs ``O(S N)`` memory instead of ``O(T S N)`` for stored
 samples, and the post-processing is done while the samples are hot in the cache.
 
 :func:`lyapunov_values` and :func:`decay_rates` are shared with
-:func:`~auv_hinf.workflow.run_plan.measured_decay_rate`, which computes the same rate from stored samples.
+:func:`~auv_hinf.certificate.run_plan.measured_decay_rate`, which computes the same rate from stored samples.
 """
 
 from __future__ import annotations
@@ -21,11 +21,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.arrays import stack_last
-from auv_hinf.certification.levels import pair_level
 from auv_hinf.exceptions import SolverError
-from auv_hinf.simulation.law import MotionSource, VehicleLaw, saturate
-from auv_hinf.simulation.postprocess import TrackingErrors, ground_velocity, tracking_errors
+from auv_hinf.law.formation_law import MotionSource, VehicleLaw, saturate
+from auv_hinf.models.vehicle import ground_velocity
+from auv_hinf.numerics.arrays import stack_last
+from auv_hinf.numerics.quadratic_forms import pair_level
+from auv_hinf.simulation.postprocess import TrackingErrors, tracking_errors
 
 #: The measured decay rate is the average rate of the per-vehicle Lyapunov norm from
 #: ``t = 0`` until it has fallen by this factor (six decades of error), far above the
@@ -76,10 +77,10 @@ class RunMetrics:
         ``||e||`` at the last sample (m).
     decay_rate : ndarray, shape (S,)
         Measured decay rate of the slowest vehicle (1/s, see
-        :func:`~auv_hinf.workflow.run_plan.measured_decay_rate`); NaN where no vehicle starts off the reference.
+        :func:`~auv_hinf.certificate.run_plan.measured_decay_rate`); NaN where no vehicle starts off the reference.
     commanded_peak : ndarray, shape (S, 3)
         Sup over the samples and vehicles of the commanded ``|tau_x|`` (N), ``|tau_y|`` (N) and
-        ``|tau_psi|`` (N m) before saturation (:meth:`~auv_hinf.simulation.law.VehicleLaw.unsaturated`);
+        ``|tau_psi|`` (N m) before saturation (:meth:`~auv_hinf.law.formation_law.VehicleLaw.unsaturated`);
         NaN when the sink was given no law.
     saturated_fraction : ndarray, shape (S,)
         Fraction of the samples at which some vehicle's command saturates (0 without actuator
@@ -95,7 +96,7 @@ class RunMetrics:
 
 
 class ErrorSink:
-    """A :data:`~auv_hinf.simulation.integrators.SampleSink` that keeps :class:`RunMetrics` of a batch.
+    """A :data:`~auv_hinf.numerics.integrators.SampleSink` that keeps :class:`RunMetrics` of a batch.
 
     Parameters
     ----------
@@ -194,11 +195,4 @@ class ErrorSink:
         )
 
 
-__all__ = [
-    "DECAY_MEASURE_DROP",
-    "DECAY_MEASURE_FLOOR",
-    "ErrorSink",
-    "RunMetrics",
-    "decay_rates",
-    "lyapunov_values",
-]
+__all__ = ["DECAY_MEASURE_DROP", "DECAY_MEASURE_FLOOR", "ErrorSink", "RunMetrics", "decay_rates", "lyapunov_values"]

@@ -11,75 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from auv_hinf._typing import FloatArray, JacobiKind
-from auv_hinf.arrays import stack_last
-from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.jacobi_maps import jacobi_coordinates
-from auv_hinf.models.reference import Motion, wrap_angle
-from auv_hinf.simulation.integrators import EventBound, EventFn
-
-
-def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
-    """Smallest distance of ``(u, v, r)`` to the envelope's bounds, shape ``states.shape[:-1]``.
-
-    Positive inside, zero on the boundary, negative outside. Units mix m/s and rad/s; only
-    the sign and the roots matter (the first root is the first exit time).
-    """
-    u, v, r = states[..., 3], states[..., 4], states[..., 5]
-    margin: FloatArray = np.minimum.reduce(
-        [
-            u - envelope.u[0],
-            envelope.u[1] - u,
-            v - envelope.v[0],
-            envelope.v[1] - v,
-            r - envelope.r[0],
-            envelope.r[1] - r,
-        ]
-    )
-    return margin
-
-
-def envelope_event(envelope: Envelope, n: int, width: int = 6) -> EventFn:
-    """The exit event of flat states ``(..., width n)``: the smallest envelope margin of their ``n`` vehicles.
-
-    ``width`` is the state size per vehicle: 6, or 8 with an integrator (see
-    :attr:`~auv_hinf.simulation.law.VehicleLaw.width`).
-    """
-
-    def event(t: FloatArray, y: FloatArray) -> FloatArray:
-        margin: FloatArray = envelope_margin(envelope, y.reshape((*y.shape[:-1], n, width))).min(axis=-1)
-        return margin
-
-    return event
-
-
-def envelope_bound(envelope: Envelope, n: int, width: int = 6) -> EventBound:
-    """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
-
-    Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
-    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
-    vehicles per system (1 for vehicle systems), ``width`` the state size per vehicle.
-    """
-
-    def bound(y: FloatArray, radius: FloatArray) -> FloatArray:
-        s, rad = y.reshape(*y.shape[:-1], n, width), radius.reshape(*radius.shape[:-1], n, width)
-        low: FloatArray = (envelope_margin(envelope, s) - rad[..., 3:6].max(axis=-1)).min(axis=-1)
-        return low
-
-    return bound
-
-
-def ground_velocity(
-    states: FloatArray, current: FloatArray | tuple[float, float], cs: tuple[FloatArray, FloatArray] | None = None
-) -> FloatArray:
-    """Inertial velocity ``R(psi) [u, v] + current`` of states ``(..., N, 6)`` (m/s).
-
-    ``current`` (inertial, m/s) broadcasts against ``(..., N, 2)``; ``cs`` is
-    ``(cos psi, sin psi)`` when the caller has them.
-    """
-    c, s = (np.cos(states[..., 2]), np.sin(states[..., 2])) if cs is None else cs
-    u, v = states[..., 3], states[..., 4]
-    out: FloatArray = stack_last([c * u - s * v, s * u + c * v]) + np.asarray(current, dtype=float)
-    return out
+from auv_hinf.mission.fleet import Motion, wrap_angle
+from auv_hinf.models.jacobi import jacobi_coordinates
 
 
 @dataclass(frozen=True)
@@ -171,14 +104,4 @@ def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind
     )
 
 
-__all__ = [
-    "FormationErrors",
-    "TrackingErrors",
-    "envelope_bound",
-    "envelope_event",
-    "envelope_margin",
-    "formation_errors",
-    "ground_velocity",
-    "in_path_frame",
-    "tracking_errors",
-]
+__all__ = ["FormationErrors", "TrackingErrors", "formation_errors", "in_path_frame", "tracking_errors"]

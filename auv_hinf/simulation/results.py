@@ -11,16 +11,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.models.actuators import CHANNELS
-from auv_hinf.models.reference import Motion
-from auv_hinf.simulation.law import saturate
-from auv_hinf.simulation.postprocess import (
-    TrackingErrors,
-    formation_errors,
-    ground_velocity,
-    in_path_frame,
-    tracking_errors,
-)
+from auv_hinf.actuation.limits import CHANNELS
+from auv_hinf.law.formation_law import saturate
+from auv_hinf.mission.fleet import Motion
+from auv_hinf.models.vehicle import ground_velocity
+from auv_hinf.simulation.postprocess import TrackingErrors, formation_errors, in_path_frame, tracking_errors
 
 if TYPE_CHECKING:
     from auv_hinf.simulation.scenario import Scenario
@@ -64,7 +59,7 @@ class SimulationResult:
         over all vehicles.
     diverged_at : float or None
         When a sampled run was stopped as diverged (s; see
-        :data:`~auv_hinf.simulation.sampled_loop.DIVERGED_RATE`); None if it was not.
+        :data:`~auv_hinf.implementation.sampled_loop.DIVERGED_RATE`); None if it was not.
     shape_components : ndarray (T, N-1, 2) or None
         Error of each Jacobi shape vector against the unshaped mission in the scenario's
         ``frame`` (m): ``[along, cross]`` track in the path frame (rotated by the path's course),

@@ -7,23 +7,18 @@ vectorised system.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import cast
 
 import numpy as np
-from numpy.typing import NDArray
 
 from auv_hinf._typing import FORMATION_FRAMES, FloatArray, FormationFrame, JacobiKind
 from auv_hinf.exceptions import ParameterError, require_finite
+from auv_hinf.implementation.model import Implementation
+from auv_hinf.law.formation_law import MotionSource, VehicleLaw
+from auv_hinf.mission.fleet import FleetReference, PathFrameReference
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.implementation import Implementation
-from auv_hinf.models.path_frame import PathFrameReference
-from auv_hinf.models.reference import FleetReference
-from auv_hinf.models.vehicle import VehicleParams
-from auv_hinf.simulation.law import MotionSource, VehicleLaw
-
-_COEFFS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+from auv_hinf.models.vehicle import PlantBatch, VehicleParams
 
 
 @dataclass(frozen=True)
@@ -51,19 +46,19 @@ class Scenario:
     name : str
     mission : MotionSource, optional
         The unshaped mission reference for the formation and position errors. Default:
-        for a shaped :class:`~auv_hinf.models.reference.FleetReference`, the same reference without
+        for a shaped :class:`~auv_hinf.mission.fleet.FleetReference`, the same reference without
         its shaping; otherwise ``reference`` itself.
     jacobi : {"paper", "orthonormal"}
         Jacobi convention of the reported shape error.
     frame : {"inertial", "path"} or None
         Frame of the reported shape-error components (along/cross track in the path frame);
-        default: the frame of a :class:`~auv_hinf.models.reference.FleetReference` or
-        ``"path"`` for a :class:`~auv_hinf.models.path_frame.PathFrameReference`, else inertial.
+        default: the frame of a :class:`~auv_hinf.mission.fleet.FleetReference` or
+        ``"path"`` for a :class:`~auv_hinf.mission.fleet.PathFrameReference`, else inertial.
     implementation : Implementation
         How the controller runs (sample time, delay, noise). The default is the continuous,
-        exact law; any other runs in :mod:`auv_hinf.simulation.sampled`.
+        exact law; any other runs in :mod:`auv_hinf.implementation.sampled_loop`.
     seed : int
-        Seed of the run's noise and delay draws (:mod:`auv_hinf.simulation.draws`, >= 0).
+        Seed of the run's noise and delay draws (:mod:`auv_hinf.implementation.draws`, >= 0).
     """
 
     law: VehicleLaw
@@ -120,62 +115,6 @@ class Scenario:
 
 
 @dataclass(frozen=True)
-class PlantBatch:
-    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,)."""
-
-    m11: FloatArray
-    m22: FloatArray
-    m33: FloatArray
-    d11_lin: FloatArray
-    d11_quad: FloatArray
-    d22_lin: FloatArray
-    d22_quad: FloatArray
-    d33_lin: FloatArray
-    d33_quad: FloatArray
-
-    def __post_init__(self) -> None:
-        arrays = [np.atleast_1d(np.asarray(getattr(self, k), dtype=float)) for k in _COEFFS]
-        if any(a.ndim != 1 or a.shape != arrays[0].shape for a in arrays):
-            raise ParameterError("plant coefficients must be 1-D arrays of one common length S")
-        for k, a in zip(_COEFFS, arrays):
-            object.__setattr__(self, k, a)
-        for s in range(len(self)):
-            self[s]  # VehicleParams checks signs and finiteness, naming the field
-
-    @classmethod
-    def from_params(cls, params: Sequence[VehicleParams]) -> PlantBatch:
-        """Stack a list of :class:`VehicleParams`."""
-        if len(params) == 0:
-            raise ParameterError("a plant batch needs at least one VehicleParams")
-        return cls(**{k: np.array([getattr(p, k) for p in params]) for k in _COEFFS})
-
-    def __len__(self) -> int:
-        return int(self.m11.shape[0])
-
-    def __getitem__(self, s: int) -> VehicleParams:
-        return VehicleParams(**{k: float(getattr(self, k)[s]) for k in _COEFFS}, name=f"plant[{s}]")
-
-    def coefficients(self, trailing: int, rows: NDArray[np.int_] | None = None) -> VehicleParams:
-        """Duck-typed parameters with arrays of shape ``(S,) + (1,) * trailing`` for :func:`vehicle.rhs`.
-
-        ``vehicle.rhs`` reads only the nine coefficients and ``damping``, which broadcast.
-        ``rows``: only those scenarios (then ``S = rows.size``).
-        """
-        pick = slice(None) if rows is None else rows
-        shape = (-1,) + (1,) * trailing
-        return cast(VehicleParams, _Coefficients({k: getattr(self, k)[pick].reshape(shape) for k in _COEFFS}))
-
-
-class _Coefficients:
-    """Array-valued stand-in for :class:`VehicleParams` (see :meth:`PlantBatch.coefficients`)."""
-
-    damping = VehicleParams.damping
-
-    def __init__(self, values: dict[str, FloatArray]) -> None:
-        self.__dict__.update(values)
-
-
-@dataclass(frozen=True)
 class ScenarioBatch:
     """``S`` scenarios integrated together as one vectorised system of shape ``(S, N, 6)``.
 
@@ -227,4 +166,4 @@ class ScenarioBatch:
         return cast(MotionSource, self.reference)
 
 
-__all__ = ["PlantBatch", "Scenario", "ScenarioBatch"]
+__all__ = ["Scenario", "ScenarioBatch"]

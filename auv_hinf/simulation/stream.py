@@ -1,10 +1,10 @@
 """Full trajectories of a run streamed to a Parquet file, in O(N) memory at any fleet size.
 
 :func:`save_trajectories` integrates the scenario again with a sink
-(:data:`~auv_hinf.simulation.integrators.SampleSink`): each batch of output samples becomes
+(:data:`~auv_hinf.numerics.integrators.SampleSink`): each batch of output samples becomes
 one Parquet row group of ``samples x N`` rows and is released, so the memory does not grow
 with the number of samples. The run itself keeps only the samples its report and plots need
-(:func:`~auv_hinf.workflow.run_plan.run_samples`); this file has every vehicle at every sample.
+(:func:`~auv_hinf.certificate.run_plan.run_samples`); this file has every vehicle at every sample.
 
 Columns: ``t`` (s), ``vehicle`` (0 .. N-1), ``x``, ``y`` (m, inertial), ``psi`` (rad), ``u``,
 ``v`` (m/s, body frame, relative to the water), ``r`` (rad/s), and with integral action the
@@ -21,8 +21,8 @@ from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
+from auv_hinf.implementation.sampled_loop import integrate_sampled
 from auv_hinf.simulation.engine import integrate_batch
-from auv_hinf.simulation.sampled import integrate_sampled
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
 
 #: Interval of the saved samples (s): the paper's figures are read at 0.1 s.

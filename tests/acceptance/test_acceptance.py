@@ -3,7 +3,7 @@
 The certificate (``docs/derivations/closed_loop.md``) claims that from every start in the
 reported simultaneous region, tracking the raw mission, each vehicle stays inside the
 envelope, its errors stay below the invariant-ellipsoid bounds of its own start
-(:func:`auv_hinf.certification.levels.start_bounds`) and its Lyapunov norm decays at the certified rate.
+(:func:`auv_hinf.numerics.quadratic_forms.start_bounds`) and its Lyapunov norm decays at the certified rate.
 Here those three claims are checked on batched simulations of many sampled starts (the
 1000-start test on the paper triangle, fewer starts on other vehicles, missions and
 envelopes), on shaped starts, through the CLI, and the region's tightness is measured.
@@ -25,25 +25,24 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate
-from auv_hinf.certification.coverage import check_run, cover_start, initial_errors
-from auv_hinf.certification.levels import start_bounds
-from auv_hinf.certification.region import Region
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import design_point, formation_offsets, mission_reference
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.run_plan import RunPlan, measured_decay_rate, plan_run, with_start
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import FormationConfig
+from auv_hinf.closed_loop.coverage import check_run, cover_start, initial_errors
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.closed_loop.region import Region
 from auv_hinf.config.presets import DEMO_ENVELOPE, TRIANGLE_SHAPE, preset_config
-from auv_hinf.config.tables import ReferenceConfig
+from auv_hinf.config.settings import FormationConfig, ReferenceConfig
 from auv_hinf.exceptions import DesignError
+from auv_hinf.mission.fleet import FleetReference, shaped_start
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.reference import FleetReference, shaped_start
 from auv_hinf.models.vehicle import paper2011, remus100
+from auv_hinf.numerics.quadratic_forms import start_bounds
 from auv_hinf.simulation.engine import simulate_batch
 from auv_hinf.simulation.results import SimulationResult
 from auv_hinf.simulation.scenario import ScenarioBatch
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import design_point, formation_offsets, mission_reference
-from auv_hinf.workflow.nominal import closed_loop_for
-from auv_hinf.workflow.run_plan import RunPlan, measured_decay_rate, plan_run, with_start
 from tests.helpers import starts_from_errors
 
 #: Absolute allowance (m, m/s, rad, rad/s) on every measured error for the integration

@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import FormationConfig, config_from_dict
+from auv_hinf.config.settings import FormationConfig, config_from_dict
 from auv_hinf.exceptions import ConfigError, EnvelopeError
 from auv_hinf.models.envelope import Envelope
 

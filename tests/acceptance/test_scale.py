@@ -9,11 +9,11 @@ import tracemalloc
 import numpy as np
 import pytest
 
+from auv_hinf.certificate.assembly import certify
 from auv_hinf.cli.main import main
-from auv_hinf.config.fields import MAX_VEHICLES
-from auv_hinf.config.formation import config_from_dict
+from auv_hinf.config.schema import MAX_VEHICLES
+from auv_hinf.config.settings import config_from_dict
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.workflow.certificate import certify
 
 N = 10_000
 #: Circumradius (m): neighbouring vehicles 2 pi R / N = 3.1 m apart.

@@ -14,14 +14,14 @@ import pytest
 
 from auv_hinf.campaign.report import passed, summarize
 from auv_hinf.campaign.runner import run_campaign
-from auv_hinf.campaign.sampling import FORCE_COLUMNS, initial_state, run_chunk, sample_run
+from auv_hinf.campaign.runs import FORCE_COLUMNS, initial_state, run_chunk, sample_run
 from auv_hinf.campaign.setup import chunks, prepare
-from auv_hinf.certification.coverage import initial_errors
 from auv_hinf.cli.main import main
+from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
+from auv_hinf.config.settings import DisturbanceConfig, UncertaintyConfig
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.models.implementation import Implementation, MeasurementNoise
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
 
 RUNS, HORIZON, SEED = 8, 20.0, 7
 

@@ -11,12 +11,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from auv_hinf.actuation.limits import CHANNELS, Actuators
 from auv_hinf.campaign.report import force_summary, passed, summarize, write_outputs
 from auv_hinf.campaign.runner import Campaign, run_campaign
-from auv_hinf.campaign.sampling import FORCE_COLUMNS, run_scenario, sample_run
+from auv_hinf.campaign.runs import FORCE_COLUMNS, run_scenario, sample_run
 from auv_hinf.campaign.setup import prepare
 from auv_hinf.config.presets import preset_config
-from auv_hinf.models.actuators import CHANNELS, Actuators
 from auv_hinf.simulation.engine import integrate_batch, simulate_batch
 from auv_hinf.simulation.metrics import ErrorSink
 from auv_hinf.simulation.scenario import ScenarioBatch

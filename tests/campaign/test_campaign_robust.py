@@ -10,12 +10,12 @@ import pytest
 
 from auv_hinf.campaign.report import summarize
 from auv_hinf.campaign.runner import run_campaign
-from auv_hinf.campaign.sampling import initial_state, sample_run
+from auv_hinf.campaign.runs import initial_state, sample_run
 from auv_hinf.campaign.setup import COEFFICIENTS, prepare
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.robust import check_robust_run
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.tables import SimulationConfig
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.robust_part import check_robust_run
+from auv_hinf.config.settings import SimulationConfig
 
 RUNS, HORIZON, SEED = 12, 12.0, 5
 

@@ -18,7 +18,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from auv_hinf.certification.closed_loop import (
+from auv_hinf.actuation.thrust import thrust_bounds
+from auv_hinf.closed_loop.nominal import (
     ClosedLoopCertificate,
     closed_loop_certificate,
     heading_decay_rate,
@@ -28,18 +29,17 @@ from auv_hinf.certification.closed_loop import (
     position_decay_rate,
     shifted_peak,
 )
-from auv_hinf.certification.levels import ellipsoid_extent, pair_level, start_bounds
-from auv_hinf.certification.margins import ErrorBounds, envelope_margins, inflate_envelope
-from auv_hinf.certification.thrust import thrust_bounds
 from auv_hinf.config.schema import DEFAULT_POLES
-from auv_hinf.design.alpha import alpha_stabilizing
 from auv_hinf.design.blocks import hinf_norm
-from auv_hinf.design.gains import Gains, heading_gains
 from auv_hinf.design.sigma import vehicle_sigma
+from auv_hinf.design.theorem1 import alpha_stabilizing
 from auv_hinf.exceptions import DesignError
+from auv_hinf.law.gains import Gains, heading_gains
+from auv_hinf.mission.fleet import ReferenceTube
+from auv_hinf.mission.margins import ErrorBounds, envelope_margins, inflate_envelope
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.reference import ReferenceTube
 from auv_hinf.models.vehicle import body_block, inertial_block, paper2011, rotation
+from auv_hinf.numerics.quadratic_forms import ellipsoid_extent, pair_level, start_bounds
 
 LAM, K1 = -2.1, 0.5
 ENV = Envelope(u=(0.0, 3.5), v=(-1.0, 1.0), r=(-0.5, 0.5))
@@ -478,7 +478,7 @@ def test_block_bounds_equal_the_body_block_over_the_box_vertices() -> None:
     """The entry and row-norm bounds of the thrust are the maxima of ``body_block`` over the 8 vertices, bit for bit."""
     import itertools
 
-    from auv_hinf.certification.thrust import _block_bounds
+    from auv_hinf.actuation.thrust import _block_bounds
     from auv_hinf.models.vehicle import remus100
 
     rng = np.random.default_rng(11)

@@ -1,4 +1,4 @@
-"""Coverage of one run by the closed-loop certificate (:mod:`auv_hinf.certification.coverage`).
+"""Coverage of one run by the closed-loop certificate (:mod:`auv_hinf.closed_loop.coverage`).
 
 The verdicts are checked against independent computations: the ellipsoid extents by
 sampling the ellipsoid's boundary, the envelope margins of the sine mission in closed
@@ -14,21 +14,21 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-import auv_hinf.certification.coverage as coverage
-from auv_hinf.certification.closed_loop import ClosedLoopCertificate
-from auv_hinf.certification.coverage import BLEND_TIMES, TURN_TIMES, check_run, cover_start, initial_errors
-from auv_hinf.certification.margins import envelope_margins
-from auv_hinf.config.formation import FormationConfig
+import auv_hinf.closed_loop.coverage as coverage
+from auv_hinf.actuation.limits import Actuators
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.run_plan import plan_run, with_start
+from auv_hinf.closed_loop.coverage import BLEND_TIMES, TURN_TIMES, check_run, cover_start, initial_errors
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.presets import preset_config
-from auv_hinf.design.gains import Gains
-from auv_hinf.models.actuators import Actuators
-from auv_hinf.models.formation import regular_polygon
-from auv_hinf.models.reference import FleetReference, shaped_start
-from auv_hinf.models.tubes import shaped_tube
+from auv_hinf.config.settings import FormationConfig
+from auv_hinf.law.gains import Gains
+from auv_hinf.mission.fleet import FleetReference, shaped_start
+from auv_hinf.mission.margins import envelope_margins
+from auv_hinf.mission.tubes import shaped_tube
+from auv_hinf.models.jacobi import regular_polygon
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.nominal import closed_loop_for
-from auv_hinf.workflow.run_plan import plan_run, with_start
 
 
 @dataclass(frozen=True)

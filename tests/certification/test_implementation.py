@@ -6,15 +6,15 @@ import math
 
 import pytest
 
-from auv_hinf.certification.implementation import certify_implementation, lag_limits
-from auv_hinf.certification.margins import ErrorBounds
-from auv_hinf.config.formation import config_from_dict
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.parts.implementation import implementation_problem, start_errors
 from auv_hinf.config.presets import preset_config
-from auv_hinf.models.implementation import Implementation, MeasurementNoise
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.implementation_part import implementation_problem, start_errors
-from auv_hinf.workflow.nominal import closed_loop_for
+from auv_hinf.config.settings import config_from_dict
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
+from auv_hinf.implementation.sampled_data import certify_implementation, lag_limits
+from auv_hinf.mission.margins import ErrorBounds
 from tests.helpers import BLUEROV_SLOW
 
 SMALL_NOISE = MeasurementNoise(0.001, 0.001, 0.001, 0.001)

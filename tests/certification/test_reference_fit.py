@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from auv_hinf.certification.reference_fit import reference_fit
+from auv_hinf.mission.fit import reference_fit
+from auv_hinf.mission.paths import LawnmowerReference
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.lawnmower import LawnmowerReference
 
 SPEED = 1.5  # m/s
 ENVELOPE = Envelope(u=(0.0, 2.5), v=(-0.3, 0.3), r=(-0.3, 0.3))
@@ -61,9 +61,9 @@ def test_inertial_frame_every_vehicle_moves_as_the_centre():
 
 def test_a_path_frame_turn_where_a_vehicle_would_stop_is_refused_by_name_not_by_an_error():
     """The paper triangle's sine (amplitude 30 m) turns tighter than its offsets in the path frame."""
-    from auv_hinf.config.formation import config_from_dict
+    from auv_hinf.certificate.assembly import certify
     from auv_hinf.config.presets import preset_config
-    from auv_hinf.workflow.certificate import certify
+    from auv_hinf.config.settings import config_from_dict
 
     doc = preset_config("paper-triangle").to_toml_dict()
     doc.pop("simulation", None)

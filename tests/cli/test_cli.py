@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 import auv_hinf
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.run_plan import plan_run, run_report
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import load_config
 from auv_hinf.config.presets import preset_config
+from auv_hinf.config.settings import load_config
 from auv_hinf.exceptions import SolverError
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.workflow.certificate import Certificate, certify
-from auv_hinf.workflow.run_plan import plan_run, run_report
 
 
 def run(argv, capsys):
@@ -43,7 +43,7 @@ def test_scientific_gamma_and_equals_form(capsys):
 
 
 def test_unwritable_out_exits_2_before_computing(tmp_path, monkeypatch, capsys):
-    certificate_module = importlib.import_module("auv_hinf.workflow.certificate")
+    certificate_module = importlib.import_module("auv_hinf.certificate.assembly")
 
     def forbidden(*args, **kwargs):
         raise AssertionError("certify must not run")

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from auv_hinf.cli.main import main
-from auv_hinf.config.hygiene import input_warnings
+from auv_hinf.config.messages import input_warnings
 from auv_hinf.design import crosscheck as crosscheck_module
 from auv_hinf.exceptions import SolverError
 

@@ -9,11 +9,17 @@ import numpy as np
 import pytest
 import tomllib
 
-from auv_hinf.config.fields import PARAMETERS, VehiclePreset
-from auv_hinf.config.formation import FormationConfig, config_from_dict, load_config
 from auv_hinf.config.presets import PAPER_TRIANGLE_INITIAL, PRESETS, annotated_toml, preset_config, spread_start
-from auv_hinf.config.schema import json_schema
-from auv_hinf.config.tables import DisturbanceConfig, ReferenceConfig, SimulationConfig, UncertaintyConfig
+from auv_hinf.config.schema import PARAMETERS, VehiclePreset, json_schema
+from auv_hinf.config.settings import (
+    DisturbanceConfig,
+    FormationConfig,
+    ReferenceConfig,
+    SimulationConfig,
+    UncertaintyConfig,
+    config_from_dict,
+    load_config,
+)
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS

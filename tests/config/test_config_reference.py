@@ -12,9 +12,9 @@ from pathlib import Path
 
 from pydantic import BaseModel
 
-from auv_hinf.config.formation import load_config
 from auv_hinf.config.reference_doc import EXAMPLE_TOML, config_reference
 from auv_hinf.config.schema import ConfigFile, DesignTable
+from auv_hinf.config.settings import load_config
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "config.md"

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from auv_hinf.config.conditions import ActuatorsTable
-from auv_hinf.config.fields import REFERENCE_MODELS
-from auv_hinf.config.formation import config_from_dict
+from auv_hinf.config.schema import REFERENCE_MODELS, ActuatorsTable
+from auv_hinf.config.settings import config_from_dict
 
 
 @pytest.mark.parametrize("kind", sorted(REFERENCE_MODELS))

@@ -7,13 +7,12 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from auv_hinf.design.alpha import alpha_stabilizing
 from auv_hinf.design.blocks import NORM_RTOL, hinf_norm, position_block, velocity_block
+from auv_hinf.design.brl import lmi_hinf_norm
 from auv_hinf.design.crosscheck import crosscheck
-from auv_hinf.design.lmi.core import LMI_RTOL
-from auv_hinf.design.lmi.theorem1 import lmi_hinf_norm
 from auv_hinf.design.riccati import ARE_RTOL, riccati_alpha
-from auv_hinf.design.theorem1 import gamma_min
+from auv_hinf.design.theorem1 import alpha_stabilizing, gamma_min
+from auv_hinf.numerics.lmi import LMI_RTOL
 
 INV_SQRT2 = 2**-0.5
 

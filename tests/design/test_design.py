@@ -9,8 +9,15 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from auv_hinf.design.alpha import alpha_minimal, alpha_paper, alpha_stabilizing, design_alpha, position_loop
-from auv_hinf.design.theorem1 import gamma_min, theorem1_conditions
+from auv_hinf.design.theorem1 import (
+    alpha_minimal,
+    alpha_paper,
+    alpha_stabilizing,
+    design_alpha,
+    gamma_min,
+    position_loop,
+    theorem1_conditions,
+)
 
 INV_SQRT2 = 2**-0.5
 # Closed forms are evaluated in a handful of flops: round-off tolerance.

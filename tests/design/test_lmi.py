@@ -7,13 +7,12 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from auv_hinf.design.alpha import alpha_minimal, alpha_stabilizing
 from auv_hinf.design.blocks import hinf_norm_peak, velocity_block
-from auv_hinf.design.lmi.core import LMI_RTOL, solve
-from auv_hinf.design.lmi.theorem1 import lmi_hinf_norm, lmi_minimal_alpha, lmi_stabilizing_alpha
+from auv_hinf.design.brl import lmi_hinf_norm, lmi_minimal_alpha, lmi_stabilizing_alpha
 from auv_hinf.design.riccati import root_condition
-from auv_hinf.design.theorem1 import gamma_min
+from auv_hinf.design.theorem1 import alpha_minimal, alpha_stabilizing, gamma_min
 from auv_hinf.exceptions import DesignError, SolverError
+from auv_hinf.numerics.lmi import LMI_RTOL, solve
 
 INV_SQRT2 = 2**-0.5
 

@@ -9,9 +9,8 @@ import control as ct
 import numpy as np
 import pytest
 
-from auv_hinf.design.alpha import alpha_stabilizing
 from auv_hinf.design.blocks import NORM_RTOL, hinf_norm, hinf_norm_peak, position_block, velocity_block
-from auv_hinf.design.theorem1 import gamma_min
+from auv_hinf.design.theorem1 import alpha_stabilizing, gamma_min
 from auv_hinf.exceptions import DesignError
 
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import auv_hinf.design.riccati as riccati
-from auv_hinf.design.alpha import alpha_stabilizing
 from auv_hinf.design.riccati import ARE_RTOL, riccati_alpha, root_condition
 from auv_hinf.design.theorem1 import (
     DOUBLE_ROOT_RTOL,
+    alpha_stabilizing,
     discriminant,
     discriminant_scale,
     gamma_min,

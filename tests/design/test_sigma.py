@@ -5,11 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.design.jacobi_norm import jacobi_apply, jacobi_sigma, jacobi_sigma_lower
-from auv_hinf.design.jacobi_sigma import DENSE_SIGMA_MAX_N, jacobi_sigma_bounds, sigma_at_witness
+from auv_hinf.design.jacobi_sigma import (
+    DENSE_SIGMA_MAX_N,
+    jacobi_apply,
+    jacobi_sigma,
+    jacobi_sigma_bounds,
+    jacobi_sigma_lower,
+    sigma_at_witness,
+)
 from auv_hinf.design.sigma import sigma_grid, sigma_max_2x2, vehicle_sigma
 from auv_hinf.models.envelope import Envelope, abs_range, envelope_lambda
-from auv_hinf.models.formation import JacobiTransform
+from auv_hinf.models.jacobi import JacobiTransform
 from auv_hinf.models.vehicle import VehicleParams, body_block, inertial_block, paper2011
 
 

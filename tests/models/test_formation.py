@@ -9,16 +9,16 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from auv_hinf.exceptions import FormationError
-from auv_hinf.models.formation import (
+from auv_hinf.models.jacobi import (
     DENSE_MAX_N,
     JacobiTransform,
     block_diag_stack,
+    closest_pair,
     formation_matrices,
     offsets_from_shape,
     regular_polygon,
     shape_from_offsets,
 )
-from auv_hinf.models.jacobi_maps import closest_pair
 from auv_hinf.models.vehicle import inertial_block
 
 KINDS = ["paper", "orthonormal"]

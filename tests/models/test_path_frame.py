@@ -5,11 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.models.lawnmower import LawnmowerReference
-from auv_hinf.models.path_frame import PathFrameReference, course_jerk
-from auv_hinf.models.paths import CircleReference, LineReference, SineReference, heading_from_velocity
-from auv_hinf.models.reference import FleetReference, shaped_start
-from auv_hinf.models.tubes import PATH_FRAME_CELLS, path_frame_tube
+from auv_hinf.mission.fleet import FleetReference, PathFrameReference, course_jerk, shaped_start
+from auv_hinf.mission.paths import (
+    CircleReference,
+    LawnmowerReference,
+    LineReference,
+    SineReference,
+    heading_from_velocity,
+)
+from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube
 
 #: Analytic against an independent analytic computation: round-off of a few flops on ~100 m.
 EXACT = 1e-9

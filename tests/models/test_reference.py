@@ -9,19 +9,30 @@ from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.models.formation import JacobiTransform
-from auv_hinf.models.lawnmower import SMOOTHSTEP_D1_MAX, SMOOTHSTEP_D2_MAX, LawnmowerReference
-from auv_hinf.models.paths import (
+from auv_hinf.mission.fleet import (
+    BLEND_H0,
+    BLEND_H1,
+    H0_SUP,
+    H1_SUP,
+    REFERENCES,
+    FleetReference,
+    reference_from_dict,
+    shaped_start,
+    wrap_angle,
+)
+from auv_hinf.mission.paths import (
     GL_NODES,
     SMOOTHSTEP,
+    SMOOTHSTEP_D1_MAX,
+    SMOOTHSTEP_D2_MAX,
     CircleReference,
+    LawnmowerReference,
     LineReference,
     SineReference,
     heading_from_velocity,
 )
-from auv_hinf.models.reference import REFERENCES, FleetReference, reference_from_dict, shaped_start, wrap_angle
-from auv_hinf.models.shaping import BLEND_H0, BLEND_H1, H0_SUP, H1_SUP
-from auv_hinf.models.tubes import TUBE_RTOL, fleet_tube, mission_tube, shaped_tube
+from auv_hinf.mission.tubes import TUBE_RTOL, fleet_tube, mission_tube, shaped_tube
+from auv_hinf.models.jacobi import JacobiTransform
 
 MISSIONS = {
     "sine-paper": SineReference(),

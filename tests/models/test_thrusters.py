@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from auv_hinf.exceptions import AuvHinfError, ParameterError, SolverError
-from auv_hinf.models.thrusters import (
+from auv_hinf.actuation.thrusters import (
     BENZON2022_THRUST,
     FORCE_TOLERANCE,
     T200_FORWARD_16V,
@@ -18,6 +17,7 @@ from auv_hinf.models.thrusters import (
     bluerov2_heavy_thrusters,
     box_corners,
 )
+from auv_hinf.exceptions import AuvHinfError, ParameterError, SolverError
 from auv_hinf.models.vehicle import PRESETS, bluerov2_heavy, preset
 
 C = math.sqrt(0.5)

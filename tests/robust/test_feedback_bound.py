@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from auv_hinf.certification.thrust import ellipsoid_feedback
+from auv_hinf.actuation.thrust import ellipsoid_feedback
 
 
 def test_the_ellipsoid_feedback_bound_holds_and_is_attained() -> None:

@@ -14,20 +14,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from auv_hinf.certificate.assembly import Certificate
+from auv_hinf.certificate.design_point import design_point, initial_states, slot_states
+from auv_hinf.certificate.document import load_certificate
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import annotated_toml, preset_config
-from auv_hinf.config.tables import DisturbanceConfig
-from auv_hinf.design.gains import INTEGRAL_POLE_SHARE, Gains, integral_gain, with_integral
-from auv_hinf.design.lmi.ellipsoid import best_ellipsoid, position_ellipsoid
+from auv_hinf.config.settings import DisturbanceConfig
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.models.implementation import Implementation
+from auv_hinf.implementation.model import Implementation
+from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.law.gains import INTEGRAL_POLE_SHARE, Gains, integral_gain, with_integral
 from auv_hinf.robust.box import ParameterBox
+from auv_hinf.robust.invariant_set import best_ellipsoid, position_ellipsoid
 from auv_hinf.simulation.engine import closed_loop_rhs, simulate
-from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.scenario import Scenario
-from auv_hinf.workflow.certificate import Certificate
-from auv_hinf.workflow.design_point import design_point, initial_states, slot_states
-from auv_hinf.workflow.persist import load_certificate
 
 #: Final position error integral action must reach in a constant current (m): the issue's 1 mm.
 FINAL_ERROR = 1e-3
@@ -203,7 +203,7 @@ def test_the_python_control_closed_loop_with_the_integrator_matches_simulate() -
     """fleet_closed_loop carries the integrator as controller states; its response is simulate's."""
     import control as ct
 
-    from auv_hinf.workflow.interconnect import fleet_closed_loop
+    from auv_hinf.law.interconnect import fleet_closed_loop
 
     cfg = preset_config("paper-triangle")
     point = design_point(cfg)
@@ -226,8 +226,8 @@ def test_the_python_control_closed_loop_with_the_integrator_matches_simulate() -
 @pytest.mark.slow
 def test_integral_action_without_box_or_current_is_covered_and_measured_below_its_floor() -> None:
     """Nothing declared: the bounds are zero up to the integrator's floor, and the run obeys them."""
-    from auv_hinf.config.tables import UncertaintyConfig
-    from auv_hinf.workflow.run_plan import plan_run, run_report
+    from auv_hinf.certificate.run_plan import plan_run, run_report
+    from auv_hinf.config.settings import UncertaintyConfig
 
     cfg = replace(
         preset_config("bluerov2-line"),

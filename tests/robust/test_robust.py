@@ -10,18 +10,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.design.gains import Gains, heading_gains
+from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.law.gains import Gains, heading_gains
+from auv_hinf.mission.fleet import FleetReference
+from auv_hinf.mission.paths import LineReference
+from auv_hinf.mission.tubes import mission_tube
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.paths import LineReference
-from auv_hinf.models.reference import FleetReference
-from auv_hinf.models.tubes import mission_tube
 from auv_hinf.models.vehicle import body_block, paper2011, remus100
 from auv_hinf.robust.bandwidth import family_gains
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary, box_lambda, box_sigma, heading_perturbation
-from auv_hinf.robust.certificate import robust_certificate
+from auv_hinf.robust.invariant_set import robust_certificate
 from auv_hinf.robust.margin import exhibited_scale, linearised_scale, trim_max_real
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.scenario import Scenario
 
 #: Relative slack of a sampled maximum against a certified bound: pure round-off.
@@ -127,7 +127,7 @@ def test_remus_certificate_covers_and_reverifies(remus_certificate) -> None:
     assert cert.stable and cert.covers, cert.reasons
     b = cert.bounds
     assert b is not None and 0 < b.position < 1.0 and 0 < b.heading < 0.1
-    from auv_hinf.design.lmi.ellipsoid import heading_matrix, heading_vertices
+    from auv_hinf.robust.invariant_set import heading_matrix, heading_vertices
 
     q = cert.heading_ellipsoid.matrix
     for a in heading_vertices(cert.heading.stiffness, cert.heading.damping):

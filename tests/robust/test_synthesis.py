@@ -7,13 +7,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from auv_hinf.certification.margins import inflate_envelope
+from auv_hinf.certificate.design_point import design_point
 from auv_hinf.config.presets import preset_config
-from auv_hinf.design.lmi import synthesis as lmi_synthesis
-from auv_hinf.design.lmi.ellipsoid import position_matrix
+from auv_hinf.mission.margins import inflate_envelope
+from auv_hinf.robust import synthesis as lmi_synthesis
 from auv_hinf.robust.box import box_lambda
+from auv_hinf.robust.invariant_set import position_matrix
 from auv_hinf.robust.synthesis import synthesise_robust
-from auv_hinf.workflow.design_point import design_point
 
 
 @pytest.mark.parametrize(("sigma", "delta", "rate"), [(0.5, 0.0, 0.3), (2.0, 0.1, 1.0), (4.6, 0.1, 1.3)])

@@ -1,6 +1,6 @@
 """An independent, slow reference of the sampled loop: scipy DOP853 per hold, the law in numpy.
 
-It shares nothing with :mod:`auv_hinf.simulation.sampled` but the convention: at ``t_k`` the law
+It shares nothing with :mod:`auv_hinf.implementation.sampled_loop` but the convention: at ``t_k`` the law
 is evaluated on the state at ``s_k`` (from the dense output of the holds already integrated)
 plus the given noise, against the reference at ``s_k``, and held to ``t_{k+1}``.
 """
@@ -10,9 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from auv_hinf.simulation.law import saturate
-from auv_hinf.simulation.plant import plant_derivative
-from auv_hinf.simulation.postprocess import ground_velocity
+from auv_hinf.law.formation_law import saturate
+from auv_hinf.models.vehicle import ground_velocity, plant_derivative
 from auv_hinf.simulation.scenario import Scenario
 
 #: Tolerance of the reference (rtol = atol), far below the product's 1e-8.

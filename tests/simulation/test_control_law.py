@@ -8,17 +8,15 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from auv_hinf.actuation.limits import Actuators
 from auv_hinf.config.schema import DEFAULT_POLES
-from auv_hinf.design.gains import Gains, heading_gains
 from auv_hinf.exceptions import DesignError, ParameterError
-from auv_hinf.models.actuators import Actuators
-from auv_hinf.models.formation import JacobiTransform
-from auv_hinf.models.jacobi_maps import jacobi_coordinates, positions_from_jacobi
-from auv_hinf.models.paths import SineReference
-from auv_hinf.models.reference import FleetReference, Motion
-from auv_hinf.models.vehicle import inertial_block, paper2011, rhs
-from auv_hinf.simulation.law import FormationController, RigidReference, VehicleLaw, saturate
-from auv_hinf.simulation.postprocess import ground_velocity
+from auv_hinf.law.formation_law import FormationController, RigidReference, VehicleLaw, saturate
+from auv_hinf.law.gains import Gains, heading_gains
+from auv_hinf.mission.fleet import FleetReference, Motion
+from auv_hinf.mission.paths import SineReference
+from auv_hinf.models.jacobi import JacobiTransform, jacobi_coordinates, positions_from_jacobi
+from auv_hinf.models.vehicle import ground_velocity, inertial_block, paper2011, rhs
 
 #: Forces are sums of terms up to ~1e4 N; dense Phi^-1 products at N = 50 (cond(Phi) ~ 50)
 #: lose a few more digits than the per-vehicle form, so 1e-9 relative is the agreement asked for.

@@ -7,8 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from auv_hinf.exceptions import ParameterError, SolverError
-from auv_hinf.simulation.integrators import dopri5
-from auv_hinf.simulation.rk45 import rk45_reference
+from auv_hinf.numerics.integrators import dopri5, rk45_reference
 
 #: Damped oscillators x'' = -2 zeta w x' - w^2 x with per-system (w, zeta): 1/s and 1.
 PARAMS = np.array([[1.0, 0.05], [3.0, 0.2], [0.3, 0.0], [8.0, 0.5]])

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from auv_hinf.campaign.setup import prepare
+from auv_hinf.certificate.run_plan import measured_decay_rate
 from auv_hinf.config.presets import preset_config
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.simulation.engine import integrate_batch, simulate_batch
 from auv_hinf.simulation.metrics import ErrorSink, decay_rates
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
-from auv_hinf.workflow.run_plan import measured_decay_rate
 
 #: Relative difference allowed between two roundings of the same norm: four units in the last place.
 ULPS = 4 * np.finfo(float).eps

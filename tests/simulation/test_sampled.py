@@ -8,18 +8,16 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
+from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.config.presets import preset_config
-from auv_hinf.models.implementation import Implementation, MeasurementNoise
-from auv_hinf.models.vehicle import rhs
+from auv_hinf.implementation.draws import ImplementationDraws, noise_from_uniforms, noise_generator
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
+from auv_hinf.implementation.sampled_loop import SNAP, control_period, integrate_sampled
+from auv_hinf.models.vehicle import ground_velocity, rhs
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation import engine
-from auv_hinf.simulation.draws import ImplementationDraws, noise_from_uniforms, noise_generator
 from auv_hinf.simulation.engine import fleet_derivative, simulate, simulate_batch
-from auv_hinf.simulation.integrators import NUMERICAL_FLOOR
-from auv_hinf.simulation.postprocess import ground_velocity
-from auv_hinf.simulation.sampled import integrate_sampled
-from auv_hinf.simulation.sampled_loop import SNAP, control_period
 from auv_hinf.simulation.scenario import ScenarioBatch
-from auv_hinf.workflow.run_plan import plan_run
 from tests.simulation.sampled_reference import reference_loop
 
 NOISE = MeasurementNoise(position=0.05, velocity=0.02, heading=0.01, yaw_rate=0.005)

@@ -10,18 +10,17 @@ import pytest
 from numpy.testing import assert_allclose
 
 from auv_hinf._typing import OrientationLaw
-from auv_hinf.arrays import stack_last
+from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.config.presets import preset_config
-from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.formation import JacobiTransform, regular_polygon
-from auv_hinf.models.paths import SineReference
-from auv_hinf.models.reference import shaped_start, wrap_angle
-from auv_hinf.models.vehicle import VehicleParams, paper2011, rhs
+from auv_hinf.law.formation_law import FormationController, RigidReference
+from auv_hinf.mission.fleet import shaped_start, wrap_angle
+from auv_hinf.mission.paths import SineReference
+from auv_hinf.models.envelope import Envelope, envelope_margin
+from auv_hinf.models.jacobi import JacobiTransform, regular_polygon
+from auv_hinf.models.vehicle import VehicleParams, ground_velocity, paper2011, rhs
+from auv_hinf.numerics.arrays import stack_last
 from auv_hinf.simulation.engine import batch_system, closed_loop_rhs, simulate, simulate_batch
-from auv_hinf.simulation.law import FormationController, RigidReference
-from auv_hinf.simulation.postprocess import envelope_margin, ground_velocity
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
-from auv_hinf.workflow.run_plan import plan_run
 
 #: DOPRI and scipy's RK45 share the tableau and step control, but the error estimate is a
 #: massive cancellation (relative rounding noise ~1e-5), so last-bit differences (BLAS
@@ -188,7 +187,7 @@ def test_vectorised_rhs_equals_per_vehicle_reference(rng):
 
 
 def test_batched_rhs_in_scenario_fast_layout_equals_each_scenario_alone(rng):
-    """The batch rhs works on a scenario-axis-fastest copy of the states (auv_hinf.arrays):
+    """The batch rhs works on a scenario-axis-fastest copy of the states (auv_hinf.numerics.arrays):
     bit-identical values to evaluating every scenario on its own in numpy's default layout."""
     base = paper_scenario("paper-triangle")
     scns = [

@@ -9,14 +9,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
-from auv_hinf.design.gains import with_integral
 from auv_hinf.exceptions import ParameterError
+from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.law.gains import with_integral
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.simulation.law import VehicleLaw
 from auv_hinf.simulation.stream import INTEGRATOR_COLUMNS, STATE_COLUMNS, save_trajectories
-from auv_hinf.workflow.run_plan import plan_run
 
 #: Agreement of the streamed and the stored run: the same integration, so round-off only.
 STREAM_ATOL = 1e-9

@@ -8,22 +8,21 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from auv_hinf.certification.actuation import actuator_fraction, mission_thrust, within_actuators
-from auv_hinf.certification.margins import ErrorBounds, inflate_envelope
-from auv_hinf.certification.thrust import thrust_bounds
+from auv_hinf.actuation.limits import Actuators, actuator_shortfall, vehicle_actuators
+from auv_hinf.actuation.thrust import thrust_bounds
+from auv_hinf.certificate import assembly as certificate_module
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.run_plan import plan_run, with_start
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import config_from_dict, load_config
+from auv_hinf.closed_loop.actuator_fit import actuator_fraction, mission_thrust, within_actuators
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.tables import DisturbanceConfig, UncertaintyConfig
+from auv_hinf.config.settings import DisturbanceConfig, UncertaintyConfig, config_from_dict, load_config
 from auv_hinf.exceptions import ConfigError, DesignError
-from auv_hinf.models.actuators import Actuators, actuator_shortfall, vehicle_actuators
+from auv_hinf.mission.margins import ErrorBounds, inflate_envelope
 from auv_hinf.simulation.engine import simulate_batch
 from auv_hinf.simulation.scenario import ScenarioBatch
-from auv_hinf.workflow import certificate as certificate_module
-from auv_hinf.workflow.certificate import Certificate, certify
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.nominal import closed_loop_for
-from auv_hinf.workflow.run_plan import plan_run, with_start
 from tests.helpers import starts_from_errors
 
 #: Limits between what the paper triangle's mission needs at zero error and what its

@@ -8,13 +8,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from auv_hinf.actuation.limits import Actuators
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import mission_reference
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import load_config
 from auv_hinf.config.presets import preset_config
-from auv_hinf.models.actuators import Actuators
+from auv_hinf.config.settings import load_config
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import mission_reference
 
 
 @pytest.mark.parametrize("name", ["paper-triangle", "paper-hexagon"])
@@ -165,8 +165,8 @@ def test_toml_round_trip(tmp_path):
 
 def test_large_fleet_caps_the_crosscheck_size():
     """The cross-check size is capped (every channel is identical), and the Jacobi upper bound is cond(Phi) sigma."""
-    from auv_hinf.config.formation import config_from_dict
-    from auv_hinf.workflow.certificate import CROSSCHECK_MAX_N
+    from auv_hinf.certificate.assembly import CROSSCHECK_MAX_N
+    from auv_hinf.config.settings import config_from_dict
 
     cfg = config_from_dict({"formation": {"n": 40, "polygon_radius": 60.0}})
     c = certify(cfg)
@@ -177,8 +177,8 @@ def test_large_fleet_caps_the_crosscheck_size():
 @pytest.mark.slow
 def test_certify_json_closed_loop_keys_and_thrust_bound(capsys):
     """The closed_loop object has the documented keys, and its thrust bound covers a simulated run."""
+    from auv_hinf.certificate.run_plan import plan_run
     from auv_hinf.simulation.engine import simulate
-    from auv_hinf.workflow.run_plan import plan_run
 
     assert main(["certify", "--preset", "paper-triangle", "--json"]) == 0
     loop = json.loads(capsys.readouterr().out)["closed_loop"]
@@ -228,9 +228,9 @@ SLOW_HEADING = {
 def test_moment_bound_with_negative_k2psi_covers_the_run():
     """Slow heading poles give k2psi < 0; the yaw-moment bound must still dominate the moment the run needs
     (regression: the bound once added k2psi * E_r without abs and came out negative)."""
-    from auv_hinf.config.formation import config_from_dict
+    from auv_hinf.certificate.run_plan import plan_run, run_report
+    from auv_hinf.config.settings import config_from_dict
     from auv_hinf.simulation.engine import simulate
-    from auv_hinf.workflow.run_plan import plan_run, run_report
 
     cfg = config_from_dict(SLOW_HEADING)
     plan = plan_run(cfg)

@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import design_point, initial_states
 from auv_hinf.cli.main import main
-from auv_hinf.config.formation import config_from_dict
-from auv_hinf.simulation.integrators import NUMERICAL_FLOOR
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import design_point, initial_states
+from auv_hinf.config.settings import config_from_dict
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
 
 @pytest.mark.parametrize("n", [3, 40, 400])
@@ -50,7 +50,7 @@ def test_large_default_run_is_covered_and_measured_within_its_bounds(tmp_path, c
 
 @pytest.mark.parametrize("n", [1, 3, 999, 1000, 1001, 10_000, 100_000])
 def test_stored_samples_keep_memory_bounded(n):
-    from auv_hinf.workflow.run_plan import MIN_RUN_SAMPLES, RUN_SAMPLES, SAMPLE_BUDGET, run_samples
+    from auv_hinf.certificate.run_plan import MIN_RUN_SAMPLES, RUN_SAMPLES, SAMPLE_BUDGET, run_samples
 
     k = run_samples(n)
     assert MIN_RUN_SAMPLES <= k <= RUN_SAMPLES

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.config.formation import config_from_dict
+from auv_hinf.certificate.run_plan import plan_run, run_report
+from auv_hinf.config.settings import config_from_dict
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.workflow.run_plan import plan_run, run_report
 from tests.helpers import BLUEROV_SLOW
 
 CHANNELS = ("position_error", "velocity_error", "heading_error", "yaw_rate_error")

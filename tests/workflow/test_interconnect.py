@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
+from auv_hinf.certificate import run_plan as plan
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.design_point import design_point
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.tables import ReferenceConfig
+from auv_hinf.config.settings import ReferenceConfig
 from auv_hinf.exceptions import DesignError
+from auv_hinf.law.formation_law import FormationController
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.simulation.law import FormationController
-from auv_hinf.workflow import run_plan as plan
-from auv_hinf.workflow.certificate import Certificate, certify
-from auv_hinf.workflow.design_point import design_point
 
 #: Straight-line mission of the linearisation test: surge speed (m/s) and course (rad).
 LINE_SPEED, LINE_HEADING = 1.5, 0.3

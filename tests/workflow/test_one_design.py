@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
+from auv_hinf.certificate import design_point as design_module
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
-from auv_hinf.workflow import design_point as design_module
-from auv_hinf.workflow.certificate import Certificate, certify
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.run_plan import plan_run
 
 
 @pytest.fixture(scope="module")

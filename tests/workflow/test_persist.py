@@ -14,15 +14,22 @@ import numpy as np
 import pytest
 
 import auv_hinf
-from auv_hinf.config.formation import config_from_dict
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.document import (
+    FORMAT,
+    STORED_TYPES,
+    VERSION,
+    certificate_document,
+    certificate_from_document,
+    decode_value,
+    encode_value,
+)
 from auv_hinf.config.presets import preset_config
+from auv_hinf.config.settings import config_from_dict
 from auv_hinf.design.sigma import SigmaBounds
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.workflow.certificate import Certificate, certify
-from auv_hinf.workflow.codec import STORED_TYPES, decode_value, encode_value
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.persist import FORMAT, VERSION, certificate_document, certificate_from_document
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
@@ -111,7 +118,7 @@ def test_second_save_is_byte_identical_apart_from_the_time_stamp(cert, tmp_path)
     assert strip(first) == strip(second)
     assert len(first.splitlines()) == len(strip(first)) + 1
     stamp = datetime(2030, 1, 2, 3, 4, 5, tzinfo=timezone.utc)
-    from auv_hinf.workflow.persist import save_certificate
+    from auv_hinf.certificate.document import save_certificate
 
     a = save_certificate(cert, tmp_path / "x.json", created=stamp).read_bytes()
     b = save_certificate(Certificate.load(tmp_path / "x.json"), tmp_path / "y.json", created=stamp).read_bytes()
@@ -249,7 +256,7 @@ def test_load_rebuilds_only_package_dataclasses(cert):
     edited["state"]["crosscheck"]["$dataclass"] = "pathlib:PurePath"
     with pytest.raises(ConfigError, match="not part of auv_hinf"):
         certificate_from_document(edited, Certificate)
-    edited["state"]["crosscheck"]["$dataclass"] = "auv_hinf.workflow.certificate:certify"
+    edited["state"]["crosscheck"]["$dataclass"] = "auv_hinf.certificate.assembly:certify"
     with pytest.raises(ConfigError, match="does not exist in this version"):
         certificate_from_document(edited, Certificate)
     edited["state"]["crosscheck"] = {"$evil": 1}

@@ -1,4 +1,4 @@
-"""From a configuration to a certified run (:mod:`auv_hinf.workflow.run_plan`).
+"""From a configuration to a certified run (:mod:`auv_hinf.certificate.run_plan`).
 
 The report's measured numbers are recomputed from the raw trajectory and the reference,
 the measured decay rate from its documented definition, and the gains against the full
@@ -13,18 +13,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from auv_hinf.certification.levels import start_bounds
-from auv_hinf.config.formation import FormationConfig
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import design_point, formation_offsets, initial_states
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.run_plan import measured_decay_rate, plan_run, run_report, with_start
 from auv_hinf.config.presets import TRIANGLE_SHAPE, preset_config
-from auv_hinf.config.tables import ReferenceConfig, SimulationConfig
+from auv_hinf.config.settings import FormationConfig, ReferenceConfig, SimulationConfig
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import remus100
+from auv_hinf.numerics.quadratic_forms import start_bounds
 from auv_hinf.simulation.engine import simulate
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import design_point, formation_offsets, initial_states
-from auv_hinf.workflow.nominal import closed_loop_for
-from auv_hinf.workflow.run_plan import measured_decay_rate, plan_run, run_report, with_start
 
 REPORT_KEYS = {
     "stayed_in_envelope",

@@ -17,7 +17,7 @@ from typing import Any
 
 import pytest
 
-from auv_hinf.simulation.integrators import NUMERICAL_FLOOR
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "preset-outputs-v0.2.0.json"
 RECORDED: dict[str, Any] = json.loads(FIXTURE.read_text(encoding="utf-8"))

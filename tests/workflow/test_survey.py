@@ -8,14 +8,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.run_plan import plan_run, run_report
 from auv_hinf.cli.args import EXIT_NEGATIVE
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import annotated_toml, preset_config
-from auv_hinf.config.tables import ReferenceConfig
+from auv_hinf.config.settings import ReferenceConfig
 from auv_hinf.simulation.engine import simulate
-from auv_hinf.workflow.certificate import certify
-from auv_hinf.workflow.design_point import design_point
-from auv_hinf.workflow.run_plan import plan_run, run_report
 
 
 @pytest.mark.slow

@@ -15,9 +15,8 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from auv_hinf.design.lmi.core import solve
-from auv_hinf.design.lmi.lyapunov import LYAP_STRICT_RTOL
-from auv_hinf.design.lmi.synthesis import synthesise_position
+from auv_hinf.numerics.lmi import LYAP_STRICT_RTOL, solve
+from auv_hinf.robust.synthesis import synthesise_position
 
 #: Relative agreement of the two optima: both SDPs are solved to about 1e-8.
 OPTIMUM_RTOL = 1e-4

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.design.lmi.lyapunov import (
+from auv_hinf.closed_loop.lyapunov import (
     heading_lmi_matrices,
     lmi_heading_lyapunov,
     lmi_position_lyapunov,
     position_lmi_matrix,
-    strict_nsd_gap,
 )
+from auv_hinf.numerics.lmi import strict_nsd_gap
 
 #: Position loop of the paper triangle's design: lam (1/s), alpha (1/s), k1 (1/s^2).
 LAM, ALPHA, K1 = -2.1, 0.26, 0.5

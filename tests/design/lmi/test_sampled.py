@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from auv_hinf.certification.closed_loop import position_decay_rate
-from auv_hinf.certification.sampling import certified_lag, decay_at, exact_limit, held_plant, spectral_radius
-from auv_hinf.design.lmi.sampled import LagLoop, lmi_lag
+from auv_hinf.closed_loop.nominal import position_decay_rate
 from auv_hinf.exceptions import DesignError
+from auv_hinf.implementation.limits import certified_lag, decay_at, exact_limit, held_plant, spectral_radius
+from auv_hinf.implementation.lmi import LagLoop, lmi_lag
 
 #: The paper triangle's position loop (lambda, alpha, k1, sigma) and heading loop (c range, k_psi).
 PAPER_POSITION = LagLoop((-2.1,), 0.5, 0.2605, 1.8403)

@@ -1,0 +1,1 @@
+"""The certificate parts: each adapts one concept package to the part protocol."""

@@ -1,0 +1,262 @@
+"""The nominal closed-loop part of a certificate and of a run, from a design point.
+
+:func:`closed_loop_for` certifies the full error loop of the design's gains along its
+mission; :func:`coverage_for` decides whether that certificate covers one run's start;
+:func:`closed_loop_summary` is what :func:`~auv_hinf.certificate.assembly.certify` adds to
+the small-gain test: decay rates, the start region and thrust bounds along the configured
+mission, and the verdict on the configured start.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.actuation.limits import actuator_shortfall
+from auv_hinf.certificate.design_point import DesignPoint, initial_states
+from auv_hinf.closed_loop.actuator_fit import mission_thrust, within_actuators
+from auv_hinf.closed_loop.coverage import Coverage, StartMode, cover_start
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_certificate
+from auv_hinf.exceptions import AuvHinfError, DesignError
+from auv_hinf.law.gains import Gains
+from auv_hinf.mission.fit import ReferenceFit
+
+#: A heading range counts as the full circle when its width is 2 pi up to this relative
+#: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
+FULL_CIRCLE_RTOL = 1e-12
+
+
+def mission_checks(point: DesignPoint) -> Gains:
+    """The design's gains, after the checks every certificate needs: full heading range, mission in the envelope.
+
+    Raises
+    ------
+    DesignError
+        As :func:`closed_loop_for`, for these checks.
+    """
+    cfg = point.config
+    width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
+    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+        raise DesignError(
+            f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
+            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
+        )
+    gains = point.require_gains()
+    if not point.fit.ok:
+        raise DesignError(point.fit.reason())
+    return gains
+
+
+def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
+    """Closed-loop certificate of the design's gains along its mission (raises when there is none).
+
+    With declared ``[actuators]`` the start region is shrunk until the certified thrust fits
+    them (:func:`~auv_hinf.closed_loop.actuator_fit.within_actuators`).
+
+    Raises
+    ------
+    DesignError
+        If there are no gains, the envelope's heading range is narrower than the full
+        circle, some vehicle's desired motion leaves the envelope even at zero error (the
+        message names the vehicle, the turn and the smallest turn radius that fits), the
+        small-gain condition fails, the mission alone needs more force than the actuators give, or
+        the gains have integral action (the robust certificate covers those).
+    """
+    cfg = point.config
+    gains = mission_checks(point)
+    if gains.integral:
+        raise DesignError(
+            "the nominal closed-loop certificate covers the paper's law; integral action is certified by the "
+            "robust certificate only"
+        )
+    cert = closed_loop_certificate(cfg.vehicle, cfg.envelope, point.tube, gains, lam=point.lam, sigma=point.sigma.upper)
+    if cfg.actuators is None:
+        return cert
+    fitted = within_actuators(cert, cfg.vehicle, cfg.envelope, point.tube, gains, cfg.actuators)
+    if fitted is None:
+        need = mission_thrust(cfg.vehicle, cfg.envelope, point.tube, gains).as_tuple()
+        raise DesignError(
+            "no start region fits the actuators: even tracked exactly, the mission needs "
+            + actuator_shortfall(cfg.actuators, need)
+        )
+    return fitted
+
+
+def coverage_for(
+    point: DesignPoint, cert: ClosedLoopCertificate, initial: FloatArray, start: StartMode, *, progress: bool = True
+) -> Coverage:
+    """Coverage of the run of the design's configuration from ``initial`` in ``start`` mode (nominal plant).
+
+    With ``progress``, a search over blend times that runs longer than
+    :data:`~auv_hinf.closed_loop.coverage.PROGRESS_DELAY` shows a progress bar (stderr).
+    """
+    cfg = point.config
+    return cover_start(
+        cert,
+        cfg.vehicle,
+        cfg.envelope,
+        point.require_gains(),
+        point.mission,
+        point.offsets,
+        initial,
+        start=start,
+        frame=cfg.frame,
+        blend_time=cfg.simulation.blend_time,
+        actuators=cfg.actuators,
+        current=cfg.simulation.current,
+        progress=progress,
+    )
+
+
+@dataclass(frozen=True)
+class ClosedLoopSummary:
+    """What :func:`~auv_hinf.certificate.assembly.certify` reports about the closed loop.
+
+    Attributes
+    ----------
+    certificate : ClosedLoopCertificate or None
+        Decay rates, start region and thrust over the region; ``None`` when the mission
+        leaves the envelope even at zero error (see ``reasons``).
+    shaped : Coverage or None
+        Verdict on the configured start in shaped mode.
+    declared_start : bool
+        The configuration gives its own initial states (then the verdict requires them covered).
+    reasons : tuple of str
+        Why the closed loop is not certified (empty when it is).
+    fit : ReferenceFit or None
+        Per-vehicle verdict on the desired motion at zero error.
+    """
+
+    certificate: ClosedLoopCertificate | None
+    shaped: Coverage | None
+    declared_start: bool
+    reasons: tuple[str, ...]
+    fit: ReferenceFit | None = None
+
+    @property
+    def ok(self) -> bool:
+        """The closed loop is certified."""
+        return not self.reasons
+
+    def lines(self) -> list[str]:
+        """Lines of ``Certificate.summary``: decay, region, thrust, start (4-6 digits, with units)."""
+        c, fit = self.certificate, self.fit
+        head = []
+        if fit is not None:
+            n_in = sum(fit.inside)
+            head = [
+                f"  reference in envelope     {n_in} of {len(fit.inside)} vehicles ({fit.frame} frame)"
+                + ("" if fit.ok else f": {fit.reason()}")
+            ]
+        if c is None:
+            return [*head, "  closed loop               not certified"]
+        r = c.region.region
+        out = [
+            *head,
+            f"  closed-loop decay rate    {c.rate:.4g} 1/s "
+            f"(position {c.position.rate:.4g}, heading {c.heading.rate:.4g})",
+            f"  start region (all at once) |e| <= {r.position:.4g} m, |e'| <= {r.velocity:.4g} m/s, "
+            f"|e_psi| <= {r.heading:.4g} rad, |e_r| <= {r.yaw_rate:.4g} rad/s",
+            f"  thrust over the region    |tau_x| <= {c.thrust.force_x:.5g} N, |tau_y| <= {c.thrust.force_y:.5g} N, "
+            f"|tau_psi| <= {c.thrust.moment:.5g} N m",
+        ]
+        s = self.shaped
+        if s is not None:
+            how = f"blend {s.blend_time:g} s, turn {s.turn_time:g} s" if s.blend_time is not None else "no blend needed"
+            out.append(f"  shaped start              {'covered' if s.covered else 'NOT covered'} ({how})")
+        return out
+
+    @staticmethod
+    def _fit_keys(fit: ReferenceFit) -> dict[str, Any]:
+        """``reference_frame``, ``binding`` (vehicle, time, channel, edge, margin) and ``reference_fit``."""
+        return {
+            "reference_frame": fit.frame,
+            "binding": None if fit.binding is None else fit.binding.to_dict(),
+            "reference_fit": fit.to_dict(),
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``closed_loop`` object of ``auv-hinf certify --json``."""
+        c, s = self.certificate, self.shaped
+        forces = [] if c is None else [c.thrust.force_x, c.thrust.force_y]
+        moments = [] if c is None else [c.thrust.moment]
+        if s is not None and s.covered and s.thrust is not None:
+            forces += [s.thrust.force_x, s.thrust.force_y]
+            moments.append(s.thrust.moment)
+
+        def radii(r: Any) -> dict[str, float]:
+            return {
+                "position_error": float(r.position),
+                "velocity_error": float(r.velocity),
+                "heading_error": float(r.heading),
+                "yaw_rate_error": float(r.yaw_rate),
+            }
+
+        return {
+            "decay_rate": None if c is None else c.rate,
+            "position_decay_rate": None if c is None else c.position.rate,
+            "heading_decay_rate": None if c is None else c.heading.rate,
+            "region": None if c is None else radii(c.region.region),
+            "single_axis_region": None if c is None else radii(c.region.single_axis),
+            "region_error_bounds": None if c is None else radii(c.region.bounds),
+            # per vehicle: its own desired motion at zero error stays in the envelope (in the inertial
+            # frame every vehicle's is the centre's); certificates saved before 0.3 hold no fit: one bool
+            "reference_inside_envelope": c is not None if self.fit is None else list(self.fit.inside),
+            **({} if self.fit is None else self._fit_keys(self.fit)),
+            "max_force": max(forces) if forces else None,
+            "max_moment": max(moments) if moments else None,
+            "covers_shaped_start": bool(s is not None and s.covered),
+            "shaped_start": None if s is None else s.to_dict(),
+            "shaped_start_note": (
+                None
+                if s is not None
+                else "the default start (the fleet on its slots) could not be checked (see reasons)"
+                if not self.declared_start
+                else "the declared start could not be checked (see reasons)"
+            ),
+            "method": None if c is None else c.method,
+            "certified": self.ok,
+            "reasons": list(self.reasons),
+        }
+
+
+def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
+    """Certify the closed loop of the design point along its mission and check its configured start.
+
+    The start ``simulate`` will run is checked, whatever the fleet size: a declared start
+    (``simulation.initial``) enters the verdict; the default start is the fleet on its slots
+    (:func:`~auv_hinf.certificate.design_point.initial_states`), at zero error, so the raw mission
+    covers it without a blend and the check costs one tube. A declared start far from the
+    slots builds per-vehicle tubes for the candidate blend times it tries, with a progress bar
+    when that takes more than a few seconds (:func:`coverage_for`).
+    """
+    cfg = point.config
+    reasons: list[str] = []
+    try:
+        cert = closed_loop_for(point)
+    except AuvHinfError as exc:
+        return ClosedLoopSummary(
+            None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",), point.fit
+        )
+    declared = cfg.simulation.initial is not None
+    try:
+        shaped: Coverage | None = coverage_for(point, cert, initial_states(point), "shaped")
+    except AuvHinfError as exc:
+        shaped = None
+        if declared:
+            reasons.append(f"configured start: {exc}")
+    if declared and shaped is not None and not shaped.covered:
+        reasons.append(f"configured start not covered: {shaped.reason}")
+    return ClosedLoopSummary(cert, shaped, declared, tuple(reasons), point.fit)
+
+
+__all__ = [
+    "FULL_CIRCLE_RTOL",
+    "ClosedLoopSummary",
+    "closed_loop_for",
+    "closed_loop_summary",
+    "coverage_for",
+    "mission_checks",
+]

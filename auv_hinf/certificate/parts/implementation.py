@@ -1,0 +1,293 @@
+"""The implementation part of a certificate: the design's gains run as configured in ``[implementation]``.
+
+:func:`implementation_summary` certifies the sampled, delayed, noisy loop of the design point
+(:mod:`auv_hinf.implementation.sampled_data`) from the configured start, and says whether the
+declared implementation is covered. The continuous default reports the limits too (how fast
+the law must be sampled), and covers exactly when the continuous certificates do.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf.certificate.design_point import DesignPoint, initial_states
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.closed_loop.coverage import initial_errors
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.implementation.lag import ImplementationProblem, course_jerk_bound
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
+from auv_hinf.implementation.sampled_data import (
+    ImplementationCertificate,
+    LagLimits,
+    certify_implementation,
+    lag_limits,
+)
+from auv_hinf.implementation.sampled_loop import control_period
+from auv_hinf.mission.margins import ErrorBounds
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
+
+#: Relative width at which the search for the largest covered sample time stops.
+COVERED_SEARCH_RTOL = 0.05
+#: The search starts at this fraction of the certified sample-time limit.
+COVERED_SEARCH_FLOOR = 1e-3
+
+#: What the implementation certificate does not yet cover, said when it would matter.
+BOX_NOT_COVERED = (
+    "the implementation certificate covers the controller's own model as the plant: the declared "
+    "[uncertainty] box / [disturbance] current is certified for the continuous law only"
+)
+
+
+def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> ImplementationProblem:
+    """The implementation problem of ``point`` along its mission, with the closed loop's sigma and c-range."""
+    cfg = point.config
+    jerk, yaw_jerk = reference_jerks(point)
+    return ImplementationProblem(
+        params=cfg.vehicle,
+        envelope=cfg.envelope,
+        tube=point.tube,
+        gains=point.require_gains(),
+        lam=point.lam,
+        sigma=cert.region.sigma,
+        c_range=cert.region.c_range,
+        jerk=jerk,
+        actuators=cfg.actuators,
+        yaw_jerk=yaw_jerk,
+    )
+
+
+def reference_jerks(point: DesignPoint) -> tuple[float, float]:
+    """Bounds of every vehicle's ``|p_d'''|`` (m/s^3) and of ``|psi_d'''|`` (rad/s^3) along the raw mission.
+
+    ``psi_d`` is the course ``chi`` in both frames (:func:`course_jerk_bound`). In the path frame
+    ``p_i = q + R(chi) d_i`` adds ``|d_i| (|chi'''| + 3 |chi'| |chi''| + |chi'|^3)`` to the path's jerk.
+    """
+    b = point.mission.bounds()
+    yaw_jerk = course_jerk_bound(b.speed_min, b.accel_max, b.jerk_max, b.snap_max)
+    jerk = b.jerk_max
+    if point.config.frame == "path":
+        d = float(np.hypot(point.offsets[:, 0], point.offsets[:, 1]).max())
+        rate = max(abs(b.turn_rate_min), abs(b.turn_rate_max))
+        jerk += d * (yaw_jerk + 3.0 * rate * b.turn_accel_max + rate**3)
+    return jerk, yaw_jerk
+
+
+def start_errors(point: DesignPoint) -> ErrorBounds:
+    """Largest errors of the configured start against the raw mission at ``t = 0`` (m, m/s, rad, rad/s)."""
+    e, de, epsi, depsi = initial_errors(point.fleet(), initial_states(point))
+    return ErrorBounds(
+        float(np.hypot(e[..., 0], e[..., 1]).max()),
+        float(np.hypot(de[..., 0], de[..., 1]).max()),
+        float(np.abs(epsi).max()),
+        float(np.abs(depsi).max()),
+    )
+
+
+@dataclass(frozen=True)
+class ImplementationSummary:
+    """What ``certify`` reports about the implementation.
+
+    Attributes
+    ----------
+    implementation : Implementation
+        The declared one.
+    certificate : ImplementationCertificate or None
+        ``None`` when there is no closed-loop certificate to extend (see ``reasons``).
+    covers : bool
+        The declared implementation is certified from the configured start.
+    reasons : tuple of str
+    covered_sample_time : float or None
+        When the declared implementation is not covered: the largest sample time (s) that is,
+        with the declared delay and noise (``None``: none is, or not searched).
+    """
+
+    implementation: Implementation
+    certificate: ImplementationCertificate | None
+    covers: bool
+    reasons: tuple[str, ...]
+    covered_sample_time: float | None = None
+
+    def lines(self) -> list[str]:
+        """Lines of ``Certificate.summary`` (s, Hz, 1/s, m, m/s, rad, rad/s)."""
+        impl, c = self.implementation, self.certificate
+        out = [f"  implementation            {impl.describe()}"]
+        if c is None:
+            if self.covers:  # the continuous exact law, certified by the continuous certificates
+                return [*out, "  implementation covered    yes (the continuous certificates)"]
+            return [*out, "  implementation            not certified"]
+        ex = c.exact_max_sample_time
+        tight = "" if c.tightness is None else f", {c.tightness:.2f} of the exact nominal limit {ex:.4g} s"
+        out.append(
+            f"  max sample time           {c.max_sample_time:.4g} s at delay {impl.delay:.4g} s{tight}; "
+            f"max delay {c.max_delay:.4g} s"
+        )
+        if c.ultimate is not None and c.bounds is not None and not impl.continuous:
+            u, b = c.ultimate, c.bounds
+            out.append(
+                f"  errors (whole run)        |e| <= {b.position:.3g} m, |e'| <= {b.velocity:.3g} m/s, "
+                f"|e_psi| <= {b.heading:.3g} rad, |e_r| <= {b.yaw_rate:.3g} rad/s (decay {c.decay_rate:.3g} 1/s)"
+            )
+            out.append(
+                f"  ultimate bounds           |e| <= {u.position:.3g} m, |e'| <= {u.velocity:.3g} m/s, "
+                f"|e_psi| <= {u.heading:.3g} rad, |e_r| <= {u.yaw_rate:.3g} rad/s"
+            )
+        out.append(f"  implementation covered    {'yes' if self.covers else 'NO'}")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``implementation`` object of ``auv-hinf certify --json``.
+
+        The error and ultimate bounds are the exact solution's, raised to the integrator's
+        numerical floor (:data:`~auv_hinf.numerics.integrators.NUMERICAL_FLOOR`, 1e-5 in each
+        unit) so that a simulated run is never measured above them.
+        """
+        base: dict[str, Any] = (
+            self.certificate.to_dict()
+            if self.certificate is not None
+            else {
+                **self.implementation.to_dict(),
+                "continuous": self.implementation.continuous,
+                "max_sample_time": None,
+                "max_delay": None,
+                "exact_max_sample_time": None,
+                "tightness": None,
+                "decay_rate": None,
+                "ultimate_bounds": None,
+                "error_bounds": None,
+            }
+        )
+        period = None if self.certificate is None else self.certificate.implementation.sample_time
+        for key in ("error_bounds", "ultimate_bounds"):  # a simulated run meets them to the integrator's accuracy
+            if base.get(key) is not None:
+                base[key] = {k: max(v, NUMERICAL_FLOOR) for k, v in base[key].items()}
+        return {
+            **base,
+            "numerical_floor": NUMERICAL_FLOOR,
+            **self.implementation.to_dict(),
+            "control_period": None if self.implementation.continuous else period,
+            "covers": self.covers,
+            "covered_sample_time": self.covered_sample_time,
+            "reasons": list(self.reasons),
+        }
+
+
+def implementation_summary(
+    point: DesignPoint,
+    nominal: ClosedLoopCertificate | None,
+    continuous_ok: bool,
+    *,
+    search: bool = True,
+    horizon: float | None = None,
+) -> ImplementationSummary:
+    """Certify the declared implementation of ``point`` (see the module docstring).
+
+    Parameters
+    ----------
+    point : DesignPoint
+    nominal : ClosedLoopCertificate or None
+        The continuous closed-loop certificate (its sigma and heading damping range are reused).
+    continuous_ok : bool
+        The continuous certificates (closed loop, robust when declared) hold: the verdict of the
+        continuous default.
+    search : bool
+        When the declared implementation is not covered, search the largest sample time that is
+        (a few more certificates).
+    horizon : float, optional
+        The run's horizon (s; default the configured one): with ``sample_time = 0`` and a delay
+        or noise the law runs at a fine period that depends on it
+        (:func:`~auv_hinf.implementation.sampled_loop.control_period`), and the certificate is for
+        that period.
+    """
+    declared = point.config.implementation
+    impl = declared
+    if not declared.continuous and declared.sample_time == 0.0:
+        period = control_period(declared, horizon if horizon is not None else point.config.simulation.horizon)
+        impl = replace(declared, sample_time=period)
+    if point.gains is not None and point.gains.integral:  # continuous only (the config refuses the rest)
+        why = () if continuous_ok else ("the continuous certificates do not hold",)
+        return ImplementationSummary(declared, None, continuous_ok, why)
+    if nominal is None or point.gains is None:
+        return ImplementationSummary(impl, None, False, ("no closed-loop certificate to extend to the implementation",))
+    try:
+        prob, start = implementation_problem(point, nominal), start_errors(point)
+        limits = lag_limits(prob.loops, prob.nominal_dampings, impl.delay)
+        cert = certify_implementation(prob, impl, start, limits)
+        if impl.continuous:
+            return ImplementationSummary(declared, cert, continuous_ok, ())
+        covered = None if cert.covers or not search else covered_sample_time(prob, impl, start, limits)
+    except AuvHinfError as exc:
+        return ImplementationSummary(declared, None, False, (f"implementation not certified: {exc}",))
+    reasons = list(cert.reasons)
+    if covered is not None:
+        reasons.append(
+            f"with delay {impl.delay:.4g} s and this noise, sample times up to {covered:.4g} s "
+            f"({1.0 / covered:.3g} Hz) are covered"
+        )
+    elif not cert.covers and search:
+        reasons.append("no sample time is covered with this delay and noise: reduce them, or lower the gains")
+    if point.declared:
+        reasons.append(BOX_NOT_COVERED)
+    return ImplementationSummary(declared, cert, cert.covers and not point.declared, tuple(reasons), covered)
+
+
+def covered_sample_time(
+    prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, limits: LagLimits
+) -> float | None:
+    """Largest sample time (s) covered with ``impl``'s delay and noise, by bisection (``None``: none).
+
+    Coverage is not provably monotone in the sample time, so the answer is a bisection
+    estimate of the boundary, and only its covered end is returned: that value itself is
+    certified (the certificate at it covers).
+    """
+    hi = max(limits.lag - impl.delay, 0.0)
+    if hi <= 0.0:
+        return None
+
+    def covers(h: float) -> bool:
+        return certify_implementation(prob, replace(impl, sample_time=h), start, limits).covers
+
+    lo = hi * COVERED_SEARCH_FLOOR
+    if not covers(lo):
+        return None
+    while hi / lo > 1.0 + COVERED_SEARCH_RTOL:
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if covers(mid) else (lo, mid)
+    return lo
+
+
+def implementation_sweep(
+    point: DesignPoint, sample_times: list[float], delay: float = 0.0, noise: MeasurementNoise | None = None
+) -> list[ImplementationCertificate]:
+    """The implementation certificate of ``point`` at each sample time (s), delay (s) and noise fixed.
+
+    For design studies (notebook ``08_implementation``): decay rate and bounds against the sample time.
+
+    Raises
+    ------
+    DesignError
+        When the design has no closed-loop certificate to extend.
+    """
+    nominal = closed_loop_for(point)
+    prob, start = implementation_problem(point, nominal), start_errors(point)
+    limits = lag_limits(prob.loops, prob.nominal_dampings, delay)
+    base = Implementation(delay=delay, noise=noise or MeasurementNoise())
+    return [certify_implementation(prob, replace(base, sample_time=h), start, limits) for h in sample_times]
+
+
+__all__ = [
+    "BOX_NOT_COVERED",
+    "COVERED_SEARCH_FLOOR",
+    "COVERED_SEARCH_RTOL",
+    "ImplementationSummary",
+    "covered_sample_time",
+    "implementation_problem",
+    "implementation_summary",
+    "implementation_sweep",
+    "reference_jerks",
+    "start_errors",
+]

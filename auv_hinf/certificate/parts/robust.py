@@ -1,0 +1,276 @@
+"""The robust part of a certificate and of a run, from a design point.
+
+:func:`robust_summary` certifies the design's gains (the robust design's when ``[design]
+robust = true``, else Theorem 1's) for the declared ``[uncertainty]`` box and
+``[disturbance]`` current along the mission, with margins and the weakest corner;
+:func:`check_robust_run` says whether one simulated run (plant, current, start) is covered
+and gives its certified bounds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.actuation.thrust import ThrustBounds
+from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
+from auv_hinf.closed_loop.coverage import initial_errors
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.config.settings import FormationConfig
+from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.law.gains import Gains
+from auv_hinf.mission.fleet import FleetReference, ReferenceTube
+from auv_hinf.mission.margins import ErrorBounds
+from auv_hinf.mission.tubes import fleet_tube
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
+from auv_hinf.robust.bandwidth import RobustDesign
+from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
+from auv_hinf.robust.invariant_set import RobustCertificate, robust_certificate
+from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest_corner
+
+#: Largest fleet whose own shaped tube is built to check a run (the tube costs ~0.1-1 s a vehicle).
+RUN_TUBE_MAX_N = 16
+#: Relative tolerance of the plant-in-box and current-in-disc tests (round-off of TOML decimals).
+BOX_RTOL = 1e-12
+
+
+@dataclass(frozen=True)
+class RobustSummary:
+    """What ``certify`` reports under ``robust``.
+
+    Attributes
+    ----------
+    declared : bool
+        A box or a current is declared (otherwise everything reduces to the nominal loop).
+    certificate : RobustCertificate or None
+    margin : RobustMargin or None
+    worst : Witness or None
+        The corner plant and current with the least linearised stability margin.
+    design : RobustDesign or None
+        Present when ``[design] robust = true``.
+    nominal_rate : float or None
+        The nominal closed-loop decay rate (1/s), reported when nothing is declared.
+    reasons : tuple of str
+    """
+
+    declared: bool
+    certificate: RobustCertificate | None
+    margin: RobustMargin | None
+    worst: Witness | None
+    design: RobustDesign | None
+    nominal_rate: float | None
+    reasons: tuple[str, ...]
+    gains: Gains | None = None
+    without_integral: RobustCertificate | None = None
+
+    @property
+    def covers(self) -> bool:
+        """The robust certificate covers the declared box and current (the nominal loop when none)."""
+        if not self.declared:
+            return self.nominal_rate is not None and not self.reasons
+        return self.certificate is not None and self.certificate.covers and not self.reasons
+
+    def lines(self) -> list[str]:
+        """Lines of ``Certificate.summary`` when a box or a current is declared (none otherwise)."""
+        if not self.declared:
+            return []
+        c = self.certificate
+        what = "the declared box and current"
+        if c is not None and not (c.box.declared or c.current > 0.0):
+            what = "the controller's model (no box or current declared)"
+        out = [f"  robust certificate        {'covers' if self.covers else 'does NOT cover'} {what}"]
+        if c is not None and c.bounds is not None and c.decay_rate is not None:
+            b = c.bounds
+            out.append(
+                f"    decay rate {c.decay_rate:.4g} 1/s; ultimate |e| <= {b.position:.4g} m, "
+                f"|e'| <= {b.velocity:.4g} m/s, |e_psi| <= {b.heading:.4g} rad, |e_r| <= {b.yaw_rate:.4g} rad/s"
+            )
+        if c is not None and c.thrust is not None:
+            t = c.thrust
+            out.append(
+                f"    thrust |tau_x| <= {t.force_x:.5g} N, |tau_y| <= {t.force_y:.5g} N, "
+                f"|tau_psi| <= {t.moment:.5g} N m"
+            )
+        if self.margin is not None and c is not None and (c.box.declared or c.current > 0.0):
+            out.append(f"    box scale certified up to {self.margin.lower:.4g} (1 = the declared box)")
+        integral = self.integral()
+        if integral is not None:
+            without = integral["position_bound_without"]
+            out.append(
+                f"    integral action ki {integral['ki']:.4g} 1/s^3: |e| <= {integral['position_bound']:.4g} m; "
+                "the same alpha, k1 without it: "
+                + (f"|e| <= {without:.4g} m" if without is not None else "not certified")
+            )
+        return out
+
+    def integral(self) -> dict[str, Any] | None:
+        """The ``integral`` object of ``robust``: the position bound with and without integral action (m).
+
+        ``None`` without integral action. ``position_bound_without`` is the certified bound of the
+        same ``alpha``, ``k1`` and heading gains with ``ki = 0`` (``None`` when that does not cover),
+        ``integral_bound`` the bound of the integrator state ``|z|`` (m s).
+        """
+        c = self.certificate
+        if c is None or not c.gains.integral:
+            return None
+        w = self.without_integral
+        return {
+            "ki": c.gains.ki,
+            "position_bound": None if c.bounds is None else c.bounds.position,
+            "integral_bound": c.integral_bound,
+            "position_bound_without": None if w is None or not w.covers or w.bounds is None else w.bounds.position,
+            "covers_without": bool(w is not None and w.covers),
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``robust`` object of ``auv-hinf certify --json``."""
+        c = self.certificate
+        b = None if c is None else c.bounds
+        if not self.declared and self.nominal_rate is not None:
+            b = ErrorBounds(0.0, 0.0, 0.0, 0.0)  # a perfectly known plant without current: errors -> 0
+        rate = self.nominal_rate if not self.declared else (None if c is None else c.decay_rate)
+        gains = self.gains if c is None else c.gains
+        return {
+            "declared": self.declared,
+            "stable": bool(c is not None and c.stable) or (not self.declared and self.nominal_rate is not None),
+            "covers": self.covers,
+            "decay_rate": rate,
+            "ultimate_bounds": None
+            if b is None
+            else {"position": b.position, "velocity": b.velocity, "heading": b.heading, "yaw_rate": b.yaw_rate},
+            "margin": None if self.margin is None else self.margin.to_dict(),
+            "worst_vertex": None if self.worst is None else self.worst.to_dict(),
+            "gains": None if gains is None else gains.to_dict(),
+            "design": None if self.design is None else self.design.to_dict(),
+            "details": None if c is None else c.to_dict(),
+            "reasons": list(self.reasons) + ([] if c is None else list(c.reasons)),
+        } | ({} if (integral := self.integral()) is None else {"integral": integral})
+
+
+def robust_summary(
+    point: DesignPoint, *, margins: bool = True, nominal: ClosedLoopCertificate | None = None
+) -> RobustSummary:
+    """Certify the design's gains for its declared box and current (see the module docstring).
+
+    ``nominal`` is the nominal closed-loop certificate of the design's gains along the
+    mission (:func:`~auv_hinf.certificate.parts.closed_loop.closed_loop_for`) when the caller has it
+    already; otherwise it is computed here. It supplies the envelope and heading-range checks
+    and, with nothing declared, the whole summary: its decay rate, errors converging to zero,
+    no margins.
+    """
+    cfg = point.config
+    box, current, declared = point.box, point.current, point.declared
+    design = point.robust_design
+    tube, speed = point.tube, TubeSummary.of(point.tube).speed[1]
+    try:
+        gains = mission_checks(point)
+        if nominal is None and not gains.integral:  # integral action: the robust certificate alone
+            nominal = closed_loop_for(point)
+    except AuvHinfError as exc:
+        return RobustSummary(declared, None, None, None, design, None, (f"not certified: {exc}",))
+    if not declared:  # integral action is declared: here the nominal certificate exists
+        return RobustSummary(False, None, None, None, design, None if nominal is None else nominal.rate, (), gains)
+    reasons: list[str] = []
+    if cfg.disturbance.current_rate:
+        reasons.append(
+            "a time-varying current (current_rate > 0) is not certified: the certificate assumes it constant"
+        )
+    cert = robust_certificate(box, cfg.envelope, tube, gains, current, cfg.actuators)
+    margin = None
+    if margins and cert.stable:
+
+        def covers(s: float) -> bool:
+            return robust_certificate(box.scaled(s), cfg.envelope, tube, gains, current * s, cfg.actuators).covers
+
+        margin = robust_margin(box, gains, speed, current, covers)
+    worst = weakest_corner(box, gains, speed, current)
+    without = None
+    if gains.integral:
+        without = robust_certificate(box, cfg.envelope, tube, replace(gains, ki=0.0), current, cfg.actuators)
+    return RobustSummary(True, cert, margin, worst, design, None, tuple(reasons), gains, without)
+
+
+@dataclass(frozen=True)
+class RobustRunCheck:
+    """The robust certificate's verdict on one run.
+
+    Attributes
+    ----------
+    covered : bool
+    bounds : dict or None
+        Certified per-vehicle error bounds for this run (m, m/s, rad, rad/s).
+    reason : str
+    design_covered : bool or None
+        The robust certificate of the gains covers the declared box and current along the
+        mission, whatever this run's plant and start (``None`` when not evaluated).
+    thrust : ThrustBounds or None
+        The certificate's bound of the commanded force when it covers the run (N, N, N m).
+    """
+
+    covered: bool
+    bounds: dict[str, float] | None
+    reason: str
+    design_covered: bool | None = None
+    thrust: ThrustBounds | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary."""
+        return {"covered": self.covered, "bounds": self.bounds, "reason": self.reason}
+
+
+def _in_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
+    """Why the simulated plant is outside the declared box, or ``None`` when it is inside."""
+    mult = dict(cfg.simulation.plant)
+    for k, name in enumerate(PARAMETERS):
+        m = float(mult.get(name, 1.0))
+        if not (box.lo[k] * (1 - BOX_RTOL) <= m <= box.hi[k] * (1 + BOX_RTOL)):
+            return f"plant multiplier {name} = {m:g} is outside the declared box [{box.lo[k]:g}, {box.hi[k]:g}]"
+    return None
+
+
+def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatArray) -> RobustRunCheck:
+    """Is the run of the design's configuration tracking ``fleet`` from ``initial`` covered by the robust certificate?
+
+    Covered when the plant is in the declared box, the current within the declared bound, the
+    certificate (on the mission tube and, for a shaped start, the run's own tube) covers, and
+    every vehicle starts inside both certified ellipsoids.
+    """
+    cfg = point.config
+    box, bound = point.box, point.current
+    cur = np.asarray(cfg.simulation.current, dtype=float)
+    why = _in_box(cfg, box)
+    if why is None and float(np.hypot(*cur)) > bound * (1 + BOX_RTOL):
+        why = f"current {float(np.hypot(*cur)):.4g} m/s exceeds the declared bound {bound:g} m/s"
+    if why is None and cfg.disturbance.current_rate:
+        why = "a time-varying current is not certified"
+    if why is not None:
+        return RobustRunCheck(False, None, why)
+    try:
+        tube = point.tube
+        gains = point.require_gains()
+        if fleet.shaping is not None:
+            if cfg.n > RUN_TUBE_MAX_N:
+                return RobustRunCheck(
+                    False, None, f"not evaluated: shaped start of more than {RUN_TUBE_MAX_N} vehicles"
+                )
+            tube = ReferenceTube.concatenate([tube, fleet_tube(fleet)])
+        cert = robust_certificate(box, cfg.envelope, tube, gains, bound, cfg.actuators)
+    except AuvHinfError as exc:
+        return RobustRunCheck(False, None, f"not certified: {exc}")
+    if not cert.covers or cert.bounds is None:
+        why = "; ".join(cert.reasons) or "the robust certificate does not cover"
+        return RobustRunCheck(False, None, why, design_covered=False if fleet.shaping is None else None)
+    b = cert.bounds  # raised to the integrator's floor: the simulated run obeys them to its accuracy
+    bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in b.to_dict().items()}
+    e, de, epsi, depsi = initial_errors(fleet, initial, (float(cur[0]), float(cur[1])))
+    if not cert.start_inside(e, de, epsi, depsi, cur):
+        return RobustRunCheck(False, bounds, "the start is outside the certified invariant set", design_covered=True)
+    why = "covered: plant and current declared, start inside the certified set"
+    return RobustRunCheck(True, bounds, why, design_covered=True, thrust=cert.thrust)
+
+
+__all__ = ["BOX_RTOL", "RUN_TUBE_MAX_N", "RobustRunCheck", "RobustSummary", "check_robust_run", "robust_summary"]

@@ -1,0 +1,360 @@
+"""From a configuration to a certified run: design point, closed-loop certificate, start, scenario.
+
+:func:`plan_run` takes the design point (:func:`~auv_hinf.certificate.design_point.design_point`,
+computed once), certifies the full error loop along the configured mission
+(:func:`~auv_hinf.certificate.parts.closed_loop.closed_loop_for`), chooses the reference of one run (shaped
+or raw start, :mod:`auv_hinf.closed_loop.coverage`) and builds the
+:class:`~auv_hinf.simulation.scenario.Scenario`; :func:`run_report` puts the measured and the
+certified numbers side by side.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for, coverage_for
+from auv_hinf.certificate.parts.implementation import ImplementationSummary, implementation_summary
+from auv_hinf.certificate.parts.robust import RobustRunCheck, check_robust_run
+from auv_hinf.closed_loop.coverage import Coverage, StartMode
+from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.config.settings import FormationConfig
+from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.implementation.sampled_loop import control_period
+from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
+from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
+from auv_hinf.simulation.results import SimulationResult
+from auv_hinf.simulation.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """A run ready to simulate, with what the certificate says about it.
+
+    Attributes
+    ----------
+    design : DesignPoint
+        The design of the run's configuration: its ``gains`` are the gains the run uses.
+    certificate : ClosedLoopCertificate or None
+        ``None`` when the design has no closed-loop certificate (see ``notes``).
+    coverage : Coverage or None
+        The certificate's verdict on this run.
+    covered : bool
+        The certificate covers this run: certified design, covered start, nominal plant and
+        no current.
+    scenario : Scenario
+    notes : tuple of str
+        One line per reason the run is not covered.
+    start : {"shaped", "paper"}
+        The start mode of the run.
+    robust : RobustRunCheck or None
+        The robust certificate's verdict when the configuration declares a box or a current.
+    implementation : ImplementationSummary or None
+        The implementation certificate when the configuration declares a sampled, delayed or
+        noisy controller (``None`` for the continuous law): the run is covered only if it covers.
+    """
+
+    design: DesignPoint
+    certificate: ClosedLoopCertificate | None
+    coverage: Coverage | None
+    covered: bool
+    scenario: Scenario
+    notes: tuple[str, ...]
+    start: str = "shaped"
+    robust: RobustRunCheck | None = None
+    implementation: ImplementationSummary | None = None
+
+    def uncertified_gains(self) -> str | None:
+        """Why no certificate covers the gains of this run's configuration, or ``None``.
+
+        A run may still be uncovered with certified gains (e.g. a start outside the certified
+        set); this is about the gains: no nominal closed-loop certificate (small gain, envelope,
+        actuators), or a declared box and current the robust certificate does not cover.
+        """
+        integral = self.design.gains is not None and self.design.gains.integral
+        if self.certificate is None and not integral:
+            why = "; ".join(n for n in self.notes if n.startswith("design not certified"))
+            return why or "no closed-loop certificate"
+        if self.robust is not None and self.robust.design_covered is False:
+            return f"the robust certificate does not cover the declared box and current: {self.robust.reason}"
+        if integral and self.robust is None:
+            return "integral action is certified by the robust certificate, which was not evaluated"
+        return None
+
+
+#: Stored output samples of a run of few vehicles (one every 0.1 s over the paper's 300 s).
+RUN_SAMPLES = 3001
+#: Vehicle-samples a run stores at most (3001 samples of 1000 vehicles, about 1 GB with the
+#: forces and the post-processing): larger fleets store fewer samples, so memory stays bounded
+#: at any N. Sampling does not decide envelope exits: the integrator locates them between samples.
+SAMPLE_BUDGET = 3_001_000
+#: Fewest samples a run stores, however large the fleet.
+MIN_RUN_SAMPLES = 101
+
+
+def run_samples(n: int) -> int:
+    """Stored output samples of a run of ``n`` vehicles: :data:`RUN_SAMPLES`, fewer above the budget."""
+    return int(max(MIN_RUN_SAMPLES, min(RUN_SAMPLES, SAMPLE_BUDGET // max(n, 1))))
+
+
+def plan_run(
+    cfg: FormationConfig,
+    *,
+    start: StartMode | None = None,
+    horizon: float | None = None,
+    samples: int | None = None,
+    design: DesignPoint | None = None,
+) -> RunPlan:
+    """Gains, certificate and scenario of one configured run.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``simulation`` table gives the start, current and plant).
+    start : {"shaped", "paper"}, optional
+        Overrides ``cfg.simulation.start``.
+    horizon : float, optional
+        Overrides ``cfg.simulation.horizon`` (s).
+    samples : int, optional
+        Output samples (default :func:`run_samples` of the fleet size).
+    design : DesignPoint, optional
+        The design point of ``cfg`` when the caller has it (otherwise computed, or taken from
+        the cache).
+
+    Raises
+    ------
+    DesignError
+        If the design gives no gains.
+    """
+    sim = cfg.simulation
+    mode: StartMode = start or sim.start
+    point = design if design is not None else design_point(cfg)
+    gains = point.require_gains()
+    initial = initial_states(point)
+    notes: list[str] = []
+    cert: ClosedLoopCertificate | None = None
+    cov: Coverage | None = None
+    try:
+        if gains.integral:
+            notes.append("integral action: the robust certificate decides (the nominal one is for the paper's law)")
+        else:
+            cert = closed_loop_for(point)
+            cov = coverage_for(point, cert, initial, mode)
+            if not cov.covered:
+                notes.append(cov.reason)
+    except AuvHinfError as exc:
+        notes.append(f"design not certified: {exc}")
+    plant = sim.plant_params(cfg.vehicle)
+    if plant != cfg.vehicle:
+        notes.append("the plant differs from the controller's model; the nominal certificate assumes it is known")
+    if any(c != 0.0 for c in sim.current):
+        notes.append("a current is present; the nominal certificate assumes none")
+    reference = cov.reference if cov is not None else point.fleet()
+    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators)
+    scn = Scenario(
+        law=law,
+        reference=reference,
+        plant=plant,
+        initial=initial,
+        horizon=float(horizon if horizon is not None else sim.horizon),
+        current=sim.current,
+        envelope=cfg.envelope,
+        samples=run_samples(cfg.n) if samples is None else samples,
+        name=cfg.name,
+        jacobi=cfg.jacobi,
+        frame=cfg.frame,
+        implementation=cfg.implementation,
+        seed=sim.seed,
+    )
+    impl = _implementation_check(point, cert, cov, notes, scn.horizon)
+    nominal = cov is not None and cov.covered and not notes
+    rob = None
+    if point.declared:
+        rob = check_robust_run(point, reference, initial)
+    covered = (nominal or (rob is not None and rob.covered)) and (impl is None or impl.covers)
+    return RunPlan(point, cert, cov, covered, scn, tuple(notes), mode, rob, impl)
+
+
+def _implementation_check(
+    point: DesignPoint, cert: ClosedLoopCertificate | None, cov: Coverage | None, notes: list[str], horizon: float
+) -> ImplementationSummary | None:
+    """The implementation certificate of a sampled, delayed or noisy run (``None`` when continuous).
+
+    Its bounds are about starts measured against the raw mission, so a run that needs a blended
+    start is not covered by it; its reasons are added to ``notes``.
+    """
+    if point.config.implementation.continuous:
+        return None
+    impl = implementation_summary(point, cert, continuous_ok=False, search=False, horizon=horizon)
+    if cov is not None and cov.blend_time is not None:
+        why = "the implementation certificate covers starts on the raw mission; this start needs a blended reference"
+        impl = replace(impl, covers=False, reasons=(*impl.reasons, why))
+    if not impl.covers:
+        notes.append("implementation not covered: " + "; ".join(impl.reasons))
+    return impl
+
+
+def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:
+    """Average decay rate (1/s) of the slowest vehicle's certified Lyapunov norm.
+
+    ``V_i = x_i^T (P2 kron I2) x_i + z_i^T Q z_i`` with the decay matrices of ``cert``;
+    ``sqrt(V_i)`` must decay at least at ``cert.rate``. The rate is
+    ``ln(sqrt(V_i(0)/V_i(t*)))/t*`` with ``t*`` the first sample where ``V_i`` has fallen by
+    :data:`~auv_hinf.simulation.metrics.DECAY_MEASURE_DROP` (or the end), minimised over the vehicles
+    whose initial norm exceeds :data:`~auv_hinf.simulation.metrics.DECAY_MEASURE_FLOOR`; ``None`` when
+    no vehicle starts with an error.
+    """
+    v = lyapunov_values(result.tracking, cert.position.matrix, cert.heading.matrix)  # (T, N)
+    below = v <= DECAY_MEASURE_DROP * v[0]
+    k = np.where(below.any(axis=0), below.argmax(axis=0), v.shape[0] - 1)  # first drop, else the end
+    cols = np.arange(v.shape[1])
+    tk = np.where(k == 0, 0.0, result.t[k])
+    rate = float(decay_rates(v[0], v[k, cols], tk))
+    return None if math.isnan(rate) else rate
+
+
+def measured_errors(result: SimulationResult, start: int = 0) -> dict[str, float]:
+    """Sup over the samples from index ``start`` and the vehicles of each tracking error (m, m/s, rad, rad/s)."""
+    tr = result.tracking
+    return {
+        "position_error": float(np.linalg.norm(tr.e[start:], axis=-1).max()),
+        "velocity_error": float(np.linalg.norm(tr.e_dot[start:], axis=-1).max()),
+        "heading_error": float(np.abs(tr.e_psi[start:]).max()),
+        "yaw_rate_error": float(np.abs(tr.e_psi_dot[start:]).max()),
+    }
+
+
+def certified_errors(plan: RunPlan) -> dict[str, float] | None:
+    """The per-vehicle error bounds (m, m/s, rad, rad/s) the run's measured errors are compared with.
+
+    The one place :func:`run_report` reads them from: today the nominal coverage's bounds, never
+    below :data:`~auv_hinf.numerics.integrators.NUMERICAL_FLOOR` (the exact solution obeys the
+    bounds; the simulated one to the integrator's accuracy). For a sampled, delayed or noisy
+    implementation they are the implementation certificate's bounds over the whole run.
+    ``None`` when no certificate bounds the run.
+    """
+    if plan.implementation is not None:
+        c = plan.implementation.certificate
+        if not plan.implementation.covers or c is None or c.bounds is None:
+            return None
+        b = c.bounds
+    elif plan.coverage is None:
+        return None
+    else:
+        b = plan.coverage.bounds
+    return {
+        "position_error": max(b.position, NUMERICAL_FLOOR),
+        "velocity_error": max(b.velocity, NUMERICAL_FLOOR),
+        "heading_error": max(b.heading, NUMERICAL_FLOOR),
+        "yaw_rate_error": max(b.yaw_rate, NUMERICAL_FLOOR),
+    }
+
+
+def implementation_report(scn: Scenario) -> dict[str, Any]:
+    """What implementation a run simulated: the declared one, its seed, the law's period (s)."""
+    impl = scn.implementation
+    return {
+        **impl.to_dict(),
+        "seed": scn.seed,
+        "control_period": None if impl.continuous else control_period(impl, scn.horizon),
+        "description": impl.describe(),
+    }
+
+
+def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
+    """The simulation summary plus the certificate's verdict and bounds next to the measured ones."""
+    out = result.summary()
+    measured = measured_errors(result)
+    cov = plan.coverage
+    certified = certified_errors(plan)
+    cert = plan.certificate
+    out.update(
+        {
+            "start": plan.start,
+            "blend_time": None if cov is None else cov.blend_time,
+            "turn_time": None if cov is None else cov.turn_time,
+            "certificate_covers_run": plan.covered,
+            "coverage_reason": "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None),
+            "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
+            "certified_decay_rate": None if cert is None else cert.rate,
+            "measured_errors": measured,
+            "measured_tail_errors": measured_errors(result, result.t.size // 2),
+            "certified_errors": certified,
+            "numerical_floor": NUMERICAL_FLOOR,
+            "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
+            "robust_covers_run": None if plan.robust is None else plan.robust.covered,
+            "robust_bounds": None if plan.robust is None else plan.robust.bounds,
+            "robust_reason": None if plan.robust is None else plan.robust.reason,
+            **plan.design.require_gains().to_dict(),
+            "gain_source": plan.design.source,
+            "implementation": implementation_report(plan.scenario),
+        }
+    )
+    out["null_reasons"] = {k: _NULL_REASONS.get(k, "not applicable to this run") for k, v in out.items() if v is None}
+    out["definitions"] = DEFINITIONS
+    return out
+
+
+#: What the fleet-wide numbers of :func:`run_report` are, in words (they are not per vehicle).
+DEFINITIONS = {
+    "final_shape_error": "fleet-wide Jacobi shape error at the end (m): Frobenius norm over the N-1 Jacobi vectors",
+    "rms_shape_error": "root mean square over the samples of the fleet-wide Jacobi shape error (m); it grows with "
+    "sqrt(N) for equal per-vehicle errors",
+    "final_position_error": "largest |p_i - p_d,i| over the vehicles at the end (m)",
+    "measured_errors": "sup over samples and vehicles of each tracking error (m, m/s, rad, rad/s)",
+    "measured_tail_errors": "the same sup over the second half of the run (where ultimate bounds apply)",
+    "implementation": "how the controller ran: sample time and delay (s), noise bounds, seed of the draws, "
+    "the law's period (s; null: continuous)",
+    "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
+    "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
+    "shape_errors": "error of each Jacobi shape vector against the mission, in the formation's frame (along and "
+    "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "
+    "('final') and over the run ('max') (m)",
+    "commanded_peak": "largest commanded force per channel before saturation (N, N, N m)",
+}
+
+
+#: Why a key of :func:`run_report` can be ``null``, in words.
+_NULL_REASONS = {
+    "first_exit_time": "the run never left the envelope",
+    "blend_time": "no blended start: the run starts on the raw mission, or no certificate evaluated it",
+    "turn_time": "no blended start: the run starts on the raw mission, or no certificate evaluated it",
+    "coverage_reason": "no certificate evaluated the run",
+    "measured_decay_rate": "no vehicle starts with an error large enough to measure a decay (or no certificate)",
+    "certified_decay_rate": "no closed-loop certificate",
+    "certified_errors": "no certificate covers the run's start",
+    "certified_thrust": "no certificate bounds the run's force",
+    "robust_covers_run": "no [uncertainty] box or [disturbance] current declared",
+    "robust_bounds": "no robust bound for this run (none declared, or not covered)",
+    "robust_reason": "no [uncertainty] box or [disturbance] current declared",
+    "actuator_limits": "no [actuators] declared: unlimited thrust",
+    "diverged_at": "the run did not diverge",
+}
+
+
+def with_start(cfg: FormationConfig, initial: FloatArray) -> FormationConfig:
+    """Copy of ``cfg`` whose simulation starts from ``initial`` ``(N, 6)``."""
+    return replace(cfg, simulation=replace(cfg.simulation, initial=tuple(map(tuple, np.asarray(initial).tolist()))))
+
+
+__all__ = [
+    "DEFINITIONS",
+    "MIN_RUN_SAMPLES",
+    "RUN_SAMPLES",
+    "SAMPLE_BUDGET",
+    "RunPlan",
+    "certified_errors",
+    "implementation_report",
+    "measured_decay_rate",
+    "measured_errors",
+    "plan_run",
+    "run_report",
+    "run_samples",
+    "with_start",
+]

@@ -1,4 +1,0 @@
-"""The nominal closed-loop certificate.
-
-Decay rates, invariant regions, envelope margins, thrust and start coverage.
-"""

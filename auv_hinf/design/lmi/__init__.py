@@ -1,1 +1,0 @@
-"""Linear matrix inequalities in cvxpy, solved by Clarabel: the only package that imports cvxpy."""
