@@ -24,12 +24,12 @@ import dataclasses
 from auv_hinf.actuation.limits import Actuators
 from auv_hinf.actuation.thrust import ThrustBounds, thrust_bounds
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
-from auv_hinf.closed_loop.region import largest_fitting
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import ReferenceTube
 from auv_hinf.mission.margins import ErrorBounds, envelope_margins, inflate_envelope
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.bisection import largest_holding
 
 #: Resolution of the shrink factor's bisection: the region returned is within 1e-6 of the
 #: largest fraction that fits (always on the fitting side), far below any physical resolution.
@@ -66,7 +66,7 @@ def actuator_fraction(
 
     if not fits(0.0):
         return None
-    return largest_fitting(fits, 1.0, KAPPA_RTOL)
+    return largest_holding(fits, 1.0, check_lo=False, rtol=KAPPA_RTOL)
 
 
 def within_actuators(

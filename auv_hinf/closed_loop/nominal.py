@@ -30,6 +30,7 @@ from auv_hinf.mission.fleet import ReferenceTube
 from auv_hinf.mission.margins import inflate_envelope
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.bisection import bisect
 
 #: Absolute width (1/s) at which the closed-form decay-rate bisection stops.
 DECAY_ATOL = 1e-12
@@ -97,11 +98,7 @@ def position_decay_rate(lam: float, alpha: float, k1: float, sigma: float) -> fl
     bound = 1.0 / require_finite("sigma", sigma)
     if not shifted_peak(lam, alpha, k1, 0.0) < bound:
         raise DesignError(f"sigma = {sigma!r} >= alpha - lambda = {b!r}: no decay rate is certified")
-    lo, hi = 0.0, _stable_shift(b, k)
-    while hi - lo > DECAY_ATOL:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if shifted_peak(lam, alpha, k1, mid) < bound else (lo, mid)
-    return lo
+    return bisect(lambda beta: shifted_peak(lam, alpha, k1, beta) < bound, 0.0, _stable_shift(b, k), atol=DECAY_ATOL)[0]
 
 
 @dataclass(frozen=True)
@@ -167,11 +164,7 @@ def lmi_position_decay_rate(lam: float, alpha: float, k1: float, sigma: float) -
 def _bisect_lmi(feasible: Any, hi: float) -> tuple[float, float]:
     if not feasible(0.0):
         raise DesignError("the Lyapunov LMI is not strictly feasible even at beta = 0")
-    lo = 0.0
-    while hi - lo > LMI_DECAY_ATOL:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
-    return lo, hi
+    return bisect(feasible, 0.0, hi, atol=LMI_DECAY_ATOL)
 
 
 def heading_decay_upper(k1psi: float, c_lo: float, c_hi: float) -> float:

@@ -24,7 +24,6 @@ it a little longer: a contradiction, hence ``T = inf``.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from functools import partial
 from typing import Any
@@ -47,6 +46,7 @@ from auv_hinf.mission.margins import (
 )
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.numerics.quadratic_forms import ellipsoid_extent
 
 #: Relative width at which the bisections on a region scale stop.
@@ -186,11 +186,7 @@ class _RegionProblem:
 
         if not uv_ok(0.0):
             return -1.0
-        lo, hi = 0.0, MAX_HEADING_ERROR
-        while hi - lo > ANGLE_ATOL:
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if uv_ok(mid) else (lo, mid)
-        return lo
+        return bisect(uv_ok, 0.0, MAX_HEADING_ERROR, atol=ANGLE_ATOL)[0]
 
     def trial(self, region: Region) -> _Trial:
         """Certify ``region``: solve for P2 and Q, then check the exact margins."""
@@ -215,22 +211,6 @@ class _RegionProblem:
 
 def _axis_ok(prob: _RegionProblem, axis: FloatArray, k: float) -> bool:
     return prob.trial(Region(*(k * axis))).ok
-
-
-def largest_fitting(ok: Callable[[float], bool], hi: float, rtol: float = REGION_RTOL) -> float:
-    """Largest ``k`` in ``[0, hi]`` with ``ok(k)``, by bisection to ``rtol * hi``.
-
-    ``ok(0)`` must be true (the caller checks it). Only values where ``ok`` was evaluated true
-    are returned, so the answer is certified whether or not ``ok`` is monotone; monotonicity
-    decides only whether it is also the largest.
-    """
-    lo = 0.0
-    if ok(hi):
-        return hi
-    while hi - lo > rtol * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
-    return lo
 
 
 def certify_region(
@@ -288,9 +268,9 @@ def certify_region(
             hi *= 2.0
         else:
             raise DesignError(f"single-axis radius along {axis} is unbounded: the margins never bind")
-        single.append(largest_fitting(partial(_axis_ok, prob, axis), hi))
+        single.append(largest_holding(partial(_axis_ok, prob, axis), hi, check_lo=False, rtol=REGION_RTOL))
     single_axis = Region(*single)
-    kappa = largest_fitting(lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0)
+    kappa = largest_holding(lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0, check_lo=False, rtol=REGION_RTOL)
     region = single_axis.scaled(kappa)
     final = prob.trial(region)
     if not final.ok or final.margins is None:  # the bisection keeps only certified scales
@@ -308,4 +288,4 @@ def certify_region(
     )
 
 
-__all__ = ["ANGLE_ATOL", "REGION_RTOL", "Region", "RegionCertificate", "certify_region", "largest_fitting"]
+__all__ = ["ANGLE_ATOL", "REGION_RTOL", "Region", "RegionCertificate", "certify_region"]

@@ -14,6 +14,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.design.riccati import require_real_solution
 from auv_hinf.design.theorem1 import discriminant, riccati_c, riccati_regime
 from auv_hinf.exceptions import DesignError, SolverError, require_finite, require_fleet_size
+from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.lmi import _RETRY_SETTINGS, BISECTION_RTOL, LMI_MARGIN, LmiResult, solve, verify_nsd
 
 
@@ -261,12 +262,7 @@ def lmi_minimal_alpha(lam: float, gamma: float, n: int) -> LmiResult:
     hi = max(1.0, 2.0 * (1.0 / g_n + abs(lam_n)))
     while norm(hi) > g_n:
         hi *= 2.0
-    while hi - lo > BISECTION_RTOL * max(1.0, hi):
-        mid = 0.5 * (lo + hi)
-        if norm(mid) <= g_n:
-            hi = mid
-        else:
-            lo = mid
+    hi = bisect(lambda a: norm(a) > g_n, lo, hi, rtol=BISECTION_RTOL, atol=BISECTION_RTOL)[1]
     return LmiResult(value=hi * scale, status=cp.OPTIMAL, solves=solves, max_eig=max_eig, formulation=formulation)
 
 

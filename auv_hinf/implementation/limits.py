@@ -16,7 +16,6 @@ exact limit. A certified period can never exceed it: the certificate covers the 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import control as ct
 import numpy as np
@@ -24,6 +23,7 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.lmi import LagLoop, LagResult, lmi_lag
+from auv_hinf.numerics.bisection import bisect
 
 #: Relative width at which the bisections on a lag or a period stop.
 LIMIT_RTOL = 1e-4
@@ -51,14 +51,6 @@ def lag_floor(loop: LagLoop) -> float:
     return SCAN_START * _time_constants(loop.dampings[0], loop.k, loop.b)[0]
 
 
-def _bisect(ok: Callable[[float], bool], lo: float, hi: float, rtol: float) -> float:
-    """Largest value in ``[lo, hi]`` with ``ok`` (``ok(lo)`` assumed), to ``rtol`` of ``hi``."""
-    while hi - lo > rtol * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
-    return lo
-
-
 def certified_lag(loop: LagLoop) -> float:
     """Largest lag bound ``tau`` (s) with a verified certificate at zero decay (0 if none).
 
@@ -82,14 +74,14 @@ def certified_lag(loop: LagLoop) -> float:
         lo *= 2.0
         if lo > SCAN_SPAN * slow:
             return math.inf
-    return _bisect(ok, lo, 2.0 * lo, LIMIT_RTOL) * (1.0 - LAG_BACKOFF_RTOL)
+    return bisect(ok, lo, 2.0 * lo, rtol=LIMIT_RTOL)[0] * (1.0 - LAG_BACKOFF_RTOL)
 
 
 def decay_at(loop: LagLoop, tau: float) -> float:
     """Largest decay rate ``beta`` (1/s) certified at lag bound ``max(tau, lag_floor)`` (0 if only ``beta = 0`` is)."""
     tau = _solved_lag(loop, tau)
     eig = max(abs(a) for a in loop.dampings) + abs(loop.b) + math.sqrt(abs(loop.k))
-    return _bisect(lambda b: lmi_lag(loop, tau, b) is not None, 0.0, eig, DECAY_RTOL)
+    return bisect(lambda b: lmi_lag(loop, tau, b) is not None, 0.0, eig, rtol=DECAY_RTOL)[0]
 
 
 def iss_certificate(loop: LagLoop, tau: float, beta: float, weight: FloatArray) -> LagResult | None:
@@ -200,7 +192,7 @@ def exact_limit(a: float, k: float, b: float, delay: float) -> float:
         h *= SCAN_FACTOR
         if h > SCAN_SPAN * slow:
             return math.inf
-    limit = _bisect(lambda p: spectral_radius(a, k, b, p, delay) < 1.0, h, h * SCAN_FACTOR, LIMIT_RTOL)
+    limit = bisect(lambda p: spectral_radius(a, k, b, p, delay) < 1.0, h, h * SCAN_FACTOR, rtol=LIMIT_RTOL)[0]
     if not spectral_radius(a, k, b, limit, delay, control=True) < 1.0:
         raise DesignError(f"python-control disagrees with the closed-form discretisation at period {limit!r} s")
     return limit

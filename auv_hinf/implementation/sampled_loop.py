@@ -27,7 +27,9 @@ most that period to the delay (10 % of a delay of 10 ms or more).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,12 +38,10 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.implementation.draws import ImplementationDraws
 from auv_hinf.implementation.model import Implementation
-from auv_hinf.law.formation_law import saturate
-from auv_hinf.models.envelope import envelope_bound, envelope_event, envelope_margin
-from auv_hinf.models.vehicle import VehicleParams, ground_velocity, plant_derivative
+from auv_hinf.law.formation_law import MotionSource, VehicleLaw, saturate
+from auv_hinf.models.envelope import Envelope, envelope_bound, envelope_event, envelope_margin
+from auv_hinf.models.vehicle import PlantBatch, VehicleParams, ground_velocity, plant_derivative
 from auv_hinf.numerics.integrators import ATOL, RTOL, BatchSolution, SampleSink, dopri5
-from auv_hinf.simulation.results import SimulationResult, build_results
-from auv_hinf.simulation.scenario import ScenarioBatch
 
 #: Speed or yaw rate (m/s, rad/s) past which a run has diverged: no AUV moves at 100 m/s, and
 #: beyond it the quadratic damping makes the plant stiff (the run is stopped, not integrated on).
@@ -77,6 +77,73 @@ def control_period(implementation: Implementation, horizon: float) -> float:
         return implementation.sample_time
     wanted = FINE_FRACTION * implementation.delay if implementation.delay > 0.0 else FINE_PERIOD
     return min(max(FINEST_PERIOD, min(FINE_PERIOD, wanted)), horizon / MIN_SAMPLES)
+
+
+class HeldRun(Protocol):
+    """What the sampled loop reads of one run (a :class:`~auv_hinf.simulation.scenario.Scenario`)."""
+
+    @property
+    def law(self) -> VehicleLaw:
+        """The law and its controller model."""
+        ...
+
+    @property
+    def envelope(self) -> Envelope | None:
+        """Where a run counts as inside (its exits are located)."""
+        ...
+
+    @property
+    def implementation(self) -> Implementation:
+        """Sample time, delay and noise bounds."""
+        ...
+
+    @property
+    def horizon(self) -> float:
+        """End of the run (s)."""
+        ...
+
+    @property
+    def times(self) -> FloatArray:
+        """Output times (s)."""
+        ...
+
+    @property
+    def seed(self) -> int:
+        """Seed of the noise and delay draws."""
+        ...
+
+
+class HeldBatch(Protocol):
+    """What the sampled loop reads of a batch of runs (a :class:`~auv_hinf.simulation.scenario.ScenarioBatch`).
+
+    The runs share their law, envelope, implementation, horizon and output times; their plants,
+    starts, currents and seeds differ.
+    """
+
+    @property
+    def scenarios(self) -> Sequence[HeldRun]:
+        """The runs."""
+        ...
+
+    @property
+    def initial(self) -> FloatArray:
+        """Initial states, shape ``(S, N, 6)``."""
+        ...
+
+    @property
+    def current(self) -> FloatArray:
+        """Currents, shape ``(S, 2)`` (m/s, inertial)."""
+        ...
+
+    @property
+    def plant(self) -> PlantBatch:
+        """The runs' plants."""
+        ...
+
+    @property
+    def source(self) -> MotionSource:
+        """The desired motion of every run (batched)."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -140,7 +207,7 @@ class SampledSolution(BatchSolution):
 class SampledLoop:
     """The state of one sampled integration (see :func:`integrate_sampled`)."""
 
-    def __init__(self, batch: ScenarioBatch, sink: SampleSink | None, trace: bool) -> None:
+    def __init__(self, batch: HeldBatch, sink: SampleSink | None, trace: bool) -> None:
         first = batch.scenarios[0]
         impl = first.implementation
         self.s, self.n = batch.initial.shape[:2]
@@ -323,12 +390,12 @@ class SampledLoop:
         )
 
 
-def integrate_sampled(batch: ScenarioBatch, *, sink: SampleSink | None = None, trace: bool = False) -> SampledSolution:
+def integrate_sampled(batch: HeldBatch, *, sink: SampleSink | None = None, trace: bool = False) -> SampledSolution:
     """Integrate the scenarios of ``batch`` under their (shared) sampled implementation.
 
     Parameters
     ----------
-    batch : ScenarioBatch
+    batch : HeldBatch
         Each scenario's ``seed`` gives its noise and delay draws.
     sink : callable, optional
         Receives the output samples instead of storing them
@@ -352,35 +419,16 @@ def integrate_sampled(batch: ScenarioBatch, *, sink: SampleSink | None = None, t
     return loop.solution()
 
 
-def simulate_sampled_batch(batch: ScenarioBatch) -> list[SimulationResult]:
-    """Integrate the scenarios of ``batch`` (:func:`integrate_sampled`) and post-process each."""
-    sol = integrate_sampled(batch)
-    n_s, n = batch.initial.shape[:2]
-    assert sol.y is not None and sol.commanded is not None
-    states = sol.y.reshape(sol.t.size, n_s, n, 6)
-    exits = [None if math.isnan(e) else float(e) for e in sol.event_time]
-    results = build_results(
-        batch.scenarios,
-        sol.t,
-        states,
-        exits,
-        [int(x) for x in sol.n_steps],
-        commanded=sol.commanded,
-        peaks=sol.commanded_peak,
-    )
-    gone = sol.diverged
-    return [r if math.isnan(g) else replace(r, diverged_at=float(g)) for r, g in zip(results, gone)]
-
-
 __all__ = [
     "DIVERGED_RATE",
     "FINE_FRACTION",
     "MIN_SAMPLES",
     "SNAP",
+    "HeldBatch",
+    "HeldRun",
     "SampleTrace",
     "SampledLoop",
     "SampledSolution",
     "control_period",
     "integrate_sampled",
-    "simulate_sampled_batch",
 ]

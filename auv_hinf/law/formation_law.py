@@ -14,13 +14,12 @@ evaluated at the measured state. :class:`VehicleLaw` applies it with no N x N ma
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray, OrientationLaw
-from auv_hinf.actuation.limits import Actuators
 from auv_hinf.exceptions import DesignError, ParameterError
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import Motion, rigid_motion, wrap_angle
@@ -134,7 +133,24 @@ def check_orientation(orientation: str) -> None:
         raise DesignError(f"orientation must be 'corrected' or 'printed', got {orientation!r}")
 
 
-def saturate(tau: FloatArray, actuators: Actuators | None) -> tuple[FloatArray, NDArray[np.bool_]]:
+@runtime_checkable
+class ForceLimits(Protocol):
+    """What the law needs of the vehicles' actuators: the forces they deliver for a command.
+
+    :class:`~auv_hinf.actuation.limits.Actuators` is the toolbox's implementation (per-channel
+    limits, or a thruster allocation polytope); the law depends on this protocol only.
+    """
+
+    def saturate(self, tau: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """The delivered forces for commands ``tau (..., 3)`` (N, N, N m), and where a limit is active."""
+        ...
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe description of the limits (for run reports)."""
+        ...
+
+
+def saturate(tau: FloatArray, actuators: ForceLimits | None) -> tuple[FloatArray, NDArray[np.bool_]]:
     """The forces ``actuators`` deliver for commands ``tau (..., 3)`` (N, N, N m); also the active flag.
 
     Without declared actuators nothing saturates.
@@ -156,18 +172,19 @@ class VehicleLaw:
         ``alpha`` (1/s), ``k1`` (1/s^2) and the heading gains ``k_psi`` (1/s^2, 1/s).
     orientation : {"corrected", "printed"}
         Heading law, see :func:`heading_torque`.
-    actuators : Actuators, optional
-        What the vehicles can push; commands beyond it saturate (none declared: unlimited).
+    actuators : ForceLimits, optional
+        What the vehicles can push (an :class:`~auv_hinf.actuation.limits.Actuators`); commands beyond
+        it saturate (none declared: unlimited).
     """
 
     params: VehicleParams
     gains: Gains
     orientation: OrientationLaw = "corrected"
-    actuators: Actuators | None = None
+    actuators: ForceLimits | None = None
 
     def __post_init__(self) -> None:
         check_orientation(self.orientation)
-        if self.actuators is not None and not isinstance(self.actuators, Actuators):
+        if self.actuators is not None and not isinstance(self.actuators, ForceLimits):
             raise ParameterError(f"actuators must be an Actuators or None, got {self.actuators!r}")
 
     @property
@@ -241,7 +258,7 @@ class FormationController:
     reference: MotionSource
     gains: Gains
     orientation: OrientationLaw = "corrected"
-    actuators: Actuators | None = None
+    actuators: ForceLimits | None = None
 
     def __post_init__(self) -> None:
         check_orientation(self.orientation)
@@ -278,6 +295,7 @@ class FormationController:
 
 __all__ = [
     "INTEGRAL_WIDTH",
+    "ForceLimits",
     "FormationController",
     "MotionSource",
     "RigidReference",

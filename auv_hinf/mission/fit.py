@@ -23,12 +23,16 @@ from typing import Any
 import numpy as np
 
 from auv_hinf._typing import FloatArray, FormationFrame
-from auv_hinf.closed_loop.region import largest_fitting
 from auv_hinf.mission.fleet import FleetReference, ReferenceTube, reference_from_dict, turn_radius, with_turn_radius
 from auv_hinf.mission.margins import ErrorBounds, cell_margins
 from auv_hinf.mission.paths import MissionReference
 from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube
 from auv_hinf.models.envelope import Envelope
+from auv_hinf.numerics.bisection import largest_holding
+
+#: Relative width at which the bisections on the turn radius and on the offsets' scale stop (the
+#: resolution of the start regions' bisections, far below any physical tolerance of a turn).
+FIT_RTOL = 1e-5
 
 #: Channel and edge of each margin (same order as :data:`~auv_hinf.mission.margins.MARGIN_NAMES`).
 CHANNELS = (
@@ -232,17 +236,18 @@ def reference_fit(
             return _fits(reference_from_dict(**with_turn_radius(mission, 1.0 / curvature)), off, frame, envelope)
 
         if fits_radius(1.0 / (STRAIGHT_FACTOR * radius)):
-            curvature = largest_fitting(fits_radius, 1.0 / radius)
+            curvature = largest_holding(fits_radius, 1.0 / radius, check_lo=False, rtol=FIT_RTOL)
             smallest = 1.0 / curvature if curvature > 0.0 else None
     largest = None
     if frame == "path" and _fits(mission, 0.0 * off, frame, envelope):
-        scale = largest_fitting(lambda k: _fits(mission, k * off, frame, envelope), 1.0)
+        scale = largest_holding(lambda k: _fits(mission, k * off, frame, envelope), 1.0, check_lo=False, rtol=FIT_RTOL)
         largest = scale * float(np.hypot(off[:, 0], off[:, 1]).max())
     return ReferenceFit(frame, inside, margins, binding, radius, smallest, largest)
 
 
 __all__ = [
     "CHANNELS",
+    "FIT_RTOL",
     "STRAIGHT_FACTOR",
     "WITNESS_SAMPLES",
     "WITNESS_SPAN",

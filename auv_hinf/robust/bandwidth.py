@@ -29,6 +29,7 @@ from auv_hinf.law.gains import Gains, heading_gains, with_integral
 from auv_hinf.mission.fleet import ReferenceTube
 from auv_hinf.mission.margins import inflate_envelope
 from auv_hinf.models.envelope import Envelope
+from auv_hinf.numerics.bisection import bisect
 from auv_hinf.robust.box import ParameterBox, box_lambda
 from auv_hinf.robust.invariant_set import RobustCertificate, robust_certificate
 
@@ -126,15 +127,14 @@ def design_robust(
             for w in BANDWIDTHS:
                 bar.update(1)
                 if covers(w, target):
-                    lo, hi = prev, w
-                    if lo is not None:
-                        for _ in range(REFINE_STEPS):
+                    hi = w
+                    if prev is not None:
+
+                        def short(b: float, target: float = target) -> bool:
                             bar.update(1)
-                            mid = math.sqrt(lo * hi)
-                            if covers(mid, target):
-                                hi = mid
-                            else:
-                                lo = mid
+                            return not covers(b, target)
+
+                        hi = bisect(short, prev, w, steps=REFINE_STEPS, geometric=True)[1]
                     bar.update(total - bar.n)  # the search is over: the bar ends full
                     gains = family_gains(box, envelope, hi, integral)
                     cert = robust_certificate(box, envelope, tube, gains, current, actuators)

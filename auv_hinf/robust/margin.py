@@ -35,6 +35,7 @@ from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import Motion, ReferenceTube
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams, ground_velocity, rhs
+from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.robust.bandwidth import design_robust
 from auv_hinf.robust.box import PARAMETERS, ParameterBox
 from auv_hinf.robust.invariant_set import robust_certificate
@@ -131,13 +132,7 @@ def certified_scale(check: Callable[[float], bool], cap: float, steps: int = LOW
     lo, hi = 0.0, cap
     if cap > 1.0:  # the declared box (scale 1) first: it splits the search where it matters
         lo, hi = (1.0, cap) if check(1.0) else (0.0, 1.0)
-    for _ in range(steps):
-        mid = 0.5 * (lo + hi)
-        if check(mid):
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    return bisect(check, lo, hi, steps=steps)[0]
 
 
 def _error_rhs(
@@ -233,13 +228,11 @@ def exhibited_scale(
         found = [(u, d) for u, d in combos if unstable(u, d, cap) is not None]
     best: Witness | None = None
     for u, d in found:
-        lo, hi = 0.0, top
-        for _ in range(UPPER_STEPS):
-            mid = 0.5 * (lo + hi)
-            if unstable(u, d, mid) is None:
-                lo = mid
-            else:
-                hi = mid
+
+        def stable(m: float, u: FloatArray = u, d: FloatArray = d) -> bool:
+            return unstable(u, d, m) is None
+
+        hi = bisect(stable, 0.0, top, steps=UPPER_STEPS)[1]
         if best is None or hi < best.scale:
             mr = unstable(u, d, hi)
             best = Witness(
@@ -346,7 +339,7 @@ def largest_certifiable(
 
     def answer(scale_of: Any, top: float) -> float | None:
         """Bisection with the design's gains; with a robust design, confirmed by re-running it."""
-        x = _largest(lambda v: fits(*scale_of(v)), top, BISECTION_STEPS)
+        x = largest_holding(lambda v: fits(*scale_of(v)), top, steps=BISECTION_STEPS)
         if x is None or redesign is None:
             return x
         for _ in range(REDESIGN_TRIES):
@@ -385,19 +378,6 @@ def largest_certifiable(
                 name: [lo, hi] for name, lo, hi in zip(PARAMETERS, scaled.lo, scaled.hi) if lo < 1.0 or hi > 1.0
             }
     return out
-
-
-def _largest(fits: Any, top: float, steps: int) -> float | None:
-    """Largest ``x`` in ``[0, top]`` with ``fits(x)``, by bisection (``fits`` monotone); ``None`` if not 0."""
-    if fits(top):
-        return top
-    if not fits(0.0):
-        return None
-    lo, hi = 0.0, top
-    for _ in range(steps):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
-    return lo
 
 
 __all__ = [

@@ -7,14 +7,16 @@ the decoupled fleet, each vehicle) as an independent system with its own step si
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Literal, cast
 
 import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.implementation.sampled_loop import simulate_sampled_batch
+from auv_hinf.implementation.sampled_loop import integrate_sampled
 from auv_hinf.law.formation_law import VehicleLaw, VehicleMotionSource
 from auv_hinf.mission.fleet import Motion
 from auv_hinf.models.envelope import envelope_bound, envelope_event, envelope_margin
@@ -194,16 +196,36 @@ def simulate_batch(
     The integration is :func:`integrate_batch` (same parameters); every result holds the
     samples and the metrics of :class:`~auv_hinf.simulation.results.SimulationResult`.
     A batch whose implementation is not the continuous, exact law runs sampled instead
-    (:func:`~auv_hinf.implementation.sampled_loop.simulate_sampled_batch`: the integration parameters
+    (:func:`~auv_hinf.implementation.sampled_loop.integrate_sampled`: the integration parameters
     do not apply, its scheme is its own).
     """
     if not batch.scenarios[0].implementation.continuous:
-        return simulate_sampled_batch(batch)
+        return _sampled_batch(batch)
     sol = integrate_batch(batch, method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions)
     n_s, n = batch.initial.shape[:2]
     states = cast(FloatArray, sol.y).reshape(sol.t.size, n_s, n, batch.scenarios[0].law.width)
     steps = sol.n_steps.reshape(n_s, -1).max(axis=1)
     return build_results(batch.scenarios, sol.t, states, first_exits(sol, n_s), [int(x) for x in steps])
+
+
+def _sampled_batch(batch: ScenarioBatch) -> list[SimulationResult]:
+    """Integrate the scenarios of ``batch`` (:func:`integrate_sampled`) and post-process each."""
+    sol = integrate_sampled(batch)
+    n_s, n = batch.initial.shape[:2]
+    assert sol.y is not None and sol.commanded is not None
+    states = sol.y.reshape(sol.t.size, n_s, n, 6)
+    exits = [None if math.isnan(e) else float(e) for e in sol.event_time]
+    results = build_results(
+        batch.scenarios,
+        sol.t,
+        states,
+        exits,
+        [int(x) for x in sol.n_steps],
+        commanded=sol.commanded,
+        peaks=sol.commanded_peak,
+    )
+    gone = sol.diverged
+    return [r if math.isnan(g) else replace(r, diverged_at=float(g)) for r, g in zip(results, gone)]
 
 
 def simulate(

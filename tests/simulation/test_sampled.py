@@ -138,7 +138,7 @@ def test_an_unstable_implementation_is_stopped_and_reported():
 
 
 def test_continuous_default_runs_the_continuous_engine(triangle, monkeypatch):
-    monkeypatch.setattr(engine, "simulate_sampled_batch", lambda batch: pytest.fail("sampled path taken"))
+    monkeypatch.setattr(engine, "_sampled_batch", lambda batch: pytest.fail("sampled path taken"))
     res = simulate(triangle)
     assert res.diverged_at is None and triangle.implementation.continuous
     with pytest.raises(ValueError, match="continuous"):

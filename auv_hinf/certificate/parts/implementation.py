@@ -8,7 +8,6 @@ the law must be sampled), and covers exactly when the continuous certificates do
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -29,6 +28,7 @@ from auv_hinf.implementation.sampled_data import (
 )
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.mission.margins import ErrorBounds
+from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
 #: Relative width at which the search for the largest covered sample time stops.
@@ -254,10 +254,7 @@ def covered_sample_time(
     lo = hi * COVERED_SEARCH_FLOOR
     if not covers(lo):
         return None
-    while hi / lo > 1.0 + COVERED_SEARCH_RTOL:
-        mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if covers(mid) else (lo, mid)
-    return lo
+    return bisect(covers, lo, hi, rtol=COVERED_SEARCH_RTOL, geometric=True)[0]
 
 
 def implementation_sweep(
