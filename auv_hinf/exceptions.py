@@ -28,7 +28,39 @@ class EnvelopeError(AuvHinfError, ValueError):
 
 
 class DesignError(AuvHinfError, ValueError):
-    """A gain-design request is outside the domain of the formula asked for."""
+    """A gain-design request is outside the domain of the formula asked for, or a design is refused.
+
+    Parameters
+    ----------
+    message : str
+        The sentence a person reads.
+    kind : str
+        What kind of refusal it is, as a certificate part reports it (one of
+        ``auv_hinf.certificate.part.REASON_KINDS``; ``"not_covered"`` unless the raiser knows better).
+    channel, vehicle, value, limit : optional
+        What binds, as data (see ``auv_hinf.certificate.part.Reason``).
+    settings : tuple of (table, key, value)
+        Configuration values that would lift the refusal, when the raiser knows them.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        kind: str = "not_covered",
+        channel: str | None = None,
+        vehicle: int | None = None,
+        value: float | None = None,
+        limit: float | None = None,
+        settings: tuple[tuple[str, str, Any], ...] = (),
+    ) -> None:
+        super().__init__(message)
+        self.kind = kind
+        self.channel = channel
+        self.vehicle = vehicle
+        self.value = value
+        self.limit = limit
+        self.settings = settings
 
 
 class ConfigError(AuvHinfError, ValueError):

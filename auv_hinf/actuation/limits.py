@@ -102,9 +102,14 @@ class Actuators:
         return float(worst)
 
     def binding(self, peak: tuple[float, float, float]) -> tuple[str, float]:
-        """The channel with the largest ``peak / limit`` and that ratio."""
+        """What binds the box ``|tau_k| <= peak_k``: the channel with the largest ``peak / limit``, or
+        ``"thrusters"`` when the thruster polytope binds harder (:meth:`utilisation`), and that ratio."""
         r = self.ratios(peak)
         k = int(np.argmax(r))
+        if self.thrusters is not None:
+            used = self.utilisation(peak)
+            if used > r[k]:
+                return "thrusters", used
         return CHANNELS[k], float(r[k])
 
     def saturate(self, tau: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:

@@ -23,6 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from auv_hinf._typing import GAIN_METHODS, FloatArray
+from auv_hinf.certificate.part import Reason
 from auv_hinf.config.settings import FormationConfig, SimulationConfig
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.design.theorem1 import GainDesign, design_alpha
@@ -67,8 +68,9 @@ class DesignPoint:
         Where ``gains`` come from.
     robust_design : RobustDesign or None
         The robust design, when ``[design] robust = true``.
-    reasons : tuple of str
-        Why there are no gains (empty when there are).
+    reasons : tuple of Reason
+        Why there are no gains (empty when there are): the Theorem 1 design's (part ``theorem1``)
+        or the robust design's (part ``robust``).
     mission : MissionReference
         The configured centre path.
     tube : ReferenceTube
@@ -89,7 +91,7 @@ class DesignPoint:
     gains: Gains | None
     source: GainSource
     robust_design: RobustDesign | None
-    reasons: tuple[str, ...]
+    reasons: tuple[Reason, ...]
     mission: MissionReference
     tube: ReferenceTube
     offsets: FloatArray
@@ -98,7 +100,7 @@ class DesignPoint:
     def require_gains(self) -> Gains:
         """The gains, or a :class:`~auv_hinf.exceptions.DesignError` saying why there are none."""
         if self.gains is None:
-            raise DesignError("; ".join(self.reasons) or "the design gives no gains")
+            raise DesignError("; ".join(r.message for r in self.reasons) or "the design gives no gains")
         return self.gains
 
     @property
@@ -213,7 +215,7 @@ def _design(cfg: FormationConfig) -> DesignPoint:
     lam = cfg.lam if cfg.lam is not None else envelope_lambda(cfg.vehicle, cfg.envelope)
     sigma = vehicle_sigma(cfg.vehicle, cfg.envelope, lam, cfg.n)
     gamma = cfg.gamma if cfg.gamma is not None else 1.0 / sigma.upper
-    reasons: list[str] = []
+    reasons: list[Reason] = []
     designs: dict[str, GainDesign | None] = {}
     for m in GAIN_METHODS:
         try:
@@ -221,7 +223,7 @@ def _design(cfg: FormationConfig) -> DesignPoint:
         except DesignError as exc:
             designs[m] = None
             if m == cfg.method:
-                reasons.append(str(exc))
+                reasons.append(Reason("theorem1", "design", str(exc)))
     mission = mission_reference(cfg)
     offsets = formation_offsets(cfg)
     tube = path_frame_tube(mission, offsets) if cfg.frame == "path" else mission_tube(mission)
@@ -242,13 +244,17 @@ def _design(cfg: FormationConfig) -> DesignPoint:
             )
             gains = robust.gains
         except AuvHinfError as exc:
-            reasons = [f"robust design failed: {exc}"]
+            reasons = [Reason("robust", "design", f"robust design failed: {exc}")]
     else:
         used = designs.get(cfg.method)
         if used is not None and math.isfinite(used.alpha):
             gains = Gains(used.alpha, cfg.k1, heading_gains(cfg.vehicle, cfg.heading_poles))
         elif used is not None:
-            reasons.append(f"no finite gain for method {cfg.method!r} at lambda={lam:g}, gamma={gamma:g}")
+            reasons.append(
+                Reason(
+                    "theorem1", "design", f"no finite gain for method {cfg.method!r} at lambda={lam:g}, gamma={gamma:g}"
+                )
+            )
     return DesignPoint(
         config=cfg,
         lam=lam,

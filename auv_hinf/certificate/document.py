@@ -1,128 +1,167 @@
-"""Tagged JSON values: the exact, type-keeping encoding of a certificate's state.
+"""The stored certificate: its documented JSON layout, its JSON Schema, and the files of every version.
 
-:func:`encode_value` turns a value into strict JSON that :func:`decode_value` inverts
-exactly: floats (written with ``repr``, which round-trips every IEEE double), numpy arrays
-(dtype and shape), tuples, dictionaries and the package's frozen dataclasses (by a stable
-type name from :data:`STORED_TYPES`, rebuilt through their constructors). Type names do not
-change when a class moves between modules. :func:`json_safe` is the CLI's rule for plain
-JSON output (non-finite numbers as ``null``).
+A certificate file is one JSON object (format version 4)::
 
-Tagged forms (any other JSON value stands for itself; lists are lists)::
+    {
+      "format": "auv-hinf-certificate",
+      "version": 4,
+      "tool_version": "<auv_hinf.__version__ that wrote it>",
+      "created": "<ISO 8601 time stamp, UTC>",
+      "config": {... FormationConfig.to_toml_dict() ...},
+      "certificate": {... Certificate.to_dict(): the ``auv-hinf certify --json`` layout ...},
+      "digest": "sha256:<hex>"
+    }
 
-    {"$float": "inf" | "-inf" | "nan"}
-    {"$complex": [re, im]}
-    {"$numpy": "<dtype>", "value": v}                        numpy scalar
-    {"$ndarray": "<dtype>", "shape": [...], "data": [...]}   flat data, C order
-    {"$tuple": [...]}
-    {"$dict": {...}}                                          string keys only
-    {"$dataclass": "<type name>", "fields": {...}}            init fields only
+``config`` makes the file complete (``config_from_dict`` rebuilds the configuration);
+``certificate`` is exactly what ``certify --json`` prints, with every part's figures under its
+key and every part's verdict and reasons, as data, under ``parts``. The file holds no Python
+class names: it is read back by :class:`CertificateDocument`, whose JSON Schema
+(:func:`certificate_schema`, printed by ``auv-hinf schema --certificate`` and published as
+``docs/certificate.schema.json``) is the contract. ``digest`` is the SHA-256 of the canonical
+JSON of ``config`` and ``certificate``: a file edited by hand, or truncated, is refused rather
+than believed; so is one whose record disagrees with its configuration, or whose verdict
+disagrees with its parts.
 
-Version 1 certificate files (auv-hinf 0.2.0) named classes ``"auv_hinf.module:Class"``; such
-names are looked up by their class name (with :data:`LEGACY_NAMES` for renamed types).
+Loading gives a :class:`~auv_hinf.certificate.assembly.Certificate` with every part's figures,
+verdict and reasons, the configuration and the gains that ran (so :meth:`law` and
+:meth:`controller` work), and the same text as the certificate that was saved. The parts'
+typed results (LMI matrices) are not stored; ``certify`` recomputes them.
+
+Versions 1-3 (auv-hinf 0.2-0.4) stored a tagged copy of every Python object beside the record.
+They still load: the record is read and the tagged copy is ignored, except for version 1, whose
+record does not list the gains that ran (they are the robust design's recorded gains with
+``[design] robust = true``, else the configured Theorem 1 gains). Their verdict is the recorded
+one, under one part called ``recorded``.
 """
 
 from __future__ import annotations
 
-import dataclasses
+import hashlib
 import json
 import math
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any, Protocol, TypeVar, cast
+from typing import TYPE_CHECKING, Any, Literal
 
-import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from auv_hinf._version import __version__
-from auv_hinf.actuation import limits as actuators
-from auv_hinf.actuation import thrust
-from auv_hinf.certificate.parts import actuators as actuator_check
-from auv_hinf.certificate.parts import closed_loop as nominal
-from auv_hinf.certificate.parts import implementation as implementation_part
-from auv_hinf.certificate.parts import robust as robust_part
-from auv_hinf.closed_loop import coverage, region
-from auv_hinf.closed_loop import nominal as closed_loop
-from auv_hinf.config.settings import FormationConfig, config_from_dict
-from auv_hinf.design import crosscheck, sigma, theorem1
-from auv_hinf.design import theorem1 as alpha
-from auv_hinf.exceptions import AuvHinfError, ConfigError
-from auv_hinf.implementation import lag as lag_terms
-from auv_hinf.implementation import lmi as sampled
-from auv_hinf.implementation import model as implementation_model
-from auv_hinf.implementation import sampled_data as implementation
-from auv_hinf.law import gains
-from auv_hinf.law.gains import Gains, heading_gains
-from auv_hinf.mission import fit as reference_fit
-from auv_hinf.mission import fleet as motion
-from auv_hinf.mission import fleet as path_frame
-from auv_hinf.mission import fleet as reference
-from auv_hinf.mission import fleet as shaping
-from auv_hinf.mission import margins, paths
-from auv_hinf.mission import paths as lawnmower
-from auv_hinf.models import envelope, vehicle
-from auv_hinf.robust import bandwidth, box, margin
-from auv_hinf.robust import invariant_set as certificate
-from auv_hinf.robust import invariant_set as ellipsoid
+from auv_hinf.certificate.part import REASON_KINDS, ReasonKind
+from auv_hinf.config.settings import FormationConfig, config_from_dict, read_document
+from auv_hinf.exceptions import ConfigError
+from auv_hinf.law.gains import heading_gains
 
-#: Modules whose dataclasses may appear in a certificate's state.
-_STORED_MODULES = (
-    actuator_check,
-    actuators,
-    alpha,
-    bandwidth,
-    box,
-    certificate,
-    closed_loop,
-    coverage,
-    crosscheck,
-    ellipsoid,
-    envelope,
-    gains,
-    implementation,
-    implementation_model,
-    implementation_part,
-    lag_terms,
-    lawnmower,
-    margin,
-    margins,
-    motion,
-    nominal,
-    path_frame,
-    paths,
-    reference,
-    reference_fit,
-    region,
-    robust_part,
-    sampled,
-    shaping,
-    sigma,
-    theorem1,
-    thrust,
-    vehicle,
+if TYPE_CHECKING:
+    from auv_hinf.certificate.assembly import Certificate
+
+#: Value of the ``format`` key of a certificate file.
+FORMAT = "auv-hinf-certificate"
+#: Layout version written by this module.
+VERSION = 4
+#: Layout versions :func:`load_certificate` reads (1: auv-hinf 0.2.0; 2-3: the tagged-state files).
+READABLE_VERSIONS = (1, 2, 3, 4)
+#: The top-level keys of the Theorem 1 part in records of versions 1-3 (the figures it owns).
+LEGACY_THEOREM1_KEYS = (
+    "lambda",
+    "sigma",
+    "sigma_jacobi",
+    "certificate_coords",
+    "gamma",
+    "method",
+    "alpha",
+    "paper_flags",
+    "theorem1",
+    "small_gain_margin",
+    "k1",
+    "position_loop_hinf",
+    "crosscheck_ok",
+    "crosscheck_n",
+    "crosscheck_max_rel_diff",
 )
+#: The parts with a key of their own in records of versions 1-3.
+LEGACY_PART_KEYS = ("closed_loop", "robust", "actuators", "implementation")
 
 
-def _registry() -> dict[str, type]:
-    """Stable type name (the class name) -> dataclass, for every dataclass of :data:`_STORED_MODULES`."""
-    out: dict[str, type] = {}
-    for mod in _STORED_MODULES:
-        for obj in vars(mod).values():
-            if isinstance(obj, type) and dataclasses.is_dataclass(obj) and obj.__module__ == mod.__name__:
-                if out.get(obj.__name__, obj) is not obj:  # pragma: no cover - guarded by a test
-                    raise RuntimeError(f"two stored dataclasses are called {obj.__name__}")
-                out[obj.__name__] = obj
-    return out
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-#: The types a certificate file may hold, by stable name.
-STORED_TYPES: dict[str, type] = _registry()
+class SettingRecord(_Strict):
+    """A configuration value that would change a verdict."""
+
+    table: str = Field(description="TOML table")
+    key: str = Field(description="key in that table")
+    value: Any = Field(description="the value to write there, in the key's unit")
 
 
-#: Version 1 class names that were renamed: old name -> stable name.
-LEGACY_NAMES = {"RobustGains": "Gains"}
+class ReasonRecord(_Strict):
+    """A reason, as data."""
+
+    part: str
+    kind: ReasonKind = Field(description=f"one of {', '.join(REASON_KINDS)}")
+    message: str
+    channel: str | None = None
+    vehicle: int | None = None
+    value: float | None = None
+    limit: float | None = None
+    settings: list[SettingRecord] = Field(default_factory=list)
 
 
-#: numpy dtype kinds that may be stored: bool, signed and unsigned int, float, complex.
-ARRAY_KINDS = "biufc"
+class PartRecord(_Strict):
+    """One part's verdict: does it hold, does it apply, why not, and where its figures are."""
+
+    ok: bool
+    applies: bool
+    reasons: list[ReasonRecord]
+    key: str | None = Field(description="the record's key holding the part's figures (null: top-level keys)")
+    keys: list[str] | None = Field(default=None, description="the top-level keys of a part without a key")
+    note: str | None = None
+
+
+class GainsRecord(_Strict):
+    """The gains that run."""
+
+    alpha: float = Field(description="velocity gain (1/s)")
+    k1: float = Field(description="position gain (1/s^2)")
+    k_psi: list[float] = Field(min_length=2, max_length=2, description="heading gains (1/s^2, 1/s)")
+    ki: float | None = Field(default=None, description="integral gain (1/s^3), with integral action")
+    source: Literal["theorem1", "robust"]
+
+
+class CertificateRecord(BaseModel):
+    """The ``certify --json`` layout: the keys every record has, and the parts' figures beside them."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+    preset: str = Field(description="the configuration's name")
+    n: int = Field(ge=2, description="fleet size")
+    certified: bool = Field(description="every part holds")
+    reasons: list[str] = Field(description="why not, one sentence per reason")
+    envelope: dict[str, Any]
+    vehicle: dict[str, Any]
+    gains: GainsRecord | None
+    design: dict[str, Any] | None
+    parts: dict[str, PartRecord] = Field(description="each part's verdict, by part name, in evaluation order")
+
+
+class CertificateDocument(_Strict):
+    """A certificate file of format version 4 (see the module docstring)."""
+
+    format: Literal["auv-hinf-certificate"]
+    version: Literal[4]
+    tool_version: str
+    created: str = Field(description="ISO 8601 time stamp, UTC")
+    config: dict[str, Any] = Field(description="the configuration, as its TOML tables")
+    certificate: CertificateRecord
+    digest: str = Field(pattern=r"^sha256:[0-9a-f]{64}$", description="SHA-256 of the canonical config and record")
+
+
+def certificate_schema() -> dict[str, Any]:
+    """The JSON Schema of a certificate file of format version 4."""
+    schema = CertificateDocument.model_json_schema()
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "auv-hinf certificate file, format version 4"
+    return schema
 
 
 def json_safe(obj: Any) -> Any:
@@ -141,156 +180,14 @@ def json_normal(obj: Any) -> Any:
     return json.loads(json.dumps(json_safe(obj), allow_nan=False))
 
 
-def encode_value(obj: Any) -> Any:
-    """Tagged, strict-JSON form of ``obj`` that :func:`decode_value` inverts exactly.
-
-    Raises
-    ------
-    ConfigError
-        If ``obj`` holds a value of a type that cannot be stored (e.g. an object array, a
-        dictionary with non-string keys, or an object that is not a dataclass of this package).
-    """
-    if obj is None or isinstance(obj, (bool, str)):
-        return obj
-    if isinstance(obj, np.generic):
-        if obj.dtype.kind not in ARRAY_KINDS:
-            raise ConfigError(f"cannot store a numpy scalar of dtype {obj.dtype}")
-        return {"$numpy": obj.dtype.str, "value": encode_value(obj.item())}
-    if isinstance(obj, int):
-        return int(obj)
-    if isinstance(obj, float):
-        return float(obj) if math.isfinite(obj) else {"$float": repr(float(obj))}
-    if isinstance(obj, complex):
-        return {"$complex": [encode_value(obj.real), encode_value(obj.imag)]}
-    if isinstance(obj, np.ndarray):
-        if obj.dtype.kind not in ARRAY_KINDS:
-            raise ConfigError(f"cannot store a numpy array of dtype {obj.dtype}")
-        return {
-            "$ndarray": obj.dtype.str,
-            "shape": list(obj.shape),
-            "data": [encode_value(x) for x in obj.ravel().tolist()],
-        }
-    if isinstance(obj, tuple):
-        return {"$tuple": [encode_value(x) for x in obj]}
-    if isinstance(obj, list):
-        return [encode_value(x) for x in obj]
-    if isinstance(obj, dict):
-        if not all(isinstance(k, str) for k in obj):
-            raise ConfigError(f"cannot store a dictionary with non-string keys: {list(obj)!r}")
-        return {"$dict": {k: encode_value(v) for k, v in obj.items()}}
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        cls = type(obj)
-        if STORED_TYPES.get(cls.__name__) is not cls:
-            raise ConfigError(f"cannot store an instance of {cls.__module__}.{cls.__qualname__}")
-        return {
-            "$dataclass": cls.__name__,
-            "fields": {f.name: encode_value(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init},
-        }
-    raise ConfigError(f"cannot store a value of type {type(obj).__name__}: {obj!r}")
+def digest(config: Any, record: Any) -> str:
+    """``sha256:`` and the hex digest of the canonical JSON (sorted keys, no spaces) of both."""
+    text = json.dumps({"config": config, "certificate": record}, sort_keys=True, separators=(",", ":"))
+    return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def decode_value(data: Any) -> Any:
-    """Inverse of :func:`encode_value`.
-
-    Raises
-    ------
-    ConfigError
-        On an unknown tag, a class outside the package, or a value its constructor refuses.
-    """
-    if data is None or isinstance(data, (bool, str, int, float)):
-        return data
-    if isinstance(data, list):
-        return [decode_value(x) for x in data]
-    if not isinstance(data, dict):
-        raise ConfigError(f"unexpected value in a certificate file: {data!r}")
-    keys = set(data)
-    if keys == {"$float"} and data["$float"] in ("inf", "-inf", "nan"):
-        return float(data["$float"])
-    if keys == {"$complex"} and isinstance(data["$complex"], list) and len(data["$complex"]) == 2:
-        re_, im_ = (decode_value(x) for x in data["$complex"])
-        return complex(re_, im_)
-    if keys == {"$numpy", "value"}:
-        dtype = _dtype(data["$numpy"])
-        return dtype.type(decode_value(data["value"]))
-    if keys == {"$ndarray", "shape", "data"}:
-        dtype = _dtype(data["$ndarray"])
-        shape = data["shape"]
-        if not (isinstance(shape, list) and all(isinstance(s, int) and s >= 0 for s in shape)):
-            raise ConfigError(f"bad array shape in a certificate file: {shape!r}")
-        values = decode_value(data["data"])
-        if not isinstance(values, list) or len(values) != math.prod(shape):
-            raise ConfigError(f"array data of a certificate file do not fill shape {shape}")
-        return np.array(values, dtype=dtype).reshape(shape)
-    if keys == {"$tuple"} and isinstance(data["$tuple"], list):
-        return tuple(decode_value(x) for x in data["$tuple"])
-    if keys == {"$dict"} and isinstance(data["$dict"], dict):
-        return {k: decode_value(v) for k, v in data["$dict"].items()}
-    if keys == {"$dataclass", "fields"} and isinstance(data["fields"], dict):
-        cls = _dataclass(data["$dataclass"])
-        kwargs = {k: decode_value(v) for k, v in data["fields"].items()}
-        try:
-            return cls(**kwargs)
-        except (TypeError, ValueError, AuvHinfError) as exc:
-            raise ConfigError(f"cannot rebuild {data['$dataclass']} from a certificate file: {exc}") from None
-    raise ConfigError(f"unknown tagged value in a certificate file (keys {sorted(keys)})")
-
-
-def _dtype(text: Any) -> np.dtype[Any]:
-    try:
-        dtype = np.dtype(text) if isinstance(text, str) else None
-    except TypeError:
-        dtype = None
-    if dtype is None or dtype.kind not in ARRAY_KINDS:
-        raise ConfigError(f"bad numpy dtype in a certificate file: {text!r}")
-    return dtype
-
-
-def _dataclass(ref: Any) -> type:
-    """The stored dataclass named ``ref``: a stable type name, or a version 1 ``"module:Class"``."""
-    if not isinstance(ref, str):
-        raise ConfigError(f"bad class reference in a certificate file: {ref!r}")
-    name = ref
-    if ":" in ref:  # version 1: "auv_hinf.module:QualName"
-        module, _, name = ref.partition(":")
-        if not (module == "auv_hinf" or module.startswith("auv_hinf.")):
-            raise ConfigError(f"refusing to rebuild class {ref!r}: not part of auv_hinf")
-        name = LEGACY_NAMES.get(name, name)
-    cls = STORED_TYPES.get(name)
-    if cls is None:
-        raise ConfigError(f"class {ref!r} of a certificate file does not exist in this version")
-    return cls
-
-
-#: Value of the ``format`` key of a certificate file.
-FORMAT = "auv-hinf-certificate"
-
-
-#: Layout version written by this module.
-VERSION = 3
-
-
-#: Layout versions :func:`certificate_from_document` reads (1: auv-hinf 0.2.0).
-READABLE_VERSIONS = (1, 2, 3)
-
-
-class StoredCertificate(Protocol):
-    """What this module needs of a certificate: a dataclass with a configuration and a record."""
-
-    @property
-    def config(self) -> FormationConfig:
-        """The certified configuration."""
-        ...
-
-    def to_dict(self) -> dict[str, Any]:
-        """The readable record (the ``auv-hinf certify --json`` layout)."""
-        ...
-
-
-C = TypeVar("C", bound=StoredCertificate)
-
-
-def certificate_document(cert: StoredCertificate, created: datetime | None = None) -> dict[str, Any]:
-    """The JSON document of ``cert`` (see the module docstring).
+def certificate_document(cert: Certificate, created: datetime | None = None) -> dict[str, Any]:
+    """The stored document of ``cert`` (see the module docstring).
 
     Parameters
     ----------
@@ -298,40 +195,89 @@ def certificate_document(cert: StoredCertificate, created: datetime | None = Non
     created : datetime, optional
         Time stamp (default: now, UTC).
     """
-
     stamp = (created or datetime.now(timezone.utc)).astimezone(timezone.utc)
-    state = {
-        f.name: encode_value(getattr(cert, f.name)) for f in dataclasses.fields(cast(Any, cert)) if f.name != "config"
-    }
+    config = json_normal(cert.config.to_toml_dict())
+    record = json_normal(cert.to_dict())
     return {
         "format": FORMAT,
         "version": VERSION,
         "tool_version": __version__,
         "created": stamp.isoformat(),
-        "config": cert.config.to_toml_dict(),
-        "certificate": json_normal(cert.to_dict()),
-        "state": state,
+        "config": config,
+        "certificate": record,
+        "digest": digest(config, record),
     }
 
 
-def certificate_from_document(doc: Any, cls: type[C], source: str = "certificate") -> C:
-    """Rebuild the :class:`~auv_hinf.certificate.assembly.Certificate` of a document of :func:`certificate_document`.
+def _legacy_record(version: int, config: FormationConfig, record: dict[str, Any]) -> dict[str, Any]:
+    """A version 1-3 record in the version 4 layout: its parts listed, its gains named."""
+    parts: dict[str, Any] = {
+        "theorem1": {
+            "ok": True,
+            "applies": True,
+            "reasons": [],
+            "key": None,
+            "keys": [k for k in LEGACY_THEOREM1_KEYS if k in record],
+        }
+    }
+    for key in LEGACY_PART_KEYS:
+        if key in record:
+            parts[key] = {"ok": True, "applies": record[key] is not None, "reasons": [], "key": key}
+    parts["recorded"] = {
+        "ok": bool(record["certified"]),
+        "applies": True,
+        "reasons": [{"part": "recorded", "kind": "not_covered", "message": str(m)} for m in record["reasons"]],
+        "key": None,
+        "keys": [],
+        "note": f"the verdict recorded by format version {version}",
+    }
+    out = {**record, "parts": parts}
+    if "gains" not in record:  # version 1: the gains that ran, from the record and the configuration
+        out["gains"] = _gains_of_version_1(config, record)
+    out.setdefault("design", None)
+    return out
 
-    Parameters
-    ----------
-    doc : dict
-        The parsed JSON document.
-    cls : type
-        The certificate class to build.
-    source : str
-        Name used in error messages (e.g. the file name).
+
+def _gains_of_version_1(config: FormationConfig, record: dict[str, Any]) -> dict[str, Any] | None:
+    """The gains that ran for a version 1 record: the robust design's, or the Theorem 1 gains."""
+    if config.robust:
+        rob = record.get("robust") or {}
+        g = rob.get("gains")
+        return None if g is None else {**g, "source": "robust"}
+    alpha = (record.get("alpha") or {}).get("used")
+    if alpha is None:
+        return None
+    k_psi = heading_gains(config.vehicle, config.heading_poles)
+    return {"alpha": alpha, "k1": config.k1, "k_psi": list(k_psi), "source": "theorem1"}
+
+
+def _consistent(config: FormationConfig, record: CertificateRecord, source: str) -> None:
+    """Refuse a record that disagrees with its configuration or whose verdict disagrees with its parts."""
+    expected = json_normal({"n": config.n, "envelope": config.envelope.to_dict(), "vehicle": config.vehicle.to_dict()})
+    found = {"n": record.n, "envelope": record.envelope, "vehicle": record.vehicle}
+    wrong = sorted(k for k in expected if expected[k] != found[k])
+    if wrong:
+        raise ConfigError(
+            f"{source}: the certificate record disagrees with its configuration in {wrong} (edited file?)"
+        )
+    if record.certified != all(p.ok for p in record.parts.values()):
+        raise ConfigError(f"{source}: 'certified' disagrees with the verdicts of the parts (edited file?)")
+    messages = [r.message for p in record.parts.values() if not p.ok for r in p.reasons]
+    if messages != record.reasons:
+        raise ConfigError(f"{source}: 'reasons' disagree with the reasons of the parts (edited file?)")
+
+
+def certificate_from_document(doc: Any, source: str = "certificate") -> Certificate:
+    """The :class:`~auv_hinf.certificate.assembly.Certificate` of a parsed certificate file of any version.
 
     Raises
     ------
     ConfigError
-        If the format or version differs, a key is missing, the configuration is invalid,
-        a stored value cannot be rebuilt, or the readable record disagrees with the state.
+        If the format or version differs, the layout is not the schema's, the configuration is
+        invalid, the digest does not match, or the record disagrees with itself or its configuration.
     """
+    from auv_hinf.certificate.assembly import Certificate
+
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         found = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
         raise ConfigError(f"{source}: not an auv-hinf certificate file (format {found!r}, expected {FORMAT!r})")
@@ -341,70 +287,40 @@ def certificate_from_document(doc: Any, cls: type[C], source: str = "certificate
             f"{source}: unsupported certificate version {version!r} (this auv-hinf reads "
             f"versions {list(READABLE_VERSIONS)}; it was written by auv-hinf {doc.get('tool_version')!r})"
         )
-    missing = [k for k in ("config", "certificate", "state") if not isinstance(doc.get(k), dict)]
+    missing = [k for k in ("config", "certificate") if not isinstance(doc.get(k), dict)]
     if missing:
         raise ConfigError(f"{source}: certificate file lacks the object(s) {missing}")
     try:
         config = config_from_dict(doc["config"])
     except ConfigError as exc:
         raise ConfigError("\n".join(f"{source}: config: {line}" for line in str(exc).splitlines())) from None
-    state = doc["state"]
-    names = [f.name for f in dataclasses.fields(cast(Any, cls)) if f.name != "config"]
-    names = [n for n in names if n not in _added_after(version)]
-    absent = [n for n in names if n not in state]
-    extra = sorted(set(state) - set(names))
-    if absent or extra:
-        raise ConfigError(
-            f"{source}: certificate state does not match this version (missing {absent}, unknown {extra})"
-        )
+    if version == VERSION:
+        try:
+            parsed = CertificateDocument.model_validate(doc)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            where = ".".join(str(x) for x in first["loc"])
+            raise ConfigError(f"{source}: not a valid certificate file at {where}: {first['msg']}") from None
+        if parsed.digest != digest(doc["config"], doc["certificate"]):
+            raise ConfigError(f"{source}: the digest does not match the record (edited or truncated file?)")
+        raw = doc["certificate"]
+    else:
+        raw = _legacy_record(version, config, doc["certificate"])
     try:
-        values = {n: decode_value(state[n]) for n in names}
-        if version == 1:
-            values.update(_gains_of_version_1(config, values))
-        cert: C = cast(Any, cls)(config=config, **values)
-        record = json_normal(cert.to_dict())
-        if version < VERSION:  # compare on the keys the older record has
-            record = {k: record.get(k) for k in doc["certificate"]}
-    except ConfigError as exc:
-        raise ConfigError(f"{source}: {exc}") from None
-    except (TypeError, ValueError, AttributeError, KeyError) as exc:
+        record = CertificateRecord.model_validate(raw)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(x) for x in first["loc"])
+        raise ConfigError(f"{source}: not a valid certificate record at {where}: {first['msg']}") from None
+    _consistent(config, record, source)
+    try:
+        return Certificate.from_record(config, raw)
+    except (KeyError, TypeError, ValueError) as exc:
         raise ConfigError(f"{source}: cannot rebuild the certificate: {exc}") from None
-    if record != doc["certificate"]:
-        diff = sorted(k for k in set(record) | set(doc["certificate"]) if record.get(k) != doc["certificate"].get(k))
-        raise ConfigError(f"{source}: the certificate record disagrees with its stored state in {diff} (edited file?)")
-    return cert
 
 
-#: Certificate fields that version 1 files lack.
-_ADDED_IN_2 = ("gains", "gain_source", "actuators", "design")
-
-
-#: Certificate fields that version 2 files lack (the implementation certificate).
-_ADDED_IN_3 = ("implementation",)
-
-
-def _added_after(version: int) -> tuple[str, ...]:
-    """Certificate fields a file of ``version`` lacks (they keep their defaults)."""
-    return (_ADDED_IN_2 if version < 2 else ()) + (_ADDED_IN_3 if version < 3 else ())
-
-
-def _gains_of_version_1(config: FormationConfig, values: dict[str, Any]) -> dict[str, Any]:
-    """The gains that ran for a version 1 certificate: the robust design's, or the Theorem 1 gains."""
-    if config.robust:
-        rob = values.get("robust")
-        g = None if rob is None else rob.gains
-        return {"gains": g, "gain_source": "robust"}
-    alpha_used = values.get("alpha_used")
-    if alpha_used is None:
-        return {"gains": None, "gain_source": "theorem1"}
-    return {
-        "gains": Gains(alpha_used, config.k1, heading_gains(config.vehicle, config.heading_poles)),
-        "gain_source": "theorem1",
-    }
-
-
-def save_certificate(cert: StoredCertificate, path: str | Path, *, created: datetime | None = None) -> Path:
-    """Write ``cert`` as a versioned JSON file (strict JSON, UTF-8, 2-space indent).
+def save_certificate(cert: Certificate, path: str | Path, *, created: datetime | None = None) -> Path:
+    """Write ``cert`` as a certificate file (strict JSON, UTF-8, 2-space indent).
 
     Parameters
     ----------
@@ -422,7 +338,7 @@ def save_certificate(cert: StoredCertificate, path: str | Path, *, created: date
     Raises
     ------
     ConfigError
-        If the file cannot be written or the certificate holds a value that cannot be stored.
+        If the file cannot be written.
     """
     p = Path(path)
     text = json.dumps(certificate_document(cert, created), indent=2, allow_nan=False) + "\n"
@@ -433,8 +349,8 @@ def save_certificate(cert: StoredCertificate, path: str | Path, *, created: date
     return p
 
 
-def load_certificate(path: str | Path, cls: type[C]) -> C:
-    """Read a file written by :func:`save_certificate` and rebuild the certificate exactly.
+def load_certificate(path: str | Path) -> Certificate:
+    """Read a file written by :func:`save_certificate` (or by an earlier version) without re-certifying.
 
     Raises
     ------
@@ -443,31 +359,25 @@ def load_certificate(path: str | Path, cls: type[C]) -> C:
         :func:`certificate_from_document`; messages start with the file name.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
-        raise ConfigError(f"cannot read certificate {str(p)!r}: {reason}") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"{p}: invalid JSON: {exc}") from None
-    return certificate_from_document(doc, cls, source=str(p))
+    return certificate_from_document(read_document(p, "certificate", "JSON", json.loads), source=str(p))
 
 
 __all__ = [
-    "ARRAY_KINDS",
     "FORMAT",
-    "LEGACY_NAMES",
+    "LEGACY_PART_KEYS",
+    "LEGACY_THEOREM1_KEYS",
     "READABLE_VERSIONS",
-    "STORED_TYPES",
     "VERSION",
-    "C",
-    "StoredCertificate",
+    "CertificateDocument",
+    "CertificateRecord",
+    "GainsRecord",
+    "PartRecord",
+    "ReasonRecord",
+    "SettingRecord",
     "certificate_document",
     "certificate_from_document",
-    "decode_value",
-    "encode_value",
+    "certificate_schema",
+    "digest",
     "json_normal",
     "json_safe",
     "load_certificate",

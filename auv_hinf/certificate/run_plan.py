@@ -18,13 +18,13 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
-from auv_hinf.certificate.parts.closed_loop import closed_loop_for, coverage_for
-from auv_hinf.certificate.parts.implementation import ImplementationSummary, implementation_summary
-from auv_hinf.certificate.parts.robust import RobustRunCheck, check_robust_run
+from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
+from auv_hinf.certificate.parts.implementation import ImplementationSummary
+from auv_hinf.certificate.parts.robust import RobustRunCheck
+from auv_hinf.certificate.registry import parts
 from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
@@ -58,6 +58,8 @@ class RunPlan:
     implementation : ImplementationSummary or None
         The implementation certificate when the configuration declares a sampled, delayed or
         noisy controller (``None`` for the continuous law): the run is covered only if it covers.
+    checks : tuple of RunCheck
+        Every part's verdict on the run, in registry order (the fields above are read off them).
     """
 
     design: DesignPoint
@@ -69,6 +71,7 @@ class RunPlan:
     start: str = "shaped"
     robust: RobustRunCheck | None = None
     implementation: ImplementationSummary | None = None
+    checks: tuple[RunCheck, ...] = ()
 
     def uncertified_gains(self) -> str | None:
         """Why no certificate covers the gains of this run's configuration, or ``None``.
@@ -77,15 +80,7 @@ class RunPlan:
         set); this is about the gains: no nominal closed-loop certificate (small gain, envelope,
         actuators), or a declared box and current the robust certificate does not cover.
         """
-        integral = self.design.gains is not None and self.design.gains.integral
-        if self.certificate is None and not integral:
-            why = "; ".join(n for n in self.notes if n.startswith("design not certified"))
-            return why or "no closed-loop certificate"
-        if self.robust is not None and self.robust.design_covered is False:
-            return f"the robust certificate does not cover the declared box and current: {self.robust.reason}"
-        if integral and self.robust is None:
-            return "integral action is certified by the robust certificate, which was not evaluated"
-        return None
+        return next((c.refuses_gains for c in self.checks if c.refuses_gains is not None), None)
 
 
 #: Stored output samples of a run of few vehicles (one every 0.1 s over the paper's 300 s).
@@ -137,32 +132,19 @@ def plan_run(
     point = design if design is not None else design_point(cfg)
     gains = point.require_gains()
     initial = initial_states(point)
-    notes: list[str] = []
-    cert: ClosedLoopCertificate | None = None
-    cov: Coverage | None = None
-    try:
-        if gains.integral:
-            notes.append("integral action: the robust certificate decides (the nominal one is for the paper's law)")
-        else:
-            cert = closed_loop_for(point)
-            cov = coverage_for(point, cert, initial, mode)
-            if not cov.covered:
-                notes.append(cov.reason)
-    except AuvHinfError as exc:
-        notes.append(f"design not certified: {exc}")
-    plant = sim.plant_params(cfg.vehicle)
-    if plant != cfg.vehicle:
-        notes.append("the plant differs from the controller's model; the nominal certificate assumes it is known")
-    if any(c != 0.0 for c in sim.current):
-        notes.append("a current is present; the nominal certificate assumes none")
-    reference = cov.reference if cov is not None else point.fleet()
-    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators)
+    span = float(horizon if horizon is not None else sim.horizon)
+    checks: dict[str, RunCheck] = {}
+    for part in parts():
+        check = part.check_run(RunContext(point, initial, mode, span, dict(checks)))
+        if check is not None:
+            checks[part.name] = check
+    ctx = RunContext(point, initial, mode, span, checks)
     scn = Scenario(
-        law=law,
-        reference=reference,
-        plant=plant,
+        law=VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators),
+        reference=ctx.reference,
+        plant=sim.plant_params(cfg.vehicle),
         initial=initial,
-        horizon=float(horizon if horizon is not None else sim.horizon),
+        horizon=span,
         current=sim.current,
         envelope=cfg.envelope,
         samples=run_samples(cfg.n) if samples is None else samples,
@@ -172,32 +154,22 @@ def plan_run(
         implementation=cfg.implementation,
         seed=sim.seed,
     )
-    impl = _implementation_check(point, cert, cov, notes, scn.horizon)
-    nominal = cov is not None and cov.covered and not notes
-    rob = None
-    if point.declared:
-        rob = check_robust_run(point, reference, initial)
-    covered = (nominal or (rob is not None and rob.covered)) and (impl is None or impl.covers)
-    return RunPlan(point, cert, cov, covered, scn, tuple(notes), mode, rob, impl)
-
-
-def _implementation_check(
-    point: DesignPoint, cert: ClosedLoopCertificate | None, cov: Coverage | None, notes: list[str], horizon: float
-) -> ImplementationSummary | None:
-    """The implementation certificate of a sampled, delayed or noisy run (``None`` when continuous).
-
-    Its bounds are about starts measured against the raw mission, so a run that needs a blended
-    start is not covered by it; its reasons are added to ``notes``.
-    """
-    if point.config.implementation.continuous:
-        return None
-    impl = implementation_summary(point, cert, continuous_ok=False, search=False, horizon=horizon)
-    if cov is not None and cov.blend_time is not None:
-        why = "the implementation certificate covers starts on the raw mission; this start needs a blended reference"
-        impl = replace(impl, covers=False, reasons=(*impl.reasons, why))
-    if not impl.covers:
-        notes.append("implementation not covered: " + "; ".join(impl.reasons))
-    return impl
+    nominal = checks.get("closed_loop")
+    cert, cov = (None, None) if nominal is None else nominal.detail
+    robust = checks.get("robust")
+    impl = checks.get("implementation")
+    return RunPlan(
+        design=point,
+        certificate=cert,
+        coverage=cov,
+        covered=run_covered(list(checks.values())),
+        scenario=scn,
+        notes=tuple(n for c in checks.values() for n in c.notes),
+        start=mode,
+        robust=None if robust is None else robust.detail,
+        implementation=None if impl is None else impl.detail,
+        checks=tuple(checks.values()),
+    )
 
 
 def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:

@@ -8,6 +8,7 @@ so a bad value raises :class:`~auv_hinf.exceptions.ConfigError` from Python as f
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, cast
@@ -469,6 +470,37 @@ def load_config(path: str | Path) -> FormationConfig:
     return read_config(path)[0]
 
 
+def read_document(path: Path, what: str, syntax: str, parse: Callable[[str], Any]) -> Any:
+    """The parsed document of a UTF-8 text file (a TOML config, a JSON certificate), or a one-line error.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    what : str
+        What it is, for the messages (``"config"``, ``"certificate"``).
+    syntax : str
+        Its syntax, for the messages (``"TOML"``, ``"JSON"``).
+    parse : callable
+        ``str -> document``; raises ``ValueError`` (``tomllib.TOMLDecodeError`` and
+        ``json.JSONDecodeError`` are) on a syntax error.
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read, is not UTF-8 text, or does not parse.
+    """
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
+        raise ConfigError(f"cannot read {what} {str(path)!r}: {reason}") from None
+    try:
+        return parse(text)
+    except ValueError as exc:
+        raise ConfigError(f"{path}: invalid {syntax}: {exc}") from None
+
+
 def read_config(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]:
     """:func:`load_config`, also returning the parsed TOML document (for input warnings).
 
@@ -478,15 +510,7 @@ def read_config(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]:
         As :func:`load_config`.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
-        raise ConfigError(f"cannot read config {str(p)!r}: {reason}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: invalid TOML: {exc}") from None
+    data = read_document(p, "config", "TOML", tomllib.loads)
     try:
         return config_from_dict(data, name=p.stem), data
     except ConfigError as exc:

@@ -14,6 +14,7 @@ same type.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -81,6 +82,14 @@ class Gains:
         if self.integral:
             out["ki"] = self.ki
         return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Gains:
+        """Inverse of :meth:`to_dict` (other keys, such as a report's ``source``, are ignored)."""
+        k_psi = data["k_psi"]
+        return cls(
+            float(data["alpha"]), float(data["k1"]), (float(k_psi[0]), float(k_psi[1])), float(data.get("ki", 0.0))
+        )
 
     def describe(self) -> str:
         """One line with units, as the reports print it."""

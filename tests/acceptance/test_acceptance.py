@@ -318,7 +318,8 @@ def test_configuration_that_does_not_certify_says_why():
     cert = certify(cfg)
     loop = cert.closed_loop
     assert loop is not None and not loop.ok and not cert.certified
-    assert loop.reasons and "closed loop not certified" in loop.reasons[0]
+    assert loop.reasons and "closed loop not certified" in loop.reasons[0].message
+    assert loop.reasons[0].kind == "envelope" and loop.reasons[0].channel == "yaw_rate"
     data = cert.to_dict()["closed_loop"]
     assert data["certified"] is False and data["decay_rate"] is None and data["reasons"]
     plan = plan_run(cfg, horizon=1.0, samples=11)

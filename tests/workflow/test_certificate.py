@@ -165,7 +165,7 @@ def test_toml_round_trip(tmp_path):
 
 def test_large_fleet_caps_the_crosscheck_size():
     """The cross-check size is capped (every channel is identical), and the Jacobi upper bound is cond(Phi) sigma."""
-    from auv_hinf.certificate.assembly import CROSSCHECK_MAX_N
+    from auv_hinf.certificate.parts.theorem1 import CROSSCHECK_MAX_N
     from auv_hinf.config.settings import config_from_dict
 
     cfg = config_from_dict({"formation": {"n": 40, "polygon_radius": 60.0}})

@@ -168,6 +168,6 @@ def test_linearisation_on_a_line_mission(line_cert):
 
 
 def test_controller_needs_a_gain(cert):
-    no_gain = replace(cert, gains=None, certified=False)
+    no_gain = replace(cert, gains=None)
     with pytest.raises(DesignError, match="has no gains"):
         no_gain.controller()

@@ -1,4 +1,4 @@
-"""The actuator part of a certificate: the force the law commands against what the vehicle can push.
+"""The actuator part: the force the law commands against what the vehicles can push.
 
 The certified peak is the elementwise largest of the thrust bounds the certificate proves
 (:func:`~auv_hinf.actuation.thrust.thrust_bounds`: feed-forward, model
@@ -27,14 +27,20 @@ certify the declared case.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from auv_hinf.actuation.limits import CHANNELS, Actuators, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.part import PartContext, Peak, Reason, RunCheck, RunContext, Setting, Verdict
 from auv_hinf.robust.margin import largest_certifiable
 
-Peak = tuple[float, float, float]
+#: The part's registry name and JSON key.
+PART = "actuators"
+#: An actuator channel counts as the binding constraint when the certified peak reaches this
+#: share of its limit (the region is shrunk to fit the limits, so a binding channel sits at 1).
+ACTUATOR_BINDING_RATIO = 0.99
 
 
 @dataclass(frozen=True)
@@ -49,7 +55,8 @@ class ActuatorCheck:
         ``(|tau_x|, |tau_y|, |tau_psi|)`` the law can command on the certified set (N, N, N m);
         ``None`` when no certificate bounds it.
     binding : str or None
-        The channel with the largest peak-to-limit ratio (``force_x``, ``force_y``, ``moment``).
+        What binds: the channel with the largest peak-to-limit ratio (``force_x``, ``force_y``,
+        ``moment``), or ``thrusters`` when the thruster polytope binds harder.
     binding_ratio : float or None
         That ratio (above 1: the channel cannot deliver the peak).
     certified : bool
@@ -69,34 +76,6 @@ class ActuatorCheck:
     certified: bool
     reason: str
     largest_certifiable: dict[str, Any] | None = None
-
-    def lines(self) -> list[str]:
-        """Lines of ``Certificate.summary``."""
-        if self.certified_peak is None:
-            return [f"  actuators                 {self.reason}"]
-        fx, fy, m = self.certified_peak
-        out = [f"  commanded force (certified) |tau_x| <= {fx:.5g} N, |tau_y| <= {fy:.5g} N, |tau_psi| <= {m:.5g} N m"]
-        if self.limits is None:
-            out.append(f"  actuators                 {self.reason}")
-            return out
-        lx, ly, lm = self.limits.limits()
-        verdict = "fit" if self.certified else "do NOT fit"
-        out.append(f"  actuator limits           {lx:.5g} N, {ly:.5g} N, {lm:.5g} N m: the peaks {verdict}")
-        if not self.certified:
-            out.append(f"    {self.reason}")
-        if self.largest_certifiable is not None:
-            best = self.largest_certifiable
-            if best.get("current_speed") is None:
-                out.append(
-                    "    largest certifiable within the limits: none (not even the nominal plant in still water)"
-                )
-            else:
-                box = "n/a" if best.get("box_scale") is None else f"{best['box_scale']:.4g}"
-                out.append(
-                    f"    largest certifiable within the limits: box scale {box} with current "
-                    f"{best['current_speed']:.4g} m/s (re-run with these)"
-                )
-        return out
 
     def to_dict(self) -> dict[str, Any]:
         """The ``actuators`` object of ``auv-hinf certify --json``."""
@@ -157,6 +136,91 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
     elif answers and point.declared:
         best = {"box_scale": None, "current_speed": None}
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)
+
+
+def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
+    """The settings of ``largest_certifiable`` to re-run with: the scaled ``[uncertainty]`` table and the current."""
+    if best is None or best.get("current_speed") is None:
+        return ()
+    out = [Setting("uncertainty", name, list(pair)) for name, pair in (best.get("uncertainty") or {}).items()]
+    out.append(Setting("disturbance", "current_speed", best["current_speed"]))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class ActuatorPart:
+    """The certified peak force of every earlier part against the declared ``[actuators]``.
+
+    It applies when limits are declared; without them it reports the peak and holds.
+    """
+
+    name: str = PART
+    key: str | None = PART
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The actuator check of the peaks the earlier parts prove."""
+        point = ctx.point
+        act = check_actuators(point, ctx.peaks())
+        if act.limits is None:
+            return Verdict(self.name, True, False, (), act.to_dict(), detail=act)
+        binding = None
+        if act.binding is not None and act.binding_ratio is not None and act.binding_ratio >= ACTUATOR_BINDING_RATIO:
+            binding = f"actuators ({act.binding}, {act.binding_ratio:.3g} of its limit)"
+        if act.certified:
+            return Verdict(self.name, True, True, (), act.to_dict(), binding=binding, detail=act)
+        peak, limits = act.certified_peak, act.limits.limits()
+        k = CHANNELS.index(act.binding) if act.binding in CHANNELS else None
+        why = Reason(
+            self.name,
+            "thrust" if peak is not None else "not_covered",
+            f"actuators: {act.reason}",
+            channel=act.binding,
+            value=None if peak is None else (act.binding_ratio if k is None else peak[k]),
+            limit=None if peak is None else (1.0 if k is None else limits[k]),
+            settings=advice(act.largest_certifiable),
+        )
+        return Verdict(self.name, False, True, (why,), act.to_dict(), binding=binding, detail=act)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """The certified peak force, the limits and what would fit them."""
+        f = figures
+        if f is None:
+            return []
+        peak = f["certified_peak"]
+        if peak is None:
+            return [f"  actuators                 {f['reason']}"]
+        out = [
+            f"  commanded force (certified) |tau_x| <= {peak['force_x']:.5g} N, |tau_y| <= {peak['force_y']:.5g} N, "
+            f"|tau_psi| <= {peak['moment']:.5g} N m"
+        ]
+        lim = f["limits"]
+        if lim is None:
+            out.append(f"  actuators                 {f['reason']}")
+            return out
+        verdict = "fit" if f["certified"] else "do NOT fit"
+        out.append(
+            f"  actuator limits           {lim['force_x']:.5g} N, {lim['force_y']:.5g} N, {lim['moment']:.5g} N m: "
+            f"the peaks {verdict}"
+        )
+        if not f["certified"]:
+            out.append(f"    {f['reason']}")
+        best = f.get("largest_certifiable")
+        if best is not None:
+            if best.get("current_speed") is None:
+                out.append(
+                    "    largest certifiable within the limits: none (not even the nominal plant in still water)"
+                )
+            else:
+                box = "n/a" if best.get("box_scale") is None else f"{best['box_scale']:.4g}"
+                out.append(
+                    f"    largest certifiable within the limits: box scale {box} with current "
+                    f"{best['current_speed']:.4g} m/s (re-run with these)"
+                )
+        return out
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """Nothing of its own: the certificates that cover a run bound its force."""
+        return None
 
 
 __all__ = ["ActuatorCheck", "Peak", "check_actuators", "peak_of"]

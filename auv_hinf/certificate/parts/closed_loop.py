@@ -1,21 +1,23 @@
-"""The nominal closed-loop part of a certificate and of a run, from a design point.
+"""The closed-loop part: the nominal certificate of the design's gains along the mission.
 
 :func:`closed_loop_for` certifies the full error loop of the design's gains along its
 mission; :func:`coverage_for` decides whether that certificate covers one run's start;
-:func:`closed_loop_summary` is what :func:`~auv_hinf.certificate.assembly.certify` adds to
-the small-gain test: decay rates, the start region and thrust bounds along the configured
-mission, and the verdict on the configured start.
+:func:`closed_loop_summary` is the part's result: decay rates, the start region and thrust
+bounds along the configured mission, and the verdict on the configured start.
+:class:`ClosedLoopPart` is the part of the certificate (:mod:`auv_hinf.certificate.part`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.actuation.limits import actuator_shortfall
+from auv_hinf.actuation.limits import CHANNELS, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
+from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Verdict, reason_from
 from auv_hinf.closed_loop.actuator_fit import mission_thrust, within_actuators
 from auv_hinf.closed_loop.coverage import Coverage, StartMode, cover_start
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_certificate
@@ -23,6 +25,8 @@ from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fit import ReferenceFit
 
+#: The part's registry name and JSON key.
+PART = "closed_loop"
 #: A heading range counts as the full circle when its width is 2 pi up to this relative
 #: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
 FULL_CIRCLE_RTOL = 1e-12
@@ -41,11 +45,26 @@ def mission_checks(point: DesignPoint) -> Gains:
     if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
         raise DesignError(
             f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
-            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range"
+            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range",
+            kind="envelope",
+            channel="psi",
+            value=width,
+            limit=2.0 * math.pi,
+            settings=(("envelope", "psi", [-math.pi, math.pi]),),
         )
     gains = point.require_gains()
-    if not point.fit.ok:
-        raise DesignError(point.fit.reason())
+    fit = point.fit
+    if not fit.ok:
+        b = fit.binding
+        raise DesignError(
+            fit.reason(),
+            kind="envelope",
+            channel=None if b is None else b.channel,
+            vehicle=None if b is None or cfg.frame != "path" else b.vehicle,
+            value=None if b is None else b.margin,
+            limit=0.0,
+            settings=() if fit.smallest_radius is None else (("reference", "turn_radius", fit.smallest_radius),),
+        )
     return gains
 
 
@@ -69,7 +88,8 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
     if gains.integral:
         raise DesignError(
             "the nominal closed-loop certificate covers the paper's law; integral action is certified by the "
-            "robust certificate only"
+            "robust certificate only",
+            kind="unsupported",
         )
     cert = closed_loop_certificate(cfg.vehicle, cfg.envelope, point.tube, gains, lam=point.lam, sigma=point.sigma.upper)
     if cfg.actuators is None:
@@ -77,9 +97,15 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
     fitted = within_actuators(cert, cfg.vehicle, cfg.envelope, point.tube, gains, cfg.actuators)
     if fitted is None:
         need = mission_thrust(cfg.vehicle, cfg.envelope, point.tube, gains).as_tuple()
+        channel, ratio = cfg.actuators.binding(need)
+        k = CHANNELS.index(channel) if channel in CHANNELS else None
         raise DesignError(
             "no start region fits the actuators: even tracked exactly, the mission needs "
-            + actuator_shortfall(cfg.actuators, need)
+            + actuator_shortfall(cfg.actuators, need),
+            kind="thrust",
+            channel=channel,
+            value=ratio if k is None else need[k],
+            limit=1.0 if k is None else cfg.actuators.limits()[k],
         )
     return fitted
 
@@ -123,7 +149,7 @@ class ClosedLoopSummary:
         Verdict on the configured start in shaped mode.
     declared_start : bool
         The configuration gives its own initial states (then the verdict requires them covered).
-    reasons : tuple of str
+    reasons : tuple of Reason
         Why the closed loop is not certified (empty when it is).
     fit : ReferenceFit or None
         Per-vehicle verdict on the desired motion at zero error.
@@ -132,7 +158,7 @@ class ClosedLoopSummary:
     certificate: ClosedLoopCertificate | None
     shaped: Coverage | None
     declared_start: bool
-    reasons: tuple[str, ...]
+    reasons: tuple[Reason, ...]
     fit: ReferenceFit | None = None
 
     @property
@@ -140,41 +166,13 @@ class ClosedLoopSummary:
         """The closed loop is certified."""
         return not self.reasons
 
-    def lines(self) -> list[str]:
-        """Lines of ``Certificate.summary``: decay, region, thrust, start (4-6 digits, with units)."""
-        c, fit = self.certificate, self.fit
-        head = []
-        if fit is not None:
-            n_in = sum(fit.inside)
-            head = [
-                f"  reference in envelope     {n_in} of {len(fit.inside)} vehicles ({fit.frame} frame)"
-                + ("" if fit.ok else f": {fit.reason()}")
-            ]
-        if c is None:
-            return [*head, "  closed loop               not certified"]
-        r = c.region.region
-        out = [
-            *head,
-            f"  closed-loop decay rate    {c.rate:.4g} 1/s "
-            f"(position {c.position.rate:.4g}, heading {c.heading.rate:.4g})",
-            f"  start region (all at once) |e| <= {r.position:.4g} m, |e'| <= {r.velocity:.4g} m/s, "
-            f"|e_psi| <= {r.heading:.4g} rad, |e_r| <= {r.yaw_rate:.4g} rad/s",
-            f"  thrust over the region    |tau_x| <= {c.thrust.force_x:.5g} N, |tau_y| <= {c.thrust.force_y:.5g} N, "
-            f"|tau_psi| <= {c.thrust.moment:.5g} N m",
-        ]
-        s = self.shaped
-        if s is not None:
-            how = f"blend {s.blend_time:g} s, turn {s.turn_time:g} s" if s.blend_time is not None else "no blend needed"
-            out.append(f"  shaped start              {'covered' if s.covered else 'NOT covered'} ({how})")
-        return out
-
     @staticmethod
     def _fit_keys(fit: ReferenceFit) -> dict[str, Any]:
         """``reference_frame``, ``binding`` (vehicle, time, channel, edge, margin) and ``reference_fit``."""
         return {
             "reference_frame": fit.frame,
             "binding": None if fit.binding is None else fit.binding.to_dict(),
-            "reference_fit": fit.to_dict(),
+            "reference_fit": {**fit.to_dict(), "reason": fit.reason()},
         }
 
     def to_dict(self) -> dict[str, Any]:
@@ -201,6 +199,7 @@ class ClosedLoopSummary:
             "region": None if c is None else radii(c.region.region),
             "single_axis_region": None if c is None else radii(c.region.single_axis),
             "region_error_bounds": None if c is None else radii(c.region.bounds),
+            "thrust": None if c is None else c.thrust.to_dict(),
             # per vehicle: its own desired motion at zero error stays in the envelope (in the inertial
             # frame every vehicle's is the centre's); certificates saved before 0.3 hold no fit: one bool
             "reference_inside_envelope": c is not None if self.fit is None else list(self.fit.inside),
@@ -218,7 +217,7 @@ class ClosedLoopSummary:
             ),
             "method": None if c is None else c.method,
             "certified": self.ok,
-            "reasons": list(self.reasons),
+            "reasons": [r.message for r in self.reasons],
         }
 
 
@@ -233,23 +232,135 @@ def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
     when that takes more than a few seconds (:func:`coverage_for`).
     """
     cfg = point.config
-    reasons: list[str] = []
+    reasons: list[Reason] = []
     try:
         cert = closed_loop_for(point)
     except AuvHinfError as exc:
-        return ClosedLoopSummary(
-            None, None, cfg.simulation.initial is not None, (f"closed loop not certified: {exc}",), point.fit
-        )
+        why = reason_from(PART, exc, "closed loop not certified: ")
+        return ClosedLoopSummary(None, None, cfg.simulation.initial is not None, (why,), point.fit)
     declared = cfg.simulation.initial is not None
     try:
         shaped: Coverage | None = coverage_for(point, cert, initial_states(point), "shaped")
     except AuvHinfError as exc:
         shaped = None
         if declared:
-            reasons.append(f"configured start: {exc}")
+            reasons.append(reason_from(PART, exc, "configured start: "))
     if declared and shaped is not None and not shaped.covered:
-        reasons.append(f"configured start not covered: {shaped.reason}")
+        reasons.append(Reason(PART, "start", f"configured start not covered: {shaped.reason}"))
     return ClosedLoopSummary(cert, shaped, declared, tuple(reasons), point.fit)
+
+
+@dataclass(frozen=True)
+class ClosedLoopPart:
+    """The nominal closed loop along the mission: decay, start region, thrust, the configured start.
+
+    It applies when the design has gains without integral action and the paper's certificate
+    holds (or the gains are the robust design's); otherwise it reports nothing and the other
+    parts decide.
+    """
+
+    name: str = PART
+    key: str | None = PART
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The closed-loop summary of ``ctx.point`` (see :func:`closed_loop_summary`)."""
+        point = ctx.point
+        gains = point.gains
+        theorem1 = ctx.verdicts.get("theorem1")
+        paper_ok = theorem1 is None or theorem1.ok
+        if gains is None or gains.integral or not (point.config.robust or paper_ok):
+            return Verdict(self.name, True, False)
+        loop = closed_loop_summary(point)
+        c, s = loop.certificate, loop.shaped
+        peaks = [] if c is None else [c.thrust.as_tuple()]
+        if c is not None and s is not None and s.covered and s.thrust is not None:
+            peaks.append(s.thrust.as_tuple())
+        binding = None if c is None else f"operating envelope (smallest margin {c.region.margins.min:.3g})"
+        return Verdict(self.name, loop.ok, True, loop.reasons, loop.to_dict(), tuple(peaks), binding, loop)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """Decay, region, thrust and start of the closed loop (4-6 digits, with units)."""
+        gains = record.get("gains")
+        if figures is None:
+            if gains is not None and gains.get("ki", 0.0) > 0.0:
+                return [
+                    "  closed loop (paper's law) not applicable: integral action is certified by the robust certificate"
+                ]
+            return ["  closed loop               not certified"]
+        f = figures
+        head = []
+        fit = f.get("reference_fit")
+        if fit is not None:
+            inside = fit["inside"]
+            head = [
+                f"  reference in envelope     {sum(inside)} of {len(inside)} vehicles ({fit['frame']} frame)"
+                + ("" if all(inside) else f": {fit['reason']}")
+            ]
+        if f["decay_rate"] is None:
+            return [*head, "  closed loop               not certified"]
+        r, t = f["region"], f["thrust"]
+        out = [
+            *head,
+            f"  closed-loop decay rate    {f['decay_rate']:.4g} 1/s "
+            f"(position {f['position_decay_rate']:.4g}, heading {f['heading_decay_rate']:.4g})",
+            f"  start region (all at once) |e| <= {r['position_error']:.4g} m, |e'| <= {r['velocity_error']:.4g} m/s, "
+            f"|e_psi| <= {r['heading_error']:.4g} rad, |e_r| <= {r['yaw_rate_error']:.4g} rad/s",
+            f"  thrust over the region    |tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, "
+            f"|tau_psi| <= {t['moment']:.5g} N m",
+        ]
+        s = f.get("shaped_start")
+        if s is not None:
+            how = (
+                f"blend {s['blend_time']:g} s, turn {s['turn_time']:g} s"
+                if s["blend_time"] is not None
+                else "no blend needed"
+            )
+            out.append(f"  shaped start              {'covered' if s['covered'] else 'NOT covered'} ({how})")
+        return out
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """Does the nominal certificate cover this run: its start, the nominal plant, still water?
+
+        It chooses the run's reference: the shaped start the coverage search found, or the raw mission.
+        """
+        point = ctx.point
+        cfg = point.config
+        gains = point.require_gains()
+        notes: list[str] = []
+        cert: ClosedLoopCertificate | None = None
+        cov: Coverage | None = None
+        refuses = None
+        try:
+            if gains.integral:
+                notes.append("integral action: the robust certificate decides (the nominal one is for the paper's law)")
+            else:
+                cert = closed_loop_for(point)
+                cov = coverage_for(point, cert, ctx.initial, cast(StartMode, ctx.start))
+                if not cov.covered:
+                    notes.append(cov.reason)
+        except AuvHinfError as exc:
+            notes.append(f"design not certified: {exc}")
+            refuses = f"design not certified: {exc}"
+        if cert is None and not gains.integral and refuses is None:
+            refuses = "no closed-loop certificate"
+        plant = cfg.simulation.plant_params(cfg.vehicle)
+        if plant != cfg.vehicle:
+            notes.append("the plant differs from the controller's model; the nominal certificate assumes it is known")
+        if any(c != 0.0 for c in cfg.simulation.current):
+            notes.append("a current is present; the nominal certificate assumes none")
+        covers = cov is not None and cov.covered and not notes
+        return RunCheck(
+            self.name,
+            "certificate",
+            not gains.integral,
+            covers,
+            "" if cov is None else cov.reason,
+            tuple(notes),
+            thrust=None if cov is None else cov.thrust,
+            reference=None if cov is None else cov.reference,
+            refuses_gains=refuses,
+            detail=(cert, cov),
+        )
 
 
 __all__ = [

@@ -8,12 +8,14 @@ the law must be sampled), and covers exactly when the continuous certificates do
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
+from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Setting, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
@@ -31,6 +33,8 @@ from auv_hinf.mission.margins import ErrorBounds
 from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
+#: The part's registry name and JSON key.
+PART = "implementation"
 #: Relative width at which the search for the largest covered sample time stops.
 COVERED_SEARCH_RTOL = 0.05
 #: The search starts at this fraction of the certified sample-time limit.
@@ -112,33 +116,6 @@ class ImplementationSummary:
     reasons: tuple[str, ...]
     covered_sample_time: float | None = None
 
-    def lines(self) -> list[str]:
-        """Lines of ``Certificate.summary`` (s, Hz, 1/s, m, m/s, rad, rad/s)."""
-        impl, c = self.implementation, self.certificate
-        out = [f"  implementation            {impl.describe()}"]
-        if c is None:
-            if self.covers:  # the continuous exact law, certified by the continuous certificates
-                return [*out, "  implementation covered    yes (the continuous certificates)"]
-            return [*out, "  implementation            not certified"]
-        ex = c.exact_max_sample_time
-        tight = "" if c.tightness is None else f", {c.tightness:.2f} of the exact nominal limit {ex:.4g} s"
-        out.append(
-            f"  max sample time           {c.max_sample_time:.4g} s at delay {impl.delay:.4g} s{tight}; "
-            f"max delay {c.max_delay:.4g} s"
-        )
-        if c.ultimate is not None and c.bounds is not None and not impl.continuous:
-            u, b = c.ultimate, c.bounds
-            out.append(
-                f"  errors (whole run)        |e| <= {b.position:.3g} m, |e'| <= {b.velocity:.3g} m/s, "
-                f"|e_psi| <= {b.heading:.3g} rad, |e_r| <= {b.yaw_rate:.3g} rad/s (decay {c.decay_rate:.3g} 1/s)"
-            )
-            out.append(
-                f"  ultimate bounds           |e| <= {u.position:.3g} m, |e'| <= {u.velocity:.3g} m/s, "
-                f"|e_psi| <= {u.heading:.3g} rad, |e_r| <= {u.yaw_rate:.3g} rad/s"
-            )
-        out.append(f"  implementation covered    {'yes' if self.covers else 'NO'}")
-        return out
-
     def to_dict(self) -> dict[str, Any]:
         """The ``implementation`` object of ``auv-hinf certify --json``.
 
@@ -172,6 +149,7 @@ class ImplementationSummary:
             "control_period": None if self.implementation.continuous else period,
             "covers": self.covers,
             "covered_sample_time": self.covered_sample_time,
+            "description": self.implementation.describe(),
             "reasons": list(self.reasons),
         }
 
@@ -229,10 +207,25 @@ def implementation_summary(
             f"({1.0 / covered:.3g} Hz) are covered"
         )
     elif not cert.covers and search:
-        reasons.append("no sample time is covered with this delay and noise: reduce them, or lower the gains")
+        reasons.append(no_sample_time_covered(impl))
     if point.declared:
         reasons.append(BOX_NOT_COVERED)
     return ImplementationSummary(declared, cert, cert.covers and not point.declared, tuple(reasons), covered)
+
+
+def no_sample_time_covered(impl: Implementation) -> str:
+    """Why no sample time is covered, naming only what is declared."""
+    declared = []
+    if impl.delay > 0.0:
+        declared.append(f"[implementation] delay ({impl.delay:.4g} s)")
+    if not impl.noise.exact:
+        declared.append("[implementation.noise]")
+    if declared:
+        return f"no sample time is covered with this delay and noise on this mission: reduce {' or '.join(declared)}"
+    return (
+        "no sample time is covered on this mission, even without delay or noise: the gains' continuous "
+        "certificate leaves no margin for the hold"
+    )
 
 
 def covered_sample_time(
@@ -274,6 +267,99 @@ def implementation_sweep(
     limits = lag_limits(prob.loops, prob.nominal_dampings, delay)
     base = Implementation(delay=delay, noise=noise or MeasurementNoise())
     return [certify_implementation(prob, replace(base, sample_time=h), start, limits) for h in sample_times]
+
+
+@dataclass(frozen=True)
+class ImplementationPart:
+    """The controller as it runs (``[implementation]``): sampled, held, delayed and noisy.
+
+    It always reports the limits of the design's gains (how fast they must be sampled); it
+    applies, and decides, only when a sampled, delayed or noisy implementation is declared.
+    """
+
+    name: str = PART
+    key: str | None = PART
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The implementation summary of ``ctx.point`` on the closed-loop part's certificate."""
+        point = ctx.point
+        loop = ctx.detail("closed_loop")
+        nominal = None if loop is None else loop.certificate
+        impl = implementation_summary(point, nominal, continuous_ok=ctx.holds_so_far())
+        declared = not point.config.implementation.continuous
+        c, run = impl.certificate, impl.implementation
+        binding = None
+        if declared and not impl.covers and c is not None:
+            binding = (
+                f"implementation (sample time {run.sample_time:.3g} s, delay {run.delay:.3g} s; "
+                f"certified sample time up to {c.max_sample_time:.3g} s)"
+            )
+        if not declared or impl.covers:
+            return Verdict(self.name, True, declared, (), impl.to_dict(), binding=binding, detail=impl)
+        covered = impl.covered_sample_time
+        why = Reason(
+            self.name,
+            "not_covered",
+            "implementation not covered: " + "; ".join(impl.reasons),
+            channel="sample_time",
+            value=run.sample_time,
+            limit=None if c is None else c.max_sample_time,
+            settings=() if covered is None else (Setting("implementation", "sample_time", covered),),
+        )
+        return Verdict(self.name, False, True, (why,), impl.to_dict(), binding=binding, detail=impl)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """The implementation, its limits, its bounds and one verdict (s, Hz, 1/s, m, m/s, rad, rad/s)."""
+        f = figures
+        if f is None:
+            return []
+        declared = not f["continuous"]
+        out = [f"  implementation            {f['description']}"]
+        if f["max_sample_time"] is None:
+            if not declared:
+                return out
+            return [*out, f"  implementation covered    NO: {'; '.join(f['reasons']) or 'not certified'}"]
+        ex, tight = f["exact_max_sample_time"], f["tightness"]
+        vs = "" if tight is None else f", {tight:.2f} of the exact nominal limit {ex:.4g} s"
+        out.append(
+            f"  stability limit (LK)      sample time <= {f['max_sample_time']:.4g} s at delay {f['delay']:.4g} s{vs}; "
+            f"delay <= {f['max_delay']:.4g} s (the loop alone: no noise, no envelope)"
+        )
+        b, u = f["error_bounds"], f["ultimate_bounds"]
+        if declared and b is not None and u is not None:
+            out.append(
+                f"  errors (whole run)        |e| <= {b['position']:.3g} m, |e'| <= {b['velocity']:.3g} m/s, "
+                f"|e_psi| <= {b['heading']:.3g} rad, |e_r| <= {b['yaw_rate']:.3g} rad/s "
+                f"(decay {f['decay_rate']:.3g} 1/s)"
+            )
+            out.append(
+                f"  ultimate bounds           |e| <= {u['position']:.3g} m, |e'| <= {u['velocity']:.3g} m/s, "
+                f"|e_psi| <= {u['heading']:.3g} rad, |e_r| <= {u['yaw_rate']:.3g} rad/s"
+            )
+        if declared:
+            verdict = "yes" if f["covers"] else "NO: " + ("; ".join(f["reasons"]) or "not certified")
+            out.append(f"  implementation covered    {verdict}")
+        return out
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """Does the implementation certificate cover this sampled, delayed or noisy run (a condition)?
+
+        Its bounds are about starts measured against the raw mission, so a run that needs a
+        blended start is not covered by it.
+        """
+        point = ctx.point
+        if point.config.implementation.continuous:
+            return None
+        earlier = ctx.checks.get("closed_loop")
+        cert, cov = (None, None) if earlier is None else earlier.detail
+        impl = implementation_summary(point, cert, continuous_ok=False, search=False, horizon=ctx.horizon)
+        if cov is not None and cov.blend_time is not None:
+            why = (
+                "the implementation certificate covers starts on the raw mission; this start needs a blended reference"
+            )
+            impl = replace(impl, covers=False, reasons=(*impl.reasons, why))
+        notes = () if impl.covers else ("implementation not covered: " + "; ".join(impl.reasons),)
+        return RunCheck(self.name, "condition", True, impl.covers, "; ".join(impl.reasons), notes, detail=impl)
 
 
 __all__ = [

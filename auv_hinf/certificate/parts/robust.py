@@ -1,14 +1,15 @@
-"""The robust part of a certificate and of a run, from a design point.
+"""The robust part: the design's gains on every plant of the declared box, in the declared current.
 
 :func:`robust_summary` certifies the design's gains (the robust design's when ``[design]
 robust = true``, else Theorem 1's) for the declared ``[uncertainty]`` box and
 ``[disturbance]`` current along the mission, with margins and the weakest corner;
 :func:`check_robust_run` says whether one simulated run (plant, current, start) is covered
-and gives its certified bounds.
+and gives its certified bounds. :class:`RobustPart` is the part of the certificate.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -17,6 +18,7 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Setting, Verdict, reason_from
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
@@ -32,6 +34,8 @@ from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
 from auv_hinf.robust.invariant_set import RobustCertificate, robust_certificate
 from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest_corner
 
+#: The part's registry name and JSON key.
+PART = "robust"
 #: Largest fleet whose own shaped tube is built to check a run (the tube costs ~0.1-1 s a vehicle).
 RUN_TUBE_MAX_N = 16
 #: Relative tolerance of the plant-in-box and current-in-disc tests (round-off of TOML decimals).
@@ -54,7 +58,12 @@ class RobustSummary:
         Present when ``[design] robust = true``.
     nominal_rate : float or None
         The nominal closed-loop decay rate (1/s), reported when nothing is declared.
-    reasons : tuple of str
+    reasons : tuple of Reason
+        Why the declared box and current are not covered, beyond the certificate's own reasons.
+    gains : Gains or None
+        The gains certified (those of the design point).
+    without_integral : RobustCertificate or None
+        With integral action: the same gains with ``ki = 0``, for comparison.
     """
 
     declared: bool
@@ -63,7 +72,7 @@ class RobustSummary:
     worst: Witness | None
     design: RobustDesign | None
     nominal_rate: float | None
-    reasons: tuple[str, ...]
+    reasons: tuple[Reason, ...]
     gains: Gains | None = None
     without_integral: RobustCertificate | None = None
 
@@ -73,39 +82,6 @@ class RobustSummary:
         if not self.declared:
             return self.nominal_rate is not None and not self.reasons
         return self.certificate is not None and self.certificate.covers and not self.reasons
-
-    def lines(self) -> list[str]:
-        """Lines of ``Certificate.summary`` when a box or a current is declared (none otherwise)."""
-        if not self.declared:
-            return []
-        c = self.certificate
-        what = "the declared box and current"
-        if c is not None and not (c.box.declared or c.current > 0.0):
-            what = "the controller's model (no box or current declared)"
-        out = [f"  robust certificate        {'covers' if self.covers else 'does NOT cover'} {what}"]
-        if c is not None and c.bounds is not None and c.decay_rate is not None:
-            b = c.bounds
-            out.append(
-                f"    decay rate {c.decay_rate:.4g} 1/s; ultimate |e| <= {b.position:.4g} m, "
-                f"|e'| <= {b.velocity:.4g} m/s, |e_psi| <= {b.heading:.4g} rad, |e_r| <= {b.yaw_rate:.4g} rad/s"
-            )
-        if c is not None and c.thrust is not None:
-            t = c.thrust
-            out.append(
-                f"    thrust |tau_x| <= {t.force_x:.5g} N, |tau_y| <= {t.force_y:.5g} N, "
-                f"|tau_psi| <= {t.moment:.5g} N m"
-            )
-        if self.margin is not None and c is not None and (c.box.declared or c.current > 0.0):
-            out.append(f"    box scale certified up to {self.margin.lower:.4g} (1 = the declared box)")
-        integral = self.integral()
-        if integral is not None:
-            without = integral["position_bound_without"]
-            out.append(
-                f"    integral action ki {integral['ki']:.4g} 1/s^3: |e| <= {integral['position_bound']:.4g} m; "
-                "the same alpha, k1 without it: "
-                + (f"|e| <= {without:.4g} m" if without is not None else "not certified")
-            )
-        return out
 
     def integral(self) -> dict[str, Any] | None:
         """The ``integral`` object of ``robust``: the position bound with and without integral action (m).
@@ -147,7 +123,10 @@ class RobustSummary:
             "gains": None if gains is None else gains.to_dict(),
             "design": None if self.design is None else self.design.to_dict(),
             "details": None if c is None else c.to_dict(),
-            "reasons": list(self.reasons) + ([] if c is None else list(c.reasons)),
+            "reasons": [r.message for r in self.reasons] + ([] if c is None else list(c.reasons)),
+            "box_declared": bool(c is not None and c.box.declared),
+            "current_speed": None if c is None else c.current,
+            "thrust": None if c is None or c.thrust is None else c.thrust.to_dict(),
         } | ({} if (integral := self.integral()) is None else {"integral": integral})
 
 
@@ -171,13 +150,21 @@ def robust_summary(
         if nominal is None and not gains.integral:  # integral action: the robust certificate alone
             nominal = closed_loop_for(point)
     except AuvHinfError as exc:
-        return RobustSummary(declared, None, None, None, design, None, (f"not certified: {exc}",))
+        return RobustSummary(declared, None, None, None, design, None, (reason_from(PART, exc, "not certified: "),))
     if not declared:  # integral action is declared: here the nominal certificate exists
         return RobustSummary(False, None, None, None, design, None if nominal is None else nominal.rate, (), gains)
-    reasons: list[str] = []
+    reasons: list[Reason] = []
     if cfg.disturbance.current_rate:
         reasons.append(
-            "a time-varying current (current_rate > 0) is not certified: the certificate assumes it constant"
+            Reason(
+                PART,
+                "unsupported",
+                "a time-varying current (current_rate > 0) is not certified: the certificate assumes it constant",
+                channel="current_rate",
+                value=cfg.disturbance.current_rate,
+                limit=0.0,
+                settings=(Setting("disturbance", "current_rate", 0.0),),
+            )
         )
     cert = robust_certificate(box, cfg.envelope, tube, gains, current, cfg.actuators)
     margin = None
@@ -271,6 +258,96 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
         return RobustRunCheck(False, bounds, "the start is outside the certified invariant set", design_covered=True)
     why = "covered: plant and current declared, start inside the certified set"
     return RobustRunCheck(True, bounds, why, design_covered=True, thrust=cert.thrust)
+
+
+@dataclass(frozen=True)
+class RobustPart:
+    """Every plant of the declared box, every current up to the declared bound (see the module docstring).
+
+    With nothing declared it reports the nominal loop's decay rate and holds; it applies when a
+    box, a current or integral action is declared, or when the robust design gives the gains.
+    """
+
+    name: str = PART
+    key: str | None = PART
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The robust summary of ``ctx.point``, reusing the closed-loop part's certificate."""
+        point = ctx.point
+        design_failed = [r for r in point.reasons if r.part == self.name]
+        loop = ctx.detail("closed_loop")
+        rob = robust_summary(point, nominal=None if loop is None else loop.certificate)
+        c = rob.certificate
+        peaks = () if not rob.declared or c is None or c.thrust is None else (c.thrust.as_tuple(),)
+        margins = None if not rob.declared or c is None else c.margins
+        binding = None if margins is None else f"operating envelope (smallest margin {margins.min:.3g})"
+        figures = rob.to_dict()
+        applies = rob.declared or point.source == "robust"
+        if design_failed:  # the robust design gave no gains: that is the verdict
+            return Verdict(self.name, False, True, tuple(design_failed), figures, peaks, binding, rob)
+        if rob.declared and not rob.covers:
+            why = Reason(
+                self.name,
+                "not_covered",
+                "robust certificate does not cover the declared [uncertainty] box and [disturbance] current: "
+                + ("; ".join(figures["reasons"]) or "see robust"),
+            )
+            return Verdict(self.name, False, True, (why,), figures, peaks, binding, rob)
+        return Verdict(self.name, True, applies, (), figures, peaks, binding, rob)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """The robust certificate's lines when a box or a current is declared (none otherwise)."""
+        f = figures
+        if f is None or not f["declared"]:
+            return []
+        model_only = f["current_speed"] is not None and not f["box_declared"] and not f["current_speed"] > 0.0
+        what = "the controller's model (no box or current declared)" if model_only else "the declared box and current"
+        out = [f"  robust certificate        {'covers' if f['covers'] else 'does NOT cover'} {what}"]
+        b = f["ultimate_bounds"]
+        if b is not None and f["decay_rate"] is not None:
+            out.append(
+                f"    decay rate {f['decay_rate']:.4g} 1/s; ultimate |e| <= {b['position']:.4g} m, "
+                f"|e'| <= {b['velocity']:.4g} m/s, |e_psi| <= {b['heading']:.4g} rad, "
+                f"|e_r| <= {b['yaw_rate']:.4g} rad/s"
+            )
+        t = f.get("thrust")
+        if t is not None:
+            out.append(
+                f"    thrust |tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, "
+                f"|tau_psi| <= {t['moment']:.5g} N m"
+            )
+        if f["margin"] is not None and not model_only and f["current_speed"] is not None:
+            out.append(f"    box scale certified up to {f['margin']['lower']:.4g} (1 = the declared box)")
+        integral = f.get("integral")
+        if integral is not None:
+            without = integral["position_bound_without"]
+            out.append(
+                f"    integral action ki {integral['ki']:.4g} 1/s^3: |e| <= {integral['position_bound']:.4g} m; "
+                "the same alpha, k1 without it: "
+                + (f"|e| <= {without:.4g} m" if without is not None else "not certified")
+            )
+        return out
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """Does the robust certificate cover this run (plant in the box, current within the bound, start inside)?"""
+        point = ctx.point
+        if not point.declared:
+            return None
+        rc = check_robust_run(point, ctx.reference, ctx.initial)
+        refuses = None
+        if rc.design_covered is False:
+            refuses = f"the robust certificate does not cover the declared box and current: {rc.reason}"
+        return RunCheck(
+            self.name,
+            "certificate",
+            True,
+            rc.covered,
+            rc.reason,
+            bounds=rc.bounds,
+            thrust=rc.thrust,
+            refuses_gains=refuses,
+            detail=rc,
+        )
 
 
 __all__ = ["BOX_RTOL", "RUN_TUBE_MAX_N", "RobustRunCheck", "RobustSummary", "check_robust_run", "robust_summary"]

@@ -1,0 +1,428 @@
+"""The certificate-part protocol: what every part of a certificate gives, as data.
+
+A certificate is a sequence of parts (the paper's Theorem 1, the closed loop along the
+mission, the robust certificate of a declared box and current, the actuators, the
+implementation, and any part registered later). Each part takes the design point and the
+verdicts of the parts before it, and returns a :class:`Verdict`:
+
+* whether it holds, and whether it applies to what was declared;
+* its :class:`Reason`\\ s, as data: the part, a kind from :data:`REASON_KINDS`, the channel,
+  the vehicle, the value and the limit, and the :class:`Setting`\\ s of the configuration
+  that would change the verdict (a TOML table, a key and a value), next to the sentence a
+  person reads;
+* its figures: the JSON object ``certify --json`` prints under the part's key (or at the top
+  level for a part whose ``key`` is ``None``);
+* the commanded-force bounds it proves (N, N, N m), which the actuator part holds against the
+  limits, and what binds it, if it is the design's limit.
+
+Its text section is written from its figures alone, so a certificate read back from its file
+prints the same text as the one just computed. No code decides anything from the words of a
+reason: verdicts route on ``ok``, ``applies``, ``kind`` and the other fields.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Protocol, get_args
+
+from auv_hinf.exceptions import DesignError, SolverError
+
+if TYPE_CHECKING:
+    from auv_hinf.certificate.design_point import DesignPoint
+
+#: What a reason says, in one word (``Reason.kind``):
+#:
+#: * ``design``: the gain design gives no gains (infeasible method, failed synthesis);
+#: * ``marginal``: a strict inequality holds only up to its tolerance;
+#: * ``hypothesis``: a hypothesis of the theorem fails (a singular case, a sign);
+#: * ``disagrees``: independent computations of one number disagree;
+#: * ``envelope``: the desired motion or the certified set leaves the operating envelope;
+#: * ``start``: the configured start is outside the certified start set;
+#: * ``thrust``: the certified commanded force exceeds the actuators' limits;
+#: * ``not_covered``: the certificate does not cover what was declared (the sub-reasons say why);
+#: * ``unsupported``: the declared case is outside what the certificate covers (a time-varying current);
+#: * ``solver``: a numerical route failed or did not re-verify;
+#: * ``advice``: not a failure: the settings that would certify, with their values.
+ReasonKind = Literal[
+    "design",
+    "marginal",
+    "hypothesis",
+    "disagrees",
+    "envelope",
+    "start",
+    "thrust",
+    "not_covered",
+    "unsupported",
+    "solver",
+    "advice",
+]
+REASON_KINDS: tuple[ReasonKind, ...] = get_args(ReasonKind)
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A value of the configuration that would change a verdict.
+
+    Attributes
+    ----------
+    table : str
+        The TOML table (``"uncertainty"``, ``"disturbance"``, ``"implementation"``, ...).
+    key : str
+        The key in that table, as the user writes it.
+    value : Any
+        The value to write there (a number in the key's unit, or a ``[lo, hi]`` pair).
+    """
+
+    table: str
+    key: str
+    value: Any
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary."""
+        return {"table": self.table, "key": self.key, "value": self.value}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Setting:
+        """Inverse of :meth:`to_dict`."""
+        return cls(str(data["table"]), str(data["key"]), data["value"])
+
+
+@dataclass(frozen=True)
+class Reason:
+    """Why a part does not hold, as data, with the sentence a person reads.
+
+    Attributes
+    ----------
+    part : str
+        The part's registry name.
+    kind : str
+        One of :data:`REASON_KINDS`.
+    message : str
+        The sentence printed under ``CERTIFIED: no`` and in ``certify --json``'s ``reasons``.
+    channel : str, optional
+        What is measured: a force channel (``force_x``, ``force_y``, ``moment``), an envelope
+        channel (``u``, ``v``, ``r``), ``sample_time``, ``delay``, ...
+    vehicle : int, optional
+        The vehicle it is about (0-based), when one vehicle binds.
+    value, limit : float, optional
+        The value found and the limit it is held against (in the channel's unit).
+    settings : tuple of Setting
+        Configuration values that would certify (empty when none is known).
+    """
+
+    part: str
+    kind: str
+    message: str
+    channel: str | None = None
+    vehicle: int | None = None
+    value: float | None = None
+    limit: float | None = None
+    settings: tuple[Setting, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.kind not in REASON_KINDS:
+            raise ValueError(f"reason kind must be one of {REASON_KINDS}, got {self.kind!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary."""
+        return {
+            "part": self.part,
+            "kind": self.kind,
+            "message": self.message,
+            "channel": self.channel,
+            "vehicle": self.vehicle,
+            "value": self.value,
+            "limit": self.limit,
+            "settings": [s.to_dict() for s in self.settings],
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Reason:
+        """Inverse of :meth:`to_dict`."""
+        return cls(
+            part=str(data["part"]),
+            kind=str(data["kind"]),
+            message=str(data["message"]),
+            channel=data.get("channel"),
+            vehicle=data.get("vehicle"),
+            value=data.get("value"),
+            limit=data.get("limit"),
+            settings=tuple(Setting.from_dict(s) for s in data.get("settings") or ()),
+        )
+
+
+#: A commanded-force bound ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
+Peak = tuple[float, float, float]
+
+
+def figures_in(entry: Mapping[str, Any], record: Mapping[str, Any]) -> Any:
+    """The figures, in a certificate ``record``, of the part whose ``parts`` entry is ``entry``."""
+    key = entry.get("key")
+    if key is not None:
+        return record.get(key)
+    return {k: record[k] for k in entry.get("keys", ()) if k in record}
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What one part says about a design.
+
+    Attributes
+    ----------
+    part : str
+        The part's registry name.
+    ok : bool
+        The part holds (a part that does not apply holds).
+    applies : bool
+        The part is about something the configuration declares or the design needs.
+    reasons : tuple of Reason
+        Why it does not hold (empty when it does).
+    figures : Mapping
+        The part's JSON object (``None`` when it has none to report).
+    peaks : tuple of Peak
+        Commanded-force bounds the part proves (N, N, N m).
+    binding : str, optional
+        What limits the design, when this part is what binds it (one line).
+    detail : Any
+        The part's typed result (certificates, matrices); ``None`` for a certificate read back
+        from its file, which keeps the figures only.
+    key : str or None
+        The JSON key of the figures (set by the assembly from the part; ``None``: top-level keys).
+    """
+
+    part: str
+    ok: bool
+    applies: bool = True
+    reasons: tuple[Reason, ...] = ()
+    figures: Any = None
+    peaks: tuple[Peak, ...] = ()
+    binding: str | None = None
+    detail: Any = field(default=None, compare=False)
+    key: str | None = None
+
+    def record(self) -> dict[str, Any]:
+        """The verdict's entry in ``certify --json``'s ``parts`` object.
+
+        ``key`` is where its figures are; a part whose figures are top-level keys lists them
+        under ``keys`` instead.
+        """
+        out: dict[str, Any] = {
+            "ok": self.ok,
+            "applies": self.applies,
+            "reasons": [r.to_dict() for r in self.reasons],
+            "key": self.key,
+        }
+        if self.key is None:
+            out["keys"] = sorted(self.figures or {})
+        return out
+
+    @classmethod
+    def restored(cls, part: str, entry: Mapping[str, Any], record: Mapping[str, Any]) -> Verdict:
+        """The verdict of a stored certificate: its ``parts`` entry and its figures in ``record``, no detail."""
+        key = entry.get("key")
+        figures = figures_in(entry, record)
+        return cls(
+            part=part,
+            ok=bool(entry["ok"]),
+            applies=bool(entry["applies"]),
+            reasons=tuple(Reason.from_dict(r) for r in entry["reasons"]),
+            figures=figures,
+            key=key,
+        )
+
+
+@dataclass(frozen=True)
+class PartContext:
+    """What a part sees: the design point and the verdicts of the parts before it.
+
+    Attributes
+    ----------
+    point : DesignPoint
+        The design of the configuration (gains, mission, tube, box, current, ...).
+    verdicts : Mapping of str to Verdict
+        The verdicts so far, by part name, in registry order.
+    options : Mapping
+        Options of the ``certify`` call (e.g. ``jacobi_samples``), read by the parts they concern.
+    """
+
+    point: DesignPoint
+    verdicts: Mapping[str, Verdict]
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    def detail(self, name: str) -> Any:
+        """The typed result of an earlier part (``None`` when it did not run or gave none)."""
+        v = self.verdicts.get(name)
+        return None if v is None else v.detail
+
+    def holds_so_far(self) -> bool:
+        """Every earlier part holds."""
+        return all(v.ok for v in self.verdicts.values())
+
+    def peaks(self) -> list[Peak]:
+        """Every force bound the earlier parts prove (N, N, N m)."""
+        return [p for v in self.verdicts.values() for p in v.peaks]
+
+
+#: How a part's verdict on one run combines with the others': a run is covered when some
+#: applicable ``certificate`` covers it and every applicable ``condition`` holds.
+RunRole = Literal["certificate", "condition"]
+
+
+@dataclass(frozen=True)
+class RunContext:
+    """What a part sees when it judges one run: the design, the start, the horizon, earlier checks.
+
+    Attributes
+    ----------
+    point : DesignPoint
+    initial : ndarray, shape (N, 6)
+        The run's initial states ``[x, y, psi, u, v, r]`` (m, rad, m/s, rad/s).
+    start : {"shaped", "paper"}
+        The start mode.
+    horizon : float
+        The run's horizon (s).
+    checks : Mapping of str to RunCheck
+        The checks of the parts before it.
+    """
+
+    point: DesignPoint
+    initial: Any
+    start: str
+    horizon: float
+    checks: Mapping[str, RunCheck] = field(default_factory=dict)
+
+    @property
+    def reference(self) -> Any:
+        """The fleet reference the run tracks: the first one an earlier check chose, else the raw mission."""
+        chosen = next((c.reference for c in self.checks.values() if c.reference is not None), None)
+        return self.point.fleet() if chosen is None else chosen
+
+
+@dataclass(frozen=True)
+class RunCheck:
+    """One part's verdict on one run.
+
+    Attributes
+    ----------
+    part : str
+    role : {"certificate", "condition"}
+        See :data:`RunRole`.
+    applies : bool
+        The part has something to say about this run.
+    covers : bool
+        It covers the run (a certificate) or the run meets it (a condition).
+    reason : str
+        One line on the verdict.
+    notes : tuple of str
+        Lines for the run's ``coverage_reason``.
+    bounds : dict or None
+        Certified per-vehicle error bounds of the run (m, m/s, rad, rad/s), when it covers.
+    thrust : Any
+        The certified commanded-force bound of the run (:class:`~auv_hinf.actuation.thrust.ThrustBounds`).
+    reference : Any
+        The fleet reference this part chose for the run (a shaped start), if any.
+    refuses_gains : str or None
+        Why no certificate covers the gains themselves (``simulate`` refuses them without
+        ``--uncertified``), whatever this run's start.
+    detail : Any
+        The part's typed result on the run.
+    """
+
+    part: str
+    role: RunRole
+    applies: bool
+    covers: bool
+    reason: str = ""
+    notes: tuple[str, ...] = ()
+    bounds: dict[str, float] | None = None
+    thrust: Any = None
+    reference: Any = None
+    refuses_gains: str | None = None
+    detail: Any = field(default=None, compare=False)
+
+
+def run_covered(checks: Sequence[RunCheck]) -> bool:
+    """Some applicable certificate covers the run and every applicable condition holds."""
+    certificates = [c for c in checks if c.applies and c.role == "certificate"]
+    conditions = [c for c in checks if c.applies and c.role == "condition"]
+    return any(c.covers for c in certificates) and all(c.covers for c in conditions)
+
+
+class CertificatePart(Protocol):
+    """One part of a certificate (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        The registry name (the key of the ``parts`` object of ``certify --json``).
+    key : str or None
+        The JSON key of the part's figures (``None``: the figures are top-level keys).
+    """
+
+    @property
+    def name(self) -> str:
+        """The registry name."""
+        ...
+
+    @property
+    def key(self) -> str | None:
+        """The JSON key of the figures (``None``: at the top level)."""
+        ...
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The part's verdict on ``ctx.point`` given the earlier verdicts."""
+        ...
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """The part's section of the readable table, from its figures (and the whole record)."""
+        ...
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """The part's verdict on one run (``None``: the part says nothing about runs)."""
+        ...
+
+
+def reason_from(part: str, exc: Exception, prefix: str = "") -> Reason:
+    """The :class:`Reason` of a refusal raised as an exception (its message after ``prefix``).
+
+    A :class:`~auv_hinf.exceptions.DesignError` carries its kind and data; a
+    :class:`~auv_hinf.exceptions.SolverError` is a ``solver`` reason; anything else ``not_covered``.
+    """
+    message = prefix + str(exc)
+    if isinstance(exc, DesignError):
+        return Reason(
+            part,
+            exc.kind if exc.kind in REASON_KINDS else "not_covered",
+            message,
+            channel=exc.channel,
+            vehicle=exc.vehicle,
+            value=exc.value,
+            limit=exc.limit,
+            settings=tuple(Setting(t, k, v) for t, k, v in exc.settings),
+        )
+    return Reason(part, "solver" if isinstance(exc, SolverError) else "not_covered", message)
+
+
+def reasons_of(verdicts: Sequence[Verdict]) -> tuple[Reason, ...]:
+    """Every reason of the verdicts that do not hold, in order."""
+    return tuple(r for v in verdicts if not v.ok for r in v.reasons)
+
+
+__all__ = [
+    "REASON_KINDS",
+    "CertificatePart",
+    "PartContext",
+    "Peak",
+    "Reason",
+    "ReasonKind",
+    "RunCheck",
+    "RunContext",
+    "RunRole",
+    "Setting",
+    "Verdict",
+    "figures_in",
+    "reason_from",
+    "reasons_of",
+    "run_covered",
+]

@@ -1,0 +1,79 @@
+"""The registry of certificate parts: which parts every certificate has, in the order they run.
+
+:data:`PARTS` lists the toolbox's parts; a part may read the verdicts of the parts before it
+(the robust part reuses the closed-loop certificate, the actuator part holds every earlier
+part's force bounds against the limits). Adding a part to the toolbox is one new module and
+one line here. :func:`register_part` adds a part at run time (a plug-in, or a test), and
+:func:`unregister_part` removes it again.
+"""
+
+from __future__ import annotations
+
+from auv_hinf.certificate.part import CertificatePart
+from auv_hinf.certificate.parts.actuators import ActuatorPart
+from auv_hinf.certificate.parts.closed_loop import ClosedLoopPart
+from auv_hinf.certificate.parts.implementation import ImplementationPart
+from auv_hinf.certificate.parts.robust import RobustPart
+from auv_hinf.certificate.parts.theorem1 import Theorem1Part
+from auv_hinf.exceptions import ParameterError
+
+#: The toolbox's parts, in evaluation order.
+PARTS: tuple[CertificatePart, ...] = (
+    Theorem1Part(),
+    ClosedLoopPart(),
+    RobustPart(),
+    ActuatorPart(),
+    ImplementationPart(),
+)
+
+_registered: list[CertificatePart] = list(PARTS)
+
+
+def parts() -> tuple[CertificatePart, ...]:
+    """The parts every certificate is assembled from now, in evaluation order."""
+    return tuple(_registered)
+
+
+def part_named(name: str) -> CertificatePart | None:
+    """The registered part called ``name`` (``None``: not registered)."""
+    return next((p for p in _registered if p.name == name), None)
+
+
+def register_part(part: CertificatePart, *, after: str | None = None) -> None:
+    """Add ``part`` to every certificate from now on: last, or right after the part named ``after``.
+
+    Raises
+    ------
+    ParameterError
+        If a part of that name is registered already, its key is taken, or ``after`` is unknown.
+    """
+    if part_named(part.name) is not None:
+        raise ParameterError(f"a certificate part called {part.name!r} is registered already")
+    if part.key is not None and any(p.key == part.key for p in _registered):
+        raise ParameterError(f"the JSON key {part.key!r} belongs to another certificate part")
+    if after is None:
+        _registered.append(part)
+        return
+    names = [p.name for p in _registered]
+    if after not in names:
+        raise ParameterError(f"no certificate part called {after!r} (parts: {names})")
+    _registered.insert(names.index(after) + 1, part)
+
+
+def unregister_part(name: str) -> None:
+    """Remove the part called ``name`` (one of the toolbox's own parts cannot be removed).
+
+    Raises
+    ------
+    ParameterError
+        If no such part is registered, or it is one of :data:`PARTS`.
+    """
+    part = part_named(name)
+    if part is None:
+        raise ParameterError(f"no certificate part called {name!r}")
+    if any(p.name == name for p in PARTS):
+        raise ParameterError(f"{name!r} is one of the toolbox's own certificate parts")
+    _registered.remove(part)
+
+
+__all__ = ["PARTS", "part_named", "parts", "register_part", "unregister_part"]
