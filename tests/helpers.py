@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from functools import cache
+
 import numpy as np
 
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.config.presets import preset_config
 from auv_hinf.mission.fleet import FleetReference
+from auv_hinf.models.envelope import Envelope
 
 #: Four BlueROV2 Heavy on a gentle sine with Theorem 1 gains (gamma = 0.1, method minimal): a loop gentle
 #: enough to be sampled, and a mission that keeps it inside its envelope.
@@ -27,3 +33,18 @@ def starts_from_errors(fleet: FleetReference, errors: np.ndarray) -> np.ndarray:
     c, s = np.cos(psi), np.sin(psi)
     u, v = c * vel[..., 0] + s * vel[..., 1], -s * vel[..., 0] + c * vel[..., 1]
     return np.concatenate([m.p + e, psi[..., None], u[..., None], v[..., None], (m.r + dep)[..., None]], axis=-1)
+
+
+@cache
+def preset_certificate(name: str) -> Certificate:
+    """The certificate of preset ``name``, computed once per test process (the heavy presets take seconds)."""
+    return certify(preset_config(name))
+
+
+@cache
+def failed_certificate() -> Certificate:
+    """Not certified: the paper's gain is infeasible on this envelope, so there is no closed loop."""
+    cfg = replace(
+        preset_config("paper-triangle"), envelope=Envelope(u=(0, 0.1), v=(-0.1, 0.1), r=(-20, 20)), method="paper"
+    )
+    return certify(cfg)

@@ -251,6 +251,37 @@ def _gains_of_version_1(config: FormationConfig, record: dict[str, Any]) -> dict
     return {"alpha": alpha, "k1": config.k1, "k_psi": list(k_psi), "source": "theorem1"}
 
 
+#: Scalar fields of the tagged state of version 1-3 files and where the record holds them: an
+#: edited record disagrees with its state on one of these (the state itself is not rebuilt).
+LEGACY_STATE_SCALARS = {
+    "lam": ("lambda",),
+    "gamma": ("gamma",),
+    "alpha_used": ("alpha", "used"),
+    "small_gain_margin": ("small_gain_margin",),
+    "position_loop_hinf": ("position_loop_hinf",),
+    "certified": ("certified",),
+}
+
+
+def _legacy_state_agrees(state: Any, record: dict[str, Any], source: str) -> None:
+    """Refuse a version 1-3 record whose scalars disagree with the tagged state stored beside it."""
+    if not isinstance(state, dict):
+        raise ConfigError(f"{source}: certificate file lacks the object(s) ['state']")
+    for name, path in LEGACY_STATE_SCALARS.items():
+        value = state.get(name)
+        if isinstance(value, dict) and set(value) == {"$float"}:
+            value = None  # a non-finite float, which the record holds as null
+        if value is not None and not isinstance(value, (bool, int, float)):
+            continue
+        found: Any = record
+        for key in path:
+            found = found.get(key) if isinstance(found, dict) else None
+        if found != value:
+            raise ConfigError(
+                f"{source}: the certificate record disagrees with its stored state in [{path[0]!r}] (edited file?)"
+            )
+
+
 def _consistent(config: FormationConfig, record: CertificateRecord, source: str) -> None:
     """Refuse a record that disagrees with its configuration or whose verdict disagrees with its parts."""
     expected = json_normal({"n": config.n, "envelope": config.envelope.to_dict(), "vehicle": config.vehicle.to_dict()})
@@ -305,6 +336,7 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
             raise ConfigError(f"{source}: the digest does not match the record (edited or truncated file?)")
         raw = doc["certificate"]
     else:
+        _legacy_state_agrees(doc.get("state"), doc["certificate"], source)
         raw = _legacy_record(version, config, doc["certificate"])
     try:
         record = CertificateRecord.model_validate(raw)
@@ -365,6 +397,7 @@ def load_certificate(path: str | Path) -> Certificate:
 __all__ = [
     "FORMAT",
     "LEGACY_PART_KEYS",
+    "LEGACY_STATE_SCALARS",
     "LEGACY_THEOREM1_KEYS",
     "READABLE_VERSIONS",
     "VERSION",

@@ -189,6 +189,8 @@ class Verdict:
         from its file, which keeps the figures only.
     key : str or None
         The JSON key of the figures (set by the assembly from the part; ``None``: top-level keys).
+    note : str or None
+        Where the verdict comes from, when it is not a part of this session (a stored record).
     """
 
     part: str
@@ -200,6 +202,7 @@ class Verdict:
     binding: str | None = None
     detail: Any = field(default=None, compare=False)
     key: str | None = None
+    note: str | None = None
 
     def record(self) -> dict[str, Any]:
         """The verdict's entry in ``certify --json``'s ``parts`` object.
@@ -214,7 +217,9 @@ class Verdict:
             "key": self.key,
         }
         if self.key is None:
-            out["keys"] = sorted(self.figures or {})
+            out["keys"] = list(self.figures or {})
+        if self.note is not None:
+            out["note"] = self.note
         return out
 
     @classmethod
@@ -229,6 +234,7 @@ class Verdict:
             reasons=tuple(Reason.from_dict(r) for r in entry["reasons"]),
             figures=figures,
             key=key,
+            note=entry.get("note"),
         )
 
 

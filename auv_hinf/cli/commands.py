@@ -231,6 +231,11 @@ def _short(value: Any) -> str:
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
+    if args.certificate:
+        from auv_hinf.certificate.document import certificate_schema
+
+        print(json.dumps(certificate_schema(), indent=2))
+        return EXIT_OK
     from auv_hinf.config.schema import json_schema
 
     print(json.dumps(json_schema(), indent=2))

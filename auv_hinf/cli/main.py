@@ -111,7 +111,12 @@ def build_parser() -> argparse.ArgumentParser:
                 help="tighten the Jacobi sigma bound by branch-and-bound (N <= 3, ~25 s)",
             )
 
-    sub.add_parser("schema", help="print the JSON Schema of the TOML configuration", allow_abbrev=False)
+    sc = sub.add_parser(
+        "schema", help="print the JSON Schema of the TOML configuration (or of certificate files)", allow_abbrev=False
+    )
+    sc.add_argument(
+        "--certificate", action="store_true", help="the schema of the files certify --out and Certificate.save write"
+    )
     i = sub.add_parser("init", help="write an annotated starting configuration", allow_abbrev=False)
     i.add_argument("--out", type=Path, help="file to write (default: print to stdout)")
     i.add_argument("--preset", choices=PRESETS, default=PRESETS[0], help=f"starting point (default {PRESETS[0]})")

@@ -247,6 +247,7 @@ def check_run(
         thrust = None if lazy_thrust and not marg.ok else _fleet_thrust(params, envelope, gains, fleet, bounds, cells)
     except AuvHinfError as exc:
         return Coverage(False, start, fleet, bounds, None, None, tb, th, str(exc))
+    covered = False
     if not marg.ok:
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
         unit = "rad/s" if worst.startswith("r") else "m/s"
@@ -259,8 +260,9 @@ def check_run(
     elif actuators is not None and thrust is not None and not actuators.admits(thrust.as_tuple()):
         reason = "not covered: " + actuator_shortfall(actuators, thrust.as_tuple())
     else:
+        covered = True
         reason = "covered: start inside the certified invariant set, reference inside the envelope"
-    return Coverage(reason.startswith("covered"), start, fleet, bounds, marg, thrust, tb, th, reason)
+    return Coverage(covered, start, fleet, bounds, marg, thrust, tb, th, reason)
 
 
 def cover_start(

@@ -1,9 +1,16 @@
-"""Validation messages: one readable line per problem, naming its TOML path.
+"""What the user is told about their input: one readable line per problem, and warnings.
 
 Pydantic's errors are rewritten as ``design.gamma must be > 0.0 s, got -1``,
 ``design.gama is not a known key; did you mean 'gamma'?`` or
 ``[extra] is an unknown table; expected one of: ...`` and raised together as one
 :class:`~auv_hinf.exceptions.ConfigError`.
+
+:func:`input_warnings` flags input that validates but is probably not what the user meant;
+the CLI prints the lines on standard error before it runs:
+
+* an angle (rad) beyond ``2 pi`` in magnitude, which usually means degrees typed by mistake
+  (``envelope.psi``, ``reference.heading``, the heading column of ``simulation.initial``);
+* a configuration file that sets nothing, so every default is certified without a word.
 """
 
 from __future__ import annotations

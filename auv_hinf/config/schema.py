@@ -1,5 +1,16 @@
-"""Building blocks of the TOML schema: field helpers, the strict base table, the parameter list
-and the ``[reference]`` models (one per mission kind). :mod:`auv_hinf.config.schema` assembles them."""
+"""The TOML configuration format as strict pydantic models: every table, its fields, units and defaults.
+
+Every table is a model with ``extra="forbid"`` and strict types: a string is never read
+as a number, a float never as an integer (an integer is fine where a float is expected),
+NaN and infinities are refused. Each physical field carries its unit (``unit`` in the
+JSON Schema) and its valid range. The tables are the vehicle, formation, envelope, design,
+reference (one model per mission kind), simulation, and the conditions a design meets: the
+true plant, the declared box and current, the actuators and the controller as it runs.
+:func:`auv_hinf.config.messages.parse_config` turns a parsed TOML document into a validated
+:class:`ConfigFile`; every problem becomes one line of a :class:`~auv_hinf.exceptions.ConfigError`
+that names its TOML path (``design.gamma``) and, for a misspelled key, the closest valid name.
+The default of every key is declared here once (:func:`schema_default`).
+"""
 
 from __future__ import annotations
 

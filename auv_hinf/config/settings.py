@@ -1,8 +1,12 @@
-"""Frozen runtime settings of the ``[reference]``, ``[simulation]``, ``[uncertainty]`` and
-``[disturbance]`` tables.
+"""Design configurations: frozen runtime objects, validated from TOML files or from Python.
 
-Each validates itself at construction with the table's model of :mod:`auv_hinf.config.schema`,
-so a bad value raises :class:`~auv_hinf.exceptions.ConfigError` from Python as from TOML.
+The TOML format is defined by the strict pydantic models of :mod:`auv_hinf.config.schema`
+(``auv-hinf schema`` prints it as JSON Schema). :class:`FormationConfig` and its tables
+(``[reference]``, ``[simulation]``, ``[uncertainty]``, ``[disturbance]``) are frozen dataclasses
+that validate themselves with the same models at construction, so a bad value raises
+:class:`~auv_hinf.exceptions.ConfigError` whether it comes from a file or from Python.
+:func:`read_document` reads every input file of the toolbox (configurations and certificates).
+The built-in presets live in :mod:`auv_hinf.config.presets`.
 """
 
 from __future__ import annotations

@@ -1,9 +1,38 @@
-"""Norm of the Jacobi-coordinate perturbation ``M = Phi blockdiag(G_i - lam I) Phi^-1`` at given states.
+"""Certified bounds on the Jacobi-coordinate sigma ``||Phi blockdiag(G_i - lam I) Phi^-1||_2``.
 
-:func:`jacobi_sigma` evaluates ``||M||_2`` exactly with a dense SVD (small fleets);
-:func:`jacobi_apply` applies ``M`` or ``M^T`` in O(N) through the Jacobi maps, and
-:func:`jacobi_sigma_lower` gives a matrix-free lower bound ``||M x||`` at a unit witness vector
-``x`` from a Krylov-accelerated power iteration on ``M^T M`` (see :mod:`auv_hinf.design.jacobi_sigma`).
+Jacobi coordinates (bounded)
+----------------------------
+``||Phi B Phi^-1|| <= cond(Phi) ||B||`` gives a certified upper bound
+``cond(Phi) * sigma_vehicle`` . For small fleets (N <= :data:`BNB_MAX_N`, full
+heading circle) :func:`jacobi_branch_and_bound` tightens it:
+
+* a common rotation of all headings commutes with ``Phi kron I2``, so only the N-1
+  headings relative to vehicle N matter;
+* for fixed headings the norm is convex in the per-vehicle ``(|u|, |v|, r)``, so its
+  supremum is at one of the ``8^N`` vertex combinations;
+* in heading ``psi_i`` the matrix moves with derivative ``Phi (e_i e_i^T kron
+  [J, G_i - lam I]) Phi^-1``, whose norm is at most
+  ``L_i = 2 sigma_vehicle ||Phi e_i|| ||e_i^T Phi^-1||``;
+* so on a heading cell with centre ``c`` and half-width ``h`` the supremum is at most
+  ``f(c) + h sum_i L_i``. Cells are split until the bound is within ``tol`` of the best
+  centre value, or a budget runs out; whatever the stopping point, the returned upper
+  bound is valid.
+
+The lower bound is the best evaluated configuration (a witness). Up to
+:data:`DENSE_SIGMA_MAX_N` vehicles each configuration is evaluated exactly by a dense 2N x 2N
+SVD (:func:`jacobi_sigma`). Larger fleets use :func:`jacobi_sigma_lower`: a Krylov
+(Lanczos-type) acceleration of the power iteration on ``M^T M``, ``M = Phi blockdiag(G_i - lam I)
+Phi^-1``, with ``M`` and ``M^T`` applied matrix-free through the O(N) Jacobi maps
+(``Phi^-1 = Phi^T D^-2``, ``Phi^-T = D^-2 Phi``). For any vector ``x`` the ratio
+``||M x|| / ||x||`` is at most ``||M||``, so the value returned, which is that ratio at the
+returned witness vector, is a valid lower bound however far the iteration got. Time and memory
+are O(N) per configuration.
+The small-gain certificate uses vehicle coordinates, which is legitimate because the
+nominal loop ``(lam - alpha) I`` is the same in every coordinate system.
+
+The norm itself at given states: :func:`jacobi_sigma` evaluates ``||M||_2`` exactly with a
+dense SVD (small fleets); :func:`jacobi_apply` applies ``M`` or ``M^T`` in O(N) through the
+Jacobi maps, and :func:`jacobi_sigma_lower` gives the matrix-free lower bound.
 """
 
 from __future__ import annotations

@@ -1,7 +1,25 @@
-"""Theorem 1's hypotheses and the numerical regimes of the scalar Riccati equation (37).
+"""Theorem 1: its hypotheses, the regimes of the scalar Riccati equation (37), and the three gain designs.
 
-With ``L = alpha I`` eq. (37) is, per channel, ``c alpha^2 + 2 lam alpha + 1 = 0`` with
-``c = 1/gamma^2 - 2`` (see :mod:`auv_hinf.design.theorem1` and ``docs/derivations/theorem1.md``).
+With ``L = alpha I`` the Riccati equation (37) of the paper is, per channel, the scalar
+quadratic (see docs/errata.md)::
+
+    c alpha^2 + 2 lam alpha + 1 = 0,      c = 1/gamma^2 - 2.
+
+Its roots are ``(-lam +- s)/c`` with ``s = sqrt(lam^2 - c)``; they are real iff
+``gamma >= 1/sqrt(lam^2 + 2)``. The closed loop of each channel is ``1/(s + alpha - lam)``,
+so ``||T||_inf = 1/(alpha - lam)`` exactly (docs/errata.md). Three designs are offered:
+
+* :func:`alpha_paper` -- eq. (32) exactly as printed. It returns ``alpha = 0`` at
+  ``gamma = 1/sqrt(2)``, which leaves a residual of 1 in (37), and below
+  ``1/sqrt(2)`` it takes the ``+`` root, which is not the stabilising solution and is a far
+  larger gain. Both are flagged on the result.
+* :func:`alpha_stabilizing` -- the stabilising root ``lam + c alpha = -s < 0``, the one that
+  ``care`` returns, written as ``1/(|lam| + s)``: no cancellation and continuous through
+  ``gamma = 1/sqrt(2)`` where it equals ``-1/(2 lam)``.
+* :func:`alpha_minimal` -- the smallest alpha with ``||T||_inf <= gamma``:
+  ``max(0, 1/gamma + lam)``. It drops the paper's ``K = -L`` restriction.
+
+:func:`theorem1_gains` completes a design into the law's :class:`~auv_hinf.law.gains.Gains`.
 
 Numerical regimes of (37) (:func:`riccati_regime`), shared by every solver route:
 

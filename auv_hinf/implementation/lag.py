@@ -1,4 +1,9 @@
-"""Bounds of what a held, delayed, noisy law adds to each error loop beyond the lagged feedback.
+"""The lagged error loops of one design, and bounds of what a held, delayed, noisy law adds to them.
+
+:class:`ImplementationProblem` gathers what the certificate of the implemented controller
+depends on (model, envelope, tube, gains, sigma, heading damping range, reference jerks,
+actuators); :func:`position_lag_loop` and :func:`heading_lag_loop` are its two error loops in the
+form of :class:`~auv_hinf.implementation.lmi.LagLoop`.
 
 Under the implementation convention (:mod:`auv_hinf.implementation.model`) the force at time
 ``t`` is the law evaluated at ``t' = t - eta`` (``0 <= eta <= T = h + delay``) on the measured

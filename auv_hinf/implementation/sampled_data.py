@@ -1,8 +1,17 @@
-"""The verified fixed point of the implementation's error bounds.
+"""The certificate of the controller as it runs: sampled, held, delayed, noisy.
 
-For one way of bounding the lag's effects (the drift feedforward as the LMI's lag channel
-``q2``, or inside the disturbance), :func:`bound_errors` computes the ISS certificates of both
-loops at the declared lag and the least fixed point of
+Per vehicle and per loop (position, heading) the lagged law is certified by a
+Lyapunov-Krasovskii functional (:mod:`auv_hinf.implementation.lmi`) for every measurement age
+up to ``T = sample_time + delay``; the implementation's remaining effects are a bounded
+disturbance (:mod:`auv_hinf.implementation.lag`) whose size depends on the error bounds
+through the force the law commands. The envelope margins of the bounds, the LMI and (when
+declared) the actuators decide ``covers``; :func:`lag_limits` gives the certified and the exact
+sample-time limits (:mod:`auv_hinf.implementation.limits`).
+
+The error bounds are a verified fixed point. For one way of bounding the lag's effects (the
+drift feedforward as the LMI's lag channel ``q2``, or inside the disturbance),
+:func:`bound_errors` computes the ISS certificates of both loops at the declared lag and the
+least fixed point of
 
     bounds -> force(bounds + noise) -> disturbance -> invariant level -> bounds,
 

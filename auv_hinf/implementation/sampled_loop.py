@@ -1,11 +1,13 @@
-"""The sampled-data loop of :mod:`auv_hinf.implementation.sampled_loop`: schedule, holds and integration.
+"""The sampled-data simulation: the law at the sample instants, held forces, delay, noisy measurements.
 
 The convention is :mod:`auv_hinf.implementation.model`'s. At ``t_k = k h`` the law
 (:class:`~auv_hinf.law.formation_law.VehicleLaw`) is evaluated on the state measured at
 ``s_k = max(t_k - d_k, 0)`` plus the noise of sample ``k`` (:mod:`auv_hinf.implementation.draws`),
 against the desired motion at ``s_k``; its forces (saturated, if actuators are declared) are
 held on ``[t_k, t_{k+1})``. The measured ground velocity is ``R(psi~) (u~, v~) + current``
-from the measured heading and body velocity.
+from the measured heading and body velocity. :func:`integrate_sampled` runs a batch of runs
+(:class:`HeldBatch`: what the loop reads of a :class:`~auv_hinf.simulation.scenario.ScenarioBatch`);
+the simulation engine post-processes its solution like a continuous one.
 
 The plant stays continuous: between samples it is the vehicle under constant forces,
 integrated by the product's Dormand-Prince 5(4)

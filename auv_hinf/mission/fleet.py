@@ -1,4 +1,35 @@
-"""The desired motion of every vehicle at one or more times (what a control law tracks)."""
+"""Fleet references: a mission path, the formation offsets (inertial or path frame) and a shaped start.
+
+Vehicle ``i`` tracks ``p_i(t) = q(t) + d_i(t) + c_i(t)`` (inertial frame, m): ``q`` is the
+mission path (:mod:`auv_hinf.mission.paths`), ``d_i`` the vehicle's offset and ``c_i`` an
+optional start correction (:class:`Shaping`) that blends the vehicle's actual initial state
+into the formation over ``[0, T_b]`` and is identically zero afterwards. :class:`Motion` is the
+desired motion of every vehicle at one or more times (what a control law tracks).
+
+Offsets. In the *inertial* frame (the paper's convention, the default) ``d_i`` is constant:
+the Jacobi shape is fixed in the earth frame. In the *path* frame the offset
+``d_i = (d_x, d_y)`` (m; ``x`` along the track, ``y`` across it, on the body y axis: to the left
+as the figures draw the plane, starboard in a north-east frame) turns with the course
+``chi = atan2(q')`` of the centre path::
+
+    p_i    = q    + R d
+    p_i'   = q'   + chi' S R d
+    p_i''  = q''  + chi'' S R d - chi'^2 R d
+    p_i''' = q''' + chi''' S R d - 3 chi' chi'' R d - chi'^3 S R d
+
+with ``R = R(chi)`` the 2-D rotation and ``S = [[0, -1], [1, 0]]`` (``R' = chi' S R``,
+``S^2 = -I``). ``chi', chi''`` come from ``q', q'', q'''``
+(:func:`~auv_hinf.mission.paths.heading_from_velocity`), ``chi'''`` also needs ``q''''``
+(:func:`course_jerk`). Every vehicle then heads along the track, ``psi_d = chi`` (a survey
+sonar looks across the track), and its desired body velocity is ``(|q'| - chi' d_y, chi' d_x)``:
+the vehicle on the outside of a turn of radius ``rho`` goes faster, ``s (1 + |d_y|/rho)``, the
+inner one slower, and a vehicle ahead of or behind the centre slips sideways at ``chi' d_x``.
+
+Shaped starts. The correction starts at the vehicle's actual mismatch and is blended out to
+exactly zero by ``t = T_b`` (:func:`blend_basis`); the desired heading gets a blended offset
+``delta_i`` too. :mod:`auv_hinf.mission.tubes` bounds every one of these motions for all
+``t >= 0``, per vehicle, for the certificates.
+"""
 
 from __future__ import annotations
 

@@ -1,10 +1,11 @@
 """Mission references: the centre path ``q(t)`` of a formation, with provable bounds.
 
-Every path is a frozen dataclass, callable on an array of times ``t`` (s) and returning the
-inertial position ``q`` (m), velocity ``q'`` (m/s), acceleration ``q''`` (m/s^2) and jerk
-``q'''`` (m/s^3), each of shape ``np.shape(t) + (2,)``. :meth:`bounds` gives analytic bounds
-valid for every ``t >= 0``; each is widened outward by the relative margin
-:data:`BOUND_RTOL` so that floating-point rounding cannot make a sampled value escape it.
+Every path (sine, line, circle, and the lawn-mower survey pattern with smooth turns) is a
+frozen dataclass, callable on an array of times ``t`` (s) and returning the inertial position
+``q`` (m), velocity ``q'`` (m/s), acceleration ``q''`` (m/s^2) and jerk ``q'''`` (m/s^3), each
+of shape ``np.shape(t) + (2,)``. :meth:`bounds` gives analytic bounds valid for every
+``t >= 0``; each is widened outward by the relative margin :data:`BOUND_RTOL` so that
+floating-point rounding cannot make a sampled value escape it.
 """
 
 from __future__ import annotations

@@ -1,8 +1,26 @@
-"""O(N) Jacobi maps: ``Phi p``, ``Phi^-1 x``, ``Phi^T y`` and ``Phi^-T z`` with cumulative sums.
+"""Jacobi formation coordinates (Yang & Zhang, eqs. 11-20): the transform, the formation matrices, O(N) maps.
 
-The Jacobi rows are mutually orthogonal, so ``Phi = D Q`` with ``Q`` orthogonal and
-``D = diag(row norms)``; hence ``Phi^-1 = Phi^T D^-2`` and ``Phi^-T = D^-2 Phi``, and no N x N
-matrix is ever needed. Also the O(N log N) closest pair of a point set (coincident vehicles).
+Positions of N vehicles are stacked as an array of shape ``(..., N, 2)`` (inertial
+frame, m). The Jacobi transform ``Phi`` (N x N) acts on the vehicle index; on the
+stacked 2N vector it is ``Phi kron I2``. Rows ``0..N-2`` give the Jacobi shape vectors
+``rho_j``; the last row gives the formation centre ``q_c`` (the mean position).
+
+Structure used for O(N) work
+----------------------------
+The rows of ``Phi`` are mutually orthogonal, so ``Phi = D Q`` with ``Q`` orthogonal and
+``D = diag(row norms)``. Hence
+
+* the singular values of ``Phi`` are its row norms: ``sqrt((j+1)/j)`` (``j = 1..N-1``) and
+  ``1/sqrt(N)`` for the centroid row in the paper form, so ``cond(Phi) = sqrt(2N)``; ``1``
+  (N-1 times) and ``1/sqrt(N)`` in the orthonormal form, so ``cond(Phi) = sqrt(N)``;
+* ``Phi^-1 = Phi^T D^-2`` and ``Phi^-T = D^-2 Phi``.
+
+Every product with ``Phi``, ``Phi^T``, ``Phi^-1`` or ``Phi^-T`` is a (reverse) cumulative sum
+over the vehicle index (:func:`jacobi_coordinates`, :func:`positions_from_jacobi`,
+:func:`jacobi_transpose`, :func:`jacobi_inverse_transpose`), O(N) time and memory; no N x N
+matrix is ever needed. The dense matrices (:attr:`JacobiTransform.phi` and friends) are built
+lazily and only up to :data:`DENSE_MAX_N` vehicles. Also the O(N log N) closest pair of a
+point set (coincident vehicles).
 """
 
 from __future__ import annotations

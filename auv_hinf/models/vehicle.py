@@ -1,4 +1,4 @@
-"""3-DOF horizontal AUV model (Yang & Zhang, eqs. 1-10).
+"""3-DOF horizontal AUV model (Yang & Zhang, eqs. 1-10), one vehicle or a batch of plants.
 
 Conventions
 -----------
@@ -16,7 +16,11 @@ Equations (the surge, sway and yaw equations behind eqs. 5-6; see ``docs/errata.
     m22 v' + m11 u r + d22 v = tau_y
     m33 r' + (m22 - m11) u v + d33 r = tau_psi
 
-with ``d11 = d11_lin + d11_quad |u|`` and likewise for sway (|v|) and yaw (|r|).
+with ``d11 = d11_lin + d11_quad |u|`` and likewise for sway (|v|) and yaw (|r|). The body
+velocities are relative to the water: the ground velocity is ``R(psi) [u, v] + current``
+(:func:`ground_velocity`). :class:`PlantBatch` stacks the plants of a batch of runs, and
+:func:`plant_derivative` is the state derivative of every vehicle of every run under given
+forces, shared by the continuous and the sampled simulation.
 """
 
 from __future__ import annotations

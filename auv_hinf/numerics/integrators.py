@@ -7,8 +7,8 @@ and the right-hand side ``rhs(t, y)`` takes per-system times ``t`` of shape ``(B
   (Dormand-Prince 5(4), FSAL, the same tableau, error norm and step control as scipy's
   ``RK45``). Outputs are sampled from the continuous extension, and the first time an
   event function turns negative is located by root finding on that interpolant.
-* :func:`~auv_hinf.numerics.integrators.rk45_reference` (its own module) runs scipy's ``solve_ivp`` on one
-  system with the same interface; it is the reference this integrator is tested against.
+* :func:`rk45_reference` runs scipy's ``solve_ivp`` (RK45) on one system behind the same
+  interface; it is the reference :func:`dopri5` is tested against.
 
 Limitation of the event location: the event function is checked on ``subdivisions``
 equally spaced points per step; an excursion that enters and leaves between two

@@ -1,9 +1,25 @@
-"""Invariant-ellipsoid LMIs of the perturbed error loops (robust certificate).
+"""The robust certificate: every plant of a declared box, every current up to a declared speed.
 
-Both loops are 2-state (the position loop acts on ``(e, e')`` through ``P kron I2``) with a
-unit-bounded disturbance ``|d| <= 1``; the real bound scales the ellipsoid linearly. A matrix
-``P > 0`` with ``V' <= -a (V - 1)`` for every admissible uncertainty makes ``{V <= l}``
-invariant for every ``l >= 1`` and gives ``V(t) - 1 <= (V(0) - 1) exp(-a t)``.
+For each vehicle the perturbed position and heading error loops of :mod:`auv_hinf.robust.box`
+get verified invariant ellipsoids. They are coupled: the position disturbance grows with the
+heading error (through ``sin theta``) and the heading disturbance with the velocity error
+(through ``u v``). The certificate assumes bounds ``(E_psi, E_v)``, computes the ellipsoids
+those assumptions allow, and accepts when the ellipsoids are strictly inside the assumptions:
+by continuity a trajectory that starts inside both ellipsoids can never be the first to
+violate an assumption (the first-exit argument of :mod:`auv_hinf.closed_loop.region`, with
+sigma on the envelope inflated by 1e-9). The assumptions come from the least fixed point of
+that map, inflated slightly.
+
+What is certified, per vehicle and for every plant in the box and every constant current with
+``|c| <= current``: a start inside both ellipsoids keeps its errors within ``bounds`` for all
+``t >= 0``; ``V - 1`` decays at least as ``exp(-2 decay_rate t)``; the body velocities stay in
+the envelope (``margins``) and the thrust within ``thrust``.
+
+The ellipsoid LMIs. Both loops are 2-state (the position loop acts on ``(e, e')`` through
+``P kron I2``) with a unit-bounded disturbance ``|d| <= 1``; the real bound scales the
+ellipsoid linearly. A matrix ``P > 0`` with ``V' <= -a (V - 1)`` for every admissible
+uncertainty makes ``{V <= l}`` invariant for every ``l >= 1`` and gives
+``V(t) - 1 <= (V(0) - 1) exp(-a t)``.
 
 * position: ``x' = A0 x + b (w1 + w2 + d)`` with ``|w1| <= sigma |x2|`` and
   ``|w2| <= delta |k1 x1 + alpha x2|`` (S-procedure, multipliers ``tau1, tau2``);

@@ -1,6 +1,22 @@
-"""LMI synthesis of the position gains with an input bound on the invariant ellipsoid.
+"""Robust design by LMI synthesis: the gains that need the least force, certified for the box.
 
-The perturbed position error loop of the robust certificate (per axis, ``P kron I2``) is
+The bandwidth family (:mod:`auv_hinf.robust.bandwidth`) fixes the shape of the gains and
+searches one number. Here the position gains ``(k1, alpha)`` come from the synthesis LMI of
+:func:`synthesise_position` (below): for a decay rate ``a`` and a cap on the velocity error
+it minimises the feedback acceleration on the invariant ellipsoid, over every plant of the box
+(the vertex sigma and the input-gain spread) and the current's disturbance. The heading gains
+follow by pole placement at :data:`~auv_hinf.robust.bandwidth.HEADING_RATIO` times the position
+loop's natural frequency ``sqrt(l k1)``.
+
+The objective, stated in every design: the smallest **certified peak force** relative to the
+actuator limits (or in newtons when none are declared), among the candidates whose robust
+certificate covers the box scaled by :data:`~auv_hinf.robust.bandwidth.TARGET_MARGIN` (else by
+1). The search runs over :data:`RATES` (fractions of ``|lam| + sigma``) and :data:`VELOCITY_SHARES`
+(the share of the envelope's sway half-width the velocity error may take). Every candidate is
+certified from scratch by :func:`~auv_hinf.robust.invariant_set.robust_certificate`; the SDP
+only proposes.
+
+The synthesis LMI. The perturbed position error loop of the robust certificate (per axis, ``P kron I2``) is
 
     x' = (A_o - l b K) x + b (w1 + w2 + d),   A_o = [[0, 1], [0, lam]],   K = [k1, alpha],
 

@@ -294,19 +294,23 @@ class ClosedLoopPart:
             inside = fit["inside"]
             head = [
                 f"  reference in envelope     {sum(inside)} of {len(inside)} vehicles ({fit['frame']} frame)"
-                + ("" if all(inside) else f": {fit['reason']}")
+                + ("" if all(inside) else f": {fit.get('reason', '')}")
             ]
         if f["decay_rate"] is None:
             return [*head, "  closed loop               not certified"]
-        r, t = f["region"], f["thrust"]
+        r, t = f["region"], f.get("thrust")
+        force = (
+            f"|tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, |tau_psi| <= {t['moment']:.5g} N m"
+            if t is not None  # records of format versions 1-3 hold the largest force and moment only
+            else f"|tau_x|, |tau_y| <= {f['max_force']:.5g} N, |tau_psi| <= {f['max_moment']:.5g} N m"
+        )
         out = [
             *head,
             f"  closed-loop decay rate    {f['decay_rate']:.4g} 1/s "
             f"(position {f['position_decay_rate']:.4g}, heading {f['heading_decay_rate']:.4g})",
             f"  start region (all at once) |e| <= {r['position_error']:.4g} m, |e'| <= {r['velocity_error']:.4g} m/s, "
             f"|e_psi| <= {r['heading_error']:.4g} rad, |e_r| <= {r['yaw_rate_error']:.4g} rad/s",
-            f"  thrust over the region    |tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, "
-            f"|tau_psi| <= {t['moment']:.5g} N m",
+            f"  thrust over the region    {force}",
         ]
         s = f.get("shaped_start")
         if s is not None:

@@ -314,7 +314,8 @@ class ImplementationPart:
         if f is None:
             return []
         declared = not f["continuous"]
-        out = [f"  implementation            {f['description']}"]
+        described = f.get("description") or f"sample time {f['sample_time']:g} s, delay {f['delay']:g} s"
+        out = [f"  implementation            {described}"]
         if f["max_sample_time"] is None:
             if not declared:
                 return out

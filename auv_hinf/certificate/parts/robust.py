@@ -300,7 +300,8 @@ class RobustPart:
         f = figures
         if f is None or not f["declared"]:
             return []
-        model_only = f["current_speed"] is not None and not f["box_declared"] and not f["current_speed"] > 0.0
+        current = f.get("current_speed")
+        model_only = current is not None and not f.get("box_declared", True) and not current > 0.0
         what = "the controller's model (no box or current declared)" if model_only else "the declared box and current"
         out = [f"  robust certificate        {'covers' if f['covers'] else 'does NOT cover'} {what}"]
         b = f["ultimate_bounds"]
@@ -316,7 +317,7 @@ class RobustPart:
                 f"    thrust |tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, "
                 f"|tau_psi| <= {t['moment']:.5g} N m"
             )
-        if f["margin"] is not None and not model_only and f["current_speed"] is not None:
+        if f["margin"] is not None and not model_only and f.get("details") is not None:
             out.append(f"    box scale certified up to {f['margin']['lower']:.4g} (1 = the declared box)")
         integral = f.get("integral")
         if integral is not None:

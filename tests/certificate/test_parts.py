@@ -1,0 +1,115 @@
+"""The part protocol: a part registered from outside the package is in the JSON, the text, the file and the exit code."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pytest
+
+from auv_hinf.certificate.assembly import Certificate, certify
+from auv_hinf.certificate.part import REASON_KINDS, PartContext, Reason, RunCheck, RunContext, Setting, Verdict
+from auv_hinf.certificate.registry import PARTS, parts, register_part, unregister_part
+from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
+from auv_hinf.exceptions import ParameterError
+
+
+@dataclass(frozen=True)
+class SpacingPart:
+    """A test part: every two slots of the shape at least ``spacing`` m apart."""
+
+    spacing: float
+    name: str = "spacing"
+    key: str | None = "spacing_check"
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        off = ctx.point.offsets
+        d = np.hypot(*(off[:, None, :] - off[None, :, :]).transpose(2, 0, 1))
+        closest = float(d[np.triu_indices(len(off), 1)].min())
+        figures = {"closest": closest, "required": self.spacing}
+        if closest >= self.spacing:
+            return Verdict(self.name, True, True, (), figures)
+        why = Reason(
+            self.name,
+            "envelope",
+            f"slots only {closest:.3g} m apart, {self.spacing:g} m needed",
+            channel="spacing",
+            value=closest,
+            limit=self.spacing,
+            settings=(Setting("formation", "radius", self.spacing),),
+        )
+        return Verdict(self.name, False, True, (why,), figures)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        return [f"  slot spacing              {figures['closest']:.4g} m (needed {figures['required']:g} m)"]
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        return None
+
+
+@pytest.fixture
+def registered(request):
+    part = SpacingPart(request.param)
+    register_part(part, after="actuators")
+    try:
+        yield part
+    finally:
+        unregister_part(part.name)
+    assert [p.name for p in parts()] == [p.name for p in PARTS]
+
+
+@pytest.mark.parametrize("registered", [1e6], indirect=True)
+def test_a_failing_plug_in_part_is_in_the_json_the_text_the_file_and_the_exit_code(registered, tmp_path, capsys):
+    cert = certify(preset_config("paper-triangle"))
+    record = cert.to_dict()
+    assert record["spacing_check"]["required"] == 1e6 and record["spacing_check"]["closest"] > 0
+    names = list(record["parts"])
+    assert names.index("spacing") == names.index("actuators") + 1
+    entry = record["parts"]["spacing"]
+    assert entry["ok"] is False and entry["reasons"][0]["kind"] == "envelope"
+    assert entry["reasons"][0]["settings"] == [{"table": "formation", "key": "radius", "value": 1e6}]
+    assert not cert.certified and record["certified"] is False
+    assert [r.part for r in cert.findings] == ["spacing"] and "slots only" in record["reasons"][0]
+    text = cert.summary()
+    assert "slot spacing" in text and "CERTIFIED: no" in text and "slots only" in text
+    loaded = Certificate.load(cert.save(tmp_path / "c.json"))
+    assert loaded.to_dict() == json.loads(json.dumps(record)) and loaded.summary() == text
+    assert main(["certify", "--preset", "paper-triangle", "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["parts"]["spacing"]["ok"] is False
+
+
+@pytest.mark.parametrize("registered", [0.5], indirect=True)
+def test_a_holding_plug_in_part_keeps_the_exit_code_zero(registered, capsys):
+    assert main(["certify", "--preset", "paper-triangle"]) == 0
+    assert "slot spacing" in capsys.readouterr().out
+
+
+def test_the_registry_refuses_clashes_and_keeps_its_own_parts():
+    with pytest.raises(ParameterError, match="registered already"):
+        register_part(PARTS[0])
+    with pytest.raises(ParameterError, match="JSON key"):
+        register_part(SpacingPart(1.0, name="other", key="robust"))
+    with pytest.raises(ParameterError, match="no certificate part called"):
+        register_part(SpacingPart(1.0), after="nope")
+    with pytest.raises(ParameterError, match="toolbox's own"):
+        unregister_part("robust")
+    with pytest.raises(ValueError, match="reason kind"):
+        Reason("x", "because", "words")
+    assert "advice" in REASON_KINDS
+
+
+def test_a_stored_part_that_is_not_registered_still_loads(tmp_path):
+    part = SpacingPart(1e6)
+    register_part(part)
+    try:
+        path = certify(preset_config("paper-triangle")).save(tmp_path / "c.json")
+    finally:
+        unregister_part(part.name)
+    loaded = Certificate.load(path)
+    assert not loaded.certified and loaded.verdict("spacing") is not None
+    assert "spacing" in loaded.summary() and "not registered" in loaded.summary()
