@@ -60,7 +60,7 @@ def sampled_vs_continuous() -> str:
         "every hold (it ends on every sample, measurement and output instant; the next step is carried over). Steps: "
         "accepted integration steps. Its states agree with an independent loop (scipy DOP853 at rtol = atol = 1e-12 "
         "per hold, the law evaluated on its own dense output) to 5e-8 (paper triangle, 60 s) and 6e-7 (remus-line "
-        "at 50 Hz) (tests/simulation/test_sampled.py). The final position error of the sampled run is the "
+        "at 50 Hz) (tests/implementation/test_sampled_loop.py). The final position error of the sampled run is the "
         "noise-driven residual (the continuous run ends at about 1e-8 m). The ratio is the number to read: "
         "the machine was shared, so absolute times vary from run to run."
     )

@@ -1,4 +1,4 @@
-"""The part protocol: a part registered from outside the package is in the JSON, the text, the file and the exit code."""
+"""The part protocol: a part registered from outside the package shows in the JSON, text, file and exit code."""
 
 from __future__ import annotations
 

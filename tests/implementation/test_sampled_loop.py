@@ -18,7 +18,7 @@ from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation import engine
 from auv_hinf.simulation.engine import fleet_derivative, simulate, simulate_batch
 from auv_hinf.simulation.scenario import ScenarioBatch
-from tests.simulation.sampled_reference import reference_loop
+from tests.implementation.sampled_reference import reference_loop
 
 NOISE = MeasurementNoise(position=0.05, velocity=0.02, heading=0.01, yaw_rate=0.005)
 #: Runs of one batch against the same runs alone: only BLAS round-off in the stage sums differs.
