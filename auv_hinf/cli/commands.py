@@ -135,6 +135,16 @@ def _cmd_certify(args: argparse.Namespace) -> int:
     return _verdict(cert.certified, "; ".join(cert.reasons) or "no reason given")
 
 
+def _refuse_uncertified(plan: RunPlan, allowed: bool, what: str) -> None:
+    """Refuse to run gains that no certificate covers, unless ``--uncertified`` allows it."""
+    refusal = plan.uncertified_gains()
+    if refusal is not None and not allowed:
+        raise Negative(
+            f"refusing to {what} gains that no certificate covers: {refusal}; `{PROG} certify` gives the "
+            f"largest certifiable box and current, or rerun with --uncertified to {what} them anyway"
+        )
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from auv_hinf.certificate.run_plan import plan_run, run_report
     from auv_hinf.simulation.engine import simulate
@@ -153,12 +163,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         plan = plan_run(cfg, start=args.start, horizon=args.horizon)
     except DesignError as exc:
         raise Negative(f"no gain to simulate with: {exc}") from None
-    refusal = plan.uncertified_gains()
-    if refusal is not None and not args.uncertified:
-        raise Negative(
-            f"refusing to simulate gains that no certificate covers: {refusal}; `{PROG} certify` gives the "
-            "largest certifiable box and current, or rerun with --uncertified to simulate them anyway"
-        )
+    _refuse_uncertified(plan, args.uncertified, "simulate")
     result = simulate(plan.scenario)
     summary = run_report(plan, result)
     if args.save is not None:
@@ -264,9 +269,15 @@ def _cmd_init(args: argparse.Namespace) -> int:
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from auv_hinf.campaign.report import write_outputs
     from auv_hinf.campaign.runner import dask_client, run_campaign
+    from auv_hinf.certificate.run_plan import plan_run
 
     _prepare_out(args.out)
     cfg = _load(args)
+    try:
+        plan = plan_run(cfg, horizon=args.horizon, samples=2)  # the gains' verdict; the runs come later
+    except DesignError as exc:
+        raise Negative(f"no gain to run a campaign with: {exc}") from None
+    _refuse_uncertified(plan, args.uncertified, "run a campaign of")
     with dask_client(args.workers, args.scheduler) as client:
         try:
             camp = run_campaign(

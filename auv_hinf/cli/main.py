@@ -144,6 +144,11 @@ def _campaign_parser(sub: Any) -> None:
     numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
     c.add_argument("--out", type=Path, required=True, help="directory for runs.parquet, summary.json, PNGs")
     c.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    c.add_argument(
+        "--uncertified",
+        action="store_true",
+        help="run even when no certificate covers the gains (no run is then covered by a certificate)",
+    )
 
 
 def _report(kind: str, exc: BaseException) -> None:

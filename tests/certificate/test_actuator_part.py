@@ -13,6 +13,7 @@ from auv_hinf.actuation.thrust import thrust_bounds
 from auv_hinf.certificate import assembly as certificate_module
 from auv_hinf.certificate.assembly import Certificate, certify
 from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.document import json_safe
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.certificate.run_plan import plan_run, with_start
 from auv_hinf.cli.main import main
@@ -127,7 +128,8 @@ def test_remus_with_its_real_limits_names_the_sway_channel(remus_limited, tmp_pa
     assert best["box_scale"] is not None and 0.0 < best["box_scale"] < 1.0
     # saved and loaded with its actuator verdict
     path = cert.save(tmp_path / "c.json")
-    assert Certificate.load(path).actuators == cert.actuators
+    stored = Certificate.load(path).to_dict()["actuators"]
+    assert stored == json.loads(json.dumps(json_safe(cert.to_dict()["actuators"])))
 
 
 @pytest.mark.slow
@@ -154,6 +156,11 @@ def test_cli_remus100_limits_exit_1_naming_sway(remus_limited, tmp_path, capsys,
     run = json.loads(capsys.readouterr().out)
     assert code == 1 and run["certificate_covers_run"] is False
     assert run["actuator_limits"]["force_y"] == 5.6 and set(run["commanded_peak"]) == {"force_x", "force_y", "moment"}
+    # and so does a campaign
+    code = main(["campaign", "--config", str(path), "--runs", "2", "--horizon", "2", "--out", str(tmp_path / "c")])
+    err = capsys.readouterr().err
+    assert code == 1 and "refusing to run a campaign of gains that no certificate covers" in err
+    assert "--uncertified" in err and not (tmp_path / "c" / "runs.parquet").exists()
 
 
 def test_simulate_reports_commanded_peak_before_saturation(capsys):
