@@ -41,7 +41,7 @@ import json
 import math
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -298,6 +298,19 @@ def _consistent(config: FormationConfig, record: CertificateRecord, source: str)
         raise ConfigError(f"{source}: 'reasons' disagree with the reasons of the parts (edited file?)")
 
 
+_Model = TypeVar("_Model", bound=BaseModel)
+
+
+def _validated(model: type[_Model], data: Any, what: str) -> _Model:
+    """``data`` validated as ``model``, or a one-line error naming the first place it breaks the schema."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(x) for x in first["loc"])
+        raise ConfigError(f"{what} at {where}: {first['msg']}") from None
+
+
 def certificate_from_document(doc: Any, source: str = "certificate") -> Certificate:
     """The :class:`~auv_hinf.certificate.assembly.Certificate` of a parsed certificate file of any version.
 
@@ -326,24 +339,14 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
     except ConfigError as exc:
         raise ConfigError("\n".join(f"{source}: config: {line}" for line in str(exc).splitlines())) from None
     if version == VERSION:
-        try:
-            parsed = CertificateDocument.model_validate(doc)
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            where = ".".join(str(x) for x in first["loc"])
-            raise ConfigError(f"{source}: not a valid certificate file at {where}: {first['msg']}") from None
+        parsed = _validated(CertificateDocument, doc, f"{source}: not a valid certificate file")
         if parsed.digest != digest(doc["config"], doc["certificate"]):
             raise ConfigError(f"{source}: the digest does not match the record (edited or truncated file?)")
         raw = doc["certificate"]
     else:
         _legacy_state_agrees(doc.get("state"), doc["certificate"], source)
         raw = _legacy_record(version, config, doc["certificate"])
-    try:
-        record = CertificateRecord.model_validate(raw)
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(str(x) for x in first["loc"])
-        raise ConfigError(f"{source}: not a valid certificate record at {where}: {first['msg']}") from None
+    record = _validated(CertificateRecord, raw, f"{source}: not a valid certificate record")
     _consistent(config, record, source)
     try:
         return Certificate.from_record(config, raw)
