@@ -36,9 +36,9 @@ class DesignError(AuvHinfError, ValueError):
         The sentence a person reads.
     kind : str
         What kind of refusal it is, as a certificate part reports it (one of
-        ``auv_hinf.certificate.part.REASON_KINDS``; ``"not_covered"`` unless the raiser knows better).
+        ``auv_hinf.certificate.reason.REASON_KINDS``; ``"not_covered"`` unless the raiser knows better).
     channel, vehicle, value, limit : optional
-        What binds, as data (see ``auv_hinf.certificate.part.Reason``).
+        What binds, as data (see ``auv_hinf.certificate.reason.Reason``).
     settings : tuple of (table, key, value)
         Configuration values that would lift the refusal, when the raiser knows them.
     """

@@ -25,13 +25,13 @@ from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
-from auv_hinf.certificate.design_point import design_point  # noqa: E402
-from auv_hinf.certificate.parts.closed_loop import closed_loop_for  # noqa: E402
-from auv_hinf.certificate.parts.implementation import implementation_problem, start_errors  # noqa: E402
-from auv_hinf.config.presets import annotated_toml, preset_config  # noqa: E402
-from auv_hinf.config.settings import FormationConfig, config_from_dict  # noqa: E402
-from auv_hinf.implementation.model import Implementation, MeasurementNoise  # noqa: E402
-from auv_hinf.implementation.sampled_data import certify_implementation, lag_limits  # noqa: E402
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.parts.implementation import implementation_problem, start_errors
+from auv_hinf.config.presets import annotated_toml, preset_config
+from auv_hinf.config.settings import FormationConfig, config_from_dict
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
+from auv_hinf.implementation.sampled_data import certify_implementation, lag_limits
 
 REPEATS = 3
 #: A BlueROV2 Heavy line with gentle Theorem 1 gains: covered at 100 Hz with small noise.

@@ -19,10 +19,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from common import HORIZON, REPEATS, fleet, table, timed  # noqa: E402
 
-from auv_hinf.certificate.run_plan import plan_run  # noqa: E402
-from auv_hinf.config.presets import preset_config  # noqa: E402
-from auv_hinf.implementation.model import Implementation, MeasurementNoise  # noqa: E402
-from auv_hinf.simulation.engine import simulate  # noqa: E402
+from auv_hinf.certificate.run_plan import plan_run
+from auv_hinf.config.presets import preset_config
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
+from auv_hinf.simulation.engine import simulate
 
 #: The issue's implementation: a small AUV's 10 Hz loop, an acoustic 0.1 s delay, USBL-like noise.
 IMPLEMENTATION = Implementation(

@@ -31,17 +31,17 @@ from typing import Any, cast  # noqa: E402
 
 from common import REPEATS, table  # noqa: E402
 
-from auv_hinf._typing import FloatArray  # noqa: E402
-from auv_hinf.certificate.assembly import certify  # noqa: E402
-from auv_hinf.certificate.design_point import _design, design_point, initial_states  # noqa: E402
-from auv_hinf.certificate.document import json_safe  # noqa: E402
-from auv_hinf.certificate.parts.closed_loop import closed_loop_for, coverage_for  # noqa: E402
-from auv_hinf.certificate.run_plan import RunPlan, plan_run, run_report, run_samples  # noqa: E402
-from auv_hinf.config.settings import FormationConfig, config_from_dict  # noqa: E402
-from auv_hinf.figures.simulation import save_simulation_plots  # noqa: E402
-from auv_hinf.simulation.engine import first_exits, integrate_batch  # noqa: E402
-from auv_hinf.simulation.results import SimulationResult, build_results  # noqa: E402
-from auv_hinf.simulation.scenario import ScenarioBatch  # noqa: E402
+from auv_hinf._typing import FloatArray
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import _design, design_point, initial_states
+from auv_hinf.certificate.document import json_safe
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for, coverage_for
+from auv_hinf.certificate.run_plan import RunPlan, plan_run, run_report, run_samples
+from auv_hinf.config.settings import FormationConfig, config_from_dict
+from auv_hinf.figures.simulation import save_simulation_plots
+from auv_hinf.simulation.engine import first_exits, integrate_batch
+from auv_hinf.simulation.results import SimulationResult, build_results
+from auv_hinf.simulation.scenario import ScenarioBatch
 
 #: Fleet sizes of the table.
 SIZES = (3, 100, 1000, 10_000)

@@ -19,12 +19,14 @@ from typing import Any
 import control as ct
 
 from auv_hinf.certificate.design_point import design_point, formation_offsets, mission_reference
-from auv_hinf.certificate.part import PartContext, Reason, Verdict, reasons_of
+from auv_hinf.certificate.document import read_certificate, record_from_document, save_certificate
+from auv_hinf.certificate.part import PartContext, Verdict, reasons_of
 from auv_hinf.certificate.parts.theorem1 import DEFAULT_JACOBI_SAMPLES, Theorem1Result
+from auv_hinf.certificate.reason import Reason
 from auv_hinf.certificate.registry import parts
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import DesignError
+from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
 from auv_hinf.law.gains import Gains
 from auv_hinf.law.interconnect import fleet_closed_loop, formation_controller
@@ -228,8 +230,6 @@ class Certificate:
         Path
             The file written.
         """
-        from auv_hinf.certificate.document import save_certificate
-
         return save_certificate(self, path)
 
     @classmethod
@@ -241,8 +241,6 @@ class Certificate:
         ConfigError
             Not a certificate file, an unknown version, an invalid configuration, or an edited record.
         """
-        from auv_hinf.certificate.document import load_certificate
-
         return load_certificate(path)
 
     def law(self) -> VehicleLaw:
@@ -291,6 +289,48 @@ class Certificate:
         return certificate_text(self.to_dict())
 
 
+def load_certificate(path: str | Path) -> Certificate:
+    """The certificate stored in ``path`` (any format version), without re-certifying.
+
+    Parameters
+    ----------
+    path : str or Path
+        A file written by :meth:`Certificate.save` (or by an earlier version).
+
+    Raises
+    ------
+    ConfigError
+        Not a certificate file, an unknown version, an invalid configuration, or an edited record.
+    """
+    return _rebuilt(*read_certificate(path), str(path))
+
+
+def certificate_from_document(doc: Any, source: str = "certificate") -> Certificate:
+    """The certificate of a parsed certificate file (any format version).
+
+    Parameters
+    ----------
+    doc : Any
+        The parsed JSON document.
+    source : str
+        The file's name, for the messages.
+
+    Raises
+    ------
+    ConfigError
+        As :func:`load_certificate`.
+    """
+    return _rebuilt(*record_from_document(doc, source), source)
+
+
+def _rebuilt(config: FormationConfig, record: Mapping[str, Any], source: str) -> Certificate:
+    """:meth:`Certificate.from_record`, its failures (values the types refuse) as one-line errors."""
+    try:
+        return Certificate.from_record(config, record)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ConfigError(f"{source}: cannot rebuild the certificate: {exc}") from None
+
+
 def certify(
     config: FormationConfig, *, jacobi_samples: int = DEFAULT_JACOBI_SAMPLES, refine_jacobi: bool = False
 ) -> Certificate:
@@ -311,4 +351,4 @@ def certify(
     return Certificate(config, tuple(verdicts.values()), point.gains, point.source, design)
 
 
-__all__ = ["Certificate", "certify"]
+__all__ = ["Certificate", "certificate_from_document", "certify", "load_certificate"]

@@ -23,7 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from auv_hinf._typing import GAIN_METHODS, FloatArray
-from auv_hinf.certificate.part import Reason
+from auv_hinf.certificate.reason import Reason
 from auv_hinf.config.settings import FormationConfig, SimulationConfig
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.design.theorem1 import GainDesign, design_alpha

@@ -22,7 +22,7 @@ JSON of ``config`` and ``certificate``: a file edited by hand, or truncated, is 
 than believed; so is one whose record disagrees with its configuration, or whose verdict
 disagrees with its parts.
 
-Loading gives a :class:`~auv_hinf.certificate.assembly.Certificate` with every part's figures,
+Loading (:meth:`~auv_hinf.certificate.assembly.Certificate.load`) gives a certificate with every part's figures,
 verdict and reasons, the configuration and the gains that ran (so :meth:`law` and
 :meth:`controller` work), and the same text as the certificate that was saved. The parts'
 typed results (LMI matrices) are not stored; ``certify`` recomputes them.
@@ -41,18 +41,15 @@ import json
 import math
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, TypeVar
+from typing import Any, Literal, Protocol, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from auv_hinf._version import __version__
-from auv_hinf.certificate.part import REASON_KINDS, ReasonKind
+from auv_hinf.certificate.reason import REASON_KINDS, ReasonKind
 from auv_hinf.config.settings import FormationConfig, config_from_dict, read_document
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.law.gains import heading_gains
-
-if TYPE_CHECKING:
-    from auv_hinf.certificate.assembly import Certificate
 
 #: Value of the ``format`` key of a certificate file.
 FORMAT = "auv-hinf-certificate"
@@ -80,6 +77,19 @@ LEGACY_THEOREM1_KEYS = (
 )
 #: The parts with a key of their own in records of versions 1-3.
 LEGACY_PART_KEYS = ("closed_loop", "robust", "actuators", "implementation")
+
+
+class StoredCertificate(Protocol):
+    """What a certificate file stores of a certificate: its configuration and its record."""
+
+    @property
+    def config(self) -> FormationConfig:
+        """The certified configuration."""
+        ...
+
+    def to_dict(self) -> dict[str, Any]:
+        """The record (the ``certify --json`` layout)."""
+        ...
 
 
 class _Strict(BaseModel):
@@ -186,7 +196,7 @@ def digest(config: Any, record: Any) -> str:
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def certificate_document(cert: Certificate, created: datetime | None = None) -> dict[str, Any]:
+def certificate_document(cert: StoredCertificate, created: datetime | None = None) -> dict[str, Any]:
     """The stored document of ``cert`` (see the module docstring).
 
     Parameters
@@ -311,8 +321,18 @@ def _validated(model: type[_Model], data: Any, what: str) -> _Model:
         raise ConfigError(f"{what} at {where}: {first['msg']}") from None
 
 
-def certificate_from_document(doc: Any, source: str = "certificate") -> Certificate:
-    """The :class:`~auv_hinf.certificate.assembly.Certificate` of a parsed certificate file of any version.
+def record_from_document(doc: Any, source: str = "certificate") -> tuple[FormationConfig, dict[str, Any]]:
+    """The configuration and the version 4 record of a parsed certificate file of any version.
+
+    The record is validated against the schema and against its configuration;
+    :meth:`~auv_hinf.certificate.assembly.Certificate.from_record` makes the certificate of it.
+
+    Parameters
+    ----------
+    doc : Any
+        The parsed JSON document.
+    source : str
+        The file's name, for the messages.
 
     Raises
     ------
@@ -320,8 +340,6 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
         If the format or version differs, the layout is not the schema's, the configuration is
         invalid, the digest does not match, or the record disagrees with itself or its configuration.
     """
-    from auv_hinf.certificate.assembly import Certificate
-
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         found = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
         raise ConfigError(f"{source}: not an auv-hinf certificate file (format {found!r}, expected {FORMAT!r})")
@@ -348,13 +366,10 @@ def certificate_from_document(doc: Any, source: str = "certificate") -> Certific
         raw = _legacy_record(version, config, doc["certificate"])
     record = _validated(CertificateRecord, raw, f"{source}: not a valid certificate record")
     _consistent(config, record, source)
-    try:
-        return Certificate.from_record(config, raw)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ConfigError(f"{source}: cannot rebuild the certificate: {exc}") from None
+    return config, raw
 
 
-def save_certificate(cert: Certificate, path: str | Path, *, created: datetime | None = None) -> Path:
+def save_certificate(cert: StoredCertificate, path: str | Path, *, created: datetime | None = None) -> Path:
     """Write ``cert`` as a certificate file (strict JSON, UTF-8, 2-space indent).
 
     Parameters
@@ -384,17 +399,22 @@ def save_certificate(cert: Certificate, path: str | Path, *, created: datetime |
     return p
 
 
-def load_certificate(path: str | Path) -> Certificate:
-    """Read a file written by :func:`save_certificate` (or by an earlier version) without re-certifying.
+def read_certificate(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]:
+    """The configuration and the record of a certificate file of any version (:func:`record_from_document`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
 
     Raises
     ------
     ConfigError
-        If the file cannot be read or is not JSON, or for any reason of
-        :func:`certificate_from_document`; messages start with the file name.
+        If the file cannot be read or is not JSON, or for any reason of :func:`record_from_document`;
+        messages start with the file name.
     """
     p = Path(path)
-    return certificate_from_document(read_document(p, "certificate", "JSON", json.loads), source=str(p))
+    return record_from_document(read_document(p, "certificate", "JSON", json.loads), source=str(p))
 
 
 __all__ = [
@@ -410,12 +430,13 @@ __all__ = [
     "PartRecord",
     "ReasonRecord",
     "SettingRecord",
+    "StoredCertificate",
     "certificate_document",
-    "certificate_from_document",
     "certificate_schema",
     "digest",
     "json_normal",
     "json_safe",
-    "load_certificate",
+    "read_certificate",
+    "record_from_document",
     "save_certificate",
 ]

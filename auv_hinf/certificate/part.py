@@ -24,132 +24,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Protocol, get_args
+from typing import TYPE_CHECKING, Any, Literal, Protocol
 
-from auv_hinf.exceptions import DesignError, SolverError
+from auv_hinf.certificate.reason import Reason
 
 if TYPE_CHECKING:
     from auv_hinf.certificate.design_point import DesignPoint
-
-#: What a reason says, in one word (``Reason.kind``):
-#:
-#: * ``design``: the gain design gives no gains (infeasible method, failed synthesis);
-#: * ``marginal``: a strict inequality holds only up to its tolerance;
-#: * ``hypothesis``: a hypothesis of the theorem fails (a singular case, a sign);
-#: * ``disagrees``: independent computations of one number disagree;
-#: * ``envelope``: the desired motion or the certified set leaves the operating envelope;
-#: * ``start``: the configured start is outside the certified start set;
-#: * ``thrust``: the certified commanded force exceeds the actuators' limits;
-#: * ``not_covered``: the certificate does not cover what was declared (the sub-reasons say why);
-#: * ``unsupported``: the declared case is outside what the certificate covers (a time-varying current);
-#: * ``solver``: a numerical route failed or did not re-verify;
-#: * ``advice``: not a failure: the settings that would certify, with their values.
-ReasonKind = Literal[
-    "design",
-    "marginal",
-    "hypothesis",
-    "disagrees",
-    "envelope",
-    "start",
-    "thrust",
-    "not_covered",
-    "unsupported",
-    "solver",
-    "advice",
-]
-REASON_KINDS: tuple[ReasonKind, ...] = get_args(ReasonKind)
-
-
-@dataclass(frozen=True)
-class Setting:
-    """A value of the configuration that would change a verdict.
-
-    Attributes
-    ----------
-    table : str
-        The TOML table (``"uncertainty"``, ``"disturbance"``, ``"implementation"``, ...).
-    key : str
-        The key in that table, as the user writes it.
-    value : Any
-        The value to write there (a number in the key's unit, or a ``[lo, hi]`` pair).
-    """
-
-    table: str
-    key: str
-    value: Any
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dictionary."""
-        return {"table": self.table, "key": self.key, "value": self.value}
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Setting:
-        """Inverse of :meth:`to_dict`."""
-        return cls(str(data["table"]), str(data["key"]), data["value"])
-
-
-@dataclass(frozen=True)
-class Reason:
-    """Why a part does not hold, as data, with the sentence a person reads.
-
-    Attributes
-    ----------
-    part : str
-        The part's registry name.
-    kind : str
-        One of :data:`REASON_KINDS`.
-    message : str
-        The sentence printed under ``CERTIFIED: no`` and in ``certify --json``'s ``reasons``.
-    channel : str, optional
-        What is measured: a force channel (``force_x``, ``force_y``, ``moment``), an envelope
-        channel (``u``, ``v``, ``r``), ``sample_time``, ``delay``, ...
-    vehicle : int, optional
-        The vehicle it is about (0-based), when one vehicle binds.
-    value, limit : float, optional
-        The value found and the limit it is held against (in the channel's unit).
-    settings : tuple of Setting
-        Configuration values that would certify (empty when none is known).
-    """
-
-    part: str
-    kind: str
-    message: str
-    channel: str | None = None
-    vehicle: int | None = None
-    value: float | None = None
-    limit: float | None = None
-    settings: tuple[Setting, ...] = ()
-
-    def __post_init__(self) -> None:
-        if self.kind not in REASON_KINDS:
-            raise ValueError(f"reason kind must be one of {REASON_KINDS}, got {self.kind!r}")
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dictionary."""
-        return {
-            "part": self.part,
-            "kind": self.kind,
-            "message": self.message,
-            "channel": self.channel,
-            "vehicle": self.vehicle,
-            "value": self.value,
-            "limit": self.limit,
-            "settings": [s.to_dict() for s in self.settings],
-        }
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> Reason:
-        """Inverse of :meth:`to_dict`."""
-        return cls(
-            part=str(data["part"]),
-            kind=str(data["kind"]),
-            message=str(data["message"]),
-            channel=data.get("channel"),
-            vehicle=data.get("vehicle"),
-            value=data.get("value"),
-            limit=data.get("limit"),
-            settings=tuple(Setting.from_dict(s) for s in data.get("settings") or ()),
-        )
 
 
 #: A commanded-force bound ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
@@ -389,46 +269,20 @@ class CertificatePart(Protocol):
         ...
 
 
-def reason_from(part: str, exc: Exception, prefix: str = "") -> Reason:
-    """The :class:`Reason` of a refusal raised as an exception (its message after ``prefix``).
-
-    A :class:`~auv_hinf.exceptions.DesignError` carries its kind and data; a
-    :class:`~auv_hinf.exceptions.SolverError` is a ``solver`` reason; anything else ``not_covered``.
-    """
-    message = prefix + str(exc)
-    if isinstance(exc, DesignError):
-        return Reason(
-            part,
-            exc.kind if exc.kind in REASON_KINDS else "not_covered",
-            message,
-            channel=exc.channel,
-            vehicle=exc.vehicle,
-            value=exc.value,
-            limit=exc.limit,
-            settings=tuple(Setting(t, k, v) for t, k, v in exc.settings),
-        )
-    return Reason(part, "solver" if isinstance(exc, SolverError) else "not_covered", message)
-
-
 def reasons_of(verdicts: Sequence[Verdict]) -> tuple[Reason, ...]:
     """Every reason of the verdicts that do not hold, in order."""
     return tuple(r for v in verdicts if not v.ok for r in v.reasons)
 
 
 __all__ = [
-    "REASON_KINDS",
     "CertificatePart",
     "PartContext",
     "Peak",
-    "Reason",
-    "ReasonKind",
     "RunCheck",
     "RunContext",
     "RunRole",
-    "Setting",
     "Verdict",
     "figures_in",
-    "reason_from",
     "reasons_of",
     "run_covered",
 ]

@@ -10,13 +10,12 @@ import numpy as np
 import pytest
 
 import auv_hinf
-from auv_hinf.certificate.assembly import Certificate
+from auv_hinf.certificate.assembly import Certificate, certificate_from_document
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.document import (
     FORMAT,
     VERSION,
     certificate_document,
-    certificate_from_document,
     certificate_schema,
     digest,
     save_certificate,

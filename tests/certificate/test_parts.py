@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from auv_hinf.certificate.assembly import Certificate, certify
-from auv_hinf.certificate.part import REASON_KINDS, PartContext, Reason, RunCheck, RunContext, Setting, Verdict
+from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.reason import REASON_KINDS, Reason, Setting
 from auv_hinf.certificate.registry import PARTS, parts, register_part, unregister_part
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from auv_hinf.certificate.assembly import load_certificate
 from auv_hinf.certificate.design_point import design_point, initial_states, slot_states
-from auv_hinf.certificate.document import load_certificate
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import annotated_toml, preset_config
 from auv_hinf.config.settings import DisturbanceConfig

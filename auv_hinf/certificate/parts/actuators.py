@@ -33,7 +33,8 @@ from typing import Any
 
 from auv_hinf.actuation.limits import CHANNELS, Actuators, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint
-from auv_hinf.certificate.part import PartContext, Peak, Reason, RunCheck, RunContext, Setting, Verdict
+from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.robust.margin import largest_certifiable
 
 #: The part's registry name and JSON key.

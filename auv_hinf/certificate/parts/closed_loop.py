@@ -17,7 +17,8 @@ from typing import Any, cast
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNELS, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
-from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Verdict, reason_from
+from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.reason import Reason, reason_from
 from auv_hinf.closed_loop.actuator_fit import mission_thrust, within_actuators
 from auv_hinf.closed_loop.coverage import Coverage, StartMode, cover_start
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_certificate

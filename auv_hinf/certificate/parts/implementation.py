@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
-from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Setting, Verdict
+from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.exceptions import AuvHinfError

@@ -18,8 +18,9 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.design_point import DesignPoint
-from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Setting, Verdict, reason_from
+from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
+from auv_hinf.certificate.reason import Reason, Setting, reason_from
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig

@@ -16,7 +16,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from auv_hinf.certificate.part import PartContext, Reason, RunCheck, RunContext, Setting, Verdict
+from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.design.crosscheck import CrosscheckReport, crosscheck
 from auv_hinf.design.jacobi_sigma import jacobi_sigma_bounds
 from auv_hinf.design.sigma import SigmaBounds
