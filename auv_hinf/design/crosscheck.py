@@ -68,7 +68,13 @@ class Check:
         return self.rel_diff <= self.tol
 
     def with_value(self, value: float) -> Check:
-        """The same comparison for another ``value`` (to test that a wrong value fails)."""
+        """The same comparison for another ``value`` (to test that a wrong value fails).
+
+        Parameters
+        ----------
+        value : float
+            The new compared value, in the unit of ``reference``; ``rel_diff`` is recomputed.
+        """
         return replace(self, value=value, rel_diff=_rel(value, self.reference, self.scale))
 
 
