@@ -72,7 +72,13 @@ class Region:
     yaw_rate: float
 
     def scaled(self, kappa: float) -> Region:
-        """All four radii times ``kappa``."""
+        """All four radii times ``kappa``.
+
+        Parameters
+        ----------
+        kappa : float
+            Common factor (dimensionless).
+        """
         return Region(*(float(kappa * x) for x in self.as_array()))
 
     def as_array(self) -> FloatArray:
