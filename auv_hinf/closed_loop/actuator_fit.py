@@ -44,7 +44,7 @@ def mission_thrust(params: VehicleParams, envelope: Envelope, tube: ReferenceTub
     params : VehicleParams
         The controller's model of the vehicle.
     envelope : Envelope
-        Operating envelope (inflated as for the certificate).
+        Operating envelope (not inflated: the bound uses its inflated copy, as the certificate does).
     tube : ReferenceTube
         Bounds of the vehicle's desired motion.
     gains : Gains
@@ -76,7 +76,7 @@ def actuator_fraction(
     params : VehicleParams
         The controller's model of the vehicle.
     envelope : Envelope
-        Operating envelope (inflated as for the certificate).
+        Operating envelope (not inflated: the bound uses its inflated copy, as the certificate does).
     tube : ReferenceTube
         Bounds of the vehicle's desired motion.
     gains : Gains
