@@ -141,9 +141,18 @@ class LagBounds:
 def bound_errors(prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, channel: bool) -> LagBounds:
     """ISS certificates at the declared lag and the verified fixed point of the error bounds.
 
-    ``channel``: the drift feedforward's dependence on the velocity error's change is a
-    norm-bounded term of the position LMI (``q2``); otherwise it is part of the disturbance,
-    bounded through the body accelerations.
+    Parameters
+    ----------
+    prob : ImplementationProblem
+        The configuration (model, envelope, tube, gains, sigma, actuators).
+    impl : Implementation
+        Sample time, delay and measurement-noise bounds.
+    start : ErrorBounds
+        Bounds of the errors at ``t = 0`` (m, m/s, rad, rad/s).
+    channel : bool
+        The drift feedforward's dependence on the velocity error's change is a norm-bounded
+        term of the position LMI (``q2``); otherwise it is part of the disturbance, bounded
+        through the body accelerations.
     """
     lag = impl.max_lag
     loops = prob.lag_loops(channel)
@@ -228,7 +237,17 @@ class LagLimits:
 
 
 def lag_limits(loops: tuple[LagLoop, LagLoop], nominal_dampings: tuple[float, float], delay: float) -> LagLimits:
-    """:func:`certified_lag` of both loops and :func:`exact_limit` of their nominal members."""
+    """:func:`certified_lag` of both loops and :func:`exact_limit` of their nominal members.
+
+    Parameters
+    ----------
+    loops : tuple of LagLoop
+        Position and heading loops.
+    nominal_dampings : tuple of float
+        Velocity coefficient ``a`` (1/s) of each loop's nominal member.
+    delay : float
+        Declared delay (s) for the exact limit.
+    """
     lag = min(certified_lag(loop) for loop in loops)
     exact = min(exact_limit(a, lp.k, lp.b, delay) for a, lp in zip(nominal_dampings, loops, strict=True))
     return LagLimits(lag=lag, exact_sample_time=exact)
