@@ -175,6 +175,7 @@ def spectral_radius(a: float, k: float, b: float, period: float, delay: float, *
     seconds and ``u_{j-m}`` after, so ``x_{j+1} = Ad x_j + G1 u_{j-m-1} + G0 u_{j-m}``
     with ``G0 = Bd(h - f)``, ``G1 = Ad(h - f) Bd(f)`` from python-control's ``sample_system``.
     The state ``(x_j, u_{j-1}, ..., u_{j-m-1})`` evolves linearly; its spectral radius decides.
+
     Parameters
     ----------
     a : float
