@@ -165,7 +165,13 @@ def certificate_schema() -> dict[str, Any]:
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` with every non-finite float replaced by ``None`` and tuples by lists (the CLI's JSON rule)."""
+    """``obj`` with every non-finite float replaced by ``None`` and tuples by lists (the CLI's JSON rule).
+
+    Parameters
+    ----------
+    obj : Any
+        A value of JSON types (dicts, lists, tuples, scalars), nested.
+    """
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     if isinstance(obj, dict):
@@ -176,12 +182,26 @@ def json_safe(obj: Any) -> Any:
 
 
 def json_normal(obj: Any) -> Any:
-    """``obj`` as it reads back from a JSON file: :func:`json_safe`, then a dump/parse round trip."""
+    """``obj`` as it reads back from a JSON file: :func:`json_safe`, then a dump/parse round trip.
+
+    Parameters
+    ----------
+    obj : Any
+        A value of JSON types, nested.
+    """
     return json.loads(json.dumps(json_safe(obj), allow_nan=False))
 
 
 def digest(config: Any, record: Any) -> str:
-    """``sha256:`` and the hex digest of the canonical JSON (sorted keys, no spaces) of both."""
+    """``sha256:`` and the hex digest of the canonical JSON (sorted keys, no spaces) of both.
+
+    Parameters
+    ----------
+    config : Any
+        The stored configuration (its TOML tables, JSON-normal).
+    record : Any
+        The stored certificate record (JSON-normal).
+    """
     text = json.dumps({"config": config, "certificate": record}, sort_keys=True, separators=(",", ":"))
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()
 
@@ -301,6 +321,13 @@ def _consistent(config: FormationConfig, record: CertificateRecord, source: str)
 def certificate_from_document(doc: Any, source: str = "certificate") -> Certificate:
     """The :class:`~auv_hinf.certificate.assembly.Certificate` of a parsed certificate file of any version.
 
+    Parameters
+    ----------
+    doc : Any
+        The parsed JSON document.
+    source : str
+        Name of the document (a file name), starting every message.
+
     Raises
     ------
     ConfigError
@@ -383,6 +410,11 @@ def save_certificate(cert: Certificate, path: str | Path, *, created: datetime |
 
 def load_certificate(path: str | Path) -> Certificate:
     """Read a file written by :func:`save_certificate` (or by an earlier version) without re-certifying.
+
+    Parameters
+    ----------
+    path : str or Path
+        The certificate file.
 
     Raises
     ------
