@@ -286,6 +286,7 @@ class Certificate:
 
         Inputs ``x[i], y[i], psi[i], u[i], v[i], r[i]``, outputs ``tau_x[i], tau_y[i],
         tau_psi[i]`` (N, N, N m); see :func:`auv_hinf.law.interconnect.formation_controller`.
+
         Parameters
         ----------
         reference : MotionSource, optional
