@@ -192,6 +192,13 @@ class ChunkProgress:
 
     The client reads them (``Client.get_events``) and moves the bar as the chunk runs, as the
     serial path does, instead of once per finished chunk.
+
+    Attributes
+    ----------
+    topic : str
+        Name of the Dask event topic.
+    lo : int
+        First run index of the chunk, sent with each fraction.
     """
 
     topic: str

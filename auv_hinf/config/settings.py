@@ -163,7 +163,13 @@ class SimulationConfig:
 
 @dataclass(frozen=True)
 class UncertaintyConfig:
-    """Declared parameter box (``[uncertainty]``): name -> relative ``(lo, hi)``, 0 < lo <= 1 <= hi."""
+    """Declared parameter box (``[uncertainty]``): name -> relative ``(lo, hi)``, 0 < lo <= 1 <= hi.
+
+    Attributes
+    ----------
+    box : tuple of (str, (float, float))
+        The declared parameters (vehicle coefficient names) with their multipliers ``(lo, hi)``.
+    """
 
     box: tuple[tuple[str, tuple[float, float]], ...] = ()
 
@@ -178,7 +184,15 @@ class UncertaintyConfig:
 
 @dataclass(frozen=True)
 class DisturbanceConfig:
-    """Declared current bounds (``[disturbance]``): speed in m/s, rate in m/s^2 (``None``: not declared)."""
+    """Declared current bounds (``[disturbance]``): speed in m/s, rate in m/s^2 (``None``: not declared).
+
+    Attributes
+    ----------
+    current_speed : float or None
+        Bound on ``|current|`` (m/s, inertial frame).
+    current_rate : float or None
+        Bound on ``|d current / dt|`` (m/s^2).
+    """
 
     current_speed: float | None = None
     current_rate: float | None = None

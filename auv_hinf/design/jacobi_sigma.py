@@ -345,7 +345,22 @@ def jacobi_sigma_bounds(
 
 @dataclass(frozen=True)
 class JacobiBnbResult:
-    """Result of :func:`jacobi_branch_and_bound`: certified ``upper``, witnessed ``lower`` (1/s)."""
+    """Result of :func:`jacobi_branch_and_bound`: certified ``upper``, witnessed ``lower`` (1/s).
+
+    Attributes
+    ----------
+    upper : float
+        Certified upper bound of the Jacobi sigma (1/s), round-off allowance included.
+    lower : float
+        Best evaluated value (1/s), attained at ``witness``.
+    witness : tuple of ndarray
+        ``(psi, |u|, |v|, r)`` of the vehicles at the lower bound (rad, m/s, m/s, rad/s; the last
+        vehicle's heading is 0).
+    levels : int
+        Refinement levels run.
+    evaluations : int
+        Configurations evaluated.
+    """
 
     upper: float
     lower: float

@@ -110,6 +110,8 @@ class LagResult:
         Lag bound (s) and decay rate (1/s) it was verified at.
     max_eig, margin : float
         Largest eigenvalue of the verified matrices and the round-off margin it cleared.
+    lag_multiplier : float
+        S-procedure multiplier ``mu2`` of the lag channel (0 without one).
     """
 
     p: FloatArray

@@ -113,7 +113,28 @@ def _fits(prob: ImplementationProblem, b: ErrorBounds) -> bool:
 
 @dataclass(frozen=True)
 class LagBounds:
-    """The outcome of :func:`bound_errors` (bounds in m, m/s, rad, rad/s; ``None`` when not covered)."""
+    """The outcome of :func:`bound_errors` (bounds in m, m/s, rad, rad/s; ``None`` when not covered).
+
+    Attributes
+    ----------
+    covers : bool
+        The error bounds are a verified fixed point inside the envelope (and the forces within
+        the actuators).
+    reasons : tuple of str
+        Why not (empty when it covers).
+    decay_rate : float or None
+        Rate (1/s) of the ISS certificates (the smaller of the two).
+    bounds : ErrorBounds or None
+        Bounds of the errors over the whole run.
+    ultimate : ErrorBounds or None
+        Bounds the errors enter and stay in as ``t -> inf``.
+    thrust : ThrustBounds or None
+        Bound of the commanded forces (N, N, N m).
+    disturbance : LagDisturbance or None
+        Bounds of the disturbances at the fixed point.
+    certificates : tuple of LagResult
+        The position and heading certificates (empty when none is verified).
+    """
 
     covers: bool
     reasons: tuple[str, ...]
@@ -278,6 +299,8 @@ class ImplementationCertificate:
     disturbance : LagDisturbance or None
     certificates : tuple of LagResult
         The verified position and heading certificates (empty when none).
+    method : str
+        The method, in words (:data:`METHOD`).
     """
 
     implementation: Implementation

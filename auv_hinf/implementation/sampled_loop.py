@@ -187,12 +187,20 @@ def _none() -> FloatArray:
 class SampledSolution(BatchSolution):
     """A :class:`~auv_hinf.numerics.integrators.BatchSolution` of ``S`` runs, and what their controller did.
 
-    ``y`` is ``(T, S, 6 N)`` (None when the samples went to a sink), ``event_time`` each run's
-    first envelope exit (s, NaN if none) on the integrator's interpolant, ``n_steps`` its accepted
-    steps over all segments.
-
     Attributes
     ----------
+    t : ndarray, shape (T,)
+        Output times (s).
+    y : ndarray, shape (T, S, 6 N), or None
+        States at the output times; None when the samples went to a sink.
+    event_time : ndarray, shape (S,)
+        Each run's first envelope exit (s, NaN if none) on the integrator's interpolant.
+    n_steps : ndarray of int, shape (S,)
+        Each run's accepted steps over all segments.
+    n_rejected : ndarray of int, shape (S,)
+        Zero (not counted).
+    next_step : None
+        Not used by the sampled loop.
     commanded : ndarray, shape (T, S, N, 3), or None
         The held command (before saturation) at the output times (N, N, N m).
     commanded_peak : ndarray, shape (S, 3)

@@ -472,7 +472,21 @@ _COEFFS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d
 
 @dataclass(frozen=True)
 class PlantBatch:
-    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,)."""
+    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,).
+
+    Attributes
+    ----------
+    m11, m22 : ndarray, shape (S,)
+        Surge and sway inertia (kg).
+    m33 : ndarray, shape (S,)
+        Yaw inertia (kg m^2).
+    d11_lin, d11_quad : ndarray, shape (S,)
+        Surge damping coefficients (kg/s, kg/m).
+    d22_lin, d22_quad : ndarray, shape (S,)
+        Sway damping coefficients (kg/s, kg/m).
+    d33_lin, d33_quad : ndarray, shape (S,)
+        Yaw damping coefficients (kg m^2/s, kg m^2).
+    """
 
     m11: FloatArray
     m22: FloatArray

@@ -444,6 +444,10 @@ class RobustCertificate:
     thrust : ThrustBounds or None
     reasons : tuple of str
         Why it does not cover (empty when it does).
+    method : str
+        The method, in words (:data:`METHOD`).
+    integral_bound : float or None
+        With integral action, bound of the integrator state ``|z|`` (m s); else None.
     """
 
     gains: Gains

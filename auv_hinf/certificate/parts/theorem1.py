@@ -148,7 +148,15 @@ def figures(result: Theorem1Result, method: str, k1: float, jacobi: str, gamma_c
 
 @dataclass(frozen=True)
 class Theorem1Part:
-    """The paper's certificate: small gain over the envelope (see the module docstring)."""
+    """The paper's certificate: small gain over the envelope (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        The registry name.
+    key : str or None
+        The JSON key of the figures (``None``: they are top-level keys).
+    """
 
     name: str = "theorem1"
     key: str | None = None
