@@ -34,7 +34,7 @@ class Negative(Exception):
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one exception (one line, exit code 2)."""
+    """An argparse parser that reports usage errors as one exception (one line, exit code 2)."""
 
     def error(self, message: str) -> Any:
         """Raise :class:`UsageError` with ``message`` instead of printing the usage and exiting.
