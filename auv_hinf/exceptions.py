@@ -105,6 +105,13 @@ def require_finite(name: str, value: Any) -> float:
 def require_fleet_size(n: Any, minimum: int = 2) -> int:
     """Return ``n`` as an int, or raise if it is not an integer number of vehicles >= ``minimum``.
 
+    Parameters
+    ----------
+    n : Any
+        The number of vehicles to check.
+    minimum : int
+        Smallest number accepted.
+
     Raises
     ------
     FormationError

@@ -80,12 +80,24 @@ class Actuators:
         return (self.tau_x, self.tau_y, self.tau_psi)
 
     def ratios(self, peak: tuple[float, float, float]) -> tuple[float, float, float]:
-        """``peak_k / limit_k`` per channel: above 1 the channel cannot deliver the peak."""
+        """``peak_k / limit_k`` per channel: above 1 the channel cannot deliver the peak.
+
+        Parameters
+        ----------
+        peak : tuple of float
+            Peak ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m, body frame).
+        """
         lim = self.limits()
         return (peak[0] / lim[0], peak[1] / lim[1], peak[2] / lim[2])
 
     def admits(self, peak: tuple[float, float, float]) -> bool:
-        """Every force of the box ``|tau_k| <= peak_k`` can be delivered (exact: box corners, convexity)."""
+        """Every force of the box ``|tau_k| <= peak_k`` can be delivered (exact: box corners, convexity).
+
+        Parameters
+        ----------
+        peak : tuple of float
+            Half-widths ``(|tau_x|, |tau_y|, |tau_psi|)`` of the box (N, N, N m, body frame).
+        """
         if not all(r <= 1.0 for r in self.ratios(peak)):
             return False
         return self.thrusters is None or self.thrusters.contains_box(peak)
@@ -95,6 +107,11 @@ class Actuators:
 
         The largest per-channel ratio, and with thrusters the inverse of the largest scale of the
         box the thrusters can deliver whole (exact, one LP).
+
+        Parameters
+        ----------
+        peak : tuple of float
+            Half-widths ``(|tau_x|, |tau_y|, |tau_psi|)`` of the box (N, N, N m, body frame).
         """
         worst = max(self.ratios(peak))
         if self.thrusters is not None and any(p > 0.0 for p in peak):
@@ -102,8 +119,16 @@ class Actuators:
         return float(worst)
 
     def binding(self, peak: tuple[float, float, float]) -> tuple[str, float]:
-        """What binds the box ``|tau_k| <= peak_k``: the channel with the largest ``peak / limit``, or
-        ``"thrusters"`` when the thruster polytope binds harder (:meth:`utilisation`), and that ratio."""
+        """What binds the box ``|tau_k| <= peak_k``, and its ratio.
+
+        The channel with the largest ``peak / limit``, or ``"thrusters"`` when the thruster
+        polytope binds harder (:meth:`utilisation`).
+
+        Parameters
+        ----------
+        peak : tuple of float
+            Half-widths ``(|tau_x|, |tau_y|, |tau_psi|)`` of the box (N, N, N m, body frame).
+        """
         r = self.ratios(peak)
         k = int(np.argmax(r))
         if self.thrusters is not None:
@@ -114,6 +139,13 @@ class Actuators:
 
     def saturate(self, tau: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
         """Clip commanded forces ``tau (..., 3)`` to the limits; also the per-vehicle active flag.
+
+        With thrusters the command is first saturated by the allocation, then clipped per channel.
+
+        Parameters
+        ----------
+        tau : ndarray, shape (..., 3)
+            Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
 
         Returns
         -------
@@ -185,6 +217,11 @@ VEHICLE_ACTUATORS: dict[str, Actuators] = {
 
 def vehicle_actuators(name: str) -> Actuators:
     """The actuator limits of vehicle preset ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`VEHICLE_ACTUATORS` (``"remus100"``, ``"bluerov2-heavy"``).
 
     Raises
     ------

@@ -137,7 +137,15 @@ def ellipsoid_feedback(matrix: FloatArray, row: FloatArray, level: float) -> flo
     The planar feedback ``F = sum_k c_k x_k`` (each ``x_k`` in R^2, the form is ``P kron I2``)
     obeys ``|F|^2 = sum_axes (c^T x_a)^2 <= (c^T P^-1 c) sum_axes x_a^T P x_a`` (Cauchy-Schwarz
     in the ``P`` inner product), so the bound holds on the whole ellipsoid and is attained on it.
-    ``matrix`` is ``P`` (n x n), ``row`` the gains ``c`` (e.g. ``[k1, alpha]``).
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (n, n)
+        The form ``P``, symmetric positive definite.
+    row : ndarray, shape (n,)
+        The gains ``c`` (e.g. ``[k1, alpha]``, 1/s^2 and 1/s).
+    level : float
+        Level of the ellipsoid (negative levels count as 0).
     """
     c = np.asarray(row, dtype=float)
     return float(math.sqrt(max(level, 0.0) * float(c @ np.linalg.solve(matrix, c))))

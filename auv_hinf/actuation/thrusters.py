@@ -239,6 +239,11 @@ class ThrusterAllocation:
         Channel ``k``'s limit is the largest ``c`` such that every ``t e_k`` with ``|t| <= c`` (the
         other two channels zero) is deliverable: the smaller of the largest push either way, one
         LP per channel. The limits do not hold all at once; use :meth:`contains_box` for that.
+
+        Parameters
+        ----------
+        tol : float
+            Residual (N, N m) accepted when the solver's forces are checked.
         """
         eye = np.eye(3)
         x, y, psi = (self._max_scale(np.stack([eye[k], -eye[k]]), tol) for k in range(3))
@@ -306,7 +311,11 @@ class ThrusterAllocation:
 def box_corners(peak: ArrayLike) -> FloatArray:
     """The distinct corners ``(+-peak_x, +-peak_y, +-peak_psi)`` of a box, shape (<= 8, 3).
 
-    ``peak`` must be 3 finite numbers >= 0 (N, N, N m), else :class:`ParameterError` is raised.
+    Parameters
+    ----------
+    peak : array_like, shape (3,)
+        Half-widths of the box (N, N, N m), finite and >= 0, else :class:`ParameterError` is
+        raised; a zero half-width gives one value instead of two.
     """
     p = _array("peak", peak, (3,), "a box half-width per channel")
     if np.any(p < 0):

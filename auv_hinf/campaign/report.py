@@ -51,7 +51,13 @@ def _composition(s: Any, k: int) -> str:
 
 
 def passed(table: pd.DataFrame) -> pd.Series:
-    """Per-run verdict: ``inside_bounds & within_certified_force`` where they apply, else ``stayed_in_envelope``."""
+    """Per-run verdict: ``inside_bounds & within_certified_force`` where they apply, else ``stayed_in_envelope``.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The run table (``runs.parquet``'s columns).
+    """
     inside = table["inside_bounds"]
     if "within_certified_force" in table:
         inside = inside & table["within_certified_force"]
@@ -59,7 +65,13 @@ def passed(table: pd.DataFrame) -> pd.Series:
 
 
 def summarize(camp: Campaign) -> dict[str, Any]:
-    """The ``summary.json`` object: counts, fractions, worst ratios, forces (N, N m), throughput (s, runs/s)."""
+    """The ``summary.json`` object: counts, fractions, worst ratios, forces (N, N m), throughput (s, runs/s).
+
+    Parameters
+    ----------
+    camp : Campaign
+        The finished campaign (its setup and run table).
+    """
     t, s = camp.table, camp.setup
     k = len(t)
     applicable = t["inside_bounds"].notna()
@@ -133,7 +145,13 @@ def summarize(camp: Campaign) -> dict[str, Any]:
 
 
 def certified_thrust(camp: Campaign) -> dict[str, float]:
-    """Thrust bound the runs are checked against (N, N, N m): the robust certificate's, else the nominal one's."""
+    """Thrust bound the runs are checked against (N, N, N m): the robust certificate's, else the nominal one's.
+
+    Parameters
+    ----------
+    camp : Campaign
+        The finished campaign (its setup and run table).
+    """
     rob = camp.setup.robust
     if rob is not None:
         return {c: float(b) for c, b in zip(CHANNELS, rob.thrust)}
@@ -149,6 +167,11 @@ def force_summary(camp: Campaign) -> dict[str, Any]:
     (None when there are none) and ``tightness`` its inverse, how many times the worst sampled
     run the certified bound is (the bound's conservatism as measured; at least 1 when sound);
     ``within_certified_force`` and ``exceeded_certified_force`` count those runs.
+
+    Parameters
+    ----------
+    camp : Campaign
+        The finished campaign (its setup and run table).
     """
     t = camp.table
     within = t["within_certified_force"]
@@ -170,7 +193,13 @@ def force_summary(camp: Campaign) -> dict[str, Any]:
 
 
 def certified_bounds(camp: Campaign) -> dict[str, float]:
-    """Bounds over every start the campaign draws: the robust certificate's, else the nominal region's."""
+    """Bounds over every start the campaign draws: the robust certificate's, else the nominal region's.
+
+    Parameters
+    ----------
+    camp : Campaign
+        The finished campaign (its setup and run table).
+    """
     rob = camp.setup.robust
     if rob is not None:
         return {kind: float(b) for kind, b in zip(ERROR_KINDS, rob.bounds)}
@@ -184,6 +213,13 @@ def save_histograms(camp: Campaign, out: Path) -> list[Path]:
     vehicles) and the certificate's bound over the whole start region.
     ``bound_ratios.png``: per kind, measured / per-start certified bound of the runs the
     certificate applies to, with the line at 1. Returns the paths written.
+
+    Parameters
+    ----------
+    camp : Campaign
+        The finished campaign (its setup and run table).
+    out : Path
+        Existing directory the two PNG files are written to.
     """
     from matplotlib.figure import Figure  # no pyplot: no backend or display needed
 
@@ -219,7 +255,15 @@ def save_histograms(camp: Campaign, out: Path) -> list[Path]:
 
 
 def write_outputs(camp: Campaign, out: Path) -> dict[str, Any]:
-    """Write ``runs.parquet``, ``summary.json`` and the PNG histograms to ``out``; return the summary."""
+    """Write ``runs.parquet``, ``summary.json`` and the PNG histograms to ``out``; return the summary.
+
+    Parameters
+    ----------
+    camp : Campaign
+        The finished campaign (its setup and run table).
+    out : Path
+        Output directory (created if missing).
+    """
     out.mkdir(parents=True, exist_ok=True)
     summary = summarize(camp)
     camp.table.to_parquet(out / "runs.parquet", index=False)

@@ -192,6 +192,13 @@ class ChunkProgress:
 
     The client reads them (``Client.get_events``) and moves the bar as the chunk runs, as the
     serial path does, instead of once per finished chunk.
+
+    Attributes
+    ----------
+    topic : str
+        Name of the Dask event topic.
+    lo : int
+        First run index of the chunk, sent with each fraction.
     """
 
     topic: str
@@ -217,7 +224,19 @@ WORKER_MALLOC = {"MALLOC_TRIM_THRESHOLD_": 2**28, "MALLOC_MMAP_THRESHOLD_": 2**2
 def dask_client(workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
     """A Dask client: a local cluster of ``workers`` single-threaded processes, or ``scheduler``.
 
-    Yields ``None`` (in-process, serial) when neither is given; closes what it opened.
+    Closes what it opened.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Number of worker processes of a local cluster (>= 1).
+    scheduler : str, optional
+        Address of a running Dask scheduler to connect to.
+
+    Yields
+    ------
+    distributed.Client or None
+        The client; ``None`` (in-process, serial) when neither is given.
 
     Raises
     ------

@@ -67,7 +67,15 @@ class RunInputs:
 
 
 def sample_run(setup: CampaignSetup, index: int) -> RunInputs:
-    """Inputs of run ``index``, from ``SeedSequence(setup.seed, spawn_key=(index,))`` alone."""
+    """Inputs of run ``index``, from ``SeedSequence(setup.seed, spawn_key=(index,))`` alone.
+
+    Parameters
+    ----------
+    setup : CampaignSetup
+        The campaign (seed, fleet, box, current, start radii or robust sets).
+    index : int
+        Run index within the campaign.
+    """
     rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
     rob = setup.robust
     corner = None if rob is None else rob.vertex_index(index)
@@ -92,6 +100,13 @@ def initial_state(setup: CampaignSetup, inputs: RunInputs) -> FloatArray:
     """``[x, y, psi, u, v, r]`` per vehicle: the mission's motion at ``t = 0`` plus the errors.
 
     The velocity error is in ground velocity: the body velocity is ``R(psi)^T (v_d + e' - c)``.
+
+    Parameters
+    ----------
+    setup : CampaignSetup
+        The campaign (its mission's motion at ``t = 0``).
+    inputs : RunInputs
+        The run's sampled start errors and current.
     """
     e, de, epsi, depsi = inputs.errors
     p, v, hr = setup.start[:, 0], setup.start[:, 1], setup.start[:, 2]
@@ -115,13 +130,30 @@ def implementation_seed(seed: int, index: int) -> int:
 
     From ``SeedSequence(seed, spawn_key=(index, IMPLEMENTATION_STREAM))``, a stream apart from the
     run's sampled inputs (:func:`sample_run`): it depends on neither the chunking nor the executor.
+
+    Parameters
+    ----------
+    seed : int
+        The campaign seed.
+    index : int
+        Run index within the campaign.
     """
     state = np.random.SeedSequence(seed, spawn_key=(index, IMPLEMENTATION_STREAM)).generate_state(2, np.uint32)
     return int(state[0]) << 32 | int(state[1])
 
 
 def run_scenario(setup: CampaignSetup, index: int, inputs: RunInputs) -> Scenario:
-    """The scenario of run ``index`` with its sampled ``inputs`` (see :func:`sample_run`)."""
+    """The scenario of run ``index`` with its sampled ``inputs`` (see :func:`sample_run`).
+
+    Parameters
+    ----------
+    setup : CampaignSetup
+        The campaign.
+    index : int
+        Run index within the campaign (names the scenario and seeds its implementation draws).
+    inputs : RunInputs
+        The run's sampled inputs.
+    """
     return Scenario(
         law=setup.law,
         reference=setup.reference,
@@ -158,8 +190,16 @@ def run_chunk(setup: CampaignSetup, lo: int, hi: int, progress: Callable[[float]
     The samples are not stored: :class:`~auv_hinf.simulation.metrics.ErrorSink` folds each one into
     the metrics as the integrator produces it (the same numbers as post-processing stored
     samples, to a few units in the last place; ``tests/simulation/test_run_metrics.py``).
-    ``progress``, if given, is called with the fraction of the chunk's samples produced so far
-    (0 to 1), about once per percent.
+
+    Parameters
+    ----------
+    setup : CampaignSetup
+        The campaign.
+    lo, hi : int
+        First run index and one past the last.
+    progress : callable, optional
+        Called with the fraction of the chunk's samples produced so far (0 to 1), about once
+        per percent.
     """
     inputs = [sample_run(setup, i) for i in range(lo, hi)]
     batch = ScenarioBatch(tuple(run_scenario(setup, i, x) for i, x in zip(range(lo, hi), inputs)))

@@ -119,6 +119,15 @@ def prepare(
 ) -> tuple[CampaignSetup, ClosedLoopCertificate | None]:
     """Gains, closed-loop certificate and the worker set-up of a campaign on ``cfg``.
 
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    seed : int
+        Campaign seed (>= 0).
+    horizon : float, optional
+        Length of every run (s, > 0); default ``cfg.simulation.horizon``.
+
     Raises
     ------
     DesignError
@@ -177,20 +186,40 @@ def prepare(
 
 
 def nominal_certificate(setup: CampaignSetup) -> ClosedLoopCertificate:
-    """The nominal certificate of a campaign whose runs it decides (without a robust one there always is one)."""
+    """The nominal certificate of a campaign whose runs it decides (without a robust one there always is one).
+
+    Parameters
+    ----------
+    setup : CampaignSetup
+        The campaign.
+    """
     if setup.certificate is None:  # pragma: no cover - prepare refuses integral action without the robust one
         raise DesignError("this campaign has no nominal certificate (integral action): the robust one decides")
     return setup.certificate
 
 
 def default_chunk(setup: CampaignSetup) -> int:
-    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the working set would exceed :data:`CHUNK_BYTES`."""
+    """Scenarios per batch: :data:`MAX_CHUNK`, fewer when the working set would exceed :data:`CHUNK_BYTES`.
+
+    Parameters
+    ----------
+    setup : CampaignSetup
+        The campaign (its fleet size).
+    """
     per_run = WORKING_ARRAYS * setup.n * 6 * 8
     return max(1, min(MAX_CHUNK, CHUNK_BYTES // per_run))
 
 
 def chunks(runs: int, chunk: int) -> list[tuple[int, int]]:
-    """``[lo, hi)`` index ranges of ``runs`` runs in chunks of ``chunk``."""
+    """``[lo, hi)`` index ranges of ``runs`` runs in chunks of ``chunk``.
+
+    Parameters
+    ----------
+    runs : int
+        Number of runs.
+    chunk : int
+        Runs per chunk (the last may be shorter).
+    """
     return [(lo, min(runs, lo + chunk)) for lo in range(0, runs, chunk)]
 
 

@@ -113,13 +113,25 @@ class RobustStart:
         return int(2 ** len(self.declared))
 
     def vertex_index(self, run: int) -> int | None:
-        """The box vertex run ``run`` samples, or ``None`` for an interior run (see the module docstring)."""
+        """The box vertex run ``run`` samples, or ``None`` for an interior run (see the module docstring).
+
+        Parameters
+        ----------
+        run : int
+            Run index within the campaign.
+        """
         if run % CORNER_PERIOD == 0 and run // CORNER_PERIOD < self.vertices:
             return run // CORNER_PERIOD
         return None
 
     def vertex_runs(self, runs: int) -> int:
-        """How many of the first ``runs`` runs are box vertices."""
+        """How many of the first ``runs`` runs are box vertices.
+
+        Parameters
+        ----------
+        runs : int
+            Number of runs.
+        """
         return min(self.vertices, (runs + CORNER_PERIOD - 1) // CORNER_PERIOD)
 
     def sample_errors(
@@ -128,6 +140,15 @@ class RobustStart:
         """Start errors of ``n`` vehicles inside the certified set for ``current`` (m/s, inertial).
 
         Returns ``e (n, 2)`` m, ``e' (n, 2)`` m/s, ``e_psi (n,)`` rad, ``e_psi' (n,)`` rad/s.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Source of the draws.
+        n : int
+            Number of vehicles.
+        current : ndarray, shape (2,)
+            The run's current (m/s, inertial frame), which shifts the position set.
         """
         pos, head, d, h = self._sets()
         scale = 1.0 - START_SHRINK
@@ -146,11 +167,33 @@ class RobustStart:
         return e, de, hv[:, 0], hv[:, 1]
 
     def inside(self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: FloatArray) -> bool:
-        """Every vehicle's start errors lie in both certified sets (the test of :meth:`sample_errors`)."""
+        """Every vehicle's start errors lie in both certified sets (the test of :meth:`sample_errors`).
+
+        Parameters
+        ----------
+        e : ndarray, shape (N, 2)
+            Position errors (m, inertial frame).
+        de : ndarray, shape (N, 2)
+            Ground-velocity errors (m/s, inertial frame).
+        epsi : ndarray, shape (N,)
+            Heading errors (rad).
+        depsi : ndarray, shape (N,)
+            Yaw-rate errors (rad/s).
+        current : ndarray, shape (2,)
+            The run's current (m/s, inertial frame).
+        """
         return self.certificate.start_inside(e, de, epsi, depsi, current)
 
     def vertex(self, box: FloatArray, index: int) -> FloatArray:
-        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)): bit ``k`` picks the upper end."""
+        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)): bit ``k`` picks the upper end.
+
+        Parameters
+        ----------
+        box : ndarray, shape (9, 2)
+            ``[lo, hi]`` multipliers of the nine coefficients.
+        index : int
+            Vertex index; its bit ``k`` refers to the ``k``-th declared parameter.
+        """
         mult = box[:, 0].copy()
         for bit, k in enumerate(self.declared):
             if (index >> bit) & 1:
@@ -187,6 +230,16 @@ def robust_start(
 
     ``(None, None)`` when nothing is declared (the nominal certificate applies); ``(None, why)``
     when something is declared but the robust certificate does not cover it.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configuration, gains, tube).
+    box : ndarray, shape (9, 2)
+        ``[lo, hi]`` multipliers of the nine coefficients; those with ``lo < hi`` are declared.
+    nominal : ClosedLoopCertificate or None
+        The nominal closed-loop certificate when the caller has it (None: the robust summary
+        computes it when it needs it).
     """
     summ = robust_summary(point, margins=False, nominal=nominal)
     if not summ.declared:
@@ -200,7 +253,15 @@ def robust_start(
 
 
 def vertex_current(rng: np.random.Generator, speed: float) -> FloatArray:
-    """A current of exactly ``speed`` (m/s) in a uniformly random direction."""
+    """A current of exactly ``speed`` (m/s) in a uniformly random direction.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the direction (one draw).
+    speed : float
+        Current speed (m/s).
+    """
     ang = 2.0 * math.pi * rng.random()
     return np.array([speed * math.cos(ang), speed * math.sin(ang)]) + 0.0
 

@@ -68,7 +68,13 @@ class Certificate:
     design: dict[str, Any] | None = None
 
     def verdict(self, name: str) -> Verdict | None:
-        """The verdict of the part called ``name`` (``None``: no such part)."""
+        """The verdict of the part called ``name`` (``None``: no such part).
+
+        Parameters
+        ----------
+        name : str
+            Part name (e.g. ``"theorem1"``, ``"closed_loop"``).
+        """
         return next((v for v in self.verdicts if v.part == name), None)
 
     @property
@@ -211,6 +217,13 @@ class Certificate:
     def from_record(cls, config: FormationConfig, record: Mapping[str, Any]) -> Certificate:
         """The certificate a stored record describes (the figures and verdicts, no typed results).
 
+        Parameters
+        ----------
+        config : FormationConfig
+            The configuration stored beside the record.
+        record : mapping
+            The record in the version 4 layout (:meth:`to_dict`'s).
+
         Raises
         ------
         KeyError, TypeError, ValueError
@@ -225,6 +238,11 @@ class Certificate:
     def save(self, path: str | Path) -> Path:
         """Write the certificate as its stored document; see :mod:`auv_hinf.certificate.document`.
 
+        Parameters
+        ----------
+        path : str or Path
+            The file to write; its parent directory must exist.
+
         Returns
         -------
         Path
@@ -235,6 +253,11 @@ class Certificate:
     @classmethod
     def load(cls, path: str | Path) -> Certificate:
         """Read a file written by :meth:`save` (any format version) without re-certifying.
+
+        Parameters
+        ----------
+        path : str or Path
+            The certificate file.
 
         Raises
         ------
@@ -261,8 +284,12 @@ class Certificate:
 
         Inputs ``x[i], y[i], psi[i], u[i], v[i], r[i]``, outputs ``tau_x[i], tau_y[i],
         tau_psi[i]`` (N, N, N m); see :func:`auv_hinf.law.interconnect.formation_controller`.
-        ``reference`` overrides the raw mission reference (e.g. a shaped start from
-        :func:`~auv_hinf.certificate.run_plan.plan_run`).
+
+        Parameters
+        ----------
+        reference : MotionSource, optional
+            Overrides the raw mission reference (e.g. a shaped start from
+            :func:`~auv_hinf.certificate.run_plan.plan_run`).
         """
         return formation_controller(self.law(), reference or self._mission_fleet(), self.config.n)
 
@@ -272,8 +299,15 @@ class Certificate:
         """The closed loop as ``control.interconnect`` of the N plants and :meth:`controller`.
 
         No inputs; the state is the stacked fleet state (``(N, 6).ravel()``) and so are the
-        outputs; see :func:`auv_hinf.law.interconnect.fleet_closed_loop`. ``plant``
-        defaults to the nominal model ``config.vehicle`` (the one the nominal certificate covers).
+        outputs; see :func:`auv_hinf.law.interconnect.fleet_closed_loop`.
+
+        Parameters
+        ----------
+        reference : MotionSource, optional
+            Overrides the raw mission reference, as in :meth:`controller`.
+        plant : VehicleParams, optional
+            The plant; default the nominal model ``config.vehicle`` (the one the nominal
+            certificate covers).
         """
         cfg = self.config
         ref = reference or self._mission_fleet()
@@ -336,9 +370,15 @@ def certify(
 ) -> Certificate:
     """Certify the configured design: every registered part, on one design point.
 
-    ``jacobi_samples`` sizes the Jacobi-coordinate search reported for the record, and
-    ``refine_jacobi`` tightens its bound by branch-and-bound (slow; the certificate itself uses
-    vehicle coordinates).
+    Parameters
+    ----------
+    config : FormationConfig
+        The configuration.
+    jacobi_samples : int
+        Size of the Jacobi-coordinate search reported for the record.
+    refine_jacobi : bool
+        Tighten that bound by branch-and-bound (slow; the certificate itself uses vehicle
+        coordinates).
     """
     point = design_point(config)
     options = {"jacobi_samples": jacobi_samples, "refine_jacobi": refine_jacobi}

@@ -149,12 +149,24 @@ class DesignPoint:
 
 
 def mission_reference(cfg: FormationConfig) -> MissionReference:
-    """The configured mission (centre path)."""
+    """The configured mission (centre path).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``[reference]`` table).
+    """
     return reference_from_dict(cfg.reference.kind, **cfg.reference.kwargs())
 
 
 def formation_offsets(cfg: FormationConfig) -> FloatArray:
-    """Vehicle offsets from the formation centre, shape ``(N, 2)`` (m), in O(N)."""
+    """Vehicle offsets from the formation centre, shape ``(N, 2)`` (m), in O(N).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its Jacobi shape vectors and Jacobi convention).
+    """
     rho = np.asarray(cfg.shape, dtype=float).reshape(cfg.n - 1, 2)
     return positions_from_jacobi(np.vstack([rho, np.zeros((1, 2))]), cfg.jacobi)
 
@@ -166,6 +178,11 @@ def initial_states(point: DesignPoint) -> FloatArray:
     raw mission (position on its slot, heading along the path, the path's speed as surge, the
     path's turn rate as yaw rate): zero tracking error, so the certificate covers it at every
     fleet size without a blended start, and ``certify`` and ``simulate`` judge the same start.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its configuration and fleet reference).
     """
     initial = point.config.simulation.initial
     if initial is not None:
@@ -176,8 +193,15 @@ def initial_states(point: DesignPoint) -> FloatArray:
 def slot_states(fleet: FleetReference, current: tuple[float, float] = (0.0, 0.0)) -> FloatArray:
     """States ``(N, 6)`` ``[x, y, psi, u, v, r]`` with zero error against ``fleet`` at ``t = 0``.
 
-    ``current`` (inertial, m/s): the body velocities are relative to the water, so a zero
-    ground-velocity error needs ``[u, v] = R(psi)^T (p_d' - current)``.
+    The body velocities are relative to the water, so a zero ground-velocity error needs
+    ``[u, v] = R(psi)^T (p_d' - current)``.
+
+    Parameters
+    ----------
+    fleet : FleetReference
+        The desired motion.
+    current : tuple of float
+        The current (m/s, inertial frame).
     """
     m = fleet.motion(0.0)
     c, s = np.cos(m.psi), np.sin(m.psi)
@@ -189,6 +213,11 @@ def slot_states(fleet: FleetReference, current: tuple[float, float] = (0.0, 0.0)
 
 def design_point(cfg: FormationConfig) -> DesignPoint:
     """The design of ``cfg`` (see the module docstring); cached on what it depends on.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
 
     Raises
     ------

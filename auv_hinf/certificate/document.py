@@ -175,7 +175,13 @@ def certificate_schema() -> dict[str, Any]:
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` with every non-finite float replaced by ``None`` and tuples by lists (the CLI's JSON rule)."""
+    """``obj`` with every non-finite float replaced by ``None`` and tuples by lists (the CLI's JSON rule).
+
+    Parameters
+    ----------
+    obj : Any
+        A value of JSON types (dicts, lists, tuples, scalars), nested.
+    """
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     if isinstance(obj, dict):
@@ -186,12 +192,26 @@ def json_safe(obj: Any) -> Any:
 
 
 def json_normal(obj: Any) -> Any:
-    """``obj`` as it reads back from a JSON file: :func:`json_safe`, then a dump/parse round trip."""
+    """``obj`` as it reads back from a JSON file: :func:`json_safe`, then a dump/parse round trip.
+
+    Parameters
+    ----------
+    obj : Any
+        A value of JSON types, nested.
+    """
     return json.loads(json.dumps(json_safe(obj), allow_nan=False))
 
 
 def digest(config: Any, record: Any) -> str:
-    """``sha256:`` and the hex digest of the canonical JSON (sorted keys, no spaces) of both."""
+    """``sha256:`` and the hex digest of the canonical JSON (sorted keys, no spaces) of both.
+
+    Parameters
+    ----------
+    config : Any
+        The stored configuration (its TOML tables, JSON-normal).
+    record : Any
+        The stored certificate record (JSON-normal).
+    """
     text = json.dumps({"config": config, "certificate": record}, sort_keys=True, separators=(",", ":"))
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()
 
@@ -332,7 +352,7 @@ def record_from_document(doc: Any, source: str = "certificate") -> tuple[Formati
     doc : Any
         The parsed JSON document.
     source : str
-        The file's name, for the messages.
+        Name of the document (a file name), starting every message.
 
     Raises
     ------
@@ -405,7 +425,7 @@ def read_certificate(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]
     Parameters
     ----------
     path : str or Path
-        The file.
+        The certificate file.
 
     Raises
     ------

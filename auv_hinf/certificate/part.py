@@ -37,7 +37,15 @@ Peak = tuple[float, float, float]
 
 
 def figures_in(entry: Mapping[str, Any], record: Mapping[str, Any]) -> Any:
-    """The figures, in a certificate ``record``, of the part whose ``parts`` entry is ``entry``."""
+    """The figures, in a certificate ``record``, of the part whose ``parts`` entry is ``entry``.
+
+    Parameters
+    ----------
+    entry : mapping
+        The part's entry of the record's ``parts`` object (its ``key``, or its ``keys``).
+    record : mapping
+        The whole certificate record.
+    """
     key = entry.get("key")
     if key is not None:
         return record.get(key)
@@ -104,7 +112,17 @@ class Verdict:
 
     @classmethod
     def restored(cls, part: str, entry: Mapping[str, Any], record: Mapping[str, Any]) -> Verdict:
-        """The verdict of a stored certificate: its ``parts`` entry and its figures in ``record``, no detail."""
+        """The verdict of a stored certificate: its ``parts`` entry and its figures in ``record``, no detail.
+
+        Parameters
+        ----------
+        part : str
+            The part's registry name.
+        entry : mapping
+            Its entry of the record's ``parts`` object.
+        record : mapping
+            The whole certificate record.
+        """
         key = entry.get("key")
         figures = figures_in(entry, record)
         return cls(
@@ -137,7 +155,13 @@ class PartContext:
     options: Mapping[str, Any] = field(default_factory=dict)
 
     def detail(self, name: str) -> Any:
-        """The typed result of an earlier part (``None`` when it did not run or gave none)."""
+        """The typed result of an earlier part (``None`` when it did not run or gave none).
+
+        Parameters
+        ----------
+        name : str
+            The earlier part's registry name.
+        """
         v = self.verdicts.get(name)
         return None if v is None else v.detail
 
@@ -229,7 +253,13 @@ class RunCheck:
 
 
 def run_covered(checks: Sequence[RunCheck]) -> bool:
-    """Some applicable certificate covers the run and every applicable condition holds."""
+    """Some applicable certificate covers the run and every applicable condition holds.
+
+    Parameters
+    ----------
+    checks : sequence of RunCheck
+        The parts' verdicts on the run.
+    """
     certificates = [c for c in checks if c.applies and c.role == "certificate"]
     conditions = [c for c in checks if c.applies and c.role == "condition"]
     return any(c.covers for c in certificates) and all(c.covers for c in conditions)
@@ -257,20 +287,46 @@ class CertificatePart(Protocol):
         ...
 
     def evaluate(self, ctx: PartContext) -> Verdict:
-        """The part's verdict on ``ctx.point`` given the earlier verdicts."""
+        """The part's verdict on ``ctx.point`` given the earlier verdicts.
+
+        Parameters
+        ----------
+        ctx : PartContext
+            The design point and the earlier verdicts.
+        """
         ...
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
-        """The part's section of the readable table, from its figures (and the whole record)."""
+        """The part's section of the readable table, from its figures (and the whole record).
+
+        Parameters
+        ----------
+        figures : Any
+            The part's figures in the record.
+        record : mapping
+            The whole certificate record.
+        """
         ...
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
-        """The part's verdict on one run (``None``: the part says nothing about runs)."""
+        """The part's verdict on one run (``None``: the part says nothing about runs).
+
+        Parameters
+        ----------
+        ctx : RunContext
+            The run and the checks of the parts before.
+        """
         ...
 
 
 def reasons_of(verdicts: Sequence[Verdict]) -> tuple[Reason, ...]:
-    """Every reason of the verdicts that do not hold, in order."""
+    """Every reason of the verdicts that do not hold, in order.
+
+    Parameters
+    ----------
+    verdicts : sequence of Verdict
+        The verdicts.
+    """
     return tuple(r for v in verdicts if not v.ok for r in v.reasons)
 
 

@@ -67,7 +67,13 @@ class Setting:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Setting:
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        data : mapping
+            ``table``, ``key`` and ``value``.
+        """
         return cls(str(data["table"]), str(data["key"]), data["value"])
 
 
@@ -122,7 +128,13 @@ class Reason:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Reason:
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        data : mapping
+            ``part``, ``kind`` and ``message``, and optionally the other attributes.
+        """
         return cls(
             part=str(data["part"]),
             kind=str(data["kind"]),
@@ -140,6 +152,15 @@ def reason_from(part: str, exc: Exception, prefix: str = "") -> Reason:
 
     A :class:`~auv_hinf.exceptions.DesignError` carries its kind and data; a
     :class:`~auv_hinf.exceptions.SolverError` is a ``solver`` reason; anything else ``not_covered``.
+
+    Parameters
+    ----------
+    part : str
+        The part's registry name.
+    exc : Exception
+        The refusal.
+    prefix : str
+        Text put before the exception's message.
     """
     message = prefix + str(exc)
     if isinstance(exc, DesignError):

@@ -35,12 +35,25 @@ def parts() -> tuple[CertificatePart, ...]:
 
 
 def part_named(name: str) -> CertificatePart | None:
-    """The registered part called ``name`` (``None``: not registered)."""
+    """The registered part called ``name`` (``None``: not registered).
+
+    Parameters
+    ----------
+    name : str
+        The part's registry name.
+    """
     return next((p for p in _registered if p.name == name), None)
 
 
 def register_part(part: CertificatePart, *, after: str | None = None) -> None:
     """Add ``part`` to every certificate from now on: last, or right after the part named ``after``.
+
+    Parameters
+    ----------
+    part : CertificatePart
+        The part; its name and (non-None) key must be new.
+    after : str, optional
+        Name of the registered part it follows; default last.
 
     Raises
     ------
@@ -62,6 +75,11 @@ def register_part(part: CertificatePart, *, after: str | None = None) -> None:
 
 def unregister_part(name: str) -> None:
     """Remove the part called ``name`` (one of the toolbox's own parts cannot be removed).
+
+    Parameters
+    ----------
+    name : str
+        The part's registry name.
 
     Raises
     ------

@@ -94,7 +94,13 @@ MIN_RUN_SAMPLES = 101
 
 
 def run_samples(n: int) -> int:
-    """Stored output samples of a run of ``n`` vehicles: :data:`RUN_SAMPLES`, fewer above the budget."""
+    """Stored output samples of a run of ``n`` vehicles: :data:`RUN_SAMPLES`, fewer above the budget.
+
+    Parameters
+    ----------
+    n : int
+        Number of vehicles.
+    """
     return int(max(MIN_RUN_SAMPLES, min(RUN_SAMPLES, SAMPLE_BUDGET // max(n, 1))))
 
 
@@ -181,6 +187,13 @@ def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -
     :data:`~auv_hinf.simulation.metrics.DECAY_MEASURE_DROP` (or the end), minimised over the vehicles
     whose initial norm exceeds :data:`~auv_hinf.simulation.metrics.DECAY_MEASURE_FLOOR`; ``None`` when
     no vehicle starts with an error.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The run (its tracking errors and sample times).
+    cert : ClosedLoopCertificate
+        The certificate whose decay matrices define ``V_i``.
     """
     v = lyapunov_values(result.tracking, cert.position.matrix, cert.heading.matrix)  # (T, N)
     below = v <= DECAY_MEASURE_DROP * v[0]
@@ -192,7 +205,15 @@ def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -
 
 
 def measured_errors(result: SimulationResult, start: int = 0) -> dict[str, float]:
-    """Sup over the samples from index ``start`` and the vehicles of each tracking error (m, m/s, rad, rad/s)."""
+    """Sup over the samples from index ``start`` and the vehicles of each tracking error (m, m/s, rad, rad/s).
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The run.
+    start : int
+        First sample index taken.
+    """
     tr = result.tracking
     return {
         "position_error": float(np.linalg.norm(tr.e[start:], axis=-1).max()),
@@ -210,6 +231,11 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
     bounds; the simulated one to the integrator's accuracy). For a sampled, delayed or noisy
     implementation they are the implementation certificate's bounds over the whole run.
     ``None`` when no certificate bounds the run.
+
+    Parameters
+    ----------
+    plan : RunPlan
+        The planned run (its coverage and implementation summary).
     """
     if plan.implementation is not None:
         c = plan.implementation.certificate
@@ -229,7 +255,13 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
 
 
 def implementation_report(scn: Scenario) -> dict[str, Any]:
-    """What implementation a run simulated: the declared one, its seed, the law's period (s)."""
+    """What implementation a run simulated: the declared one, its seed, the law's period (s).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The run's scenario.
+    """
     impl = scn.implementation
     return {
         **impl.to_dict(),
@@ -240,7 +272,15 @@ def implementation_report(scn: Scenario) -> dict[str, Any]:
 
 
 def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
-    """The simulation summary plus the certificate's verdict and bounds next to the measured ones."""
+    """The simulation summary plus the certificate's verdict and bounds next to the measured ones.
+
+    Parameters
+    ----------
+    plan : RunPlan
+        The planned run (design, certificate, coverage).
+    result : SimulationResult
+        Its simulation.
+    """
     out = result.summary()
     measured = measured_errors(result)
     cov = plan.coverage
@@ -311,7 +351,15 @@ _NULL_REASONS = {
 
 
 def with_start(cfg: FormationConfig, initial: FloatArray) -> FormationConfig:
-    """Copy of ``cfg`` whose simulation starts from ``initial`` ``(N, 6)``."""
+    """Copy of ``cfg`` whose simulation starts from ``initial`` ``(N, 6)``.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    initial : ndarray, shape (N, 6)
+        Initial states ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s).
+    """
     return replace(cfg, simulation=replace(cfg.simulation, initial=tuple(map(tuple, np.asarray(initial).tolist()))))
 
 

@@ -17,7 +17,12 @@ from auv_hinf.certificate.part import CertificatePart, figures_in
 def certificate_text(record: Mapping[str, Any], registered: Mapping[str, CertificatePart] | None = None) -> str:
     """One line per quantity, with units; the verdict and its reasons last.
 
-    ``registered`` maps part names to parts (default: the registry of this session).
+    Parameters
+    ----------
+    record : mapping
+        The certificate record (:meth:`~auv_hinf.certificate.assembly.Certificate.to_dict`).
+    registered : mapping of str to CertificatePart, optional
+        The parts by name that write their sections (default: the registry of this session).
     """
     if registered is None:
         from auv_hinf.certificate.registry import parts

@@ -34,14 +34,29 @@ class Negative(Exception):
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one exception (one line, exit code 2)."""
+    """An argparse parser that reports usage errors as one exception (one line, exit code 2)."""
 
     def error(self, message: str) -> Any:
+        """Raise :class:`UsageError` with ``message`` instead of printing the usage and exiting.
+
+        Parameters
+        ----------
+        message : str
+            The one-line message argparse gives.
+        """
         raise UsageError(message)
 
 
 def number(kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf) -> Callable[[str], float]:
-    """argparse type: a finite int or float in ``[lo, hi]``, negative and scientific forms included."""
+    """An argparse type: a finite int or float in ``[lo, hi]``, negative and scientific forms included.
+
+    Parameters
+    ----------
+    kind : {int, float}
+        The type the text is converted with.
+    lo, hi : float
+        Bounds of the accepted values (inclusive), in the option's unit.
+    """
 
     def parse(text: str) -> float:
         try:
@@ -63,12 +78,35 @@ NUMERIC_OPTIONS: set[str] = set()
 
 
 def numeric(p: argparse.ArgumentParser, flag: str, kind: type[int] | type[float], *bounds: float, **kw: Any) -> None:
+    """Add the option ``flag`` taking a :func:`number` to ``p``, and register it in :data:`NUMERIC_OPTIONS`.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The (sub)command's parser.
+    flag : str
+        The option, e.g. ``"--lam"``.
+    kind : {int, float}
+        The type of its value.
+    *bounds : float
+        ``lo`` and ``hi`` of :func:`number`, if given.
+    **kw : Any
+        Other arguments of ``add_argument`` (``help``, ``default``, ...).
+    """
     NUMERIC_OPTIONS.add(flag)
     p.add_argument(flag, type=number(kind, *bounds), **kw)
 
 
 def vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
-    """argparse type: ``size`` finite comma-separated numbers (``-0.1,0``)."""
+    """An argparse type: ``size`` finite comma-separated numbers (``-0.1,0``).
+
+    Parameters
+    ----------
+    size : int
+        Number of components.
+    unit : str
+        Their unit, for the message (e.g. ``"m/s"``).
+    """
 
     def parse(text: str) -> tuple[float, ...]:
         parts = text.split(",")
@@ -91,6 +129,11 @@ def join_numbers(argv: Sequence[str]) -> list[str]:
     argparse reads a token that starts with ``-`` as an option unless it matches its
     negative-number pattern, which misses scientific notation (``-1e-3``) and ``-inf``.
     The ``--opt=value`` form is always read as a value, so numeric options get it.
+
+    Parameters
+    ----------
+    argv : sequence of str
+        The command-line arguments (without the program name).
     """
     out: list[str] = []
     i = 0

@@ -37,7 +37,19 @@ KAPPA_RTOL = 1e-6
 
 
 def mission_thrust(params: VehicleParams, envelope: Envelope, tube: ReferenceTube, gains: Gains) -> ThrustBounds:
-    """Thrust bound at zero tracking error: what the mission itself needs (N, N, N m)."""
+    """Thrust bound at zero tracking error: what the mission itself needs (N, N, N m).
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model of the vehicle.
+    envelope : Envelope
+        Operating envelope (not inflated: the bound uses its inflated copy, as the certificate does).
+    tube : ReferenceTube
+        Bounds of the vehicle's desired motion.
+    gains : Gains
+        The law's gains.
+    """
     return thrust_bounds(params, inflate_envelope(envelope), tube, ErrorBounds(0.0, 0.0, 0.0, 0.0), gains)
 
 
@@ -56,6 +68,21 @@ def actuator_fraction(
     so the fitting fractions form an interval ``[0, kappa*]``, found by bisection to
     :data:`KAPPA_RTOL`; the value returned always fits. Returns ``None`` when the mission alone
     (zero error) needs more than a limit.
+
+    Parameters
+    ----------
+    cert : ClosedLoopCertificate
+        The certificate whose region (error bounds) is scaled.
+    params : VehicleParams
+        The controller's model of the vehicle.
+    envelope : Envelope
+        Operating envelope (not inflated: the bound uses its inflated copy, as the certificate does).
+    tube : ReferenceTube
+        Bounds of the vehicle's desired motion.
+    gains : Gains
+        The law's gains.
+    actuators : Actuators
+        The force limits (N, N, N m, body frame).
     """
     env = inflate_envelope(envelope)
     b = cert.region.bounds
@@ -82,6 +109,21 @@ def within_actuators(
     The Lyapunov matrices and decay rates are unchanged; the region, its error bounds and
     margins and the thrust bound are those of the scaled level set (see the module docstring).
     Returns ``None`` when no start region fits.
+
+    Parameters
+    ----------
+    cert : ClosedLoopCertificate
+        The closed-loop certificate to shrink.
+    params : VehicleParams
+        The controller's model of the vehicle.
+    envelope : Envelope
+        Operating envelope.
+    tube : ReferenceTube
+        Bounds of the vehicle's desired motion.
+    gains : Gains
+        The law's gains.
+    actuators : Actuators
+        The force limits (N, N, N m, body frame).
     """
     kappa = actuator_fraction(cert, params, envelope, tube, gains, actuators)
     if kappa is None:

@@ -37,6 +37,23 @@ def position_lmi_matrix(
     ``[[a^T P2 + P2 a + 2 beta P2 + tau sigma^2 c^T c, P2 b], [b^T P2, -tau]]`` with
     ``a = [[0, 1], [-k1, lam - alpha]]``, ``b = [0, 1]^T``, ``c = [0, 1]`` (units: P2 is
     dimensionless up to a common scale, the entries are 1/s times that scale).
+
+    Parameters
+    ----------
+    p2 : ndarray, shape (2, 2)
+        Candidate Lyapunov matrix ``P2``.
+    tau : float
+        S-procedure multiplier, >= 0.
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s).
+    k1 : float
+        Position gain (1/s^2).
+    sigma : float
+        Bound of ``||D(t)||`` (1/s).
+    beta : float
+        Decay rate (1/s).
     """
     a = np.array([[0.0, 1.0], [-k1, lam - alpha]])
     pa = a.T @ p2
@@ -51,7 +68,21 @@ def position_lmi_matrix(
 def heading_lmi_matrices(
     q: FloatArray, k1psi: float, c_range: tuple[float, float], beta: float
 ) -> list[tuple[FloatArray, float]]:
-    """Numeric ``A(c)^T Q + Q A(c) + 2 beta Q`` at ``c = c_lo, c_hi`` with term scales."""
+    """Numeric ``A(c)^T Q + Q A(c) + 2 beta Q`` at ``c = c_lo, c_hi`` with term scales.
+
+    ``A(c) = [[0, 1], [-k1psi, -c]]``.
+
+    Parameters
+    ----------
+    q : ndarray, shape (2, 2)
+        Candidate Lyapunov matrix ``Q``.
+    k1psi : float
+        Heading position gain (1/s^2).
+    c_range : tuple of float
+        ``(c_lo, c_hi)``, range of the heading damping ``c`` (1/s).
+    beta : float
+        Decay rate (1/s).
+    """
     out = []
     for c in c_range:
         a = np.array([[0.0, 1.0], [-k1psi, -c]])
@@ -153,6 +184,19 @@ def lmi_position_lyapunov(lam: float, alpha: float, k1: float, sigma: float, bet
     LMI over ``trace(P2) + tau = 1``; always feasible, so Clarabel must say ``optimal``)
     and returns the verified answer, or ``None`` when the LMI is not strictly feasible
     (``s >= 0``) or the strict re-check with ``eigvalsh`` fails.
+
+    Parameters
+    ----------
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s).
+    k1 : float
+        Position gain (1/s^2).
+    sigma : float
+        Bound of ``||D(t)||`` (1/s).
+    beta : float
+        Decay rate (1/s), >= 0.
     """
     problem, par, p, tau = _position_gevp()
     par["a"].value = np.array([[0.0, 1.0], [-k1, lam - alpha]])
@@ -188,6 +232,15 @@ def lmi_heading_lyapunov(k1psi: float, c_range: tuple[float, float], beta: float
     ``A(c)`` is affine in ``c``, so the LMI at the two vertices holds on the whole interval
     and ``V = x^T Q x`` decays at ``2 beta`` for any ``c(t)`` in it. Returns ``None`` when
     not strictly feasible or when the ``eigvalsh`` re-check fails.
+
+    Parameters
+    ----------
+    k1psi : float
+        Heading position gain (1/s^2).
+    c_range : tuple of float
+        ``(c_lo, c_hi)``, range of the heading damping ``c`` (1/s).
+    beta : float
+        Decay rate (1/s), >= 0.
     """
     problem, par, q = _heading_gevp()
     par["a_lo"].value = _heading_a(k1psi, c_range[0])
@@ -233,10 +286,26 @@ def _position_region_sdp() -> tuple[cp.Problem, dict[str, cp.Parameter], cp.Vari
 
 
 def lmi_position_region(lam: float, alpha: float, k1: float, sigma: float, rp: float, rv: float) -> LyapunovResult:
-    """``P2`` whose invariant ellipsoid through the start box ``||e|| <= rp, ||e'|| <= rv``
-    has the smallest velocity extent ``sqrt((P2^-1)_22)`` (rp, rv > 0 not both zero).
+    """``P2`` of the smallest velocity extent whose invariant ellipsoid holds the start box.
 
-    Homogeneous LMI (``beta = 0``, tau free, strict by :data:`LYAP_STRICT_RTOL`).
+    The start box is ``||e|| <= rp, ||e'|| <= rv``; the velocity extent is
+    ``sqrt((P2^-1)_22)``, at level 1. Homogeneous LMI (``beta = 0``, tau free, strict by
+    :data:`LYAP_STRICT_RTOL`).
+
+    Parameters
+    ----------
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s).
+    k1 : float
+        Position gain (1/s^2).
+    sigma : float
+        Bound of ``||D(t)||`` (1/s).
+    rp : float
+        Position-error radius of the start box (m), >= 0.
+    rv : float
+        Velocity-error radius of the start box (m/s), >= 0; not both zero.
 
     Raises
     ------
@@ -278,10 +347,24 @@ def _heading_region_sdp() -> tuple[cp.Problem, dict[str, cp.Parameter], cp.Varia
 def lmi_heading_region(
     k1psi: float, c_range: tuple[float, float], rh: float, rr: float, budgets: tuple[float, float]
 ) -> LyapunovResult:
-    """``Q`` whose invariant ellipsoid through ``|e_psi| <= rh, |e_psi'| <= rr`` best fits
-    the budgets ``(B_psi^2, B_r^2)``: minimise s with ``(Q^-1)_11 <= s B_psi^2`` and
-    ``(Q^-1)_22 <= s B_r^2`` (s <= 1 means both budgets are met). Homogeneous LMIs at the
+    """``Q`` whose invariant ellipsoid through the start box best fits the heading budgets.
+
+    The start box is ``|e_psi| <= rh, |e_psi'| <= rr``: minimise s with ``(Q^-1)_11 <= s B_psi^2``
+    and ``(Q^-1)_22 <= s B_r^2`` (s <= 1 means both budgets are met). Homogeneous LMIs at the
     two vertices of ``c_range``, strict by :data:`LYAP_STRICT_RTOL`.
+
+    Parameters
+    ----------
+    k1psi : float
+        Heading position gain (1/s^2).
+    c_range : tuple of float
+        ``(c_lo, c_hi)``, range of the heading damping ``c`` (1/s).
+    rh : float
+        Heading-error radius of the start box (rad), >= 0.
+    rr : float
+        Yaw-rate-error radius of the start box (rad/s), >= 0.
+    budgets : tuple of float
+        ``(B_psi^2, B_r^2)`` (rad^2, rad^2/s^2), > 0.
 
     Raises
     ------

@@ -64,6 +64,17 @@ def shifted_peak(lam: float, alpha: float, k1: float, beta: float) -> float:
     ``K = k1 - b beta + beta^2``, ``c = b - 2 beta``, ``b = alpha - lam``. Its stationary
     points solve ``x^2 + 2 beta^2 x - ((K + beta^2)^2 - c^2 beta^2 - beta^4) = 0``, so the
     maximum over ``x >= 0`` is at ``x = 0`` or at ``x = -beta^2 + sqrt((K+beta^2)^2 - c^2 beta^2)``.
+
+    Parameters
+    ----------
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s), ``> lam``.
+    k1 : float
+        Position gain (1/s^2), > 0.
+    beta : float
+        Shift (decay rate) (1/s).
     """
     b, k = _position_constants(lam, alpha, k1)
     big_k, c = k - b * beta + beta * beta, b - 2.0 * beta
@@ -88,6 +99,17 @@ def position_decay_rate(lam: float, alpha: float, k1: float, sigma: float) -> fl
     The peak is non-decreasing in beta (maximum modulus on nested half-planes), so bisection
     finds the supremum; the feasible end of the final bracket (width :data:`DECAY_ATOL`)
     is returned.
+
+    Parameters
+    ----------
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s), ``> lam``.
+    k1 : float
+        Position gain (1/s^2), > 0.
+    sigma : float
+        Bound of ``||D(t)||`` (1/s).
 
     Raises
     ------
@@ -141,7 +163,19 @@ class DecayCertificate:
 
 
 def position_decay_certificate(lam: float, alpha: float, k1: float, sigma: float) -> DecayCertificate:
-    """Closed-form rate, backed off until the Lyapunov LMI verifies strictly with ``eigvalsh``."""
+    """Closed-form rate, backed off until the Lyapunov LMI verifies strictly with ``eigvalsh``.
+
+    Parameters
+    ----------
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s), ``> lam``.
+    k1 : float
+        Position gain (1/s^2), > 0.
+    sigma : float
+        Bound of ``||D(t)||`` (1/s).
+    """
     sup = position_decay_rate(lam, alpha, k1, sigma)
     backoff = DECAY_BACKOFF_RTOL
     for _ in range(DECAY_BACKOFF_TRIES):
@@ -154,7 +188,19 @@ def position_decay_certificate(lam: float, alpha: float, k1: float, sigma: float
 
 
 def lmi_position_decay_rate(lam: float, alpha: float, k1: float, sigma: float) -> float:
-    """Position decay rate (1/s) by bisection on the verified LMI alone (cross-check)."""
+    """Position decay rate (1/s) by bisection on the verified LMI alone (cross-check).
+
+    Parameters
+    ----------
+    lam : float
+        Envelope lambda (1/s).
+    alpha : float
+        Velocity gain (1/s), ``> lam``.
+    k1 : float
+        Position gain (1/s^2), > 0.
+    sigma : float
+        Bound of ``||D(t)||`` (1/s).
+    """
     b, k = _position_constants(lam, alpha, k1)
     return _bisect_lmi(
         lambda beta: lmi_position_lyapunov(lam, alpha, k1, sigma, beta) is not None, _stable_shift(b, k)
@@ -172,6 +218,13 @@ def heading_decay_upper(k1psi: float, c_lo: float, c_hi: float) -> float:
 
     ``-max Re eig`` is ``c/2`` up to ``c = 2 sqrt(k1psi)`` and ``(c - sqrt(c^2 - 4 k1psi))/2``
     (decreasing) beyond, so it is unimodal and the minimum is at an end of the interval.
+
+    Parameters
+    ----------
+    k1psi : float
+        Heading position gain (1/s^2).
+    c_lo, c_hi : float
+        Range of the heading damping ``c`` (1/s).
     """
 
     def rate(c: float) -> float:
@@ -186,6 +239,13 @@ def heading_decay_rate(k1psi: float, c_lo: float, c_hi: float) -> DecayCertifica
 
     Bisection on the generalized-eigenvalue problem (:func:`auv_hinf.closed_loop.lyapunov.lmi_heading_lyapunov`),
     bracketed by :func:`heading_decay_upper`; the feasible end is returned, verified.
+
+    Parameters
+    ----------
+    k1psi : float
+        Heading position gain (1/s^2), > 0.
+    c_lo, c_hi : float
+        Range of the heading damping ``c`` (1/s), ``0 < c_lo <= c_hi``.
 
     Raises
     ------

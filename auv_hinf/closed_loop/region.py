@@ -64,6 +64,17 @@ class Region:
     Every start with ``||e(0)|| <= position`` (m), ``||e'(0)|| <= velocity`` (m/s),
     ``|e_psi(0)| <= heading`` (rad) and ``|e_psi'(0)| <= yaw_rate`` (rad/s), all at once, is
     covered. The errors are taken against the reference at ``t = 0``.
+
+    Attributes
+    ----------
+    position : float
+        Radius of the position error ``||e(0)||`` (m).
+    velocity : float
+        Radius of the velocity error ``||e'(0)||`` (m/s).
+    heading : float
+        Radius of the heading error ``|e_psi(0)|`` (rad).
+    yaw_rate : float
+        Radius of the yaw-rate error ``|e_psi'(0)|`` (rad/s).
     """
 
     position: float
@@ -72,7 +83,13 @@ class Region:
     yaw_rate: float
 
     def scaled(self, kappa: float) -> Region:
-        """All four radii times ``kappa``."""
+        """All four radii times ``kappa``.
+
+        Parameters
+        ----------
+        kappa : float
+            Common factor (dimensionless).
+        """
         return Region(*(float(kappa * x) for x in self.as_array()))
 
     def as_array(self) -> FloatArray:

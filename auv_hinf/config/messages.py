@@ -121,7 +121,15 @@ def _message(err: Any) -> str:
 
 
 def format_errors(exc: ValidationError, where: tuple[str, ...] = ()) -> list[str]:
-    """One readable line per problem of a pydantic ``ValidationError``, naming the TOML path."""
+    """One readable line per problem of a pydantic ``ValidationError``, naming the TOML path.
+
+    Parameters
+    ----------
+    exc : pydantic.ValidationError
+        The validation error.
+    where : tuple of str
+        TOML path of the validated table, put before each error's own location.
+    """
     lines: list[str] = []
     for err in exc.errors(include_url=False):
         line = _message({**err, "loc": (*where, *err["loc"])})
@@ -133,7 +141,14 @@ def format_errors(exc: ValidationError, where: tuple[str, ...] = ()) -> list[str
 def validate_table(model: type[BaseModel], data: Any, where: tuple[str, ...] = ()) -> Any:
     """Validate ``data`` with ``model``; problems become one :class:`ConfigError` (one line each).
 
-    ``where`` is the TOML path of the table (e.g. ``("design",)``), used in the messages.
+    Parameters
+    ----------
+    model : type of pydantic.BaseModel
+        The table's model.
+    data : Any
+        The table's parsed content.
+    where : tuple of str
+        TOML path of the table (e.g. ``("design",)``), used in the messages.
     """
     try:
         return model.model_validate(data)
@@ -144,7 +159,13 @@ def validate_table(model: type[BaseModel], data: Any, where: tuple[str, ...] = (
 
 
 def parse_config(data: Any) -> ConfigFile:
-    """Validate a parsed TOML document (a dict of tables)."""
+    """Validate a parsed TOML document (a dict of tables).
+
+    Parameters
+    ----------
+    data : Any
+        The parsed document; anything but a dict is refused.
+    """
     if not isinstance(data, dict):
         raise ConfigError(f"a configuration must be a table of tables, got {type(data).__name__}")
     out: ConfigFile = validate_table(ConfigFile, data)
@@ -156,6 +177,11 @@ def plain_data(value: Any) -> Any:
 
     Numpy scalars become Python numbers, arrays and tuples become lists; booleans and
     strings are kept, so the strict models still refuse them where a number is expected.
+
+    Parameters
+    ----------
+    value : Any
+        The value, nested mappings and iterables included.
     """
     if isinstance(value, (bool, str, bytes)):
         return value
@@ -173,7 +199,15 @@ def plain_data(value: Any) -> Any:
 
 
 def as_dict(value: Any, where: str) -> dict[str, Any]:
-    """``dict(value)`` for a mapping or (name, value) pairs, else a ConfigError."""
+    """``dict(value)`` for a mapping or (name, value) pairs, else a ConfigError.
+
+    Parameters
+    ----------
+    value : Any
+        A mapping or an iterable of ``(name, value)`` pairs.
+    where : str
+        What the value is (a TOML path), for the message.
+    """
     try:
         return dict(value)
     except (TypeError, ValueError):
@@ -181,7 +215,15 @@ def as_dict(value: Any, where: str) -> dict[str, Any]:
 
 
 def set_fields(obj: Any, **values: Any) -> None:
-    """Normalise the fields of a frozen dataclass in its ``__post_init__``."""
+    """Normalise the fields of a frozen dataclass in its ``__post_init__``.
+
+    Parameters
+    ----------
+    obj : Any
+        The dataclass instance.
+    **values : Any
+        New values of its fields, by field name.
+    """
     for key, val in values.items():
         object.__setattr__(obj, key, val)
 

@@ -74,6 +74,17 @@ def spread_start(
     """Initial states on the desired shape scaled by ``scale`` and rotated by ``rotation`` rad.
 
     Heading 0, surge 1 m/s, sway and yaw rate 0: the start used where the paper gives none.
+
+    Parameters
+    ----------
+    shape : array_like, shape (N-1, 2)
+        Desired Jacobi shape vectors (m, inertial frame).
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles.
+    scale : float
+        Factor on the offsets from the centre (dimensionless).
+    rotation : float
+        Counter-clockwise rotation of the offsets about the centre (rad).
     """
     off = offsets_from_shape(np.asarray(shape, dtype=float), transform)
     c, s = np.cos(rotation), np.sin(rotation)
@@ -233,6 +244,11 @@ PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)
 def preset_config(name: str) -> FormationConfig:
     """The built-in configuration ``name`` (one of :data:`PRESETS`).
 
+    Parameters
+    ----------
+    name : str
+        The preset's name.
+
     Raises
     ------
     ConfigError
@@ -245,7 +261,13 @@ def preset_config(name: str) -> FormationConfig:
 
 
 def toml_literal(value: Any) -> str:
-    """A TOML literal for a bool, number, string or (nested) list."""
+    """A TOML literal for a bool, number, string or (nested) list.
+
+    Parameters
+    ----------
+    value : Any
+        The value.
+    """
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (int, float)):
@@ -292,6 +314,11 @@ def annotated_toml(cfg: FormationConfig) -> str:
 
     Keys that are not set appear commented out with an example value; the text is read
     back by :func:`~auv_hinf.config.settings.load_config` into an equal configuration (up to the name).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
     """
     data = cfg.to_toml_dict()
     vehicle = data["vehicle"]

@@ -192,7 +192,13 @@ def walk_tables(model: type[BaseModel] = ConfigFile, path: tuple[str, ...] = ())
 
 
 def plain_keys(model: type[BaseModel]) -> list[tuple[str, FieldInfo]]:
-    """The keys of a table that hold values, not sub-tables, with their field definitions."""
+    """The keys of a table that hold values, not sub-tables, with their field definitions.
+
+    Parameters
+    ----------
+    model : type of pydantic.BaseModel
+        The table's model.
+    """
     return [(info.alias or name, info) for name, info in model.model_fields.items() if not _table_model(info)]
 
 

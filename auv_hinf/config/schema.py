@@ -248,6 +248,13 @@ def schema_default(table: type[BaseModel], key: str) -> Any:
     """The default of ``key`` in ``table`` as the schema declares it: the one source of every default.
 
     Lists come back as tuples (the frozen runtime objects hold tuples).
+
+    Parameters
+    ----------
+    table : type of pydantic.BaseModel
+        The table's model.
+    key : str
+        The field name (not its TOML alias).
     """
     default = table.model_fields[key].default
     return tuple(default) if isinstance(default, list) else default
@@ -289,7 +296,13 @@ class VehicleTable(_Table):
         return data
 
     def to_params(self, default_name: str) -> VehicleParams:
-        """The validated :class:`VehicleParams`."""
+        """The validated :class:`VehicleParams`.
+
+        Parameters
+        ----------
+        default_name : str
+            Name of a custom vehicle without ``name`` (a preset keeps its own).
+        """
         if self.preset is not None:
             from auv_hinf.models.vehicle import preset
 
@@ -527,18 +540,40 @@ class ConfigFile(_Table):
 
 
 def suggest_key(key: str, names: list[str]) -> str:
-    """``; did you mean 'x'?`` for the closest of ``names``, else the list of valid names."""
+    """``; did you mean 'x'?`` for the closest of ``names``, else the list of valid names.
+
+    Parameters
+    ----------
+    key : str
+        The unknown key.
+    names : list of str
+        The valid keys.
+    """
     close = difflib.get_close_matches(key, names, n=1, cutoff=0.6)
     return f"; did you mean {close[0]!r}?" if close else f"; expected one of: {', '.join(names)}"
 
 
 def table_keys(model: type[BaseModel]) -> list[str]:
-    """The TOML keys of a table model (aliases such as ``lambda`` included)."""
+    """The TOML keys of a table model (aliases such as ``lambda`` included).
+
+    Parameters
+    ----------
+    model : type of pydantic.BaseModel
+        The table's model.
+    """
     return [f.alias or name for name, f in model.model_fields.items()]
 
 
 def unknown_key_hints(data: dict[str, Any], allowed: list[str]) -> str:
-    """Text naming the keys of ``data`` that are not in ``allowed``, with a suggestion each."""
+    """Text naming the keys of ``data`` that are not in ``allowed``, with a suggestion each.
+
+    Parameters
+    ----------
+    data : dict
+        The table as parsed.
+    allowed : list of str
+        Its valid keys.
+    """
     return "".join(f"; unknown key {k!r}{suggest_key(str(k), allowed)}" for k in data if k not in allowed)
 
 

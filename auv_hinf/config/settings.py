@@ -135,7 +135,13 @@ class SimulationConfig:
         )
 
     def plant_params(self, nominal: VehicleParams) -> VehicleParams:
-        """The simulated plant: ``nominal`` with the :attr:`plant` multipliers applied."""
+        """The simulated plant: ``nominal`` with the :attr:`plant` multipliers applied.
+
+        Parameters
+        ----------
+        nominal : VehicleParams
+            The configured vehicle.
+        """
         if not self.plant:
             return nominal
         scaled = {k: getattr(nominal, k) * m for k, m in self.plant}
@@ -157,7 +163,13 @@ class SimulationConfig:
 
 @dataclass(frozen=True)
 class UncertaintyConfig:
-    """Declared parameter box (``[uncertainty]``): name -> relative ``(lo, hi)``, 0 < lo <= 1 <= hi."""
+    """Declared parameter box (``[uncertainty]``): name -> relative ``(lo, hi)``, 0 < lo <= 1 <= hi.
+
+    Attributes
+    ----------
+    box : tuple of (str, (float, float))
+        The declared parameters (vehicle coefficient names) with their multipliers ``(lo, hi)``.
+    """
 
     box: tuple[tuple[str, tuple[float, float]], ...] = ()
 
@@ -172,7 +184,15 @@ class UncertaintyConfig:
 
 @dataclass(frozen=True)
 class DisturbanceConfig:
-    """Declared current bounds (``[disturbance]``): speed in m/s, rate in m/s^2 (``None``: not declared)."""
+    """Declared current bounds (``[disturbance]``): speed in m/s, rate in m/s^2 (``None``: not declared).
+
+    Attributes
+    ----------
+    current_speed : float or None
+        Bound on ``|current|`` (m/s, inertial frame).
+    current_rate : float or None
+        Bound on ``|d current / dt|`` (m/s^2).
+    """
 
     current_speed: float | None = None
     current_rate: float | None = None
@@ -338,7 +358,13 @@ class FormationConfig:
         return JacobiTransform(self.n, self.jacobi)
 
     def with_method(self, method: str) -> FormationConfig:
-        """Copy with another gain method (validated)."""
+        """Copy with another gain method (validated).
+
+        Parameters
+        ----------
+        method : {"paper", "stabilizing", "minimal"}
+            The Theorem 1 gain method.
+        """
         return replace(self, method=cast(GainMethod, method))
 
     def to_dict(self) -> dict[str, Any]:
@@ -415,7 +441,12 @@ def _implementation(table: ImplementationTable) -> Implementation:
 def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
     """Build and validate a :class:`FormationConfig` from parsed TOML (a dict of tables).
 
-    ``name`` is used unless the document has a top-level ``name``.
+    Parameters
+    ----------
+    data : Any
+        The parsed document.
+    name : str
+        The configuration's name unless the document has a top-level ``name``.
 
     Raises
     ------
@@ -465,6 +496,11 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
 def load_config(path: str | Path) -> FormationConfig:
     """Read and validate a TOML configuration file (the name defaults to the file stem).
 
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+
     Raises
     ------
     ConfigError
@@ -507,6 +543,11 @@ def read_document(path: Path, what: str, syntax: str, parse: Callable[[str], Any
 
 def read_config(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]:
     """:func:`load_config`, also returning the parsed TOML document (for input warnings).
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
 
     Raises
     ------

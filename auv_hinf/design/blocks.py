@@ -44,7 +44,17 @@ PEAK_MAX_ITER = 60
 
 
 def velocity_block(lam: float, alpha: float, dim: int = 2) -> ct.StateSpace:
-    """Closed velocity loop ``Ze' = (lam - alpha) Ze + w``, output ``Ze`` (one block: dim 2)."""
+    """Closed velocity loop ``Ze' = (lam - alpha) Ze + w``, output ``Ze`` (one block: dim 2).
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    alpha : float
+        Velocity gain (1/s).
+    dim : int
+        Number of channels (states, inputs and outputs).
+    """
     eye = np.eye(dim)
     return ct.ss((lam - alpha) * eye, eye, eye, np.zeros((dim, dim)), name="velocity_block")
 
@@ -53,6 +63,17 @@ def position_block(lam: float, alpha: float, k1: float, dim: int = 2) -> ct.Stat
     """Theorem 2 loop ``[Xe; Ze]' = [[0, I], [-k1 I, (lam - alpha) I]] [Xe; Ze] + [0; I] w``.
 
     Output ``Ze``; one block has ``dim = 2``.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    alpha : float
+        Velocity gain (1/s).
+    k1 : float
+        Position gain (1/s^2).
+    dim : int
+        Number of channels (``2 dim`` states).
     """
     eye, zero = np.eye(dim), np.zeros((dim, dim))
     a = np.block([[zero, eye], [-k1 * eye, (lam - alpha) * eye]])
@@ -66,6 +87,11 @@ def hinf_norm(sys: ct.StateSpace) -> float:
 
     Any warning it emits is an error; any failure of the back end is raised as
     :class:`~auv_hinf.exceptions.SolverError`.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        A stable continuous-time system.
     """
     try:
         with warnings.catch_warnings():

@@ -43,6 +43,15 @@ def lmi_stabilizing_alpha(lam: float, gamma: float, n: int) -> LmiResult:
     same root. Recorded as formulation
     ``"double-root linear"``.
 
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), ``>= 1/sqrt(lam^2 + 2)``.
+    n : int
+        Number of vehicles (>= 2); ``L`` is ``2n x 2n``.
+
     Raises
     ------
     DesignError
@@ -120,6 +129,11 @@ def lmi_hinf_norm(sys: ct.StateSpace) -> LmiResult:
     2. ``"modal+balanced"``, if Clarabel fails on 1 (very stiff systems, e.g. poles from
        -1e8 to -1e-3): the same on python-control's modal (block-diagonal) realisation,
        provided its eigenvector basis has condition number below :data:`MODAL_COND_MAX`.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        A continuous-time system, asymptotically stable.
 
     Raises
     ------
@@ -233,6 +247,15 @@ def lmi_minimal_alpha(lam: float, gamma: float, n: int) -> LmiResult:
     and gamma. The only LMI that could see a tiny pole is the one at ``alpha = 0``; it is
     skipped when the DC gain ``1/|lam|`` of that loop (a lower bound of its norm, evaluated
     with numpy) already exceeds gamma.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s), finite.
+    gamma : float
+        H-infinity bound (s), > 0.
+    n : int
+        Number of vehicles (>= 2); the closed loop has ``2n`` states.
     """
     lam_f = require_finite("lambda", lam)
     g = require_finite("gamma", gamma)

@@ -53,6 +53,21 @@ class Check:
     check whose reference is a positive quantity (alpha, beta, a norm), so the comparison is
     relative to the compared quantity itself; it is the size of L (alpha) for the checks
     whose reference is exactly 0 (``max |L - alpha I|``).
+
+    Attributes
+    ----------
+    name : str
+        What is compared, in words.
+    value : float
+        The value of the route checked.
+    reference : float
+        The value it is compared with, in the same unit.
+    rel_diff : float
+        ``|value - reference| / max(|reference|, scale)``.
+    tol : float
+        Relative tolerance.
+    scale : float
+        Floor of the denominator (0: relative to the reference alone).
     """
 
     name: str
@@ -68,7 +83,13 @@ class Check:
         return self.rel_diff <= self.tol
 
     def with_value(self, value: float) -> Check:
-        """The same comparison for another ``value`` (to test that a wrong value fails)."""
+        """The same comparison for another ``value`` (to test that a wrong value fails).
+
+        Parameters
+        ----------
+        value : float
+            The new compared value, in the unit of ``reference``; ``rel_diff`` is recomputed.
+        """
         return replace(self, value=value, rel_diff=_rel(value, self.reference, self.scale))
 
 
@@ -80,6 +101,45 @@ class CrosscheckReport:
     ``1/sqrt(lam^2+2)`` (then so are the stabilising and Riccati values). ``formulations``
     maps each numerical route to the equivalent formulation it used (e.g. the Riccati regime
     ``"double-root"`` solved by its closed form, the LMI normalisation, a modal fallback).
+
+    Attributes
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        Requested H-infinity bound (s).
+    n : int
+        Number of vehicles; the Riccati and LMI problems have size ``2n``.
+    k1 : float
+        Theorem 2 position gain (1/s^2).
+    conditions : dict
+        The hypotheses of Theorem 1 (:meth:`~auv_hinf.design.theorem1.Theorem1Conditions.to_dict`).
+    alpha_paper, alpha_stabilizing : float or None
+        Eq. (32) as printed and the stabilising root of eq. (37), closed forms.
+    alpha_minimal : float
+        Smallest alpha with ``||T||_inf <= gamma``, closed form.
+    alpha_care, alpha_scipy_care : float or None
+        Eq. (37) solved at full size with python-control and with scipy
+        (:func:`~auv_hinf.design.riccati.riccati_alpha`).
+    alpha_lmi : float or None
+        The Riccati-inequality LMI (:func:`~auv_hinf.design.brl.lmi_stabilizing_alpha`).
+    alpha_lmi_minimal : float
+        The BRL bisection (:func:`~auv_hinf.design.brl.lmi_minimal_alpha`).
+    paper_flags : tuple of str
+        Flags of eq. (32), or why it is infeasible.
+    riccati_regime : str or None
+        Regime of eq. (37) the Riccati solvers ran in.
+    hinf_exact : float or None
+        ``1/(alpha - lam)`` of the velocity loop at the stabilising alpha (s).
+    hinf_python_control, hinf_lmi : float or None
+        The same norm from ``control.norm`` and from the bounded-real LMI (s).
+    position_hinf_exact, position_hinf_python_control : float or None
+        Norm of the Theorem 2 position loop at the stabilising alpha and ``k1``, exact and from
+        ``control.norm`` (s).
+    checks : tuple of Check
+        The comparisons.
+    formulations : dict of str to str
+        The formulation each numerical route used.
     """
 
     lam: float

@@ -82,7 +82,19 @@ def jacobi_sigma(
     v: ArrayLike,
     r: ArrayLike,
 ) -> FloatArray:
-    """``||Phi blockdiag(G_i - lam I) Phi^-1||_2`` at stacked states ``(..., N)``."""
+    """``||Phi blockdiag(G_i - lam I) Phi^-1||_2`` at stacked states ``(..., N)`` (1/s), by a dense SVD.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters shared by all vehicles.
+    lam : float
+        Envelope lambda (1/s).
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles (dense, so ``N <= DENSE_MAX_N``).
+    psi, u, v, r : array_like, shape (..., N)
+        Heading (rad), surge and sway (m/s, body frame) and yaw rate (rad/s) per vehicle.
+    """
     a = transform.matrix @ block_diag_stack(_shifted_blocks(params, lam, psi, u, v, r)) @ transform.matrix_inv
     return np.linalg.svd(a, compute_uv=False)[..., 0]
 
@@ -333,7 +345,22 @@ def jacobi_sigma_bounds(
 
 @dataclass(frozen=True)
 class JacobiBnbResult:
-    """Result of :func:`jacobi_branch_and_bound`: certified ``upper``, witnessed ``lower`` (1/s)."""
+    """Result of :func:`jacobi_branch_and_bound`: certified ``upper``, witnessed ``lower`` (1/s).
+
+    Attributes
+    ----------
+    upper : float
+        Certified upper bound of the Jacobi sigma (1/s), round-off allowance included.
+    lower : float
+        Best evaluated value (1/s), attained at ``witness``.
+    witness : tuple of ndarray
+        ``(psi, |u|, |v|, r)`` of the vehicles at the lower bound (rad, m/s, m/s, rad/s; the last
+        vehicle's heading is 0).
+    levels : int
+        Refinement levels run.
+    evaluations : int
+        Configurations evaluated.
+    """
 
     upper: float
     lower: float
@@ -356,7 +383,29 @@ def jacobi_branch_and_bound(
 ) -> JacobiBnbResult:
     """Certified Lipschitz branch-and-bound of the Jacobi sigma over relative headings.
 
-    See the module docstring for the argument. ``tol`` is relative to the best value.
+    See the module docstring for the argument.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters shared by all vehicles.
+    envelope : Envelope
+        Operating envelope (full heading circle assumed).
+    lam : float
+        Envelope lambda (1/s).
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles (``N <= BNB_MAX_N`` in practice: ``8^N`` vertex
+        combinations per cell).
+    sigma_vehicle : float
+        Certified vehicle-coordinate sigma (1/s), in the Lipschitz constants ``L_i``.
+    tol : float
+        Stop when the upper bound is within this fraction of the best centre value.
+    initial_cells : int
+        Cells per relative heading on the first level.
+    budget : int
+        Stop before a level whose evaluations (configurations) would pass this count.
+    progress : bool
+        Show a progress bar (one step per level).
     """
     nv = transform.n
     a_rng, b_rng = abs_range(*envelope.u), abs_range(*envelope.v)
@@ -413,6 +462,15 @@ def sigma_at_witness(params: VehicleParams, bounds: SigmaBounds, transform: Jaco
     A matrix-free Jacobi witness (large fleets) also stores the unit vector ``x`` that
     attained it (:attr:`SigmaWitness.vector`); its value is then ``||M x||``, recomputed in O(N), which is
     what :attr:`SigmaBounds.lower` records (a lower bound of the norm at that configuration).
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    bounds : SigmaBounds
+        Vehicle- or Jacobi-coordinate bounds with their witness and lambda.
+    transform : JacobiTransform, optional
+        The Jacobi transform, needed for a Jacobi witness.
     """
     w = bounds.witness
     psi, u, v, r = (np.asarray(x, dtype=float) for x in (w.psi, w.u, w.v, w.r))

@@ -78,7 +78,15 @@ class RiccatiResult:
 
 
 def require_real_solution(lam: float, gamma: float) -> None:
-    """Raise :class:`DesignError` when eq. (37) has no real root (gamma below the bound)."""
+    """Raise :class:`DesignError` when eq. (37) has no real root (gamma below the bound).
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), > 0.
+    """
     cond = theorem1_conditions(lam, gamma)
     if not cond.gamma_ok:
         raise DesignError(f"gamma={gamma:.6g} below 1/sqrt(lambda^2+2)={cond.gamma_min:.6g}: (37) has no real solution")
@@ -160,6 +168,13 @@ def root_condition(lam: float, gamma: float) -> float:
     solver's answer is only sqrt(eps)-accurate; the Riccati tolerance is scaled by this
     factor (and so is the Riccati-inequality LMI's, whose optimum has the same sensitivity)
     so that the check stays honest there instead of failing on round-off.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), nonzero.
     """
     c = riccati_c(gamma)
     s = math.sqrt(max(lam * lam - c, 0.0))

@@ -39,6 +39,11 @@ def sigma_max_2x2(m: ArrayLike) -> FloatArray:
 
     For ``[[a, b], [c, d]]``:
     ``(sqrt((a+d)^2 + (b-c)^2) + sqrt((a-d)^2 + (b+c)^2)) / 2``.
+
+    Parameters
+    ----------
+    m : array_like, shape (..., 2, 2)
+        The matrices.
     """
     x = np.asarray(m, dtype=float)
     a, b, c, d = x[..., 0, 0], x[..., 0, 1], x[..., 1, 0], x[..., 1, 1]
@@ -190,8 +195,20 @@ def sigma_grid(
 ) -> FloatArray:
     """Vehicle-coordinate sigma on a slice, shape ``(len(r_values), len(x_values))``.
 
-    ``axis="u"`` sweeps surge (m/s) with sway fixed at ``other``; ``axis="v"`` sweeps sway
-    with surge fixed at ``other``. Rows follow ``r_values`` (rad/s).
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    lam : float
+        Envelope lambda (1/s).
+    x_values : array_like, shape (K,)
+        Surge (``axis="u"``) or sway (``axis="v"``) speeds (m/s, body frame): the columns.
+    r_values : array_like, shape (R,)
+        Yaw rates (rad/s): the rows.
+    axis : {"u", "v"}
+        Which speed ``x_values`` sweeps.
+    other : float
+        The other speed (m/s), held fixed.
     """
     x = np.asarray(x_values, dtype=float)
     r = np.asarray(r_values, dtype=float)

@@ -87,22 +87,50 @@ NORM_BOUND_RTOL = 1e-12
 
 
 def riccati_c(gamma: float) -> float:
-    """Coefficient ``c = 1/gamma^2 - 2`` of the scalar Riccati equation (37) (s^-2 scaled)."""
+    """Coefficient ``c = 1/gamma^2 - 2`` of the scalar Riccati equation (37) (s^-2 scaled).
+
+    Parameters
+    ----------
+    gamma : float
+        H-infinity bound (s), nonzero.
+    """
     return 1.0 / (gamma * gamma) - 2.0
 
 
 def gamma_min(lam: float) -> float:
-    """Smallest gamma for which (37) has a real root: ``1/sqrt(lam^2 + 2)``."""
+    """Smallest gamma for which (37) has a real root: ``1/sqrt(lam^2 + 2)``.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    """
     return 1.0 / math.sqrt(lam * lam + 2.0)
 
 
 def discriminant(lam: float, gamma: float) -> float:
-    """Discriminant ``lam^2 - c = lam^2 + 2 - 1/gamma^2`` of (37) (1/s^2); roots are real iff >= 0."""
+    """Discriminant ``lam^2 - c = lam^2 + 2 - 1/gamma^2`` of (37) (1/s^2); roots are real iff >= 0.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), nonzero.
+    """
     return lam * lam + 2.0 - 1.0 / (gamma * gamma)
 
 
 def discriminant_scale(lam: float, gamma: float) -> float:
-    """Size ``lam^2 + 1/gamma^2`` of the terms that cancel in :func:`discriminant` (1/s^2)."""
+    """Size ``lam^2 + 1/gamma^2`` of the terms that cancel in :func:`discriminant` (1/s^2).
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), nonzero.
+    """
     return lam * lam + 1.0 / (gamma * gamma)
 
 
@@ -111,6 +139,13 @@ def riccati_regime(lam: float, gamma: float) -> str:
 
     See the module docstring; the tolerances are :data:`DOUBLE_ROOT_RTOL` and
     :data:`LYAPUNOV_RTOL`. Every route (care, scipy, LMI) branches on this one function.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), nonzero.
 
     Examples
     --------
@@ -352,6 +387,13 @@ def alpha_stabilizing(lam: float, gamma: float) -> GainDesign:
     This is the root with ``lam + (1/gamma^2 - 2) alpha < 0``, the one ``care`` returns, in
     every regime; it equals ``-1/(2 lam)`` at ``gamma = 1/sqrt(2)``.
 
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda < 0 (1/s).
+    gamma : float
+        H-infinity bound (s), ``>= 1/sqrt(lam^2 + 2)``.
+
     Raises
     ------
     DesignError
@@ -386,6 +428,13 @@ def alpha_minimal(lam: float, gamma: float) -> GainDesign:
 
     No ``K = -L`` restriction and no lower bound on gamma; ``lam`` may be any finite value.
 
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s), finite.
+    gamma : float
+        H-infinity bound (s), > 0.
+
     Examples
     --------
     >>> round(alpha_minimal(-1.2, 0.5).alpha, 6)
@@ -403,7 +452,17 @@ def alpha_minimal(lam: float, gamma: float) -> GainDesign:
 
 
 def design_alpha(lam: float, gamma: float, method: GainMethod) -> GainDesign:
-    """Dispatch to :func:`alpha_paper`, :func:`alpha_stabilizing` or :func:`alpha_minimal`."""
+    """Dispatch to :func:`alpha_paper`, :func:`alpha_stabilizing` or :func:`alpha_minimal`.
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    gamma : float
+        H-infinity bound (s), > 0.
+    method : {"paper", "stabilizing", "minimal"}
+        Which design; anything else raises :class:`DesignError`.
+    """
     if method == "paper":
         return alpha_paper(lam, gamma)
     if method == "stabilizing":
@@ -437,6 +496,15 @@ class PositionLoop:
 
 def position_loop(lam: float, alpha: float, k1: float) -> PositionLoop:
     """Exact H-infinity norm and poles of the Theorem 2 loop (see docs/errata.md).
+
+    Parameters
+    ----------
+    lam : float
+        Nominal value lambda (1/s).
+    alpha : float
+        Velocity gain (1/s), ``> lam``.
+    k1 : float
+        Position gain (1/s^2), > 0.
 
     Raises
     ------

@@ -20,6 +20,15 @@ def implementation_figure(
     error bounds of the covered sample times. Vertical lines: the certified ``max_sample_time``
     (solid) and the exact nominal limit (dashed); beyond the first nothing is certified, beyond
     the second the nominal loop itself is unstable.
+
+    Parameters
+    ----------
+    sample_times : sequence of float
+        Sample times (s), one per certificate.
+    certs : sequence of ImplementationCertificate
+        The certificates; the limits drawn are those of the first.
+    title : str
+        Figure title (none when empty).
     """
     fig, (ax_rate, ax_bound) = plt.subplots(1, 2, figsize=(10.5, 3.8), constrained_layout=True)
     rates = [c.decay_rate if c.decay_rate is not None else math.nan for c in certs]

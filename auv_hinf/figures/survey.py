@@ -19,7 +19,15 @@ _POINTS_PER_INCH = 72.0
 
 
 def leg_midpoints(course: np.ndarray, straight_atol: float = 1e-9) -> list[int]:
-    """Sample indices at the middle of each straight leg along x (``|sin chi| <= straight_atol``)."""
+    """Sample indices at the middle of each straight leg along x (``|sin chi| <= straight_atol``).
+
+    Parameters
+    ----------
+    course : ndarray, shape (T,)
+        The course ``chi`` (rad) of each sample.
+    straight_atol : float
+        Largest ``|sin chi|`` of a sample on a straight leg.
+    """
     straight = np.abs(np.sin(course)) <= straight_atol
     edges = np.flatnonzero(np.diff(straight.astype(int)))
     starts = [0, *(edges + 1)] if straight[0] else list(edges + 1)

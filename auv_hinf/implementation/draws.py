@@ -39,8 +39,16 @@ BLOCK = 128
 def noise_from_uniforms(noise: MeasurementNoise, uniforms: FloatArray) -> FloatArray:
     """State errors ``[dx, dy, dpsi, du, dv, dr]`` (m, m, rad, m/s, m/s, rad/s) from uniforms.
 
-    ``uniforms (..., 6)`` in ``[0, 1)``: position radius and direction, velocity radius and
-    direction, heading, yaw rate. The errors lie inside the bounds of ``noise`` (module note).
+    The errors lie inside the bounds of ``noise`` (module note); the velocity error is in the
+    body frame, the position error inertial.
+
+    Parameters
+    ----------
+    noise : MeasurementNoise
+        Bounds of the measurement errors.
+    uniforms : ndarray, shape (..., 6)
+        Draws in ``[0, 1)``: position radius and direction, velocity radius and direction,
+        heading, yaw rate.
     """
     u = np.asarray(uniforms, dtype=float)
     tau = 2.0 * np.pi
@@ -59,12 +67,26 @@ def noise_from_uniforms(noise: MeasurementNoise, uniforms: FloatArray) -> FloatA
 
 
 def noise_generator(seed: int, vehicle: int) -> np.random.Generator:
-    """The generator of vehicle ``vehicle``'s measurement noise in the run of ``seed``."""
+    """The generator of vehicle ``vehicle``'s measurement noise in the run of ``seed``.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the run.
+    vehicle : int
+        Index of the vehicle in the fleet.
+    """
     return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(NOISE_STREAM, int(vehicle))))
 
 
 def delay_generator(seed: int) -> np.random.Generator:
-    """The generator of the varying delays of the run of ``seed``."""
+    """The generator of the varying delays of the run of ``seed``.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the run.
+    """
     return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(DELAY_STREAM,)))
 
 
@@ -92,7 +114,13 @@ class ImplementationDraws:
         self._delay_start = 0
 
     def noise(self, k: int) -> FloatArray:
-        """Measurement errors of sample ``k``, shape ``(S, N, 6)``; ``k`` may not decrease between calls."""
+        """Measurement errors of sample ``k``, shape ``(S, N, 6)``; ``k`` may not decrease between calls.
+
+        Parameters
+        ----------
+        k : int
+            Sample index, advancing by at most one between calls.
+        """
         if self._impl.noise.exact:
             return np.zeros((self._s, self._n, 6))
         if k >= self._noise_start + self._noise.shape[0]:
@@ -105,7 +133,13 @@ class ImplementationDraws:
         return out
 
     def delays(self, lo: int, hi: int) -> FloatArray:
-        """Delays ``d_k`` (s) of samples ``lo .. hi - 1``, shape ``(S, hi - lo)``; ``lo`` may not decrease."""
+        """Delays ``d_k`` (s) of samples ``lo .. hi - 1``, shape ``(S, hi - lo)``; ``lo`` may not decrease.
+
+        Parameters
+        ----------
+        lo, hi : int
+            First sample index and one past the last.
+        """
         delay = self._impl.delay
         if not self._impl.varying_delay:
             return np.full((self._s, hi - lo), delay)

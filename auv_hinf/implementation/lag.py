@@ -71,6 +71,15 @@ def operating_box(envelope: Envelope, tube: ReferenceTube, bounds: ErrorBounds) 
     The body velocity is the desired one (speed ``S``, pointing along the desired heading up to
     the tube's heading offset) plus the velocity error, and the yaw rate the desired one plus its
     error (as in :func:`~auv_hinf.actuation.thrust.thrust_bounds`), each capped by the envelope.
+
+    Parameters
+    ----------
+    envelope : Envelope
+        Operating envelope.
+    tube : ReferenceTube
+        Bounds of the desired motion.
+    bounds : ErrorBounds
+        Bounds of the errors (m, m/s, rad, rad/s; the position bound is unused).
     """
     u_hi, v_hi, r_hi = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1], abs_range(*envelope.r)[1]
     speed = float(tube.speed[:, 1].max())
@@ -83,7 +92,13 @@ def operating_box(envelope: Envelope, tube: ReferenceTube, bounds: ErrorBounds) 
 
 
 def block_slopes(params: VehicleParams) -> tuple[float, float, float]:
-    """Spectral norms of ``dB/d|u|``, ``dB/d|v|``, ``dB/dr`` (``B`` is affine in them), 1/m and 1."""
+    """Spectral norms of ``dB/d|u|``, ``dB/d|v|``, ``dB/dr`` (``B`` is affine in them), 1/m and 1.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters; ``B`` is their :func:`~auv_hinf.models.vehicle.body_block`.
+    """
     base = body_block(params, 0.0, 0.0, 0.0)
     return tuple(  # type: ignore[return-value]
         float(np.linalg.norm(body_block(params, *unit) - base, 2))
@@ -96,6 +111,13 @@ def lag_channel_sigma(params: VehicleParams, tube: ReferenceTube) -> float:
 
     ``|(G(x) - G(y)) p_d'| <= max |p_d'| hypot(b_u, b_v) |delta nu|`` (:func:`block_slopes`): the
     position LMI's lag channel ``|q2| <= lag_sigma |delta_2|``.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    tube : ReferenceTube
+        Bounds of the desired motion (its largest speed ``max |p_d'|`` is used).
     """
     b_u, b_v, _ = block_slopes(params)
     return float(tube.speed[:, 1].max()) * math.hypot(b_u, b_v)
@@ -136,6 +158,29 @@ def body_rates(
     the measurement noise, and the drift moved by the state's change over the delay ``d``
     (Lipschitz matrix ``L``). So ``rho <= exp(mu+ h) (|a0| + d ||L|| rho)``; every component is
     bounded by the Euclidean ``rho`` (and by the cruder force-based rate).
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model, taken as the plant.
+    envelope : Envelope
+        The envelope the true body velocities stay in.
+    tube : ReferenceTube
+        Bounds of the desired motion.
+    gains : Gains
+        The law's gains.
+    implementation : Implementation
+        Sample time, delay and measurement-noise bounds.
+    lam, sigma : float
+        Envelope lambda and the bound of ``||G - lam I||`` over the envelope (1/s).
+    bounds : ErrorBounds
+        Bounds of the true errors (m, m/s, rad, rad/s).
+    force : ThrustBounds
+        Bounds of the applied (held) forces (N, N, N m).
+    disturbance : tuple of float
+        Bounds of ``|w|`` (m/s^2) and ``|w_psi|`` (rad/s^2) assumed in the error-loop bound.
+    lag_sigma : float
+        Bound of the position loop's lag channel ``|q2| / |delta_2|`` (1/s).
     """
     h, d, n = implementation.sample_time, implementation.delay, implementation.noise
     m11, m22, m33 = params.m11, params.m22, params.m33
@@ -226,6 +271,17 @@ def course_jerk_bound(speed_min: float, accel: float, jerk: float, snap: float) 
     ``s chi''' = n . q'''' - 3 s'' chi' + s chi'^3 - 3 s' chi''``, hence
     ``|chi'''| <= S4/s + 6 A J/s^2 + 10 A^3/s^3`` (``s`` the smallest speed, ``A, J, S4`` the
     bounds of ``|q''|, |q'''|, |q''''|``).
+
+    Parameters
+    ----------
+    speed_min : float
+        Smallest speed ``s`` of the path (m/s), > 0.
+    accel : float
+        Bound ``A`` of ``|q''|`` (m/s^2).
+    jerk : float
+        Bound ``J`` of ``|q'''|`` (m/s^3).
+    snap : float
+        Bound ``S4`` of ``|q''''|`` (m/s^4).
     """
     s = speed_min
     return snap / s + 6.0 * accel * jerk / s**2 + 10.0 * accel**3 / s**3
@@ -333,13 +389,34 @@ def lag_disturbance(
 
 
 def position_lag_loop(gains: Gains, lam: float, sigma: float, lag_sigma: float = 0.0) -> LagLoop:
-    """The position error loop: ``a = lam``, ``K = (k1, alpha)``, ``|q| <= sigma |e'|``,
-    ``|q2| <= lag_sigma |delta_2|`` (all 1/s)."""
+    """The position error loop: ``a = lam``, ``K = (k1, alpha)``, ``|q| <= sigma |e'|``.
+
+    With a lag channel also ``|q2| <= lag_sigma |delta_2|``.
+
+    Parameters
+    ----------
+    gains : Gains
+        ``k1`` (1/s^2) and ``alpha`` (1/s) are the loop's gains.
+    lam : float
+        Envelope lambda (1/s).
+    sigma : float
+        Bound of ``||G - lam I||`` (1/s).
+    lag_sigma : float
+        Bound of the lag channel ``|q2| / |delta_2|`` (1/s); 0 for none.
+    """
     return LagLoop((lam,), gains.k1, gains.alpha, sigma, lag_sigma)
 
 
 def heading_lag_loop(gains: Gains, c_range: tuple[float, float]) -> LagLoop:
-    """The heading error loop: ``a = -(c - k2psi)`` at both ends of ``c``, ``K = k_psi``."""
+    """The heading error loop: ``a = -(c - k2psi)`` at both ends of ``c``, ``K = k_psi``.
+
+    Parameters
+    ----------
+    gains : Gains
+        Its heading gains ``k_psi`` (1/s^2, 1/s) are the loop's gains.
+    c_range : tuple of float
+        Range of the heading damping ``c = k2psi + d33(r)/m33`` (1/s).
+    """
     k1p, k2p = gains.k_psi
     return LagLoop((-(c_range[0] - k2p), -(c_range[1] - k2p)), k1p, k2p)
 
@@ -385,6 +462,11 @@ class ImplementationProblem:
         The lag channel is the drift feedforward ``G(y) p_d'`` evaluated at the old state: its
         part driven by the velocity error's change is at most ``max |p_d'| hypot(b_u, b_v)
         |delta_2|`` (:func:`~auv_hinf.implementation.lag.lag_channel_sigma`).
+
+        Parameters
+        ----------
+        channel : bool
+            Give the position loop its lag channel (``lag_sigma > 0``).
         """
         lag_sigma = lag_channel_sigma(self.params, self.tube) if channel else 0.0
         return position_lag_loop(self.gains, self.lam, self.sigma, lag_sigma), heading_lag_loop(

@@ -47,6 +47,11 @@ def lag_floor(loop: LagLoop) -> float:
 
     Certifying a larger lag bound is sound (it covers every smaller lag) and keeps ``1/tau`` in
     the LMI well scaled; below it the solver's accuracy, not the loop, would decide.
+
+    Parameters
+    ----------
+    loop : LagLoop
+        The loop (its first damping vertex and gains set the time constants).
     """
     return SCAN_START * _time_constants(loop.dampings[0], loop.k, loop.b)[0]
 
@@ -57,6 +62,11 @@ def certified_lag(loop: LagLoop) -> float:
     The LMI is tried on a doubling ladder from :data:`SCAN_START` of the loop's fastest time
     constant (halving below it when that already fails), then refined by bisection to
     :data:`LIMIT_RTOL`.
+
+    Parameters
+    ----------
+    loop : LagLoop
+        The loop to certify.
     """
 
     def ok(tau: float) -> bool:
@@ -78,14 +88,34 @@ def certified_lag(loop: LagLoop) -> float:
 
 
 def decay_at(loop: LagLoop, tau: float) -> float:
-    """Largest decay rate ``beta`` (1/s) certified at lag bound ``max(tau, lag_floor)`` (0 if only ``beta = 0`` is)."""
+    """Largest decay rate ``beta`` (1/s) certified at lag bound ``max(tau, lag_floor)`` (0 if only ``beta = 0`` is).
+
+    Parameters
+    ----------
+    loop : LagLoop
+        The loop.
+    tau : float
+        Lag bound (s); 0 (no lag) stays 0.
+    """
     tau = _solved_lag(loop, tau)
     eig = max(abs(a) for a in loop.dampings) + abs(loop.b) + math.sqrt(abs(loop.k))
     return bisect(lambda b: lmi_lag(loop, tau, b) is not None, 0.0, eig, rtol=DECAY_RTOL)[0]
 
 
 def iss_certificate(loop: LagLoop, tau: float, beta: float, weight: FloatArray) -> LagResult | None:
-    """:func:`lmi_lag` with the smallest ISS gain at ``(max(tau, lag_floor), beta)`` and ``P >= weight``."""
+    """:func:`lmi_lag` with the smallest ISS gain at ``(max(tau, lag_floor), beta)`` and ``P >= weight``.
+
+    Parameters
+    ----------
+    loop : LagLoop
+        The loop.
+    tau : float
+        Lag bound (s); 0 (no lag) stays 0.
+    beta : float
+        Decay rate (1/s), >= 0.
+    weight : ndarray, shape (2, 2)
+        Lower bound of ``P`` (fixes its scale).
+    """
     return lmi_lag(loop, _solved_lag(loop, tau), beta, weight=weight)
 
 
@@ -112,6 +142,13 @@ def held_plant(a: float, t: float) -> tuple[FloatArray, FloatArray]:
     ``Ad = [[1, phi1], [0, exp(a t)]]``, ``Bd = [[phi2], [phi1]]`` with
     ``phi1 = (exp(a t) - 1)/a`` and ``phi2 = (exp(a t) - 1 - a t)/a^2`` (series near ``a t = 0``);
     equal to python-control's ``sample_system`` (tested), and cheap enough to scan with.
+
+    Parameters
+    ----------
+    a : float
+        Velocity coefficient (1/s).
+    t : float
+        Hold time (s).
     """
     x = a * t
     if abs(x) < 1e-4:
@@ -138,8 +175,19 @@ def spectral_radius(a: float, k: float, b: float, period: float, delay: float, *
     seconds and ``u_{j-m}`` after, so ``x_{j+1} = Ad x_j + G1 u_{j-m-1} + G0 u_{j-m}``
     with ``G0 = Bd(h - f)``, ``G1 = Ad(h - f) Bd(f)`` from python-control's ``sample_system``.
     The state ``(x_j, u_{j-1}, ..., u_{j-m-1})`` evolves linearly; its spectral radius decides.
-    ``control=True`` discretises with python-control's ``sample_system`` instead of
-    :func:`held_plant`.
+
+    Parameters
+    ----------
+    a : float
+        Velocity coefficient of the plant ``e'' = a e' + u`` (1/s).
+    k, b : float
+        Gains of the law ``u = -k e - b e'`` (1/s^2, 1/s).
+    period : float
+        Sample time ``h`` (s), > 0.
+    delay : float
+        Constant delay (s), >= 0.
+    control : bool
+        Discretise with python-control's ``sample_system`` instead of :func:`held_plant`.
     """
     if period <= 0:
         raise DesignError(f"period must be > 0 (s), got {period!r}")
@@ -181,6 +229,15 @@ def exact_limit(a: float, k: float, b: float, delay: float) -> float:
     The scan starts at :data:`SCAN_START` of the fastest time constant, or at ``delay/64``
     when that is longer (the state then carries at most 64 held inputs). The bracket found
     with the closed form is re-checked with python-control's discretisation.
+
+    Parameters
+    ----------
+    a : float
+        Velocity coefficient of the plant ``e'' = a e' + u`` (1/s).
+    k, b : float
+        Gains of the law ``u = -k e - b e'`` (1/s^2, 1/s).
+    delay : float
+        Constant delay (s), >= 0.
     """
     fast, slow = _time_constants(a, k, b)
     if not math.isfinite(slow):

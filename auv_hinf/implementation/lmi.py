@@ -83,7 +83,13 @@ class LagLoop:
             raise DesignError(f"sigma and lag_sigma must be >= 0 (1/s), got {self.sigma!r}, {self.lag_sigma!r}")
 
     def gamma_matrix(self, a: float) -> FloatArray:
-        """``Gamma = [A - BK, BK, B, B, B]`` of vertex ``a``, shape ``(2, 7)`` (columns x, delta, q, q2, w)."""
+        """``Gamma = [A - BK, BK, B, B, B]`` of vertex ``a``, shape ``(2, 7)`` (columns x, delta, q, q2, w).
+
+        Parameters
+        ----------
+        a : float
+            Vertex of the velocity coefficient (1/s), ``A = [[0, 1], [0, a]]``.
+        """
         bk = _B @ np.array([[self.k, self.b]])
         return np.hstack([np.array([[0.0, 1.0], [0.0, a]]) - bk, bk, _B, _B, _B])
 
@@ -104,6 +110,8 @@ class LagResult:
         Lag bound (s) and decay rate (1/s) it was verified at.
     max_eig, margin : float
         Largest eigenvalue of the verified matrices and the round-off margin it cleared.
+    lag_multiplier : float
+        S-procedure multiplier ``mu2`` of the lag channel (0 without one).
     """
 
     p: FloatArray
@@ -162,7 +170,27 @@ def lag_lmi_matrices(
     gain: bool,
     mu2: float = 0.0,
 ) -> list[tuple[FloatArray, float]]:
-    """The numeric LMI matrix of every vertex and the scale of its terms (for the eigenvalue re-check)."""
+    """The numeric LMI matrix of every vertex and the scale of its terms (for the eigenvalue re-check).
+
+    Parameters
+    ----------
+    loop : LagLoop
+        The loop (its dampings are the vertices).
+    p, r : ndarray, shape (2, 2)
+        The functional's matrices ``P`` and ``R``.
+    mu : float
+        S-procedure multiplier of ``q`` (unused when ``loop.sigma`` is 0).
+    g : float
+        ISS gain (used with ``gain`` only).
+    tau : float
+        Lag bound (s), >= 0; 0 drops the ``delta`` columns and the ``R`` terms.
+    beta : float
+        Decay rate (1/s).
+    gain : bool
+        Whether the ``w`` column and the ``- g Ew^T Ew`` term are included.
+    mu2 : float
+        S-procedure multiplier of ``q2`` (unused when ``loop.lag_sigma`` or ``tau`` is 0).
+    """
     cols = _columns(tau, loop.sigma > 0, gain, loop.lag_sigma > 0)
     sel = _selectors(cols)
     e0, ed, fv, fd, eq, eq2, ew = (sel[k] for k in ("e0", "ed", "fv", "fd", "eq", "eq2", "ew"))
@@ -256,9 +284,13 @@ def _problem(
 def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None = None) -> LagResult | None:
     """Verified certificate of ``loop`` for every lag in ``[0, tau]`` at decay ``beta``, or ``None``.
 
+    Clarabel's statuses other than ``optimal`` (after its retries) count as "not certified"
+    (``None``); cvxpy's own errors never escape.
+
     Parameters
     ----------
     loop : LagLoop
+        The loop to certify.
     tau : float
         Lag bound (s), ``>= 0``.
     beta : float
@@ -271,9 +303,6 @@ def lmi_lag(loop: LagLoop, tau: float, beta: float, *, weight: FloatArray | None
     -------
     LagResult or None
         ``None`` when the LMI is not strictly feasible or the eigenvalue re-check fails.
-
-    Clarabel's statuses other than ``optimal`` (after its retries) count as "not certified"
-    (``None``); cvxpy's own errors never escape.
     """
     if not (tau >= 0 and beta >= 0 and math.isfinite(tau) and math.isfinite(beta)):
         raise DesignError(f"need finite tau >= 0 (s) and beta >= 0 (1/s), got {tau!r}, {beta!r}")

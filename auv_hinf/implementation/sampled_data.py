@@ -113,7 +113,28 @@ def _fits(prob: ImplementationProblem, b: ErrorBounds) -> bool:
 
 @dataclass(frozen=True)
 class LagBounds:
-    """The outcome of :func:`bound_errors` (bounds in m, m/s, rad, rad/s; ``None`` when not covered)."""
+    """The outcome of :func:`bound_errors` (bounds in m, m/s, rad, rad/s; ``None`` when not covered).
+
+    Attributes
+    ----------
+    covers : bool
+        The error bounds are a verified fixed point inside the envelope (and the forces within
+        the actuators).
+    reasons : tuple of str
+        Why not (empty when it covers).
+    decay_rate : float or None
+        Rate (1/s) of the ISS certificates (the smaller of the two).
+    bounds : ErrorBounds or None
+        Bounds of the errors over the whole run.
+    ultimate : ErrorBounds or None
+        Bounds the errors enter and stay in as ``t -> inf``.
+    thrust : ThrustBounds or None
+        Bound of the commanded forces (N, N, N m).
+    disturbance : LagDisturbance or None
+        Bounds of the disturbances at the fixed point.
+    certificates : tuple of LagResult
+        The position and heading certificates (empty when none is verified).
+    """
 
     covers: bool
     reasons: tuple[str, ...]
@@ -141,9 +162,18 @@ class LagBounds:
 def bound_errors(prob: ImplementationProblem, impl: Implementation, start: ErrorBounds, channel: bool) -> LagBounds:
     """ISS certificates at the declared lag and the verified fixed point of the error bounds.
 
-    ``channel``: the drift feedforward's dependence on the velocity error's change is a
-    norm-bounded term of the position LMI (``q2``); otherwise it is part of the disturbance,
-    bounded through the body accelerations.
+    Parameters
+    ----------
+    prob : ImplementationProblem
+        The configuration (model, envelope, tube, gains, sigma, actuators).
+    impl : Implementation
+        Sample time, delay and measurement-noise bounds.
+    start : ErrorBounds
+        Bounds of the errors at ``t = 0`` (m, m/s, rad, rad/s).
+    channel : bool
+        The drift feedforward's dependence on the velocity error's change is a norm-bounded
+        term of the position LMI (``q2``); otherwise it is part of the disturbance, bounded
+        through the body accelerations.
     """
     lag = impl.max_lag
     loops = prob.lag_loops(channel)
@@ -228,7 +258,17 @@ class LagLimits:
 
 
 def lag_limits(loops: tuple[LagLoop, LagLoop], nominal_dampings: tuple[float, float], delay: float) -> LagLimits:
-    """:func:`certified_lag` of both loops and :func:`exact_limit` of their nominal members."""
+    """:func:`certified_lag` of both loops and :func:`exact_limit` of their nominal members.
+
+    Parameters
+    ----------
+    loops : tuple of LagLoop
+        Position and heading loops.
+    nominal_dampings : tuple of float
+        Velocity coefficient ``a`` (1/s) of each loop's nominal member.
+    delay : float
+        Declared delay (s) for the exact limit.
+    """
     lag = min(certified_lag(loop) for loop in loops)
     exact = min(exact_limit(a, lp.k, lp.b, delay) for a, lp in zip(nominal_dampings, loops, strict=True))
     return LagLimits(lag=lag, exact_sample_time=exact)
@@ -259,6 +299,8 @@ class ImplementationCertificate:
     disturbance : LagDisturbance or None
     certificates : tuple of LagResult
         The verified position and heading certificates (empty when none).
+    method : str
+        The method, in words (:data:`METHOD`).
     """
 
     implementation: Implementation

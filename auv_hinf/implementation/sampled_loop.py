@@ -74,7 +74,15 @@ SNAP = 1e-9
 
 
 def control_period(implementation: Implementation, horizon: float) -> float:
-    """Period (s) at which the law runs: ``sample_time``, or the fine period when it is 0 (module note)."""
+    """Period (s) at which the law runs: ``sample_time``, or the fine period when it is 0 (module note).
+
+    Parameters
+    ----------
+    implementation : Implementation
+        Sample time and delay of the controller.
+    horizon : float
+        Length of the run (s); a continuous law gets at least :data:`MIN_SAMPLES` samples over it.
+    """
     if implementation.sample_time > 0.0:
         return implementation.sample_time
     wanted = FINE_FRACTION * implementation.delay if implementation.delay > 0.0 else FINE_PERIOD
@@ -179,12 +187,20 @@ def _none() -> FloatArray:
 class SampledSolution(BatchSolution):
     """A :class:`~auv_hinf.numerics.integrators.BatchSolution` of ``S`` runs, and what their controller did.
 
-    ``y`` is ``(T, S, 6 N)`` (None when the samples went to a sink), ``event_time`` each run's
-    first envelope exit (s, NaN if none) on the integrator's interpolant, ``n_steps`` its accepted
-    steps over all segments.
-
     Attributes
     ----------
+    t : ndarray, shape (T,)
+        Output times (s).
+    y : ndarray, shape (T, S, 6 N), or None
+        States at the output times; None when the samples went to a sink.
+    event_time : ndarray, shape (S,)
+        Each run's first envelope exit (s, NaN if none) on the integrator's interpolant.
+    n_steps : ndarray of int, shape (S,)
+        Each run's accepted steps over all segments.
+    n_rejected : ndarray of int, shape (S,)
+        Zero (not counted).
+    next_step : None
+        Not used by the sampled loop.
     commanded : ndarray, shape (T, S, N, 3), or None
         The held command (before saturation) at the output times (N, N, N m).
     commanded_peak : ndarray, shape (S, 3)
@@ -245,7 +261,13 @@ class SampledLoop:
         self.trace: list[tuple[FloatArray, ...]] | None = [] if trace else None
 
     def plant_of(self, rows: slice | NDArray[np.int_]) -> VehicleParams:
-        """Plant coefficients of ``rows``, broadcasting against ``(rows, N)``."""
+        """Plant coefficients of ``rows``, broadcasting against ``(rows, N)``.
+
+        Parameters
+        ----------
+        rows : slice or ndarray of int
+            The runs; a slice stands for all of them.
+        """
         return self.plant_all if isinstance(rows, slice) else self.plants.coefficients(1, rows)
 
     def advance(self, target: FloatArray) -> None:
@@ -255,6 +277,11 @@ class SampledLoop:
         ``s`` in the scaled time ``theta = (t - now_s) / L_s in [0, 1]``, so runs of different
         lengths share the call. The plant under held forces is autonomous, so ``dy/dtheta =
         L_s f(y)`` and every run keeps its own step control and error norm.
+
+        Parameters
+        ----------
+        target : ndarray, shape (S,)
+            Instant (s) each run is integrated to; runs already there, or diverged, stay.
         """
         length = np.where(np.isnan(self.diverged), target - self.now, 0.0)
         rows = np.flatnonzero(length > SNAP)
@@ -303,13 +330,31 @@ class SampledLoop:
             self.y[rows[wild]] = before[wild]
 
     def capture(self, rows: NDArray[np.int_], j: NDArray[np.int_], at: FloatArray) -> None:
-        """Store the states of ``rows`` as the measurements of samples ``j`` taken at ``at`` (s)."""
+        """Store the states of ``rows`` as the measurements of samples ``j`` taken at ``at`` (s).
+
+        Parameters
+        ----------
+        rows : ndarray of int
+            The runs.
+        j : ndarray of int
+            Sample index of each run's measurement.
+        at : ndarray
+            Measurement instant ``s_j`` of each (s).
+        """
         slot = j % self.buf.shape[0]
         self.buf[slot, rows] = self.y[rows]
         self.buf_at[slot, rows] = at
 
     def output(self, rows: NDArray[np.int_], idx: NDArray[np.int_]) -> None:
-        """Send the states of ``rows`` as output samples ``idx``."""
+        """Send the states of ``rows`` as output samples ``idx``.
+
+        Parameters
+        ----------
+        rows : ndarray of int
+            The runs.
+        idx : ndarray of int
+            Output-time index of each run's sample.
+        """
         values = self.y[rows].reshape(rows.size, 6 * self.n)
         if self.sink is not None:
             self.sink(idx, rows, values)
@@ -317,7 +362,16 @@ class SampledLoop:
             self.out[idx, rows] = values
 
     def measurements(self, lo: int) -> tuple[NDArray[np.int_], FloatArray, NDArray[np.int_]]:
-        """Samples ``j`` of the window from ``lo``, their instants ``s_j (S, J)`` and hold intervals."""
+        """Samples ``j`` of the window from ``lo``, their instants ``s_j (S, J)`` and hold intervals.
+
+        The hold interval of an instant is the index ``k`` of ``[t_k, t_{k+1})`` it falls in
+        (-1 at ``t = 0``).
+
+        Parameters
+        ----------
+        lo : int
+            First sample of the window (non-decreasing between calls).
+        """
         j = np.arange(lo, min(lo + self.window, self.k_count))
         at = np.maximum(self.grid[j] - self.draws.delays(lo, lo + j.size), 0.0)
         return j, at, np.searchsorted(self.grid, at - SNAP, side="left") - 1
@@ -333,7 +387,13 @@ class SampledLoop:
             self.capture(hit, np.full(hit.size, j[c]), np.zeros(hit.size))
 
     def sample(self, k: int) -> None:
-        """Evaluate the law of sample ``k`` and hold its forces."""
+        """Evaluate the law of sample ``k`` and hold its forces.
+
+        Parameters
+        ----------
+        k : int
+            Sample index; its measurement must have been captured.
+        """
         slot = k % self.buf.shape[0]
         noise = self.draws.noise(k)
         meas = self.buf[slot] + noise
@@ -349,7 +409,13 @@ class SampledLoop:
             self.trace.append((self.buf_at[slot].copy(), noise, tau, self.forces))
 
     def interval(self, k: int) -> None:
-        """Sample ``k``, then integrate to ``t_{k+1}``, stopping on measurements and outputs."""
+        """Sample ``k``, then integrate to ``t_{k+1}``, stopping on measurements and outputs.
+
+        Parameters
+        ----------
+        k : int
+            Sample index.
+        """
         self.sample(k)
         end = self.grid[k + 1]
         j, at, interval = self.measurements(k + 1)
@@ -373,6 +439,7 @@ class SampledLoop:
         self.advance(np.full(self.s, end))
 
     def solution(self) -> SampledSolution:
+        """The result of the integration so far (call after the last :meth:`interval`)."""
         trace = None
         if self.trace is not None:
             at, noise, cmd, forces = (np.stack(x, axis=1) for x in zip(*self.trace))

@@ -40,7 +40,13 @@ class MotionSource(Protocol):
     """
 
     def motion(self, t: float | FloatArray) -> Motion:
-        """Desired motion at time(s) ``t`` (s)."""
+        """Desired motion at time(s) ``t`` (s).
+
+        Parameters
+        ----------
+        t : float or ndarray, shape (S,)
+            Time (s), or one time per row.
+        """
         ...
 
 
@@ -54,7 +60,13 @@ class VehicleMotionSource(MotionSource, Protocol):
     """
 
     def motion_per_vehicle(self, t: FloatArray) -> Motion:
-        """Desired motion of vehicle ``i`` at time ``t[..., i]`` (s)."""
+        """Desired motion of vehicle ``i`` at time ``t[..., i]`` (s).
+
+        Parameters
+        ----------
+        t : ndarray, shape (..., N)
+            Time of each vehicle (s).
+        """
         ...
 
 
@@ -84,12 +96,24 @@ class RigidReference:
         object.__setattr__(self, "offsets", off)
 
     def motion(self, t: float | FloatArray) -> Motion:
-        """Motion at ``t`` (scalar or shape ``(S,)``), all vehicles at the same time."""
+        """Motion at ``t`` (scalar or shape ``(S,)``), all vehicles at the same time.
+
+        Parameters
+        ----------
+        t : float or ndarray, shape (S,)
+            Time (s), or one time per row.
+        """
         q, qd, qdd, qddd = self.trajectory(np.asarray(t, dtype=float))
         return rigid_motion(self.offsets, q, qd, qdd, *heading_from_velocity(qd, qdd, qddd))
 
     def motion_per_vehicle(self, t: FloatArray) -> Motion:
-        """Motion of vehicle ``i`` at ``t[..., i]`` (s)."""
+        """Motion of vehicle ``i`` at ``t[..., i]`` (s).
+
+        Parameters
+        ----------
+        t : ndarray, shape (..., N)
+            Time of each vehicle (s).
+        """
         q, qd, qdd, qddd = self.trajectory(np.asarray(t, dtype=float))
         psi, r, r_dot = heading_from_velocity(qd, qdd, qddd)
         return Motion(p=q + self.offsets, v=qd, a=qdd, psi=psi, r=r, r_dot=r_dot)
@@ -113,6 +137,23 @@ def heading_torque(
     ``"corrected"``: ``V = psi_d'' + (d33/m33) psi_d' - k1 e - k2 e'``;
     ``"printed"``: ``V = psi_d' + (d33/m33) psi_d - k1 e - k2 e'``, with
     ``e = wrap(psi - psi_d)``, ``e' = r - psi_d'`` and ``d33 = d33(r)`` at the measured rate.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The controller's model of the vehicle.
+    k_psi : tuple of float
+        Heading gains ``(k1psi, k2psi)`` (1/s^2, 1/s).
+    orientation : {"corrected", "printed"}
+        Which heading law (above).
+    states : ndarray, shape (..., 6) or wider
+        Measured ``[x, y, psi, u, v, r, ...]`` (m, m, rad, m/s, m/s, rad/s).
+    psi_d : ndarray
+        Desired heading (rad), broadcasting against ``states.shape[:-1]``.
+    r_d : ndarray
+        Desired yaw rate (rad/s).
+    r_dot_d : ndarray
+        Desired yaw acceleration (rad/s^2).
     """
     psi, u, v, r = states[..., 2], states[..., 3], states[..., 4], states[..., 5]
     d33_over_m = (params.d33_lin + params.d33_quad * np.abs(r)) / params.m33
@@ -128,7 +169,13 @@ def heading_torque(
 
 
 def check_orientation(orientation: str) -> None:
-    """Validate the heading-law name shared by both law forms."""
+    """Validate the heading-law name shared by both law forms.
+
+    Parameters
+    ----------
+    orientation : str
+        ``"corrected"`` or ``"printed"``; anything else raises :class:`DesignError`.
+    """
     if orientation not in ("corrected", "printed"):
         raise DesignError(f"orientation must be 'corrected' or 'printed', got {orientation!r}")
 
@@ -142,7 +189,13 @@ class ForceLimits(Protocol):
     """
 
     def saturate(self, tau: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
-        """The delivered forces for commands ``tau (..., 3)`` (N, N, N m), and where a limit is active."""
+        """The delivered forces for commands ``tau (..., 3)`` (N, N, N m), and where a limit is active.
+
+        Parameters
+        ----------
+        tau : ndarray, shape (..., 3)
+            Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
+        """
         ...
 
     def to_dict(self) -> dict[str, Any]:
@@ -154,6 +207,13 @@ def saturate(tau: FloatArray, actuators: ForceLimits | None) -> tuple[FloatArray
     """The forces ``actuators`` deliver for commands ``tau (..., 3)`` (N, N, N m); also the active flag.
 
     Without declared actuators nothing saturates.
+
+    Parameters
+    ----------
+    tau : ndarray, shape (..., 3)
+        Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
+    actuators : ForceLimits or None
+        The vehicles' actuators; None for unlimited.
     """
     if actuators is None:
         return tau, np.zeros(tau.shape[:-1], dtype=bool)
@@ -232,7 +292,19 @@ class VehicleLaw:
     def forces(
         self, states: FloatArray, p_dot: FloatArray, motion: Motion, cs: tuple[FloatArray, FloatArray] | None = None
     ) -> FloatArray:
-        """Applied body-frame thrust (after saturation), shape ``(..., N, 3)``; see :meth:`unsaturated`."""
+        """Applied body-frame thrust (after saturation), shape ``(..., N, 3)``; see :meth:`unsaturated`.
+
+        Parameters
+        ----------
+        states : ndarray, shape (..., N, 6) or (..., N, 8)
+            Measured states, as in :meth:`unsaturated`.
+        p_dot : ndarray, shape (..., N, 2)
+            Measured inertial (ground) velocity (m/s).
+        motion : Motion
+            Desired motion, broadcastable to the same leading shape.
+        cs : tuple of ndarray, optional
+            ``(cos psi, sin psi)`` of the measured headings, when the caller has them.
+        """
         return saturate(self.unsaturated(states, p_dot, motion, cs), self.actuators)[0]
 
 
@@ -264,15 +336,28 @@ class FormationController:
         check_orientation(self.orientation)
 
     def desired(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``X_d``, ``Z_d``, ``Z_d'`` at time ``t`` (s), each ``(N, 2)`` in Jacobi coordinates."""
+        """``X_d``, ``Z_d``, ``Z_d'`` at time ``t`` (s), each ``(N, 2)`` in Jacobi coordinates.
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+        """
         m = self.reference.motion(t)
         phi = self.transform.phi
         return phi @ m.p, phi @ m.v, phi @ m.a
 
     def forces(self, t: float, states: FloatArray, p_dot: FloatArray) -> tuple[FloatArray, bool]:
-        """Body-frame thrust ``(N, 3)`` and whether saturation was active.
+        """Body-frame thrust ``(N, 3)`` (N, N, N m) and whether saturation was active.
 
-        ``states`` is ``(N, 6)``; ``p_dot`` the measured inertial velocities ``(N, 2)`` (m/s).
+        Parameters
+        ----------
+        t : float
+            Time (s).
+        states : ndarray, shape (N, 6)
+            Measured ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s).
+        p_dot : ndarray, shape (N, 2)
+            Measured inertial (ground) velocities (m/s).
         """
         par, tr = self.params, self.transform
         psi, u, v, r = states[:, 2], states[:, 3], states[:, 4], states[:, 5]

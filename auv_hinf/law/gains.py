@@ -85,7 +85,13 @@ class Gains:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Gains:
-        """Inverse of :meth:`to_dict` (other keys, such as a report's ``source``, are ignored)."""
+        """Inverse of :meth:`to_dict` (other keys, such as a report's ``source``, are ignored).
+
+        Parameters
+        ----------
+        data : mapping
+            ``alpha`` (1/s), ``k1`` (1/s^2), ``k_psi`` (1/s^2, 1/s) and optionally ``ki`` (1/s^3).
+        """
         k_psi = data["k_psi"]
         return cls(
             float(data["alpha"]), float(data["k1"]), (float(k_psi[0]), float(k_psi[1])), float(data.get("ki", 0.0))
@@ -117,6 +123,17 @@ def integral_gain(alpha: float, k1: float, lam: float, input_gain: float) -> flo
     :data:`INTEGRAL_POLE_SHARE` times the slower root's rate of ``s^2 + b s + k``: all three
     poles stay in the open left half plane.
 
+    Parameters
+    ----------
+    alpha : float
+        Velocity gain (1/s).
+    k1 : float
+        Position gain (1/s^2).
+    lam : float
+        Envelope lambda of the plant (1/s).
+    input_gain : float
+        ``l = m_hat/m``, the controller's mass over the plant's (dimensionless; 1 for an exact model).
+
     Raises
     ------
     DesignError
@@ -131,7 +148,17 @@ def integral_gain(alpha: float, k1: float, lam: float, input_gain: float) -> flo
 
 
 def with_integral(gains: Gains, lam: float, input_gain: float) -> Gains:
-    """``gains`` with the integral gain of :func:`integral_gain` for their ``alpha`` and ``k1``."""
+    """``gains`` with the integral gain of :func:`integral_gain` for their ``alpha`` and ``k1``.
+
+    Parameters
+    ----------
+    gains : Gains
+        The proportional gains; any ``ki`` is replaced.
+    lam : float
+        Envelope lambda of the plant (1/s).
+    input_gain : float
+        ``l = m_hat/m`` (dimensionless), as in :func:`integral_gain`.
+    """
     return replace(gains, ki=integral_gain(gains.alpha, gains.k1, lam, input_gain))
 
 

@@ -50,7 +50,15 @@ CONTROLLER_NAME = "formation_controller"
 
 
 def fleet_signals(names: tuple[str, ...], n: int) -> list[str]:
-    """``[f"{name}[{i}]" for i in range(n) for name in names]``: vehicle-major order."""
+    """``[f"{name}[{i}]" for i in range(n) for name in names]``: vehicle-major order.
+
+    Parameters
+    ----------
+    names : tuple of str
+        Signal names of one vehicle (e.g. :data:`STATE_NAMES`).
+    n : int
+        Number of vehicles.
+    """
     return [f"{name}[{i}]" for i in range(n) for name in names]
 
 

@@ -165,6 +165,17 @@ def vehicle_margins(
 
     A vehicle whose along-track speed may reach zero gets its surge-lower margin no larger than
     that speed's lower bound (it would stop or reverse; the heading offset is then undefined).
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path.
+    offsets : ndarray, shape (N, 2)
+        Formation offsets (m), in ``frame``.
+    frame : {"inertial", "path"}
+        Frame of the offsets; in the inertial frame every vehicle moves as the centre.
+    envelope : Envelope
+        Operating envelope.
     """
     off = np.asarray(offsets, dtype=float)
     n = off.shape[0]
@@ -218,7 +229,19 @@ def _witness_time(fleet: FleetReference, vehicle: int, column: int, envelope: En
 def reference_fit(
     mission: MissionReference, offsets: FloatArray, frame: FormationFrame, envelope: Envelope
 ) -> ReferenceFit:
-    """Per-vehicle zero-error verdict, binding vehicle and turn, smallest radius and largest offset that fit."""
+    """Per-vehicle zero-error verdict, binding vehicle and turn, smallest radius and largest offset that fit.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path.
+    offsets : ndarray, shape (N, 2)
+        Formation offsets (m), in ``frame``.
+    frame : {"inertial", "path"}
+        Frame of the offsets; the largest offset is searched in the path frame only.
+    envelope : Envelope
+        Operating envelope.
+    """
     off = np.asarray(offsets, dtype=float)
     margins = vehicle_margins(mission, off, frame, envelope)
     inside = tuple(bool(x) for x in margins.min(axis=1) >= 0.0)

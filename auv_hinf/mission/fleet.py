@@ -109,6 +109,13 @@ def blend_basis(t: FloatArray, blend_time: float) -> tuple[FloatArray, FloatArra
 
     Exactly zero for ``t >= T_b``. For ``t < 0`` the polynomials are continued (the reference
     is meant for ``t >= 0``; continuing keeps the derivatives consistent across ``t = 0``).
+
+    Parameters
+    ----------
+    t : ndarray
+        Times (s).
+    blend_time : float
+        ``T_b`` (s), > 0.
     """
     tau = np.asarray(t, dtype=float) / blend_time
     if np.all(tau >= 1.0):
@@ -174,8 +181,17 @@ class Shaping:
             object.__setattr__(self, name, arr)
 
     def terms(self, t: ArrayLike) -> tuple[list[FloatArray], list[FloatArray]]:
-        """``[c, c', c'', c''']`` (m .. m/s^3, shape ``B + (N, 2)``) and ``[delta, delta', delta'']``
-        (rad .. rad/s^2, shape ``B + (N,)``); ``B`` broadcasts ``np.shape(t)`` with the batch shape."""
+        """Position and heading corrections and their derivatives at times ``t``.
+
+        ``[c, c', c'', c''']`` (m .. m/s^3, inertial, shape ``B + (N, 2)``) and
+        ``[delta, delta', delta'']`` (rad .. rad/s^2, shape ``B + (N,)``); ``B`` broadcasts
+        ``np.shape(t)`` with the batch shape.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
         tt = times(t)
         h0, _ = blend_basis(tt, self.blend_time)
         g0, g1 = blend_basis(tt, self.th)
@@ -260,7 +276,15 @@ def path_frame_terms(q: list[FloatArray], chi: list[FloatArray], offsets: FloatA
 
 
 def check_offsets(offsets: ArrayLike, owner: str) -> FloatArray:
-    """``offsets`` as a finite ``(N, 2)`` float array (m), or a :class:`ParameterError` naming ``owner``."""
+    """``offsets`` as a finite ``(N, 2)`` float array (m), or a :class:`ParameterError` naming ``owner``.
+
+    Parameters
+    ----------
+    offsets : array_like, shape (N, 2)
+        Formation offsets (m), ``N >= 1``.
+    owner : str
+        Name of the class or setting the offsets belong to, for the message.
+    """
     off = np.asarray(offsets, dtype=float)
     if off.ndim != 2 or off.shape[1] != 2 or off.shape[0] < 1 or not np.all(np.isfinite(off)):
         raise ParameterError(f"{owner}.offsets must be finite with shape (N, 2) (m), got shape {off.shape}")
@@ -303,8 +327,18 @@ class PathFrameReference:
         object.__setattr__(self, "offsets", check_offsets(self.offsets, "PathFrameReference"))
 
     def kinematics(self, t: ArrayLike, order: int = 3) -> tuple[list[FloatArray], list[FloatArray]]:
-        """``[p, p', ..]`` (shape ``t.shape + (N, 2)``, inertial) up to derivative ``order``
-        (0 to 3) and ``[chi, chi', chi'']`` (rad .. rad/s^2, shape ``t.shape + (N,)``)."""
+        """Desired positions and their derivatives, and the course and its derivatives, at ``t``.
+
+        ``[p, p', ..]`` (m .. m/s^k, shape ``t.shape + (N, 2)``, inertial) up to derivative
+        ``order`` and ``[chi, chi', chi'']`` (rad .. rad/s^2, shape ``t.shape + (N,)``).
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite; one time for all vehicles.
+        order : int
+            Highest derivative of ``p`` returned, 0 to 3.
+        """
         return self._terms(times(t), False, order)
 
     def _terms(self, tt: FloatArray, per_vehicle: bool, order: int) -> tuple[list[FloatArray], list[FloatArray]]:
@@ -321,12 +355,24 @@ class PathFrameReference:
         return path_frame_terms(q[: order + 1], chi_n, self.offsets), chi_n[:3]
 
     def motion(self, t: float | FloatArray) -> Motion:
-        """Desired motion at ``t`` (s; scalar or shape ``(S,)``), all vehicles at the same time."""
+        """Desired motion at ``t`` (s; scalar or shape ``(S,)``), all vehicles at the same time.
+
+        Parameters
+        ----------
+        t : float or ndarray
+            Times (s), finite.
+        """
         (p, v, a), (chi, chi1, chi2) = self.kinematics(t, order=2)
         return Motion(p=p, v=v, a=a, psi=chi, r=chi1, r_dot=chi2)
 
     def motion_per_vehicle(self, t: FloatArray) -> Motion:
-        """Motion of vehicle ``i`` at ``t[..., i]`` (s), shape ``t.shape + (2,)`` / ``t.shape``."""
+        """Motion of vehicle ``i`` at ``t[..., i]`` (s), shape ``t.shape + (2,)`` / ``t.shape``.
+
+        Parameters
+        ----------
+        t : ndarray, shape (..., N)
+            Time of each vehicle (s), finite.
+        """
         (p, v, a), (chi, chi1, chi2) = self._terms(times(t), True, 2)
         return Motion(p=p, v=v, a=a, psi=chi, r=chi1, r_dot=chi2)
 
@@ -337,6 +383,11 @@ def turn_radius(mission: MissionReference) -> float:
     Circle: its radius; lawn-mower: its ``turn_radius``; sine ``[s t, A sin(w t)]``: the
     curvature ``|chi'|/|q'|`` peaks at the crests (``|q'| = s``, ``chi' = A w^2/s``), so the
     radius is ``s^2/(A w^2)``.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path; read through its ``to_dict()``.
     """
     d = mission.to_dict()
     kind = d["kind"]
@@ -354,6 +405,13 @@ def with_turn_radius(mission: MissionReference, radius: float) -> dict[str, Any]
 
     The speed is kept. A lawn-mower's ``spacing`` is raised, if needed, to the two turns it
     must hold (``2 D``, about ``3.97 R``; 4 R is used). A line has no turn (returned unchanged).
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path; read through its ``to_dict()``.
+    radius : float
+        New smallest radius of curvature (m).
     """
     d = dict(mission.to_dict())
     kind = d["kind"]
@@ -411,7 +469,13 @@ class ReferenceTube:
 
     @staticmethod
     def concatenate(tubes: list[ReferenceTube]) -> ReferenceTube:
-        """One tube holding the cells of all ``tubes``."""
+        """One tube holding the cells of all ``tubes``.
+
+        Parameters
+        ----------
+        tubes : list of ReferenceTube
+            The tubes, whose cells are stacked in order.
+        """
         return ReferenceTube(
             speed=np.concatenate([t.speed for t in tubes]),
             offset=np.concatenate([t.offset for t in tubes]),
@@ -459,9 +523,17 @@ class FleetReference:
         return FleetReference(self.mission, self.offsets, None, self.frame)
 
     def kinematics(self, t: ArrayLike) -> tuple[list[FloatArray], list[FloatArray]]:
-        """``[p, p', p'', p''']`` (m .. m/s^3, inertial, shape ``B + (N, 2)``) and
-        ``[delta, delta', delta'']`` (rad .. rad/s^2, shape ``B + (N,)``), where ``B`` broadcasts
-        ``np.shape(t)`` with the shaping's batch shape."""
+        """Desired positions and their derivatives, and the heading offsets and theirs, at ``t``.
+
+        ``[p, p', p'', p''']`` (m .. m/s^3, inertial, shape ``B + (N, 2)``) and
+        ``[delta, delta', delta'']`` (rad .. rad/s^2, shape ``B + (N,)``, zero without
+        shaping), where ``B`` broadcasts ``np.shape(t)`` with the shaping's batch shape.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
         tt = times(t)
         if self.frame == "path":
             base, _ = PathFrameReference(self.mission, self.offsets).kinematics(tt)
@@ -480,10 +552,16 @@ class FleetReference:
         return out, d
 
     def motion(self, t: ArrayLike) -> Motion:
-        """Desired motion at times ``t`` (s), shapes ``B + (N, 2)`` / ``B + (N,)`` (see
-        :meth:`kinematics`): ``psi = atan2(p') + delta`` (rad, defined modulo 2 pi),
-        ``r = chi' + delta'``, ``r_dot = chi'' + delta''`` with ``chi`` the course of ``p'``;
-        in the path frame ``chi`` is the course of the centre path ``q'``.
+        """Desired motion at times ``t``, shapes ``B + (N, 2)`` / ``B + (N,)`` (see :meth:`kinematics`).
+
+        ``psi = atan2(p') + delta`` (rad, defined modulo 2 pi), ``r = chi' + delta'``,
+        ``r_dot = chi'' + delta''`` with ``chi`` the course of ``p'``; in the path frame ``chi``
+        is the course of the centre path ``q'``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
 
         Raises
         ------
@@ -518,9 +596,18 @@ def rigid_motion(
 ) -> Motion:
     """Motion of vehicles on fixed ``offsets (N, 2)`` (m) around a centre moving as ``q`` (..., 2).
 
-    The centre's velocity, acceleration (m/s, m/s^2) and course ``chi``, ``chi'``, ``chi''``
-    (rad, rad/s, rad/s^2, shape (...)) are shared by every vehicle: they are broadcast (read-only
-    views), not copied.
+    The centre's velocity, acceleration and course are shared by every vehicle: they are
+    broadcast (read-only views), not copied.
+
+    Parameters
+    ----------
+    offsets : ndarray, shape (N, 2)
+        Vehicle offsets from the centre (m, inertial frame).
+    q, qd, qdd : ndarray, shape (..., 2)
+        Position (m), velocity (m/s) and acceleration (m/s^2) of the centre, inertial frame.
+    chi, chi1, chi2 : ndarray, shape (...)
+        Course of ``qd`` (rad) and its first two derivatives (rad/s, rad/s^2): the desired
+        heading, yaw rate and yaw acceleration of every vehicle.
     """
     n = offsets.shape[0]
     lead = chi.shape
@@ -539,7 +626,13 @@ def rigid_motion(
 
 
 def wrap_angle(angle: ArrayLike) -> FloatArray:
-    """``angle`` (rad) wrapped to (-pi, pi]."""
+    """``angle`` (rad) wrapped to (-pi, pi].
+
+    Parameters
+    ----------
+    angle : array_like
+        Angles (rad).
+    """
     out: FloatArray = np.pi - np.mod(np.pi - np.asarray(angle, dtype=float), 2.0 * np.pi)
     return out
 
@@ -636,6 +729,13 @@ REFERENCES: dict[str, type] = {c.kind: c for c in (SineReference, LineReference,
 
 def reference_from_dict(kind: str, **params: Any) -> MissionReference:
     """Mission reference of ``kind`` (a key of :data:`REFERENCES`) built from ``params``.
+
+    Parameters
+    ----------
+    kind : str
+        ``"sine"``, ``"line"``, ``"circle"`` or ``"lawnmower"``.
+    **params : Any
+        Constructor arguments of that class (as in its ``to_dict()`` without ``kind``).
 
     Raises
     ------

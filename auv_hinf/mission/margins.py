@@ -56,7 +56,15 @@ class ErrorBounds:
 
 
 def inflate_envelope(envelope: Envelope, rtol: float = ENVELOPE_INFLATION_RTOL) -> Envelope:
-    """The envelope widened by ``rtol * max(1, largest |bound|)`` on every side (m/s, rad/s)."""
+    """The envelope widened by ``rtol * max(1, largest |bound|)`` on every side (m/s, rad/s).
+
+    Parameters
+    ----------
+    envelope : Envelope
+        The envelope; its ``u``, ``v`` and ``r`` ranges are widened, ``psi`` is kept.
+    rtol : float
+        Relative widening (dimensionless).
+    """
     eta = rtol * max(1.0, *(abs(x) for x in (*envelope.u, *envelope.v, *envelope.r)))
     return Envelope(
         u=(envelope.u[0] - eta, envelope.u[1] + eta),
@@ -67,14 +75,30 @@ def inflate_envelope(envelope: Envelope, rtol: float = ENVELOPE_INFLATION_RTOL) 
 
 
 def heading_c_range(params: VehicleParams, envelope: Envelope, k_psi: tuple[float, float]) -> tuple[float, float]:
-    """Range of ``c = k2psi + d33(r)/m33`` (1/s) over the envelope's yaw rates."""
+    """Range of ``c = k2psi + d33(r)/m33`` (1/s) over the envelope's yaw rates.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters (``m33`` and the yaw damping are used).
+    envelope : Envelope
+        Operating envelope (its ``r`` range is used).
+    k_psi : tuple of float
+        Heading gains ``(k1psi, k2psi)`` (1/s^2, 1/s); only ``k2psi`` enters.
+    """
     lo, hi = abs_range(*envelope.r)
     base = k_psi[1] + params.d33_lin / params.m33
     return base + params.d33_quad * lo / params.m33, base + params.d33_quad * hi / params.m33
 
 
 def cos_range(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Exact range of ``cos`` over ``[lo, hi]`` (elementwise)."""
+    """Exact range of ``cos`` over ``[lo, hi]`` (elementwise).
+
+    Parameters
+    ----------
+    lo, hi : ndarray
+        Ends of the angle intervals (rad), ``lo <= hi``.
+    """
     two_pi = 2.0 * math.pi
     top = np.floor(hi / two_pi) >= np.ceil(lo / two_pi)
     bottom = np.floor((hi - math.pi) / two_pi) >= np.ceil((lo - math.pi) / two_pi)
@@ -128,7 +152,17 @@ MARGIN_NAMES = ("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo")
 
 
 def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -> Margins:
-    """Sound envelope margins of the tube: :func:`cell_margins` minimised over the cells."""
+    """Sound envelope margins of the tube: :func:`cell_margins` minimised over the cells.
+
+    Parameters
+    ----------
+    tube : ReferenceTube
+        Bounds of the vehicle's desired motion over its time cells.
+    bounds : ErrorBounds
+        Sup-in-time bounds of the vehicle's errors.
+    envelope : Envelope
+        Operating envelope.
+    """
     return Margins(*(float(x) for x in cell_margins(tube, bounds, envelope).min(axis=0)))
 
 
@@ -140,6 +174,15 @@ def cell_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -
     ``u`` in ``[min S cos theta - E_v, max S cos theta + E_v]``,
     ``v`` in ``[min(-S sin theta) - E_v, max(-S sin theta) + E_v]`` and
     ``r`` in ``[yaw_rate_lo - E_r, yaw_rate_hi + E_r]``.
+
+    Parameters
+    ----------
+    tube : ReferenceTube
+        Bounds of the vehicle's desired motion over its ``K`` time cells.
+    bounds : ErrorBounds
+        Sup-in-time bounds ``E_p, E_v, E_psi, E_r`` of the vehicle's errors (``E_p`` unused).
+    envelope : Envelope
+        Operating envelope.
 
     Raises
     ------

@@ -49,13 +49,24 @@ def poly_sup(p: Polynomial) -> float:
     ``p'`` (real parts, clipped into [0, 1]) are candidates: spurious ones cannot raise the
     maximum above the true supremum, and multiple roots perturbed off the real axis are not
     lost. The result is widened by :data:`BOUND_RTOL`.
+
+    Parameters
+    ----------
+    p : numpy.polynomial.Polynomial
+        The polynomial ``p(s)``.
     """
     crit = np.concatenate([[0.0, 1.0], np.clip(p.deriv().roots().real, 0.0, 1.0)])
     return float(np.max(np.abs(p(crit)))) * (1.0 + BOUND_RTOL)
 
 
 def times(t: ArrayLike) -> FloatArray:
-    """``t`` as a float array (s); raise :class:`ParameterError` if any entry is not finite."""
+    """``t`` as a float array (s); raise :class:`ParameterError` if any entry is not finite.
+
+    Parameters
+    ----------
+    t : array_like
+        Times (s).
+    """
     arr = np.asarray(t, dtype=float)
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"times t must be finite (s), got non-finite entries in {arr!r}")
@@ -116,6 +127,12 @@ class MissionBounds:
         Course terms are computed from ``q', q'', q'''``, so their rounding scales with
         ``A/S`` (rate) and ``J/S + 2 (A/S)^2`` (its derivative), not with their values, which
         may be exactly zero (the ``chi''`` of a circle).
+
+        Parameters
+        ----------
+        **values : float
+            The exact bounds, one keyword per attribute of :class:`MissionBounds` (``snap_max``
+            may be left out), in the attributes' units.
         """
         v = values
         s, a = v["speed_min"], v["accel_max"]
@@ -129,18 +146,33 @@ class MissionBounds:
 
 
 class MissionReference(Protocol):
-    """A centre path: ``kind``, ``__call__(t) -> (q, q', q'', q''')``, ``snap(t)`` (the fourth
-    derivative, m/s^4), ``bounds()``, ``to_dict()``."""
+    """A centre path: ``kind``, ``__call__(t)``, ``snap(t)``, ``bounds()``, ``to_dict()``.
+
+    ``__call__(t)`` gives ``(q, q', q'', q''')``: position (m), velocity (m/s), acceleration
+    (m/s^2) and jerk (m/s^3), inertial frame, each of shape ``np.shape(t) + (2,)``.
+    """
 
     kind: ClassVar[str]
 
     def __call__(self, t: ArrayLike) -> Derivatives: ...
 
-    def snap(self, t: ArrayLike) -> FloatArray: ...
+    def snap(self, t: ArrayLike) -> FloatArray:
+        """Fourth derivative of ``q`` (m/s^4, inertial frame), shape ``np.shape(t) + (2,)``.
 
-    def bounds(self) -> MissionBounds: ...
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
+        ...
 
-    def to_dict(self) -> dict[str, Any]: ...
+    def bounds(self) -> MissionBounds:
+        """Bounds of the path valid for every ``t >= 0``."""
+        ...
+
+    def to_dict(self) -> dict[str, Any]:
+        """Parameters as plain JSON types, with ``kind``."""
+        ...
 
 
 class _Base:
@@ -211,7 +243,13 @@ class SineReference(_Base):
         return 2.0 * math.pi / self.omega
 
     def snap(self, t: ArrayLike) -> FloatArray:
-        """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``."""
+        """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
         tt = times(t)
         return _vec(np.zeros_like(tt), self.amplitude * self.omega**4 * np.sin(self.omega * tt))
 
@@ -267,7 +305,13 @@ class LineReference(_Base):
         return np.asarray(self.start) + tt * d, d + zero, zero, zero.copy()
 
     def snap(self, t: ArrayLike) -> FloatArray:
-        """Fourth derivative of ``q`` (zero), shape ``t.shape + (2,)``."""
+        """Fourth derivative of ``q`` (zero), shape ``t.shape + (2,)``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
         return np.zeros((*times(t).shape, 2))
 
     def bounds(self) -> MissionBounds:
@@ -329,7 +373,13 @@ class CircleReference(_Base):
         return 2.0 * math.pi * self.radius / self.speed
 
     def snap(self, t: ArrayLike) -> FloatArray:
-        """Fourth derivative ``(s^4/R^3) [cos th, sin th]`` of ``q`` (m/s^4), shape ``t.shape + (2,)``."""
+        """Fourth derivative ``(s^4/R^3) [cos th, sin th]`` of ``q`` (m/s^4), shape ``t.shape + (2,)``.
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
         s, rad = self.speed, self.radius
         th = -0.5 * np.pi + (s / rad) * times(t)
         out: FloatArray = (s**4 / rad**3) * _vec(np.cos(th), np.sin(th))
@@ -360,8 +410,11 @@ def heading_from_velocity(v: ArrayLike, a: ArrayLike, j: ArrayLike) -> tuple[Flo
 
     Returns
     -------
-    chi, chi_dot, chi_ddot : ndarray, shape (...)
-        ``atan2(v_y, v_x)`` in (-pi, pi] (rad), ``(v x a)/|v|^2`` (rad/s) and
+    chi : ndarray, shape (...)
+        ``atan2(v_y, v_x)`` in (-pi, pi] (rad).
+    chi_dot : ndarray, shape (...)
+        ``(v x a)/|v|^2`` (rad/s).
+    chi_ddot : ndarray, shape (...)
         ``(v x j)/|v|^2 - 2 chi' (v . a)/|v|^2`` (rad/s^2).
 
     Raises
@@ -530,8 +583,16 @@ class LawnmowerReference(_Base):
         return (q, s * tan, (s * d1)[..., None] * nor, (s * d2)[..., None] * nor - (s * d1 * d1)[..., None] * tan)
 
     def snap(self, t: ArrayLike) -> FloatArray:
-        """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``: with ``q' = s T(chi)``,
-        ``q'''' = s ((chi''' - chi'^3) N - 3 chi' chi'' T)`` (``T``, ``N`` tangent and normal)."""
+        """Fourth derivative of ``q`` (m/s^4), shape ``t.shape + (2,)``.
+
+        With ``q' = s T(chi)``, ``q'''' = s ((chi''' - chi'^3) N - 3 chi' chi'' T)`` (``T``, ``N``
+        tangent and normal).
+
+        Parameters
+        ----------
+        t : array_like
+            Times (s), finite.
+        """
         _, _, _, tan, nor, d1, d2, d3 = self._course(times(t))
         s = self.speed
         out: FloatArray = (s * (d3 - d1**3))[..., None] * nor - (3.0 * s * d1 * d2)[..., None] * tan

@@ -29,6 +29,11 @@ PATH_FRAME_CELLS = 64
 def mission_tube(ref: MissionReference) -> ReferenceTube:
     """One-cell tube of an unshaped mission, valid for all ``t >= 0``, from its bounds.
 
+    Parameters
+    ----------
+    ref : MissionReference
+        Centre path; every vehicle moves as the centre (inertial offsets, no shaping).
+
     Returns
     -------
     ReferenceTube
@@ -161,6 +166,13 @@ def default_cells(fleet: FleetReference, resolution: float = 1e-3) -> int:
 
     Use it to tube a large fleet in chunks on one common time grid, so that the margins do
     not depend on how the fleet was split. Returns 1 for an unshaped reference.
+
+    Parameters
+    ----------
+    fleet : FleetReference
+        The whole fleet's reference.
+    resolution : float
+        Target speed pad (m/s), > 0, as in :func:`shaped_tube`.
     """
     if fleet.shaping is None:
         return 1
@@ -216,6 +228,11 @@ def fleet_tube(fleet: FleetReference) -> ReferenceTube:
 
     Unshaped: :func:`mission_tube` in the inertial frame (every vehicle moves as the centre),
     :func:`path_frame_tube` in the path frame; shaped: :func:`shaped_tube` with its defaults.
+
+    Parameters
+    ----------
+    fleet : FleetReference
+        The reference.
     """
     if fleet.shaping is not None:
         return shaped_tube(fleet)
@@ -244,6 +261,15 @@ def path_frame_tube(mission: MissionReference, offsets: ArrayLike, *, cells: int
     * ``|p_i''| <= accel_max + |d_i| (turn_accel_max + max chi'^2)``, ``|psi_d''| <= turn_accel_max``.
 
     Every interval is widened by :data:`TUBE_RTOL` of its scale.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path.
+    offsets : array_like, shape (N, 2)
+        ``d_i = (d_x, d_y)`` (m, path frame: along the track, across it).
+    cells : int
+        Number of parts of the course-rate range.
 
     Returns
     -------

@@ -34,6 +34,7 @@ def check_interval(name: str, value: Any) -> tuple[float, float]:
     Returns
     -------
     tuple of float
+        ``(min, max)`` as floats.
 
     Raises
     ------
@@ -60,7 +61,13 @@ def check_interval(name: str, value: Any) -> tuple[float, float]:
 
 
 def abs_range(lo: float, hi: float) -> tuple[float, float]:
-    """Range of ``|x|`` for ``x`` in ``[lo, hi]``; contains 0 when the interval straddles it."""
+    """Range of ``|x|`` for ``x`` in ``[lo, hi]``; contains 0 when the interval straddles it.
+
+    Parameters
+    ----------
+    lo, hi : float
+        Ends of the interval (``lo <= hi``), in the unit of ``x``.
+    """
     if lo <= 0.0 <= hi:
         return 0.0, max(-lo, hi)
     return min(abs(lo), abs(hi)), max(abs(lo), abs(hi))
@@ -97,7 +104,15 @@ class Envelope:
             object.__setattr__(self, name, check_interval(name, getattr(self, name)))
 
     def contains(self, u: Any, v: Any, r: Any) -> np.ndarray:
-        """Boolean mask: is ``(u, v, r)`` inside the envelope (heading ignored: full circle)."""
+        """Boolean mask: is ``(u, v, r)`` inside the envelope (heading ignored: full circle).
+
+        Parameters
+        ----------
+        u, v : array_like
+            Surge and sway speed, m/s (body frame).
+        r : array_like
+            Yaw rate, rad/s.
+        """
         u_, v_, r_ = (np.asarray(a, dtype=float) for a in (u, v, r))
         return (
             (u_ >= self.u[0])
@@ -125,6 +140,13 @@ def envelope_lambda(params: VehicleParams, envelope: Envelope) -> float:
     ``|v|`` of the envelope. A constant lambda is what an LTI small-gain certificate needs;
     lowering lambda by delta raises sigma by at most delta, so the required gain
     ``sigma + lam`` never gets worse.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    envelope : Envelope
+        Operating envelope (its ``u`` and ``v`` ranges are used).
     """
     umax = abs_range(*envelope.u)[1]
     vmax = abs_range(*envelope.v)[1]
@@ -137,6 +159,13 @@ def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
 
     Positive inside, zero on the boundary, negative outside. Units mix m/s and rad/s; only
     the sign and the roots matter (the first root is the first exit time).
+
+    Parameters
+    ----------
+    envelope : Envelope
+        Operating envelope (heading ignored).
+    states : ndarray, shape (..., 6) or wider
+        Vehicle states whose components 3-5 are ``u, v`` (m/s, body frame) and ``r`` (rad/s).
     """
     u, v, r = states[..., 3], states[..., 4], states[..., 5]
     margin: FloatArray = np.minimum.reduce(
@@ -155,8 +184,15 @@ def envelope_margin(envelope: Envelope, states: FloatArray) -> FloatArray:
 def envelope_event(envelope: Envelope, n: int, width: int = 6) -> EventFn:
     """The exit event of flat states ``(..., width n)``: the smallest envelope margin of their ``n`` vehicles.
 
-    ``width`` is the state size per vehicle: 6, or 8 with an integrator (see
-    :attr:`~auv_hinf.law.formation_law.VehicleLaw.width`).
+    Parameters
+    ----------
+    envelope : Envelope
+        Operating envelope.
+    n : int
+        Number of vehicles per system.
+    width : int
+        State size per vehicle: 6, or 8 with an integrator (see
+        :attr:`~auv_hinf.law.formation_law.VehicleLaw.width`).
     """
 
     def event(t: FloatArray, y: FloatArray) -> FloatArray:
@@ -170,8 +206,16 @@ def envelope_bound(envelope: Envelope, n: int, width: int = 6) -> EventBound:
     """Sound lower bound of the envelope event over a box of flat states (see ``EventBound``).
 
     Each margin is one of ``u``, ``v``, ``r`` minus or plus a constant, so over ``|y' - y| <= radius``
-    it is at least its value at ``y`` minus that component's radius. ``n`` is the number of
-    vehicles per system (1 for vehicle systems), ``width`` the state size per vehicle.
+    it is at least its value at ``y`` minus that component's radius.
+
+    Parameters
+    ----------
+    envelope : Envelope
+        Operating envelope.
+    n : int
+        Number of vehicles per system (1 for vehicle systems).
+    width : int
+        State size per vehicle.
     """
 
     def bound(y: FloatArray, radius: FloatArray) -> FloatArray:

@@ -53,6 +53,13 @@ def _check_vectors(p: ArrayLike, kind: str) -> FloatArray:
 def row_scale(n: int, kind: JacobiKind = "paper") -> FloatArray:
     """Scale of the shape rows ``j = 1..N-1`` of ``Phi``: 1 (paper) or ``sqrt(j/(j+1))`` (orthonormal).
 
+    Parameters
+    ----------
+    n : int
+        Number of vehicles ``N``.
+    kind : {"paper", "orthonormal"}
+        Row scaling of the shape rows: the paper's, or scaled to unit norm.
+
     Returns
     -------
     ndarray, shape (N-1,)
@@ -69,6 +76,13 @@ def row_norms(n: int, kind: JacobiKind = "paper") -> FloatArray:
     Paper row ``j`` has ``j`` entries ``1/j`` and one ``-1``: squared norm ``1/j + 1 = (j+1)/j``;
     the orthonormal rows are scaled to norm 1; the centroid row ``(1/N) 1^T`` has norm
     ``1/sqrt(N)``. Since the rows are mutually orthogonal these are the singular values of ``Phi``.
+
+    Parameters
+    ----------
+    n : int
+        Number of vehicles ``N``.
+    kind : {"paper", "orthonormal"}
+        Row scaling of the shape rows: the paper's, or scaled to unit norm.
     """
     j = np.arange(1, n, dtype=float)
     shape = np.sqrt((j + 1.0) / j) * row_scale(n, kind)
@@ -130,6 +144,13 @@ def jacobi_transpose(y: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
 
     Column ``k`` (1-based) of ``Phi`` holds ``s_j / j`` in rows ``j >= k`` (``j <= N-1``),
     ``-s_{k-1}`` in row ``k-1`` and ``1/N`` in the centroid row, with ``s_j`` of :func:`row_scale`.
+
+    Parameters
+    ----------
+    y : array_like, shape (..., N, 2)
+        Vectors indexed like Jacobi coordinates (any unit; the result has the same).
+    kind : {"paper", "orthonormal"}
+        Row scaling of the shape rows: the paper's, or scaled to unit norm.
     """
     arr = _check_vectors(y, kind)
     n = arr.shape[-2]
@@ -143,7 +164,15 @@ def jacobi_transpose(y: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
 
 
 def jacobi_inverse_transpose(z: ArrayLike, kind: JacobiKind = "paper") -> FloatArray:
-    """``Phi^-T z = D^-2 Phi z`` in O(N), ``D`` the row norms (:func:`row_norms`)."""
+    """``Phi^-T z = D^-2 Phi z`` in O(N), ``D`` the row norms (:func:`row_norms`).
+
+    Parameters
+    ----------
+    z : array_like, shape (..., N, 2)
+        Vectors indexed by vehicle (any unit; the result has the same).
+    kind : {"paper", "orthonormal"}
+        Row scaling of the shape rows: the paper's, or scaled to unit norm.
+    """
     arr = _check_vectors(z, kind)
     out: FloatArray = jacobi_coordinates(arr, kind) / row_norms(arr.shape[-2], kind)[:, None] ** 2
     return out
@@ -310,19 +339,42 @@ class JacobiTransform:
 
         Returns shape ``(..., N, 2)``: ``N-1`` shape vectors then the centre ``q_c`` (m).
         The same map applies to velocities and accelerations.
+
+        Parameters
+        ----------
+        p : array_like, shape (..., N, 2)
+            Positions (m, inertial frame), or velocities / accelerations.
         """
         return jacobi_coordinates(self._check_stack(p, "p"), self.kind)
 
     def to_positions(self, x: ArrayLike) -> FloatArray:
-        """Inverse of :meth:`to_jacobi`: positions ``Phi^-1 X`` from Jacobi coordinates, O(N)."""
+        """Inverse of :meth:`to_jacobi`: positions ``Phi^-1 X`` from Jacobi coordinates, O(N).
+
+        Parameters
+        ----------
+        x : array_like, shape (..., N, 2)
+            Jacobi coordinates (m, or m/s, ...); the result has their unit.
+        """
         return positions_from_jacobi(self._check_stack(x, "X"), self.kind)
 
     def transpose(self, y: ArrayLike) -> FloatArray:
-        """``Phi^T y`` for ``y`` of shape ``(..., N, 2)``, O(N)."""
+        """``Phi^T y`` for ``y`` of shape ``(..., N, 2)``, O(N).
+
+        Parameters
+        ----------
+        y : array_like, shape (..., N, 2)
+            Vectors indexed like Jacobi coordinates (any unit; the result has the same).
+        """
         return jacobi_transpose(self._check_stack(y, "y"), self.kind)
 
     def inverse_transpose(self, z: ArrayLike) -> FloatArray:
-        """``Phi^-T z`` for ``z`` of shape ``(..., N, 2)``, O(N)."""
+        """``Phi^-T z`` for ``z`` of shape ``(..., N, 2)``, O(N).
+
+        Parameters
+        ----------
+        z : array_like, shape (..., N, 2)
+            Vectors indexed by vehicle (any unit; the result has the same).
+        """
         return jacobi_inverse_transpose(self._check_stack(z, "z"), self.kind)
 
     def _check_stack(self, a: ArrayLike, name: str) -> FloatArray:
@@ -338,10 +390,12 @@ def block_diag_stack(blocks: ArrayLike) -> FloatArray:
     Parameters
     ----------
     blocks : array_like, shape (..., N, 2, 2)
+        The diagonal blocks, in order.
 
     Returns
     -------
     ndarray, shape (..., 2N, 2N)
+        Zero off the 2x2 diagonal blocks.
     """
     b = np.asarray(blocks, dtype=float)
     n = b.shape[-3]
@@ -423,8 +477,14 @@ def regular_polygon(n: int, radius: float, phase: float = 0.0) -> FloatArray:
 def shape_from_offsets(offsets: ArrayLike, transform: JacobiTransform) -> FloatArray:
     """Desired Jacobi shape vectors ``rho_d`` (shape ``(N-1, 2)``, m) from vehicle offsets.
 
-    ``offsets`` (shape ``(N, 2)``) are the desired positions relative to any common
-    point; the centroid row is dropped, so a translation of all offsets has no effect.
+    The centroid row is dropped, so a translation of all offsets has no effect.
+
+    Parameters
+    ----------
+    offsets : array_like, shape (N, 2)
+        Desired positions (m, inertial frame) relative to any common point; finite.
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles.
     """
     arr = np.asarray(offsets, dtype=float)
     if not np.all(np.isfinite(arr)):
@@ -433,7 +493,15 @@ def shape_from_offsets(offsets: ArrayLike, transform: JacobiTransform) -> FloatA
 
 
 def offsets_from_shape(shape: ArrayLike, transform: JacobiTransform) -> FloatArray:
-    """Vehicle offsets from the centre (shape ``(N, 2)``, m) for Jacobi shape vectors."""
+    """Vehicle offsets from the centre (shape ``(N, 2)``, m) for Jacobi shape vectors.
+
+    Parameters
+    ----------
+    shape : array_like, shape (N-1, 2)
+        Jacobi shape vectors ``rho_j`` (m, inertial frame).
+    transform : JacobiTransform
+        The Jacobi transform for N vehicles.
+    """
     rho = np.asarray(shape, dtype=float)
     if rho.shape != (transform.n - 1, 2):
         raise FormationError(f"shape must have shape ({transform.n - 1}, 2), got {rho.shape}")

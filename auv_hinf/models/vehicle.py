@@ -103,8 +103,12 @@ class VehicleParams:
 
         Returns
         -------
-        d11, d22, d33 : ndarray
-            kg/s, kg/s and kg m^2/s, broadcast to a common shape.
+        d11 : ndarray
+            Surge damping, kg/s, broadcast to the common shape of the inputs.
+        d22 : ndarray
+            Sway damping, kg/s, same shape.
+        d33 : ndarray
+            Yaw damping, kg m^2/s, same shape.
         """
         u_, v_, r_ = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (u, v, r)))
         return (
@@ -117,6 +121,11 @@ class VehicleParams:
         """Return a copy whose six damping coefficients are multiplied by ``factor``.
 
         Used to model a plant/controller mismatch (e.g. ``factor=1.2`` for 20 % more drag).
+
+        Parameters
+        ----------
+        factor : float
+            Scale of the damping (dimensionless, finite, >= 0); the copy's name records it.
         """
         f = require_finite("damping scale factor", factor)
         if f < 0:
@@ -231,7 +240,18 @@ PRESETS: dict[str, Callable[[], VehicleParams]] = {
 
 
 def preset(name: str) -> VehicleParams:
-    """Return the vehicle preset called ``name`` (one of :data:`PRESETS`)."""
+    """Return the vehicle preset called ``name`` (one of :data:`PRESETS`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`PRESETS`; presets with arguments get their defaults.
+
+    Raises
+    ------
+    ParameterError
+        If ``name`` is not a preset.
+    """
     try:
         return PRESETS[name]()
     except KeyError:
@@ -239,7 +259,13 @@ def preset(name: str) -> VehicleParams:
 
 
 def rotation(psi: ArrayLike) -> FloatArray:
-    """Planar rotation ``R(psi)`` from body to inertial frame, shape ``(..., 2, 2)``."""
+    """Planar rotation ``R(psi)`` from body to inertial frame, shape ``(..., 2, 2)``.
+
+    Parameters
+    ----------
+    psi : array_like
+        Heading, rad.
+    """
     p = np.asarray(psi, dtype=float)
     c, s = np.cos(p), np.sin(p)
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
@@ -249,6 +275,15 @@ def coriolis_damping_matrix(params: VehicleParams, u: ArrayLike, v: ArrayLike, r
     """``M1^-1 D1(r, |u|, |v|)`` of eq. (5), body frame, shape ``(..., 2, 2)``, in 1/s.
 
     ``D1 = [[d11, -m22 r], [m11 r, d22]]`` holds the damping and the Coriolis coupling.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    u, v : array_like
+        Surge and sway speed, m/s (body frame).
+    r : array_like
+        Yaw rate, rad/s.
     """
     d11, d22, _ = params.damping(u, v, r)
     r_ = np.broadcast_to(np.asarray(r, dtype=float), d11.shape)
@@ -262,6 +297,15 @@ def body_block(params: VehicleParams, u: ArrayLike, v: ArrayLike, r: ArrayLike) 
 
     Equal to ``[[-d11/m11, (m22-m11) r/m11], [(m22-m11) r/m22, -d22/m22]]``
     (eq. 20 equals eq. 8; ``tests/models/test_vehicle.py::test_eq20_equals_eq8_symbolically``).
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    u, v : array_like
+        Surge and sway speed, m/s (body frame).
+    r : array_like
+        Yaw rate, rad/s.
     """
     md = coriolis_damping_matrix(params, u, v, r)
     r_ = np.asarray(r, dtype=float)
@@ -274,6 +318,17 @@ def inertial_block(params: VehicleParams, psi: ArrayLike, u: ArrayLike, v: Array
     """``G(psi, r, |u|, |v|) = R(psi) [S(r) - M1^-1 D1] R(psi)^T`` of eq. (8), in 1/s.
 
     Maps the inertial velocity ``p'`` (m/s) to its drift acceleration, shape ``(..., 2, 2)``.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    psi : array_like
+        Heading, rad.
+    u, v : array_like
+        Surge and sway speed, m/s (body frame).
+    r : array_like
+        Yaw rate, rad/s.
     """
     rot = rotation(psi)
     blk = body_block(params, u, v, r)
@@ -281,7 +336,15 @@ def inertial_block(params: VehicleParams, psi: ArrayLike, u: ArrayLike, v: Array
 
 
 def input_matrix(params: VehicleParams, psi: ArrayLike) -> FloatArray:
-    """``H(psi) = R(psi) M1^-1`` of eq. (9), shape ``(..., 2, 2)``, in 1/kg."""
+    """``H(psi) = R(psi) M1^-1`` of eq. (9), shape ``(..., 2, 2)``, in 1/kg.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters (``m11``, ``m22`` are used).
+    psi : array_like
+        Heading, rad.
+    """
     return rotation(psi) @ np.diag([1.0 / params.m11, 1.0 / params.m22])
 
 
@@ -329,6 +392,13 @@ def vehicle_nlsys(params: VehicleParams, name: str = "auv") -> ct.NonlinearIOSys
 
     States ``x, y, psi, u, v, r``; inputs ``tau_x, tau_y, tau_psi``; outputs the full
     state. Use ``control.linearize(sys, xeq, ueq)`` to linearise at a trim point.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Plant parameters.
+    name : str
+        Name of the system.
     """
 
     def updfcn(t: float, x: FloatArray, u: FloatArray, p: dict[str, Any] | None) -> FloatArray:
@@ -354,9 +424,22 @@ def plant_derivative(
 ) -> FloatArray:
     """``d/dt`` of states ``(..., N, 6)`` under body forces ``(..., N, 3)`` (N, N, N m).
 
-    The position rate is the ground velocity ``R(psi) [u, v] + current`` (``current``
-    broadcasts to ``(..., N, 2)``, inertial, m/s); ``cs`` is ``(cos psi, sin psi)``, and
-    ``p_dot`` that ground velocity when the caller has it.
+    The position rate is the ground velocity ``R(psi) [u, v] + current``.
+
+    Parameters
+    ----------
+    plant : VehicleParams
+        Plant parameters, or array-valued ones (:meth:`PlantBatch.coefficients`).
+    current : ndarray
+        Water current (m/s, inertial frame); broadcasts to ``(..., N, 2)``.
+    states : ndarray, shape (..., N, 6)
+        ``[x, y, psi, u, v, r]`` in m, m, rad, m/s, m/s, rad/s.
+    forces : ndarray, shape (..., N, 3)
+        ``[tau_x, tau_y, tau_psi]`` in N, N, N m (body frame).
+    cs : tuple of ndarray
+        ``(cos psi, sin psi)`` of the states, shape ``(..., N)`` each.
+    p_dot : ndarray, shape (..., N, 2), optional
+        The ground velocity (m/s, inertial) when the caller has it already.
     """
     ground = ground_velocity(states, current, cs) if p_dot is None else p_dot
     d = rhs(plant, states, forces, cs)
@@ -369,8 +452,14 @@ def ground_velocity(
 ) -> FloatArray:
     """Inertial velocity ``R(psi) [u, v] + current`` of states ``(..., N, 6)`` (m/s).
 
-    ``current`` (inertial, m/s) broadcasts against ``(..., N, 2)``; ``cs`` is
-    ``(cos psi, sin psi)`` when the caller has them.
+    Parameters
+    ----------
+    states : ndarray, shape (..., N, 6)
+        ``[x, y, psi, u, v, r]`` in m, m, rad, m/s, m/s, rad/s.
+    current : ndarray or tuple of float
+        Water current (m/s, inertial frame); broadcasts against ``(..., N, 2)``.
+    cs : tuple of ndarray, optional
+        ``(cos psi, sin psi)`` of the states when the caller has them.
     """
     c, s = (np.cos(states[..., 2]), np.sin(states[..., 2])) if cs is None else cs
     u, v = states[..., 3], states[..., 4]
@@ -383,7 +472,21 @@ _COEFFS = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d
 
 @dataclass(frozen=True)
 class PlantBatch:
-    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,)."""
+    """Plant parameters of ``S`` scenarios: the nine :class:`VehicleParams` coefficients as arrays (S,).
+
+    Attributes
+    ----------
+    m11, m22 : ndarray, shape (S,)
+        Surge and sway inertia (kg).
+    m33 : ndarray, shape (S,)
+        Yaw inertia (kg m^2).
+    d11_lin, d11_quad : ndarray, shape (S,)
+        Surge damping coefficients (kg/s, kg/m).
+    d22_lin, d22_quad : ndarray, shape (S,)
+        Sway damping coefficients (kg/s, kg/m).
+    d33_lin, d33_quad : ndarray, shape (S,)
+        Yaw damping coefficients (kg m^2/s, kg m^2).
+    """
 
     m11: FloatArray
     m22: FloatArray
@@ -406,7 +509,13 @@ class PlantBatch:
 
     @classmethod
     def from_params(cls, params: Sequence[VehicleParams]) -> PlantBatch:
-        """Stack a list of :class:`VehicleParams`."""
+        """Stack a list of :class:`VehicleParams`.
+
+        Parameters
+        ----------
+        params : sequence of VehicleParams
+            One plant per scenario (at least one); names are dropped.
+        """
         if len(params) == 0:
             raise ParameterError("a plant batch needs at least one VehicleParams")
         return cls(**{k: np.array([getattr(p, k) for p in params]) for k in _COEFFS})
@@ -421,7 +530,14 @@ class PlantBatch:
         """Duck-typed parameters with arrays of shape ``(S,) + (1,) * trailing`` for :func:`vehicle.rhs`.
 
         ``vehicle.rhs`` reads only the nine coefficients and ``damping``, which broadcast.
-        ``rows``: only those scenarios (then ``S = rows.size``).
+
+        Parameters
+        ----------
+        trailing : int
+            Number of length-1 axes appended after the scenario axis (e.g. 1 for ``(S, N)``
+            per-vehicle arrays).
+        rows : ndarray of int, optional
+            Only those scenarios (then ``S = rows.size``); default all.
         """
         pick = slice(None) if rows is None else rows
         shape = (-1,) + (1,) * trailing

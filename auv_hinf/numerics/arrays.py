@@ -19,7 +19,14 @@ from auv_hinf._typing import FloatArray
 
 
 def stack_last(parts: Sequence[FloatArray]) -> FloatArray:
-    """``np.stack(parts, -1)`` stored with the first axis fastest (Fortran order), same values."""
+    """``np.stack(parts, -1)`` stored with the first axis fastest (Fortran order), same values.
+
+    Parameters
+    ----------
+    parts : sequence of ndarray
+        The components, of one shape or of shapes that broadcast together; ``parts[j]`` becomes
+        ``out[..., j]``.
+    """
     shapes = {np.shape(p) for p in parts}
     shape = shapes.pop() if len(shapes) == 1 else np.broadcast_shapes(*shapes)
     out: FloatArray = np.empty((*shape, len(parts)), order="F")

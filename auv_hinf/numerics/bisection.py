@@ -45,6 +45,8 @@ def bisect(
         Stop when ``hi - lo <= max(atol, rtol |hi|)`` (``hi / lo <= 1 + rtol`` with ``geometric``).
     steps : int, optional
         Stop after exactly this many evaluations instead.
+    geometric : bool
+        Bisect at the geometric midpoint ``sqrt(lo hi)`` instead of the arithmetic one.
 
     Returns
     -------
@@ -115,6 +117,22 @@ def largest_holding(
 
     ``holds(hi)`` is evaluated first, then ``holds(lo)`` (only with ``check_lo``: a caller that
     has checked it passes ``False``), then :func:`bisect` with the given stopping rule.
+
+    Parameters
+    ----------
+    holds : callable
+        The predicate, expected to hold at ``lo`` and fail above some point.
+    hi : float
+        Upper end of the search, in the predicate's unit.
+    lo : float
+        Lower end of the search.
+    check_lo : bool
+        Evaluate ``holds(lo)`` (and return None when it fails); ``False`` when the caller knows
+        it holds.
+    rtol, atol : float
+        Stopping tolerances of the bisection, as in :func:`bisect`.
+    steps : int, optional
+        Number of bisection evaluations instead, as in :func:`bisect`.
 
     Returns
     -------

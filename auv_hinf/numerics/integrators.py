@@ -136,6 +136,27 @@ def _rms(x: FloatArray) -> FloatArray:
 
 
 def check_span(y0: FloatArray, t_span: tuple[float, float], t_eval: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Check and convert the common inputs of :func:`dopri5` and :func:`rk45_reference`.
+
+    Parameters
+    ----------
+    y0 : ndarray, shape (B, d)
+        Initial states; must be finite.
+    t_span : tuple of float
+        Start and end time (s); finite, end after start.
+    t_eval : ndarray, shape (T,)
+        Output times (s); sorted and inside ``t_span``.
+
+    Returns
+    -------
+    tuple of ndarray
+        ``y0`` as a new float array and ``t_eval`` as a float array.
+
+    Raises
+    ------
+    ParameterError
+        If any of the conditions above fails.
+    """
     y = np.array(y0, dtype=float)
     te = np.asarray(t_eval, dtype=float)
     t0, t1 = t_span
@@ -230,8 +251,9 @@ def dopri5(
     t_span : tuple of float
         Start and end time (s), common to all systems.
     y0 : ndarray, shape (B, d)
+        Initial states.
     t_eval : ndarray, shape (T,)
-        Sorted output times inside ``t_span``; sampled from the continuous extension.
+        Sorted output times (s) inside ``t_span``; sampled from the continuous extension.
     rtol, atol : float
         Per-component tolerances; the error norm is the RMS over the ``d`` components of
         each system, as in scipy.
@@ -239,6 +261,9 @@ def dopri5(
         ``event(t, y)`` (see :data:`EventFn`); its first negative time per system is located
         by brentq on the interpolant, bracketed by a sign change on ``subdivisions`` points
         of each step (see the module note on the residual limitation).
+    subdivisions : int
+        Number of equally spaced points per step (``theta = 1/subdivisions, ..., 1``) at which
+        ``event`` is checked for a sign change.
     max_steps : int
         Cap on the number of batch iterations.
     event_bound : callable, optional
@@ -398,11 +423,27 @@ def rk45_reference(
     atol: float = ATOL,
     event: EventFn | None = None,
 ) -> BatchSolution:
-    """scipy ``solve_ivp`` (RK45) on one system (``B = 1``); same interface as :func:`dopri5`.
+    """Scipy ``solve_ivp`` (RK45) on one system (``B = 1``); same interface as :func:`dopri5`.
 
     The reference the vectorised integrator is tested against. Events use scipy's own
     location (sign changes between step end points, then a root search on its dense
     output), so an excursion inside one step is missed.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, y)`` with ``t`` (1,) and ``y`` (1, d), as for :func:`dopri5`.
+    t_span : tuple of float
+        Start and end time (s).
+    y0 : ndarray, shape (1, d)
+        Initial state.
+    t_eval : ndarray, shape (T,)
+        Sorted output times (s) inside ``t_span``.
+    rtol, atol : float
+        Tolerances passed to ``solve_ivp``.
+    event : callable, optional
+        ``event(t, y)`` (see :data:`EventFn`); its first crossing from positive to negative (or
+        a negative value at the start) is returned as ``event_time``.
 
     Raises
     ------

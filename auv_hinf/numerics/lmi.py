@@ -33,6 +33,13 @@ def solve(problem: cp.Problem, what: str) -> int:
     solve is retried with the settings in :data:`_RETRY_SETTINGS`; any status other than
     ``optimal`` after that raises :class:`auv_hinf.exceptions.SolverError` (never cvxpy's).
     Warnings cvxpy emits for an attempt are silenced because the retry decides.
+
+    Parameters
+    ----------
+    problem : cvxpy.Problem
+        The problem to solve (in place: its variables hold the solution afterwards).
+    what : str
+        Name of the computation, for the error message.
     """
     solves = 0
     status: str | None = None
@@ -75,7 +82,20 @@ _RETRY_SETTINGS: tuple[dict[str, Any], ...] = (
 
 
 def verify_nsd(matrix: FloatArray, what: str) -> float:
-    """Check that a numeric symmetric matrix is negative semidefinite; return its max eig."""
+    """Check that a numeric symmetric matrix is negative semidefinite; return its max eig.
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (n, n)
+        The LMI matrix evaluated at the solution; its symmetric part is checked.
+    what : str
+        Name of the LMI, for the error message.
+
+    Raises
+    ------
+    SolverError
+        If the largest eigenvalue exceeds ``LMI_VERIFY_TOL * max(1, max |entry|)``.
+    """
     sym = 0.5 * (matrix + matrix.T)
     top = float(np.linalg.eigvalsh(sym).max())
     scale = max(1.0, float(np.abs(sym).max()))
@@ -120,7 +140,15 @@ LYAP_STRICT_RTOL = 1e-7
 
 
 def roundoff_margin(size: int, scale: float) -> float:
-    """Eigenvalue round-off allowance ``EIG_ROUNDOFF_FACTOR * n * eps * scale``."""
+    """Eigenvalue round-off allowance ``EIG_ROUNDOFF_FACTOR * n * eps * scale``.
+
+    Parameters
+    ----------
+    size : int
+        Matrix dimension ``n``.
+    scale : float
+        Size of the matrix entries (floored at 1e-300), in the matrix's unit.
+    """
     return EIG_ROUNDOFF_FACTOR * size * float(np.finfo(float).eps) * max(scale, 1e-300)
 
 
@@ -128,8 +156,15 @@ def strict_nsd_gap(matrix: FloatArray, scale: float = 0.0) -> tuple[float, float
     """Largest eigenvalue of the symmetric part of ``matrix`` and the round-off margin.
 
     The matrix is *strictly* negative definite, provably and despite round-off, when the
-    first value is below minus the second. ``scale`` is the size of the terms ``matrix`` was
-    assembled from (defaults to its own norm).
+    first value is below minus the second.
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (n, n)
+        The assembled LMI matrix.
+    scale : float
+        Size of the terms ``matrix`` was assembled from; the margin uses the larger of it and
+        the spectral norm of the symmetric part (the default 0 uses that norm alone).
     """
     sym = 0.5 * (matrix + matrix.T)
     eigs = np.linalg.eigvalsh(sym)

@@ -21,7 +21,15 @@ BOUND_RTOL = 1e-12
 
 
 def box_level(m: FloatArray, r1: float, r2: float) -> float:
-    """Largest ``x^T M x`` over the box ``|x1| <= r1, |x2| <= r2``: ``m11 r1^2 + 2 |m12| r1 r2 + m22 r2^2`` (exact)."""
+    """Largest ``x^T M x`` over the box ``|x1| <= r1, |x2| <= r2``: ``m11 r1^2 + 2 |m12| r1 r2 + m22 r2^2`` (exact).
+
+    Parameters
+    ----------
+    m : ndarray, shape (2, 2)
+        Symmetric form.
+    r1, r2 : float
+        Half-widths of the box in ``x1`` and ``x2`` (e.g. m and m/s, or rad and rad/s).
+    """
     return float(m[0, 0]) * r1 * r1 + 2.0 * abs(float(m[0, 1])) * r1 * r2 + float(m[1, 1]) * r2 * r2
 
 
@@ -29,6 +37,13 @@ def level_extent(m: FloatArray, rho: float) -> tuple[float, float]:
     """Sup of ``|x1|`` and ``|x2|`` over ``{x^T M x <= rho}``: ``sqrt(rho (M^-1)_ii)``.
 
     Both are inflated by :data:`BOUND_RTOL` for round-off; units follow ``x``.
+
+    Parameters
+    ----------
+    m : ndarray, shape (2, 2)
+        Symmetric positive definite form.
+    rho : float
+        Level; ``rho <= 0`` gives ``(0, 0)``.
     """
     m11, m12, m22 = float(m[0, 0]), float(m[0, 1]), float(m[1, 1])
     if rho <= 0.0:
@@ -44,6 +59,13 @@ def ellipsoid_extent(m: FloatArray, r1: float, r2: float) -> tuple[float, float]
     For ``M = M2`` (or ``M2 kron I2`` with ``x1, x2`` planar vectors) and the start set
     ``|x1| <= r1, |x2| <= r2``, ``rho`` is :func:`box_level` and the extents are
     :func:`level_extent` (inflated by :data:`BOUND_RTOL` for round-off). Units follow ``r1, r2``.
+
+    Parameters
+    ----------
+    m : ndarray, shape (2, 2)
+        Symmetric positive definite form ``M2``.
+    r1, r2 : float
+        Half-widths of the start box in ``x1`` and ``x2`` (norms for planar vectors).
     """
     return level_extent(m, box_level(m, r1, r2))
 
@@ -51,9 +73,18 @@ def ellipsoid_extent(m: FloatArray, r1: float, r2: float) -> tuple[float, float]
 def pair_level(m: FloatArray, x: ArrayLike, dx: ArrayLike, planar: bool = False) -> FloatArray:
     """Level ``[x, x']^T (M kron I) [x, x']`` of error pairs in the ellipse of the (2, 2) ``m``.
 
-    ``planar``: ``x`` and ``dx`` are inertial vectors ``(..., 2)`` (e.g. m and m/s) and the form is
-    summed over both axes; otherwise they are scalars ``(...)`` (e.g. rad and rad/s). The planar
-    products are written out, not reduced over the length-2 axis (cheaper in the hot path).
+    The planar products are written out, not reduced over the length-2 axis (cheaper in the
+    hot path).
+
+    Parameters
+    ----------
+    m : ndarray, shape (2, 2)
+        Symmetric form.
+    x, dx : array_like, shape (..., 2) or (...)
+        Errors and their rates: inertial vectors (e.g. m and m/s) with ``planar``, otherwise
+        scalars (e.g. rad and rad/s).
+    planar : bool
+        ``x`` and ``dx`` are planar vectors and the form is summed over both axes.
     """
     a, b = np.asarray(x, dtype=float), np.asarray(dx, dtype=float)
     if planar:

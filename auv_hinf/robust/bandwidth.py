@@ -85,7 +85,19 @@ class RobustDesign:
 
 
 def family_gains(box: ParameterBox, envelope: Envelope, w: float, integral: bool = False) -> Gains:
-    """Gains of the family at bandwidth ``w`` (rad/s); with ``integral``, plus ``ki`` (:func:`integral_gain`)."""
+    """Gains of the family at bandwidth ``w`` (rad/s); with ``integral``, plus ``ki`` (:func:`integral_gain`).
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant box (its centre lambda and input gain enter the gains).
+    envelope : Envelope
+        Operating envelope (inflated for the centre lambda).
+    w : float
+        Bandwidth (rad/s).
+    integral : bool
+        Add integral action.
+    """
     lam, _ = box_lambda(box, inflate_envelope(envelope))
     lc, _ = box.input_gain()
     h = HEADING_RATIO * w
@@ -108,7 +120,28 @@ def design_robust(
     fallback: bool = True,
     integral: bool = False,
 ) -> RobustDesign:
-    """Choose the robust gains (see the module docstring); ``integral``: each with integral action."""
+    """Choose the robust gains (see the module docstring).
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared plant box.
+    envelope : Envelope
+        Operating envelope.
+    tube : ReferenceTube
+        Bounds of the desired motion.
+    current : float
+        Declared current speed (m/s), scaled with the box.
+    actuators : Actuators, optional
+        The force limits the certificate must respect.
+    progress : bool
+        Show one progress bar over the whole search.
+    fallback : bool
+        When nothing fits the actuators, return the gentlest design that covers the box
+        without them (its certificate then reports the excess).
+    integral : bool
+        Every candidate with integral action.
+    """
     tried: list[tuple[float, float, bool]] = []
     cap = box.max_scale if box.declared else math.inf
 

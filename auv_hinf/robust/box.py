@@ -68,7 +68,15 @@ class ParameterBox:
 
     @classmethod
     def from_ranges(cls, nominal: VehicleParams, ranges: tuple[tuple[str, tuple[float, float]], ...]) -> ParameterBox:
-        """Box from ``(name, (lo, hi))`` pairs (the ``[uncertainty]`` table); others are exact."""
+        """Box from ``(name, (lo, hi))`` pairs (the ``[uncertainty]`` table); others are exact.
+
+        Parameters
+        ----------
+        nominal : VehicleParams
+            The controller's parameters.
+        ranges : tuple of (str, (float, float))
+            Name (one of :data:`PARAMETERS`) and multipliers ``(lo, hi)`` of each uncertain parameter.
+        """
         lo, hi = [1.0] * 9, [1.0] * 9
         for name, (a, b) in ranges:
             if name not in PARAMETERS:
@@ -89,7 +97,13 @@ class ParameterBox:
         return min(caps) if caps else math.inf
 
     def scaled(self, s: float) -> ParameterBox:
-        """The box scaled by ``s >= 0`` about the nominal: ``lo -> 1 - s (1 - lo)``, ``hi -> 1 + s (hi - 1)``."""
+        """The box scaled by ``s >= 0`` about the nominal: ``lo -> 1 - s (1 - lo)``, ``hi -> 1 + s (hi - 1)``.
+
+        Parameters
+        ----------
+        s : float
+            Scale (dimensionless), in ``[0, max_scale]``.
+        """
         if not (0.0 <= s <= self.max_scale):
             raise ParameterError(f"box scale must be in [0, {self.max_scale:g}], got {s!r}")
         return ParameterBox(
@@ -99,25 +113,49 @@ class ParameterBox:
         )
 
     def interval(self, name: str) -> tuple[float, float]:
-        """Absolute ``[min, max]`` of parameter ``name`` in the box (SI units)."""
+        """Absolute ``[min, max]`` of parameter ``name`` in the box (SI units).
+
+        Parameters
+        ----------
+        name : str
+            One of :data:`PARAMETERS`.
+        """
         k = PARAMETERS.index(name)
         v = float(getattr(self.nominal, name))
         return v * self.lo[k], v * self.hi[k]
 
     def spread(self, name: str) -> float:
-        """``max |p - p_hat|`` of parameter ``name`` over the box (SI units)."""
+        """``max |p - p_hat|`` of parameter ``name`` over the box (SI units).
+
+        Parameters
+        ----------
+        name : str
+            One of :data:`PARAMETERS`.
+        """
         lo, hi = self.interval(name)
         v = float(getattr(self.nominal, name))
         return max(v - lo, hi - v)
 
     def plant(self, multipliers: FloatArray) -> VehicleParams:
-        """The plant with the nine given multipliers of the nominal parameters."""
+        """The plant with the nine given multipliers of the nominal parameters.
+
+        Parameters
+        ----------
+        multipliers : ndarray, shape (9,)
+            Multipliers of the :data:`PARAMETERS`, in that order (dimensionless).
+        """
         m = np.asarray(multipliers, dtype=float)
         values = {n: float(getattr(self.nominal, n)) * float(x) for n, x in zip(PARAMETERS, m)}
         return VehicleParams(**values, name=f"{self.nominal.name} (perturbed)")
 
     def vertices(self, names: tuple[str, ...] = PARAMETERS) -> FloatArray:
-        """Multipliers ``(V, 9)`` of every corner over the uncertain parameters among ``names``."""
+        """Multipliers ``(V, 9)`` of every corner over the uncertain parameters among ``names``.
+
+        Parameters
+        ----------
+        names : tuple of str
+            Parameters whose ranges give corners; the others stay at 1.
+        """
         axes = [
             (self.lo[k], self.hi[k]) if (n in names and self.lo[k] < self.hi[k]) else (1.0,)
             for k, n in enumerate(PARAMETERS)
@@ -160,6 +198,13 @@ def box_blocks(box: ParameterBox, envelope: Envelope) -> FloatArray:
     exact intervals (ignoring their coupling through the masses only enlarges the set).
     A convex function of ``B`` is then convex in each quantity separately, so its maximum over
     the box is at one of these vertices.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant parameters.
+    envelope : Envelope
+        Operating envelope (its ``u``, ``v`` and ``r`` ranges).
     """
     m11, m22 = box.interval("m11"), box.interval("m22")
     a1, b1 = _quotient(box.interval("d11_lin"), m11), _quotient(box.interval("d11_quad"), m11)
@@ -182,6 +227,15 @@ def box_sigma(box: ParameterBox, envelope: Envelope, lam: float) -> float:
     ``||R B R^T - lam I|| = ||B - lam I||`` and the norm is convex in ``B``, so the maximum over
     the vertices of :func:`box_blocks` bounds it (exact for a degenerate box, where it equals
     the nominal vehicle sigma).
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant parameters.
+    envelope : Envelope
+        Operating envelope.
+    lam : float
+        Centre lambda (1/s).
     """
     blocks = box_blocks(box, envelope) - lam * np.eye(2)
     return float(_norm2x2(blocks).max()) * (1.0 + SIGMA_ROUNDOFF_RTOL)
@@ -193,6 +247,13 @@ def box_lambda(box: ParameterBox, envelope: Envelope) -> tuple[float, float]:
     ``box_sigma`` is convex in ``lam`` (a maximum of norms of affine functions); the minimiser is
     found by bounded scalar search between the extreme diagonal entries. Whatever ``lam`` it
     returns, the sigma reported is the vertex bound at that ``lam``, so it is sound.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant parameters.
+    envelope : Envelope
+        Operating envelope.
     """
     blocks = box_blocks(box, envelope)
     diag = blocks[:, [0, 1], [0, 1]]
@@ -226,7 +287,13 @@ class TubeSummary:
 
     @classmethod
     def of(cls, tube: ReferenceTube) -> TubeSummary:
-        """Summary of every cell of ``tube``."""
+        """Summary of every cell of ``tube``.
+
+        Parameters
+        ----------
+        tube : ReferenceTube
+            The tube.
+        """
         return cls(
             (float(tube.speed[:, 0].min()), float(tube.speed[:, 1].max())),
             (float(tube.offset[:, 0].min()), float(tube.offset[:, 1].max())),
@@ -248,7 +315,19 @@ def _product_range(*intervals: tuple[float, float]) -> tuple[float, float]:
 
 
 def current_offset(box: ParameterBox, lam: float, current: float, k1: float) -> float:
-    """``|e_c| = |lam| c_max/(l k1)`` (m): the shift of the equilibrium by the constant part of ``-G c``."""
+    """``|e_c| = |lam| c_max/(l k1)`` (m): the shift of the equilibrium by the constant part of ``-G c``.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant parameters; ``l`` is the centre of its input gain.
+    lam : float
+        Centre lambda (1/s).
+    current : float
+        Largest current speed ``c_max`` (m/s).
+    k1 : float
+        Position gain (1/s^2).
+    """
     return abs(lam) * current / (box.input_gain()[0] * k1)
 
 
@@ -270,6 +349,23 @@ def position_disturbance(
     ``x = (|dd11| + |dm| r_max s)/m11_min``, ``y = (|dm| r_max + |dd22| s)/m22_min``,
     ``s = max |sin theta|`` over ``theta`` in ``[delta_min - E, delta_max + E]`` and
     ``|(L - I) p_d''| <= max |m_jj_hat/m_jj - 1| a_max``.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant parameters.
+    envelope : Envelope
+        Operating envelope.
+    tube : TubeSummary
+        Extremes of the reference tube.
+    current : float
+        Largest current speed ``c_max`` (m/s).
+    heading : float
+        Bound ``E`` of the heading error (rad).
+    lam : float
+        Centre lambda (1/s).
+    sigma : float
+        Bound of ``||G - lam I||`` over box and envelope (1/s).
     """
     r_max = abs_range(*envelope.r)[1]
     u_max, v_max = abs_range(*envelope.u)[1], abs_range(*envelope.v)[1]
@@ -322,6 +418,23 @@ def heading_perturbation(
     ``K = (m33_hat k1psi + dM S^2 g)/m33``, ``C = (m33_hat k2psi + d33(r))/m33`` and
     ``|h| <= |m33_hat/m33 - 1| psi_d''_max + |dd33| psi_d'_max/m33_min
     + |dM| (S_max^2 |sin 2 delta|_max / 2 + S_max W + W^2/2)/m33_min``.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The plant parameters.
+    envelope : Envelope
+        Operating envelope (its ``r`` range).
+    tube : TubeSummary
+        Extremes of the reference tube.
+    k_psi : tuple of float
+        Heading gains ``(k1psi, k2psi)`` (1/s^2, 1/s).
+    current : float
+        Largest current speed (m/s).
+    velocity : float
+        Bound of the velocity error ``||e'||`` (m/s).
+    heading : float
+        Bound ``E`` of the heading error (rad).
     """
     m33_hat = box.nominal.m33
     m33 = box.interval("m33")

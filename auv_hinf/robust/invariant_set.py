@@ -164,7 +164,22 @@ def _position_sdp(
 def position_matrix(
     p: FloatArray, taus: tuple[float, float], a0: FloatArray, s1: FloatArray, s2: FloatArray, rate: float
 ) -> FloatArray:
-    """The ``(n + 3) x (n + 3)`` position LMI matrix (numpy), for the re-verification."""
+    """The ``(n + 3) x (n + 3)`` position LMI matrix (numpy), for the re-verification.
+
+    Parameters
+    ----------
+    p : ndarray, shape (n, n)
+        Candidate ``P``.
+    taus : tuple of float
+        S-procedure multipliers ``(tau1, tau2)``.
+    a0 : ndarray, shape (n, n)
+        Nominal loop matrix ``A0``.
+    s1, s2 : ndarray, shape (n, n)
+        Quadratic forms of the two uncertainty constraints: ``sigma^2 e_n e_n^T`` and
+        ``delta^2 c^T c`` (see :func:`position_ellipsoid`).
+    rate : float
+        Rate ``a`` (1/s).
+    """
     n = p.shape[0]
     pb = p @ _unit(n, n - 1)
     m = np.zeros((n + 3, n + 3))
@@ -207,8 +222,25 @@ def position_ellipsoid(
     Without integral action ``a0 = [[0, 1], [-l k1, lam - l alpha]]`` and ``c2 = [k1, alpha]``;
     with it the state is ``(z, e, e')``, ``a0 = [[0, 1, 0], [0, 0, 1], [-l ki, -l k1, lam - l alpha]]``,
     ``c2 = [ki, k1, alpha]`` and ``start_cap`` bounds ``P_zz`` (the start of the integrator,
-    see :func:`_position_sdp`). ``sigma`` bounds ``||D||`` (acting on ``e'``) and ``delta`` the
-    spread of the input gain ``L`` about its centre ``l``.
+    see :func:`_position_sdp`).
+
+    Parameters
+    ----------
+    a0 : ndarray, shape (n, n)
+        Nominal loop matrix (n = 2, or 3 with integral action).
+    sigma : float
+        Bound of ``||D||`` acting on ``e'`` (1/s).
+    delta : float
+        Spread of the input gain ``L`` about its centre ``l`` (dimensionless).
+    c2 : ndarray, shape (n,)
+        Feedback gains ``[k1, alpha]`` (1/s^2, 1/s), or ``[ki, k1, alpha]`` with integral action.
+    rate : float
+        Rate ``a`` (1/s).
+    weight : float
+        Weight of the squared velocity half-width against the squared position half-width in
+        the objective.
+    start_cap : float, optional
+        Upper bound of ``P_zz`` (with integral action only).
     """
     n = a0.shape[0]
     prob, par, p, (t1, t2) = _position_sdp(n, start_cap is not None)
@@ -249,7 +281,17 @@ def _heading_sdp() -> tuple[cp.Problem, dict[str, Any], cp.Variable]:
 
 
 def heading_matrix(q: FloatArray, a: FloatArray, rate: float) -> FloatArray:
-    """The 3x3 heading LMI matrix at one vertex (numpy), for the re-verification."""
+    """The 3x3 heading LMI matrix at one vertex (numpy), for the re-verification.
+
+    Parameters
+    ----------
+    q : ndarray, shape (2, 2)
+        Candidate ``Q``.
+    a : ndarray, shape (2, 2)
+        Vertex matrix ``[[0, 1], [-K, -C]]``.
+    rate : float
+        Rate ``a`` (1/s).
+    """
     m = np.zeros((3, 3))
     m[:2, :2] = a.T @ q + q @ a + rate * q
     m[:2, 2:] = q @ _B
@@ -259,14 +301,35 @@ def heading_matrix(q: FloatArray, a: FloatArray, rate: float) -> FloatArray:
 
 
 def heading_vertices(stiffness: tuple[float, float], damping: tuple[float, float]) -> list[FloatArray]:
-    """``A = [[0, 1], [-K, -C]]`` at the four corners of the ``(K, C)`` box."""
+    """``A = [[0, 1], [-K, -C]]`` at the four corners of the ``(K, C)`` box.
+
+    Parameters
+    ----------
+    stiffness : tuple of float
+        ``[min, max]`` of ``K`` (1/s^2).
+    damping : tuple of float
+        ``[min, max]`` of ``C`` (1/s).
+    """
     return [np.array([[0.0, 1.0], [-k, -c]]) for k in stiffness for c in damping]
 
 
 def heading_ellipsoid(
     stiffness: tuple[float, float], damping: tuple[float, float], rate: float, weight: float
 ) -> Ellipsoid | None:
-    """Invariant ellipsoid of the heading loop for every ``K(t), C(t)`` in the box; ``None`` if none."""
+    """Invariant ellipsoid of the heading loop for every ``K(t), C(t)`` in the box; ``None`` if none.
+
+    Parameters
+    ----------
+    stiffness : tuple of float
+        ``[min, max]`` of ``K`` (1/s^2).
+    damping : tuple of float
+        ``[min, max]`` of ``C`` (1/s).
+    rate : float
+        Rate ``a`` (1/s).
+    weight : float
+        Weight of the squared yaw-rate half-width against the squared heading half-width in
+        the objective.
+    """
     prob, par, q = _heading_sdp()
     verts = heading_vertices(stiffness, damping)
     for p_, a in zip(par["verts"], verts):
@@ -287,6 +350,15 @@ def best_ellipsoid(build: Callable[[float], Ellipsoid | None], rate_max: float, 
     Coarse search over :data:`RATE_GRID` times ``rate_max``, then golden-section refinement
     (in ``log a``) between the neighbours of the best rate. Any verified ellipsoid is sound;
     the search only makes it small.
+
+    Parameters
+    ----------
+    build : callable
+        ``build(rate)``: the verified ellipsoid at rate ``rate`` (1/s), or None.
+    rate_max : float
+        Largest rate searched (1/s).
+    weight : float
+        The ``weight`` of the score ``ext_1^2 + weight ext_2^2``.
     """
 
     def score(e: Ellipsoid | None) -> float:
@@ -372,6 +444,10 @@ class RobustCertificate:
     thrust : ThrustBounds or None
     reasons : tuple of str
         Why it does not cover (empty when it does).
+    method : str
+        The method, in words (:data:`METHOD`).
+    integral_bound : float or None
+        With integral action, bound of the integrator state ``|z|`` (m s); else None.
     """
 
     gains: Gains
@@ -401,7 +477,12 @@ class RobustCertificate:
 
         Without integral action ``e_c = -lam c/(l k1)`` (m) in the position error; with it the
         integrator absorbs the constant part, ``z* = -lam c/(l ki)`` (m s), and the position
-        error's equilibrium is zero. ``current`` is the inertial current (m/s), shape ``(..., 2)``.
+        error's equilibrium is zero.
+
+        Parameters
+        ----------
+        current : array_like, shape (..., 2)
+            The current (m/s, inertial frame).
         """
         gain = self.gains.ki if self.gains.integral else self.gains.k1
         out: FloatArray = -self.lam * np.asarray(current, dtype=float) / (self.gain_centre * gain)
@@ -412,10 +493,21 @@ class RobustCertificate:
     ) -> bool:
         """Every vehicle's start errors lie in both certified sets (False when there are none).
 
-        ``e (N, 2)`` m and ``de (N, 2)`` m/s are the position and ground-velocity errors,
-        ``epsi``, ``depsi`` ``(N,)`` the heading (rad) and yaw-rate (rad/s) errors, ``current``
-        the inertial current (m/s). The sets are ``V(e - e_c, e') <= d^2`` (position ellipsoid
-        on each axis pair) and ``W(e_psi, e_psi') <= h^2``.
+        The sets are ``V(e - e_c, e') <= d^2`` (position ellipsoid on each axis pair) and
+        ``W(e_psi, e_psi') <= h^2``.
+
+        Parameters
+        ----------
+        e : ndarray, shape (N, 2)
+            Position errors (m, inertial frame).
+        de : ndarray, shape (N, 2)
+            Ground-velocity errors (m/s, inertial frame).
+        epsi : ndarray, shape (N,)
+            Heading errors (rad).
+        depsi : ndarray, shape (N,)
+            Yaw-rate errors (rad/s).
+        current : array_like, shape (2,)
+            The current (m/s, inertial frame).
         """
         pos, head, hp, d = self.position_ellipsoid, self.heading_ellipsoid, self.heading, self.position_disturbance
         if pos is None or head is None or hp is None or d is None:

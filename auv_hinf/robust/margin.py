@@ -126,7 +126,17 @@ class RobustMargin:
 
 
 def certified_scale(check: Callable[[float], bool], cap: float, steps: int = LOWER_STEPS) -> float:
-    """Largest scale in ``[0, cap]`` found by bisection at which ``check`` holds (0 if none)."""
+    """Largest scale in ``[0, cap]`` found by bisection at which ``check`` holds (0 if none).
+
+    Parameters
+    ----------
+    check : callable
+        ``check(scale)``: whether the certificate holds at that box scale.
+    cap : float
+        Largest scale searched; with ``cap > 1`` scale 1 is checked first.
+    steps : int
+        Bisection steps.
+    """
     if check(cap):
         return cap
     lo, hi = 0.0, cap
@@ -160,6 +170,17 @@ def trim_max_real(law: VehicleLaw, plant: VehicleParams, speed: float, current: 
     """Largest real part (1/s) of the linearised loop at the straight-line trim, or ``None``.
 
     ``None`` when no trim is found (then nothing is exhibited).
+
+    Parameters
+    ----------
+    law : VehicleLaw
+        The law on the controller's model.
+    plant : VehicleParams
+        The (perturbed) plant.
+    speed : float
+        Speed of the straight-line reference along +x (m/s).
+    current : ndarray, shape (2,)
+        The current (m/s, inertial frame).
     """
     f = _error_rhs(law, plant, speed, current)
     w = law.width
@@ -208,8 +229,22 @@ def exhibited_scale(
 ) -> Witness | None:
     """Smallest scale with a destabilising corner plant and current (see the module docstring).
 
-    ``guess`` (e.g. :func:`linearised_scale`) only narrows the search: the candidates bisected
-    are those unstable at ``min(cap, 1.25 guess)`` (all those unstable at ``cap`` if none is).
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared box, scaled about the nominal.
+    gains : Gains
+        The law's gains.
+    speed : float
+        Speed of the straight-line reference (m/s), the tube's top speed.
+    current : float
+        Declared current speed (m/s), scaled with the box.
+    cap : float
+        Largest scale searched.
+    guess : float, optional
+        A scale (e.g. :func:`linearised_scale`) that only narrows the search: the candidates
+        bisected are those unstable at ``min(cap, 1.25 guess)`` (all those unstable at ``cap``
+        if none is).
     """
     law = _law(box, gains)
     dirs = _current_directions(current)
@@ -245,7 +280,21 @@ def exhibited_scale(
 
 
 def linearised_scale(box: ParameterBox, gains: Gains, speed: float, current: float, cap: float) -> float:
-    """Largest scale at which the linearised heading loop is stable for every plant and current."""
+    """Largest scale at which the linearised heading loop is stable for every plant and current.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared box, scaled about the nominal.
+    gains : Gains
+        The law's gains (the heading gains enter).
+    speed : float
+        Speed of the straight-line reference (m/s).
+    current : float
+        Declared current speed (m/s), scaled with the box.
+    cap : float
+        Largest scale searched.
+    """
     m33 = box.nominal.m33
 
     def stable(s: float) -> bool:
@@ -267,7 +316,21 @@ def robust_margin(
     current: float,
     covers: Callable[[float], bool],
 ) -> RobustMargin:
-    """Margins of ``gains``: ``covers(s)`` says whether the certificate covers the ``s``-scaled box."""
+    """Margins of ``gains``: ``covers(s)`` says whether the certificate covers the ``s``-scaled box.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared box.
+    gains : Gains
+        The law's gains.
+    speed : float
+        Speed of the straight-line reference for the exhibited scale (m/s).
+    current : float
+        Declared current speed (m/s).
+    covers : callable
+        ``covers(scale)``: whether the robust certificate covers the box (and current) scaled so.
+    """
     cap = min(SCALE_CAP, box.max_scale) if box.declared else SCALE_CAP
     lower = certified_scale(covers, cap)
     lin = linearised_scale(box, gains, speed, current, cap)
@@ -276,7 +339,19 @@ def robust_margin(
 
 
 def weakest_corner(box: ParameterBox, gains: Gains, speed: float, current: float) -> Witness | None:
-    """The corner plant and current (scale 1) whose linearised trim has the largest real part."""
+    """The corner plant and current (scale 1) whose linearised trim has the largest real part.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared box.
+    gains : Gains
+        The law's gains.
+    speed : float
+        Speed of the straight-line reference (m/s).
+    current : float
+        Declared current speed (m/s).
+    """
     law = _law(box, gains)
     dirs = _current_directions(current)
     best: Witness | None = None
@@ -323,6 +398,25 @@ def largest_certifiable(
     ``current_speed_alone`` (declared box) are the largest of each with the other unchanged.
     Each is ``None`` when it does not apply (nothing of that kind declared) or when not even
     zero certifies.
+
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared box.
+    envelope : Envelope
+        Operating envelope.
+    tube : ReferenceTube
+        Bounds of the desired motion.
+    gains : Gains
+        The design's gains.
+    current : float
+        Declared current speed (m/s).
+    act : Actuators
+        The force limits (N, N, N m).
+    redesign : {"bandwidth", "lmi"}, optional
+        The ``[design] synthesis`` of a robust design whose answers are confirmed by re-running it.
+    integral : bool
+        The design's ``[design] integral``.
     """
     out: dict[str, Any] = {"box_scale": None, "current_speed": None}
 

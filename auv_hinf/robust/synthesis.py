@@ -141,7 +141,27 @@ def synthesis_matrix(
     delta: float,
     rate: float,
 ) -> FloatArray:
-    """The 4x4 synthesis LMI matrix (numpy), for the re-verification."""
+    """The 4x4 synthesis LMI matrix (numpy), for the re-verification.
+
+    Parameters
+    ----------
+    q : ndarray, shape (2, 2)
+        ``Q = P^-1``.
+    y : ndarray, shape (1, 2)
+        ``Y = K Q``.
+    s : tuple of float
+        ``(s1, s2)``, the inverses of the S-procedure multipliers.
+    a_o : ndarray, shape (2, 2)
+        ``A_o = [[0, 1], [0, lam]]``.
+    gain : float
+        Centre ``l`` of the input gain (dimensionless).
+    sigma : float
+        Bound of ``||D||`` (1/s).
+    delta : float
+        Spread of the input gain about ``l`` (dimensionless).
+    rate : float
+        Decay rate ``a`` (1/s), > 0.
+    """
     bb = _B @ _B.T
     top = a_o @ q + q @ a_o.T - gain * (_B @ y + y.T @ _B.T) + rate * q + (s[0] + s[1] + 1.0 / rate) * bb
     m = np.zeros((4, 4))
@@ -239,8 +259,23 @@ def synthesise_robust(
 ) -> RobustDesign:
     """The synthesised robust design (see the module docstring).
 
-    With ``integral`` every candidate gets the integral gain of
-    :func:`~auv_hinf.law.gains.integral_gain` for its ``(alpha, k1)`` before it is certified.
+    Parameters
+    ----------
+    box : ParameterBox
+        The declared plant box.
+    envelope : Envelope
+        Operating envelope.
+    tube : ReferenceTube
+        Bounds of the desired motion.
+    current : float
+        Declared current speed (m/s), scaled with the box.
+    actuators : Actuators, optional
+        The force limits; the objective is then relative to them.
+    progress : bool
+        Show a progress bar over the candidates.
+    integral : bool
+        Give every candidate the integral gain of :func:`~auv_hinf.law.gains.integral_gain` for
+        its ``(alpha, k1)`` before it is certified.
 
     Returns
     -------

@@ -35,6 +35,19 @@ def fleet_derivative(
     """Closed-loop ``d/dt`` of states ``(..., N, law.width)``; ``current`` broadcasts to ``(..., N, 2)`` (m/s).
 
     With integral action the last two columns are the integrator ``z`` (m s), ``z' = p - p_d``.
+
+    Parameters
+    ----------
+    law : VehicleLaw
+        The law (its model, gains and actuators).
+    plant : VehicleParams
+        The plant, or array-valued coefficients (:meth:`~auv_hinf.models.vehicle.PlantBatch.coefficients`).
+    current : ndarray
+        Water current (m/s, inertial frame); broadcasts to ``(..., N, 2)``.
+    states : ndarray, shape (..., N, law.width)
+        ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s), then ``z`` with integral action.
+    motion : Motion
+        Desired motion, broadcastable to the same leading shape.
     """
     cs = (np.cos(states[..., 2]), np.sin(states[..., 2]))  # shared by the law and the plant
     p_dot = ground_velocity(states, current, cs)
@@ -46,13 +59,31 @@ def fleet_derivative(
 
 
 def initial_with_controller(law: VehicleLaw, initial: FloatArray) -> FloatArray:
-    """Plant states ``(..., N, 6)`` followed by the controller's: the integrator starts at zero."""
+    """Plant states ``(..., N, 6)`` followed by the controller's: the integrator starts at zero.
+
+    Parameters
+    ----------
+    law : VehicleLaw
+        The law; its ``width`` sets the number of controller states.
+    initial : ndarray, shape (..., N, 6)
+        Initial plant states.
+    """
     pad = np.zeros((*initial.shape[:-1], law.width - 6))
     return np.concatenate([initial, pad], axis=-1)
 
 
 def closed_loop_rhs(scn: Scenario, t: float, y: FloatArray) -> FloatArray:
-    """Time derivative of the flat state ``y`` (``law.width N``,) of one scenario at time ``t`` (s)."""
+    """Time derivative of the flat state ``y`` (``law.width N``,) of one scenario at time ``t`` (s).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario (law, plant, current, reference).
+    t : float
+        Time (s).
+    y : ndarray, shape (law.width N,)
+        Flat closed-loop state, vehicle after vehicle.
+    """
     s = np.asarray(y, dtype=float).reshape(-1, scn.law.width)
     return fleet_derivative(scn.law, scn.plant, np.asarray(scn.current), s, scn.reference.motion(t)).ravel()
 
@@ -66,6 +97,13 @@ def batch_system(
     ``d = w``, with ``w`` the law's :attr:`~auv_hinf.law.formation_law.VehicleLaw.width`; each
     vehicle with its own time (the law has no shared state, so the fleet is decoupled); needs a
     :class:`VehicleMotionSource`.
+
+    Parameters
+    ----------
+    batch : ScenarioBatch
+        The scenarios (their first gives the law and the envelope).
+    systems : {"scenario", "vehicle"}
+        What one system of the batch is.
     """
     n_s, n = batch.initial.shape[:2]
     law, ref, env = batch.scenarios[0].law, batch.source, batch.scenarios[0].envelope
@@ -107,6 +145,8 @@ def integrate_batch(
 
     Parameters
     ----------
+    batch : ScenarioBatch
+        The scenarios; they share the law, the horizon and the output times of the first.
     method : {"dopri", "rk45"}
         ``"dopri"``: vectorised Dormand-Prince with per-system step control
         (:func:`~auv_hinf.numerics.integrators.dopri5`); ``"rk45"``: scipy ``solve_ivp`` per
@@ -177,7 +217,15 @@ def integrate_batch(
 
 
 def first_exits(sol: BatchSolution, n_scenarios: int) -> list[float | None]:
-    """Each scenario's first envelope exit (s) over its systems, None if it stayed in."""
+    """Each scenario's first envelope exit (s) over its systems, None if it stayed in.
+
+    Parameters
+    ----------
+    sol : BatchSolution
+        Solution of :func:`integrate_batch`; its systems are grouped scenario by scenario.
+    n_scenarios : int
+        Number of scenarios ``S``.
+    """
     exits = sol.event_time.reshape(n_scenarios, -1)
     return [float(e[~np.isnan(e)].min()) if np.any(~np.isnan(e)) else None for e in exits]
 
@@ -198,6 +246,19 @@ def simulate_batch(
     A batch whose implementation is not the continuous, exact law runs sampled instead
     (:func:`~auv_hinf.implementation.sampled_loop.integrate_sampled`: the integration parameters
     do not apply, its scheme is its own).
+
+    Parameters
+    ----------
+    batch : ScenarioBatch
+        The scenarios.
+    method : {"dopri", "rk45"}
+        Integrator, as in :func:`integrate_batch`.
+    systems : {"scenario", "vehicle"}
+        What one independently step-controlled system is.
+    rtol, atol : float
+        Integration tolerances.
+    subdivisions : int
+        Sub-grid points per step on which the envelope margin is checked.
     """
     if not batch.scenarios[0].implementation.continuous:
         return _sampled_batch(batch)
@@ -237,7 +298,21 @@ def simulate(
     atol: float = ATOL,
     subdivisions: int = 8,
 ) -> SimulationResult:
-    """Integrate one scenario and compute its metrics; see :func:`simulate_batch`."""
+    """Integrate one scenario and compute its metrics; see :func:`simulate_batch`.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario.
+    method : {"dopri", "rk45"}
+        Integrator, as in :func:`integrate_batch`.
+    systems : {"scenario", "vehicle"}
+        What one independently step-controlled system is.
+    rtol, atol : float
+        Integration tolerances.
+    subdivisions : int
+        Sub-grid points per step on which the envelope margin is checked.
+    """
     return simulate_batch(
         ScenarioBatch((scn,)), method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions
     )[0]

@@ -40,8 +40,16 @@ DECAY_MEASURE_FLOOR = 1e-6
 def lyapunov_values(tr: TrackingErrors, p2: FloatArray, q: FloatArray) -> FloatArray:
     """``V = x^T (P2 kron I2) x + z^T Q z`` of every error sample, shape of ``tr.e_psi``.
 
-    ``x = (e, e')`` (m, m/s) and ``z = (e_psi, e_psi')`` (rad, rad/s); ``p2`` and ``q`` are the
-    (2, 2) decay matrices of the position and heading loops.
+    ``x = (e, e')`` (m, m/s) and ``z = (e_psi, e_psi')`` (rad, rad/s).
+
+    Parameters
+    ----------
+    tr : TrackingErrors
+        The error samples.
+    p2 : ndarray, shape (2, 2)
+        Decay matrix of the position loop (acting as ``P2 kron I2``).
+    q : ndarray, shape (2, 2)
+        Decay matrix of the heading loop.
     """
     v: FloatArray = pair_level(p2, tr.e, tr.e_dot, planar=True) + pair_level(q, tr.e_psi, tr.e_psi_dot)
     return v
@@ -50,9 +58,17 @@ def lyapunov_values(tr: TrackingErrors, p2: FloatArray, q: FloatArray) -> FloatA
 def decay_rates(v0: FloatArray, vk: FloatArray, tk: FloatArray) -> FloatArray:
     """Slowest vehicle's rate ``ln(sqrt(V(0) / V(t_k))) / t_k`` (1/s) over the last axis.
 
-    ``v0``, ``vk`` and ``tk`` are ``(..., N)``: the start value, the value at the measuring
-    sample and its time (s). Vehicles with ``sqrt(V(0)) <=`` :data:`DECAY_MEASURE_FLOOR` or
-    ``t_k <= 0`` are skipped; NaN where no vehicle is left.
+    Vehicles with ``sqrt(V(0)) <=`` :data:`DECAY_MEASURE_FLOOR` or ``t_k <= 0`` are skipped;
+    NaN where no vehicle is left.
+
+    Parameters
+    ----------
+    v0 : ndarray, shape (..., N)
+        Lyapunov value ``V(0)`` of each vehicle.
+    vk : ndarray, shape (..., N)
+        Its value at the measuring sample.
+    tk : ndarray, shape (..., N)
+        Time of the measuring sample (s).
     """
     ok = (np.sqrt(np.maximum(v0, 0.0)) > DECAY_MEASURE_FLOOR) & (tk > 0)
     with np.errstate(divide="ignore", invalid="ignore"):

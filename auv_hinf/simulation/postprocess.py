@@ -34,7 +34,17 @@ class TrackingErrors:
 
 
 def tracking_errors(states: FloatArray, p_dot: FloatArray, motion: Motion) -> TrackingErrors:
-    """:class:`TrackingErrors` of states ``(T, N, 6)`` with ground velocities ``(T, N, 2)``."""
+    """:class:`TrackingErrors` of states ``(T, N, 6)`` with ground velocities ``(T, N, 2)``.
+
+    Parameters
+    ----------
+    states : ndarray, shape (T, N, 6)
+        ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s); extra leading axes broadcast.
+    p_dot : ndarray, shape (T, N, 2)
+        Ground velocities (m/s, inertial frame).
+    motion : Motion
+        The desired motion at the same samples.
+    """
     e_psi = wrap_angle(states[..., 2] - motion.psi)
     return TrackingErrors(
         e=states[..., 0:2] - motion.p,
@@ -73,8 +83,17 @@ class FormationErrors:
 
 
 def in_path_frame(vectors: FloatArray, course: FloatArray | None) -> FloatArray:
-    """Inertial vectors ``(T, ..., 2)`` in the frame of the course ``chi (T,)`` (rad): ``[along, cross]``
-    = ``R(chi)^T v`` (m); unchanged when ``course`` is None (the inertial frame)."""
+    """Inertial vectors ``(T, ..., 2)`` in the frame of the course ``chi (T,)``: ``[along, cross] = R(chi)^T v``.
+
+    Unchanged when ``course`` is None (the inertial frame).
+
+    Parameters
+    ----------
+    vectors : ndarray, shape (T, ..., 2)
+        Inertial vectors (e.g. m).
+    course : ndarray, shape (T,), or None
+        Course angle ``chi`` of each sample (rad).
+    """
     if course is None:
         return vectors
     shape = (-1,) + (1,) * (vectors.ndim - 2)
@@ -90,6 +109,15 @@ def formation_errors(positions: FloatArray, target: FloatArray, kind: JacobiKind
 
     Leading axes broadcast: positions ``(T, S, N, 2)`` of ``S`` scenarios against one target
     ``(T, 1, N, 2)`` transform the target once (``desired_center`` then has the target's shape).
+
+    Parameters
+    ----------
+    positions : ndarray, shape (T, N, 2)
+        Vehicle positions (m, inertial frame).
+    target : ndarray, shape (T, N, 2)
+        Target positions (m, inertial frame).
+    kind : {"paper", "orthonormal"}
+        Row scaling of the Jacobi transform.
     """
     jac = jacobi_coordinates(positions, kind)
     jac_d = jacobi_coordinates(target, kind)

@@ -85,7 +85,13 @@ class SimulationResult:
     diverged_at: float | None = None
 
     def error_at(self, time: float) -> tuple[float, float]:
-        """Shape and centre error (m) at the sample nearest to ``time`` (s)."""
+        """Shape and centre error (m) at the sample nearest to ``time`` (s).
+
+        Parameters
+        ----------
+        time : float
+            Time (s).
+        """
         k = int(np.argmin(np.abs(self.t - time)))
         return float(self.shape_error[k]), float(self.center_error[k])
 
@@ -133,14 +139,34 @@ class SimulationResult:
         return {"frame": frame, "axes": axes, "final": [float(x) for x in final], "max": [float(x) for x in peak]}
 
     def save_npz(self, path: str | Path) -> None:
-        """Write time, states, forces and Jacobi coordinates to a ``.npz`` file."""
+        """Write time, states, forces and Jacobi coordinates to a ``.npz`` file.
+
+        Parameters
+        ----------
+        path : str or Path
+            The file (``np.savez_compressed`` appends ``.npz`` when missing).
+        """
         np.savez_compressed(path, t=self.t, states=self.states, forces=self.forces, jacobi=self.jacobi)
 
 
 def build_result(
     scn: Scenario, t: FloatArray, states: FloatArray, exit_time: float | None, n_steps: int
 ) -> SimulationResult:
-    """Post-process the samples ``states (T, N, 6)`` at times ``t (T,)`` in whole-array calls."""
+    """Post-process the samples ``states (T, N, 6)`` at times ``t (T,)`` in whole-array calls.
+
+    Parameters
+    ----------
+    scn : Scenario
+        The scenario the samples belong to.
+    t : ndarray, shape (T,)
+        Sample times (s).
+    states : ndarray, shape (T, N, 6)
+        ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s), or ``(T, N, 8)`` with the integrator.
+    exit_time : float or None
+        First envelope exit (s), None if the run stayed in.
+    n_steps : int
+        Accepted integration steps.
+    """
     return build_results((scn,), t, states[:, None], [exit_time], [n_steps])[0]
 
 
@@ -168,9 +194,23 @@ def build_results(
     chunk) are processed together in whole-array calls, with the desired motion evaluated
     once; the others one at a time. Each result holds views of the batched arrays.
 
-    ``commanded (T, S, N, 3)`` is the law's output before saturation at the samples (N, N, N m)
-    when it is not the law at the sampled state (a sampled implementation holds it), and
-    ``peaks (S, 3)`` its peak per channel when that was taken over more instants than ``t``.
+    Parameters
+    ----------
+    scns : sequence of Scenario
+        The ``S`` scenarios.
+    t : ndarray, shape (T,)
+        Sample times (s).
+    states : ndarray, shape (T, S, N, w)
+        ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s), then the integrator ``z`` (m s).
+    exit_times : sequence of float or None
+        Each scenario's first envelope exit (s), None if it stayed in.
+    n_steps : sequence of int
+        Each scenario's accepted integration steps.
+    commanded : ndarray, shape (T, S, N, 3), optional
+        The law's output before saturation at the samples (N, N, N m, body frame), when it is not
+        the law at the sampled state (a sampled implementation holds it).
+    peaks : ndarray, shape (S, 3), optional
+        Its peak per channel (N, N, N m) when that was taken over more instants than ``t``.
     """
     first = scns[0]
     shared = all(

@@ -38,6 +38,11 @@ INTEGRATOR_COLUMNS = ("z_x", "z_y")
 def parquet_path(path: str | Path) -> Path:
     """``path`` as the Parquet file :func:`save_trajectories` writes.
 
+    Parameters
+    ----------
+    path : str or Path
+        The file name; must end in ``.parquet``.
+
     Raises
     ------
     ParameterError

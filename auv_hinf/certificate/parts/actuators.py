@@ -96,7 +96,13 @@ class ActuatorCheck:
 
 
 def peak_of(bounds: list[Peak]) -> Peak | None:
-    """Elementwise largest of thrust bounds (``None`` for none)."""
+    """Elementwise largest of thrust bounds (``None`` for none).
+
+    Parameters
+    ----------
+    bounds : list of Peak
+        Thrust bounds ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
+    """
     if not bounds:
         return None
     return (max(b[0] for b in bounds), max(b[1] for b in bounds), max(b[2] for b in bounds))
@@ -105,7 +111,14 @@ def peak_of(bounds: list[Peak]) -> Peak | None:
 def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = True) -> ActuatorCheck:
     """The actuator verdict of a design whose certificates bound the thrust by ``peaks``.
 
-    ``answers`` computes :func:`largest_certifiable` when the limits bind.
+    Parameters
+    ----------
+    point : DesignPoint
+        The design (its declared actuators, box and gains).
+    peaks : list of Peak
+        The certified thrust bounds (N, N, N m); their elementwise largest is checked.
+    answers : bool
+        Compute :func:`largest_certifiable` when the limits bind.
     """
     act = point.config.actuators
     peak = peak_of(peaks)

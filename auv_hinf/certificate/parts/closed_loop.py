@@ -36,6 +36,11 @@ FULL_CIRCLE_RTOL = 1e-12
 def mission_checks(point: DesignPoint) -> Gains:
     """The design's gains, after the checks every certificate needs: full heading range, mission in the envelope.
 
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point.
+
     Raises
     ------
     DesignError
@@ -74,6 +79,11 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
 
     With declared ``[actuators]`` the start region is shrunk until the certified thrust fits
     them (:func:`~auv_hinf.closed_loop.actuator_fit.within_actuators`).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configuration, gains, tube, lambda, sigma).
 
     Raises
     ------
@@ -116,8 +126,19 @@ def coverage_for(
 ) -> Coverage:
     """Coverage of the run of the design's configuration from ``initial`` in ``start`` mode (nominal plant).
 
-    With ``progress``, a search over blend times that runs longer than
-    :data:`~auv_hinf.closed_loop.coverage.PROGRESS_DELAY` shows a progress bar (stderr).
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point.
+    cert : ClosedLoopCertificate
+        Its closed-loop certificate.
+    initial : ndarray, shape (N, 6)
+        Initial states ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s).
+    start : {"shaped", "paper"}
+        The start mode.
+    progress : bool
+        A search over blend times that runs longer than
+        :data:`~auv_hinf.closed_loop.coverage.PROGRESS_DELAY` shows a progress bar (stderr).
     """
     cfg = point.config
     return cover_start(
@@ -231,6 +252,11 @@ def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
     covers it without a blend and the check costs one tube. A declared start far from the
     slots builds per-vehicle tubes for the candidate blend times it tries, with a progress bar
     when that takes more than a few seconds (:func:`coverage_for`).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point.
     """
     cfg = point.config
     reasons: list[Reason] = []

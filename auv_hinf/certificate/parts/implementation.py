@@ -49,7 +49,15 @@ BOX_NOT_COVERED = (
 
 
 def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> ImplementationProblem:
-    """The implementation problem of ``point`` along its mission, with the closed loop's sigma and c-range."""
+    """The implementation problem of ``point`` along its mission, with the closed loop's sigma and c-range.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configuration, gains, tube, lambda).
+    cert : ClosedLoopCertificate
+        Its closed-loop certificate (the region's sigma and heading damping range).
+    """
     cfg = point.config
     jerk, yaw_jerk = reference_jerks(point)
     return ImplementationProblem(
@@ -71,6 +79,11 @@ def reference_jerks(point: DesignPoint) -> tuple[float, float]:
 
     ``psi_d`` is the course ``chi`` in both frames (:func:`course_jerk_bound`). In the path frame
     ``p_i = q + R(chi) d_i`` adds ``|d_i| (|chi'''| + 3 |chi'| |chi''| + |chi'|^3)`` to the path's jerk.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its mission bounds, frame and offsets).
     """
     b = point.mission.bounds()
     yaw_jerk = course_jerk_bound(b.speed_min, b.accel_max, b.jerk_max, b.snap_max)
@@ -83,7 +96,13 @@ def reference_jerks(point: DesignPoint) -> tuple[float, float]:
 
 
 def start_errors(point: DesignPoint) -> ErrorBounds:
-    """Largest errors of the configured start against the raw mission at ``t = 0`` (m, m/s, rad, rad/s)."""
+    """Largest errors of the configured start against the raw mission at ``t = 0`` (m, m/s, rad, rad/s).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its configured initial states and fleet reference).
+    """
     e, de, epsi, depsi = initial_errors(point.fleet(), initial_states(point))
     return ErrorBounds(
         float(np.hypot(e[..., 0], e[..., 1]).max()),
@@ -237,6 +256,17 @@ def covered_sample_time(
     Coverage is not provably monotone in the sample time, so the answer is a bisection
     estimate of the boundary, and only its covered end is returned: that value itself is
     certified (the certificate at it covers).
+
+    Parameters
+    ----------
+    prob : ImplementationProblem
+        The configuration's implementation problem.
+    impl : Implementation
+        The declared implementation (its delay and noise are kept, its sample time varied).
+    start : ErrorBounds
+        Largest start errors (m, m/s, rad, rad/s).
+    limits : LagLimits
+        The loops' lag limits; the search runs up to ``limits.lag - impl.delay``.
     """
     hi = max(limits.lag - impl.delay, 0.0)
     if hi <= 0.0:
@@ -257,6 +287,17 @@ def implementation_sweep(
     """The implementation certificate of ``point`` at each sample time (s), delay (s) and noise fixed.
 
     For design studies (notebook ``08_implementation``): decay rate and bounds against the sample time.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point.
+    sample_times : list of float
+        Sample times (s).
+    delay : float
+        Delay (s), the same for each.
+    noise : MeasurementNoise, optional
+        Measurement-noise bounds (default exact measurements).
 
     Raises
     ------

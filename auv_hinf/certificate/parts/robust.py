@@ -141,6 +141,16 @@ def robust_summary(
     already; otherwise it is computed here. It supplies the envelope and heading-range checks
     and, with nothing declared, the whole summary: its decay rate, errors converging to zero,
     no margins.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (box, current, gains, tube, robust design).
+    margins : bool
+        Also compute the robust margins (how far the box and current can grow), when the
+        certificate is stable.
+    nominal : ClosedLoopCertificate, optional
+        The nominal closed-loop certificate, when the caller has it.
     """
     cfg = point.config
     box, current, declared = point.box, point.current, point.declared
@@ -221,11 +231,20 @@ def _in_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
 
 
 def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatArray) -> RobustRunCheck:
-    """Is the run of the design's configuration tracking ``fleet`` from ``initial`` covered by the robust certificate?
+    """Whether the robust certificate covers the run of the design's configuration tracking ``fleet`` from ``initial``.
 
     Covered when the plant is in the declared box, the current within the declared bound, the
     certificate (on the mission tube and, for a shaped start, the run's own tube) covers, and
     every vehicle starts inside both certified ellipsoids.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured plant, current, box, gains, tube).
+    fleet : FleetReference
+        The reference the run tracks (raw mission or shaped start).
+    initial : ndarray, shape (N, 6)
+        Initial states ``[x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s).
     """
     cfg = point.config
     box, bound = point.box, point.current

@@ -96,7 +96,21 @@ class Theorem1Result:
 
 
 def figures(result: Theorem1Result, method: str, k1: float, jacobi: str, gamma_configured: bool) -> dict[str, Any]:
-    """The part's top-level keys of ``certify --json``."""
+    """The part's top-level keys of ``certify --json``.
+
+    Parameters
+    ----------
+    result : Theorem1Result
+        The part's typed result.
+    method : str
+        The configured gain method.
+    k1 : float
+        Position gain (1/s^2).
+    jacobi : str
+        The Jacobi convention (``"paper"`` or ``"orthonormal"``).
+    gamma_configured : bool
+        Whether gamma was configured (else ``1/sigma``).
+    """
     paper = result.designs.get("paper")
     return {
         "lambda": result.lam,
@@ -135,13 +149,27 @@ def figures(result: Theorem1Result, method: str, k1: float, jacobi: str, gamma_c
 
 @dataclass(frozen=True)
 class Theorem1Part:
-    """The paper's certificate: small gain over the envelope (see the module docstring)."""
+    """The paper's certificate: small gain over the envelope (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        The registry name.
+    key : str or None
+        The JSON key of the figures (``None``: they are top-level keys).
+    """
 
     name: str = "theorem1"
     key: str | None = None
 
     def evaluate(self, ctx: PartContext) -> Verdict:
-        """Lambda, sigma, the three gains, the small-gain margin and the cross-checks of ``ctx.point``."""
+        """Lambda, sigma, the three gains, the small-gain margin and the cross-checks of ``ctx.point``.
+
+        Parameters
+        ----------
+        ctx : PartContext
+            The design point and the options (``jacobi_samples``, ``refine_jacobi``).
+        """
         point = ctx.point
         config = point.config
         lam, sig, gamma = point.lam, point.sigma, point.gamma
@@ -218,7 +246,15 @@ class Theorem1Part:
         return Verdict(self.name, not reasons, True, tuple(reasons), figs, detail=result)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
-        """Lambda, sigma, gamma, the gains of every method, the margin, the cross-check, the gains that run."""
+        """Lambda, sigma, gamma, the gains of every method, the margin, the cross-check, the gains that run.
+
+        Parameters
+        ----------
+        figures : Any
+            The part's figures (:func:`figures`).
+        record : mapping
+            The whole certificate record (its ``gains``).
+        """
         f = figures
 
         def fmt(x: float | None) -> str:
@@ -253,7 +289,13 @@ class Theorem1Part:
         return lines
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
-        """The paper's certificate says nothing about one run (the closed-loop part does)."""
+        """The paper's certificate says nothing about one run (the closed-loop part does).
+
+        Parameters
+        ----------
+        ctx : RunContext
+            The run (unused).
+        """
         return None
 
 
