@@ -11,13 +11,13 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import sys  # noqa: E402
-from dataclasses import replace  # noqa: E402
-from pathlib import Path  # noqa: E402
+import sys
+from dataclasses import replace
+from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from common import HORIZON, REPEATS, fleet, table, timed  # noqa: E402
+from common import HORIZON, REPEATS, fleet, table, timed
 
 from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.config.presets import preset_config

@@ -14,22 +14,22 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # run_all pins them; this keeps a direct run comparable
 os.environ.setdefault("MPLBACKEND", "Agg")  # before anything imports matplotlib
 
-import contextlib  # noqa: E402
-import io  # noqa: E402
-import json  # noqa: E402
-import math  # noqa: E402
-import re  # noqa: E402
-import shutil  # noqa: E402
-import statistics  # noqa: E402
-import subprocess  # noqa: E402
-import sys  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
-from pathlib import Path  # noqa: E402
-from typing import Any, cast  # noqa: E402
+import contextlib
+import io
+import json
+import math
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, cast
 
-from common import REPEATS, table  # noqa: E402
+from common import REPEATS, table
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.certificate.assembly import certify

@@ -14,22 +14,22 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 os.environ.setdefault("MPLBACKEND", "Agg")  # table 7 saves figures; set before anything imports matplotlib
 
-import datetime as dt  # noqa: E402
-import platform  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import datetime as dt
+import platform
+import sys
+import time
+from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import numpy as np  # noqa: E402
-import scipy  # noqa: E402
-from bench_design import gains, rhs_peers  # noqa: E402
-from bench_implementation import implementation_cost  # noqa: E402
-from bench_sampled import sampled_vs_continuous  # noqa: E402
-from bench_sim import campaign_throughput, end_to_end, time_vs_error  # noqa: E402
-from bench_synthesis import synthesis  # noqa: E402
-from bench_user_path import user_path  # noqa: E402
+import numpy as np
+import scipy
+from bench_design import gains, rhs_peers
+from bench_implementation import implementation_cost
+from bench_sampled import sampled_vs_continuous
+from bench_sim import campaign_throughput, end_to_end, time_vs_error
+from bench_synthesis import synthesis
+from bench_user_path import user_path
 
 
 def machine() -> str:
