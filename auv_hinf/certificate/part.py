@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from auv_hinf.certificate.design_point import DesignPoint
 
 
-#: A commanded-force bound ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
+# A commanded-force bound (|tau_x|, |tau_y|, |tau_psi|) (N, N, N m): a plain alias, left out of the API pages.
 Peak = tuple[float, float, float]
 
 
