@@ -195,6 +195,7 @@ def config_dicts(draw: st.DrawFn) -> dict[str, Any]:
     return data
 
 
+@pytest.mark.slow
 @given(data=config_dicts())
 @fuzz(30)
 def test_certify_fuzz(data: dict[str, Any], tmp_path_factory: pytest.TempPathFactory,
@@ -265,6 +266,7 @@ key_names = st.sampled_from(["preset", "n", "shape", "offsets", "polygon_radius"
 
 @given(data=st.dictionaries(table_names, st.one_of(st.dictionaries(key_names, toml_like, max_size=4), toml_like),
                             max_size=4))  # fmt: skip
+@pytest.mark.slow
 @fuzz(150)
 def test_config_from_dict_fuzz(data: dict[str, Any]) -> None:
     try:

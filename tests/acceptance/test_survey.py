@@ -41,6 +41,7 @@ def test_survey_certifies_and_a_simulation_is_covered_with_the_v_facing_forward_
     assert report["shape_errors"]["frame"] == "path" and report["shape_errors"]["axes"] == ["along", "cross"]
 
 
+@pytest.mark.slow
 def test_cli_keys_and_a_too_tight_turn_is_refused_before_simulating(tmp_path, capsys):
     assert main(["certify", "--preset", "remus-survey", "--json"]) == 0
     loop = json.loads(capsys.readouterr().out)["closed_loop"]

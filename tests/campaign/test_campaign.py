@@ -46,6 +46,7 @@ def test_sampled_starts_lie_in_the_certified_region() -> None:
     assert not np.array_equal(sample_run(setup, 4).errors[0], a.errors[0])
 
 
+@pytest.mark.slow
 def test_nominal_runs_stay_inside_their_certified_bounds(serial: pd.DataFrame) -> None:
     assert list(serial["run"]) == list(range(RUNS))
     assert serial["nominal"].all() and serial["stayed_in_envelope"].all()
@@ -204,6 +205,7 @@ def _record_bar(mp: pytest.MonkeyPatch) -> list[int]:
     return seen
 
 
+@pytest.mark.slow
 def test_dask_chunks_report_their_progress_as_events_and_the_bar_ends_at_the_runs() -> None:
     """On Dask every chunk logs fractions below one while it runs; the bar is monotone and ends at the runs.
 

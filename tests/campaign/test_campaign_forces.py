@@ -34,6 +34,7 @@ def campaign() -> Campaign:
     return run_campaign(preset_config("paper-triangle"), RUNS, seed=SEED, chunk=10, horizon=HORIZON)
 
 
+@pytest.mark.slow
 def test_every_certified_run_stays_within_its_certified_force(campaign: Campaign) -> None:
     t = campaign.table
     for col in NEW_COLUMNS:

@@ -163,6 +163,7 @@ def test_cli_remus100_limits_exit_1_naming_sway(remus_limited, tmp_path, capsys,
     assert "--uncertified" in err and not (tmp_path / "c" / "runs.parquet").exists()
 
 
+@pytest.mark.slow
 def test_simulate_reports_commanded_peak_before_saturation(capsys):
     code = main(["simulate", "--preset", "paper-triangle", "--horizon", "20", "--json"])
     run = json.loads(capsys.readouterr().out)

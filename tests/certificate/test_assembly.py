@@ -17,6 +17,7 @@ from auv_hinf.config.settings import load_config
 from auv_hinf.models.envelope import Envelope
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["paper-triangle", "paper-hexagon"])
 def test_presets_certify(name):
     c = certify(preset_config(name))
@@ -62,6 +63,7 @@ def test_minimal_with_gamma_equal_inverse_sigma_is_strictly_zero_margin():
     assert not c.certified and any("small-gain margin" in r for r in c.reasons)
 
 
+@pytest.mark.slow
 def test_cli_certify_json(capsys, tmp_path):
     code = main(["certify", "--preset", "paper-triangle", "--json", "--out", str(tmp_path)])
     data = json.loads(capsys.readouterr().out)

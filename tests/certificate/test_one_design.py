@@ -85,6 +85,7 @@ def test_certify_computes_the_design_once(monkeypatch):
     design_module._design.cache_clear()
 
 
+@pytest.mark.slow
 def test_theorem1_preset_runs_its_theorem1_gains():
     cert = certify(preset_config("paper-triangle"))
     point = design_point(preset_config("paper-triangle"))

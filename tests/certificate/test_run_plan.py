@@ -131,6 +131,7 @@ def test_measured_decay_rate_matches_its_definition(triangle, rng):
     assert run_report(plan, res)["measured_decay_rate"] == rate
 
 
+@pytest.mark.slow
 def test_measured_decay_is_none_for_the_shaped_start(triangle):
     cfg, cert = triangle
     plan = plan_run(cfg, horizon=30.0, samples=301)
@@ -162,6 +163,7 @@ def test_plant_mismatch_or_current_is_not_covered(triangle, rng, change, note):
     assert rep["certificate_covers_run"] is False and note in rep["coverage_reason"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("which", ["paper-triangle", "paper-hexagon", "remus-line"])
 def test_design_gains_agree_with_certify(which):
     if which == "remus-line":

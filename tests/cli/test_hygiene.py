@@ -32,6 +32,7 @@ def test_cli_prints_the_warning(tmp_path, capsys):
     assert "warning" in err and "reference.heading = 90 rad" in err
 
 
+@pytest.mark.slow
 def test_closed_pipe_exits_quietly():
     cmd = [sys.executable, "-c", "from auv_hinf.cli.main import main; raise SystemExit(main())", "schema"]
     with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:

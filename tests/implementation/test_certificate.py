@@ -142,6 +142,7 @@ def test_a_sample_time_above_the_exact_limit_is_not_covered(slow):
         pytest.param("remus-line", False, marks=pytest.mark.slow),
     ],
 )
+@pytest.mark.slow
 def test_presets_at_10_hz_with_delay_say_whether_covered(preset, exactly_stable):
     """At 10 Hz with a 0.1 s delay the verdict agrees with an exact reference, and it decides the certificate.
 
@@ -171,6 +172,7 @@ def test_presets_at_10_hz_with_delay_say_whether_covered(preset, exactly_stable)
         assert "exceeds the certified" in d["reasons"][0]
 
 
+@pytest.mark.slow
 def test_the_continuous_default_reports_limits_and_the_continuous_verdict():
     cert = certify(preset_config("paper-triangle"))
     d = cert.to_dict()["implementation"]

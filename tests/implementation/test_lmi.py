@@ -73,6 +73,7 @@ def _state_at(sols, s, x_now, t_now):
     return sols[0].sol(sols[0].t[0])
 
 
+@pytest.mark.slow
 def test_exact_limit_is_where_the_held_loop_starts_to_grow():
     a, k, b = -2.1, 0.5, 0.2605
     for delay in (0.0, 0.3):

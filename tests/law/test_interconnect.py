@@ -61,6 +61,7 @@ def region_start(c: Certificate, fraction: float = 0.6) -> np.ndarray:
     return np.column_stack([m.p + e, psi, u, v, r])
 
 
+@pytest.mark.slow
 def test_controller_is_static_with_fleet_signals(cert):
     ctrl = cert.controller()
     n = cert.config.n

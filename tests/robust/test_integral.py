@@ -198,6 +198,7 @@ def test_cli_reports_the_bound_with_and_without_integral_action(tmp_path: Path, 
     assert loaded.gains is not None and loaded.gains.ki == out["gains"]["ki"]
 
 
+@pytest.mark.slow
 def test_the_python_control_closed_loop_with_the_integrator_matches_simulate() -> None:
     """fleet_closed_loop carries the integrator as controller states; its response is simulate's."""
     import control as ct

@@ -44,6 +44,7 @@ def _batch(rng: np.random.Generator) -> tuple[ScenarioBatch, object]:
     return ScenarioBatch(tuple(scns)), cert
 
 
+@pytest.mark.slow
 def test_streamed_metrics_equal_the_stored_sample_post_processing(rng: np.random.Generator) -> None:
     batch, cert = _batch(rng)
     sink = ErrorSink(
