@@ -129,7 +129,7 @@ class VehicleLink:
     Parameters
     ----------
     url : str
-        pymavlink connection string.
+        The pymavlink connection string.
     index : int
         The vehicle's index in the fleet (0-based), for messages.
     mapping : ArduSubMapping
@@ -372,7 +372,15 @@ class VehicleLink:
         self._send(self.conn.mav.timesync_encode(0, ts1))
 
     def request_streams(self) -> None:
-        """MAV_CMD_SET_MESSAGE_INTERVAL: navigation at :attr:`telemetry_rate`, SYSTEM_TIME at 1 Hz."""
+        """MAV_CMD_SET_MESSAGE_INTERVAL: navigation at :attr:`telemetry_rate`, SYSTEM_TIME at 1 Hz.
+
+        Also the older REQUEST_DATA_STREAM of the POSITION and EXTRA1 streams (ArduSub's
+        ``SRn_POSITION`` and ``SRn_EXTRA1``, which carry LOCAL_POSITION_NED and ATTITUDE), for
+        firmware and emulators that only know that one.
+        """
+        hz = max(1, round(self.telemetry_rate))
+        for stream in (mavlink.MAV_DATA_STREAM_POSITION, mavlink.MAV_DATA_STREAM_EXTRA1):
+            self._send(self.conn.mav.request_data_stream_encode(self.target, 1, stream, hz, 1))
         interval_us = 1e6 / self.telemetry_rate
         for msg_id, us in (
             (mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, interval_us),

@@ -19,7 +19,7 @@ assumption              violated when                                           
 ``mode``                the HEARTBEAT's custom_mode is not the mapping's (19, MANUAL)              -
 ``pilot_gain``          "PilotGain" differs from the mapping's gain by more than 0.01              -
 ``envelope_u/v/r``      a body velocity or yaw rate is outside the envelope by more than the       m/s, rad/s
-                        noise (and, for u and v, the current bound: they are measured over ground)
+                        noise (and, for u and v, the current bound: they are over ground)
 ``invariant_position``  ``|p - p_d|`` exceeds its certified bound plus the position noise          m
 ``invariant_velocity``  ``|p' - p_d'|`` exceeds its bound plus the velocity noise and the speed    m/s
                         times the heading noise

@@ -279,7 +279,18 @@ class StationReference:
         object.__setattr__(self, "headings", h)
 
     def motion(self, t: float | FloatArray) -> Motion:
-        """The held motion at times ``t`` (s; scalar or ``(S,)``): positions and headings, zero rates."""
+        """The held motion: positions and headings, zero rates.
+
+        Parameters
+        ----------
+        t : float or ndarray
+            Time(s) (s; scalar or ``(S,)``).
+
+        Returns
+        -------
+        Motion
+            Shapes ``(N, 2)`` / ``(N,)``, with a leading ``(S,)`` for an array of times.
+        """
         lead = np.shape(np.asarray(t, dtype=float))
         n = self.positions.shape[0]
         zero2, zero1 = np.zeros((*lead, n, 2)), np.zeros((*lead, n))
@@ -288,7 +299,18 @@ class StationReference:
         return Motion(p=p, v=zero2, a=zero2.copy(), psi=psi, r=zero1, r_dot=zero1.copy())
 
     def motion_per_vehicle(self, t: FloatArray) -> Motion:
-        """The held motion of vehicle ``i`` at ``t[..., i]`` (s): the same at every time."""
+        """The held motion of vehicle ``i`` at ``t[..., i]``: the same at every time.
+
+        Parameters
+        ----------
+        t : ndarray, shape (..., N)
+            One time per vehicle (s).
+
+        Returns
+        -------
+        Motion
+            Shapes ``(..., N, 2)`` / ``(..., N)``.
+        """
         return self.motion(np.asarray(t, dtype=float)[..., 0])
 
 

@@ -154,6 +154,7 @@ def test_four_vehicles_at_10hz_stay_inside_the_certified_bounds(four_at_10hz):
         "heading": np.abs(log.psi - log.ref_psi),
         "yaw_rate": np.abs(log.r - log.ref_r),
     }
+    print("largest errors " + ", ".join(f"{k} {e.max():.3g} of {bounds[k]:.3g}" for k, e in errors.items()))
     for name, e in errors.items():
         assert e.max() <= bounds[name], (name, e.max(), bounds[name])
     # the fleet moved along its mission: 60 s at 0.05 m/s
@@ -240,6 +241,10 @@ def test_latency_above_the_delay_trips_the_right_vehicle_and_holds(certificate, 
     log = pd.read_parquet(tmp_path / "lat.parquet")
     first = log.loc[log.violations.str.contains('"delay"'), "step"].min()
     assert (log[log.step >= first].law == "hold").all() and (log[log.step < first].law == "certified").all()
+    # its log, with the hold and every violation, replays to the same verdicts
+    code = main(["replay", str(tmp_path / "lat.parquet"), "--certificate", str(certificate[1]), "--json"])
+    again = json.loads(capsys.readouterr().out)
+    assert code == 1 and again["reproduced"] is True and again["violation_count"] == summary["violation_count"]
 
 
 def test_message_loss_trips_staleness_and_stops_with_neutral(certificate, faulty_fleet, capsys, tmp_path):
