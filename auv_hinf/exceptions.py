@@ -71,6 +71,14 @@ class SolverError(AuvHinfError, RuntimeError):
     """A numerical solver did not return a verified optimal answer."""
 
 
+class LinkError(AuvHinfError, RuntimeError):
+    """A vehicle link could not be opened, or a vehicle stopped sending what the loop needs."""
+
+
+class LogError(AuvHinfError, ValueError):
+    """A run log cannot be read or lacks a column; the message names the file and the column."""
+
+
 def require_finite(name: str, value: Any) -> float:
     """Return ``value`` as a float, or raise if it is not a finite real number.
 
@@ -130,6 +138,8 @@ __all__ = [
     "DesignError",
     "EnvelopeError",
     "FormationError",
+    "LinkError",
+    "LogError",
     "ParameterError",
     "SolverError",
     "require_finite",

@@ -29,7 +29,7 @@ from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
 from auv_hinf.law.gains import Gains
-from auv_hinf.law.interconnect import fleet_closed_loop, formation_controller
+from auv_hinf.law.interconnect import fleet_closed_loop, formation_controller, sampled_formation_controller
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.models.vehicle import VehicleParams
 
@@ -280,18 +280,31 @@ class Certificate:
         return VehicleLaw(params=cfg.vehicle, gains=self.gains, actuators=cfg.actuators)
 
     def controller(self, reference: MotionSource | None = None) -> ct.NonlinearIOSystem:
-        """The certified law along the raw mission as a static python-control ``nlsys``.
+        """The certified law along the raw mission as a python-control ``nlsys``.
 
         Inputs ``x[i], y[i], psi[i], u[i], v[i], r[i]``, outputs ``tau_x[i], tau_y[i],
-        tau_psi[i]`` (N, N, N m); see :func:`auv_hinf.law.interconnect.formation_controller`.
+        tau_psi[i]`` (N, N, N m). With a declared sample time it is the law as it runs: discrete
+        time, ``dt = sample_time``, the delay a shift of whole samples (a fractional delay is
+        rounded down; see :func:`auv_hinf.law.interconnect.sampled_formation_controller`).
+        Otherwise it is the continuous static law
+        (:func:`auv_hinf.law.interconnect.formation_controller`, ``dt = 0``), and a delay declared
+        with ``sample_time = 0`` is not in it.
 
         Parameters
         ----------
         reference : MotionSource, optional
             Overrides the raw mission reference (e.g. a shaped start from
             :func:`~auv_hinf.certificate.run_plan.plan_run`).
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+            The controller.
         """
-        return formation_controller(self.law(), reference or self._mission_fleet(), self.config.n)
+        ref, impl = reference or self.mission_fleet(), self.config.implementation
+        if impl.sampled:
+            return sampled_formation_controller(self.law(), ref, self.config.n, impl.sample_time, impl.delay)
+        return formation_controller(self.law(), ref, self.config.n)
 
     def closed_loop_system(
         self, reference: MotionSource | None = None, plant: VehicleParams | None = None
@@ -310,10 +323,10 @@ class Certificate:
             certificate covers).
         """
         cfg = self.config
-        ref = reference or self._mission_fleet()
+        ref = reference or self.mission_fleet()
         return fleet_closed_loop(self.law(), ref, cfg.vehicle if plant is None else plant, cfg.n)
 
-    def _mission_fleet(self) -> FleetReference:
+    def mission_fleet(self) -> FleetReference:
         """Raw mission reference: formation offsets (in their frame) around the mission path, no shaping."""
         cfg = self.config
         return FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)

@@ -13,8 +13,11 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
-#: Exit codes: success, a negative verdict, bad input.
+#: Exit codes: success, a negative verdict, bad input; and Ctrl-C outside a run's loop (128 + SIGINT).
 EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_INTERRUPTED = 130
+#: The runtime monitor's actions (``run --on-violation``).
+ACTIONS = ("warn", "hold", "stop")
 #: The command's name in messages.
 PROG = "auv-hinf"
 #: Largest ``design --n``: the full-size LMI cross-check grows as (2N)^2 (25 s at N = 20).
@@ -123,6 +126,17 @@ def vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
     return parse
 
 
+def per_vehicle(text: str) -> tuple[float, ...]:
+    """argparse type: one finite number >= 0, or a comma-separated list of them (one per vehicle)."""
+    try:
+        values = tuple(float(p) for p in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or comma-separated numbers, got {text!r}") from None
+    if not all(math.isfinite(v) and v >= 0.0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite numbers >= 0, got {text!r}")
+    return values
+
+
 def join_numbers(argv: Sequence[str]) -> list[str]:
     """Write ``--lam -1e-3`` as ``--lam=-1e-3``.
 
@@ -154,7 +168,12 @@ def join_numbers(argv: Sequence[str]) -> list[str]:
 
 
 __all__ = [
+    "ACTIONS",
     "DESIGN_MAX_N",
+    "EXIT_BAD_INPUT",
+    "EXIT_INTERRUPTED",
+    "EXIT_NEGATIVE",
+    "EXIT_OK",
     "NUMERIC_OPTIONS",
     "PROG",
     "BadInput",
@@ -164,5 +183,6 @@ __all__ = [
     "join_numbers",
     "number",
     "numeric",
+    "per_vehicle",
     "vector",
 ]

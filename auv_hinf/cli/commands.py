@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tempfile
 from collections.abc import Callable
@@ -299,6 +300,213 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     )
 
 
+def _deploy_source(args: argparse.Namespace) -> tuple[FormationConfig, Any, Any]:
+    """The configuration, the certificate of ``--certificate`` (else ``None``) and the ``[deploy]`` table."""
+    from auv_hinf.certificate.assembly import Certificate
+    from auv_hinf.config.messages import parse_config
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.config.schema import DeployTable
+    from auv_hinf.config.settings import read_config
+
+    if args.certificate is not None:
+        cert = Certificate.load(args.certificate)
+        return cert.config, cert, DeployTable()
+    if args.preset:
+        return preset_config(args.preset), None, DeployTable()
+    cfg, data = read_config(args.config)
+    for line in input_warnings(data):
+        print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
+    return cfg, None, parse_config(data).deploy
+
+
+def _certified(cfg: FormationConfig, cert: Any) -> Any:
+    """``cert``, or the certificate of ``cfg`` computed now."""
+    from auv_hinf.certificate.assembly import certify
+
+    return cert if cert is not None else certify(cfg)
+
+
+def _runtime_law(cert: Any, uncertified: bool) -> Any:
+    """The runtime law of ``cert``, refused (exit 1) when the certificate does not hold."""
+    from auv_hinf.deployment.runtime import RuntimeLaw
+
+    if not cert.certified and not uncertified:
+        raise Negative(
+            f"refusing to run a law its certificate does not cover: {'; '.join(cert.reasons)}; "
+            "rerun with --uncertified to run it anyway (every step is then reported as not covered)"
+        )
+    try:
+        return RuntimeLaw.from_certificate(cert)
+    except DesignError as exc:
+        raise Negative(f"no law to run: {exc}") from None
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from auv_hinf.deployment.ardusub import ArduSubMapping
+    from auv_hinf.deployment.link import VehicleLink
+    from auv_hinf.deployment.monitor import MonitorConfig
+    from auv_hinf.deployment.runner import run
+
+    cfg, cert, deploy = _deploy_source(args)
+    urls = list(args.connect or deploy.connect or [])
+    n = cfg.n
+    if len(urls) != n:
+        raise BadInput(f"give one --connect URL per vehicle ({n}; or [deploy] connect), got {len(urls)}")
+    _prepare_out(args.log.parent)
+    cert = _certified(cfg, cert)
+    law = _runtime_law(cert, args.uncertified)
+    if law.sample_time <= 0.0:
+        raise BadInput(
+            "the certificate declares no sample time ([implementation] sample_time = 0): a fixed-rate loop is "
+            "not what it certifies; declare the sample time and delay the vehicles run at, and certify them"
+        )
+    latency = deploy.command_latency if args.command_latency is None else args.command_latency
+    gain = deploy.pilot_gain if args.gain is None else args.gain
+    law = replace(law, assumptions=replace(law.assumptions, command_latency=latency, pilot_gain=gain))
+    if not law.assumptions.varying_delay:
+        print(
+            f"{PROG}: warning: the certificate assumes every measurement exactly {law.delay:g} s old; a real link "
+            "gives any age up to it: certify with [implementation] varying_delay = true",
+            file=sys.stderr,
+        )
+    config = MonitorConfig.parse(args.on_violation or deploy.on_violation, args.action)
+    mapping = ArduSubMapping(gain=gain, voltage=deploy.voltage if args.voltage is None else args.voltage)
+    rate = deploy.telemetry_rate if args.rate is None else args.rate
+    links = []
+    try:
+        links = [VehicleLink(u, i, mapping, telemetry_rate=rate) for i, u in enumerate(urls)]
+        summary = run(
+            law,
+            links,
+            args.duration,
+            args.log,
+            config=config,
+            wait_timeout=args.wait,
+            metadata={"config": cfg.name},
+            realtime=args.realtime,
+        )
+    finally:
+        for link in links:
+            link.close()
+    if args.json:
+        print(json.dumps(json_safe(summary)))
+    else:
+        for key in ("steps", "covered", "violation_count", "max_age", "max_period", "mean_period", "std_period", "log"):
+            print(f"{key:>16}: {_short(summary[key])}")
+    steps, count = summary["steps"], summary["violation_count"]
+    covered = "yes" if summary["covered"] else f"no ({count} violation(s))"
+    if summary["stopped_by"] in ("sigint", "stop_event"):
+        print(
+            f"{PROG}: interrupted after {steps} steps: neutral sent to {n} vehicle(s); covered so far: {covered}",
+            file=sys.stderr,
+        )
+        return EXIT_OK
+    if summary["covered"]:
+        return EXIT_OK
+    first = summary["violations"][0] if summary["violations"] else None
+    what = (
+        ""
+        if first is None
+        else f"; first: {first['assumption']} on vehicle {first['vehicle']} at t = {first['time']:.3g} s"
+    )
+    if summary["stopped_by"] == "monitor":
+        return _verdict(False, f"stopped by the monitor after {steps} steps, neutral sent to {n} vehicle(s){what}")
+    if count == 0:
+        return _verdict(False, "the certificate does not hold (--uncertified)")
+    return _verdict(False, f"the certificate did not cover the run: {count} violation(s){what}")
+
+
+def _cmd_fleet_sim(args: argparse.Namespace) -> int:
+    import signal
+
+    from auv_hinf.deployment.ardusub import ArduSubMapping
+    from auv_hinf.deployment.loopback import LinkFaults, LoopbackFleet, loopback_starts
+
+    cfg = _deploy_source(args)[0]
+    n = len(args.listen)
+    if n != cfg.n:
+        raise BadInput(f"give one --listen URL per vehicle of {cfg.name!r} ({cfg.n}), got {n}")
+
+    def each(values: tuple[float, ...], flag: str) -> tuple[float, ...]:
+        if len(values) not in (1, n):
+            raise BadInput(f"{flag} takes one value or one per vehicle ({n}), got {len(values)}")
+        return values * n if len(values) == 1 else values
+
+    lat, jit, loss, closs = (
+        each(args.latency, "--latency"),
+        each(args.jitter, "--jitter"),
+        each(args.loss, "--loss"),
+        each(args.command_loss, "--command-loss"),
+    )
+    faults = [LinkFaults(lat[i], jit[i], loss[i], closs[i]) for i in range(n)]
+    fleet = LoopbackFleet(
+        cfg.vehicle,
+        loopback_starts(cfg, args.current),
+        list(args.listen),
+        ArduSubMapping(gain=args.gain, voltage=args.voltage),
+        faults,
+        current=args.current,
+        rate=args.rate,
+        odometry=args.odometry,
+        timesync=not args.no_timesync,
+        mode=args.mode,
+        sysid=args.sysid,
+        seed=args.seed,
+    )
+
+    if args.realtime:
+        from auv_hinf.deployment.priority import raise_priority
+
+        raise_priority()
+
+    def _stop(signum: int, frame: Any) -> None:
+        fleet.stopped = True
+
+    signal.signal(signal.SIGINT, _stop)
+    signal.signal(signal.SIGTERM, _stop)
+    print(json.dumps({"ready": True, "endpoints": fleet.endpoints, "pid": os.getpid()}), flush=True)
+    try:
+        fleet.run(args.duration)
+    finally:
+        fleet.close()
+        if args.report is not None:
+            args.report.parent.mkdir(parents=True, exist_ok=True)
+            args.report.write_text(json.dumps(json_safe(fleet.report())), encoding="utf-8")
+    return EXIT_OK
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from auv_hinf.deployment.log import read_log
+    from auv_hinf.deployment.replay import replay
+
+    cfg, cert, _ = _deploy_source(args)
+    data = read_log(args.log)
+    law = _runtime_law(_certified(cfg, cert), uncertified=True)
+    result = replay(data, law)
+    summary = result.summary
+    if args.plot is not None:
+        from auv_hinf.figures.deployment import save_replay_figure
+
+        try:
+            summary["plot"] = str(save_replay_figure(result, law.assumptions, args.plot, title=str(args.log)))
+        except OSError as exc:
+            raise BadInput(f"--plot {str(args.plot)!r}: {exc.strerror or exc}") from None
+    if args.json:
+        print(json.dumps(json_safe(summary)))
+    else:
+        for key in ("steps", "covered", "violation_count", "reproduced", "max_age", "max_period", "unchecked"):
+            print(f"{key:>16}: {_short(summary[key])}")
+    if summary["assumptions_match"] is False:
+        print(f"{PROG}: warning: the log was run under other assumptions than this certificate's", file=sys.stderr)
+    if summary["reproduced"] is False:
+        return _verdict(False, f"the log's verdicts are not reproduced at {len(summary['mismatches'])} step(s)")
+    if not summary["covered"]:
+        count = summary["violation_count"]
+        why = f"{count} violation(s)" if count else "the certificate does not hold"
+        return _verdict(False, f"the certificate does not cover the logged run: {why}")
+    return EXIT_OK
+
+
 COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "design": _cmd_design,
     "certify": _cmd_certify,
@@ -306,6 +514,9 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "schema": _cmd_schema,
     "init": _cmd_init,
     "campaign": _cmd_campaign,
+    "run": _cmd_run,
+    "fleet-sim": _cmd_fleet_sim,
+    "replay": _cmd_replay,
 }
 
 

@@ -1,8 +1,9 @@
 """Command-line interface ``auv-hinf``.
 
-Exit codes: 0 success (consistent / certified / simulated / written); 1 a negative verdict
-(cross-check disagrees, not certified, no gain) or a solver or internal failure; 2 bad input
-(arguments, configuration, unusable ``--out``). Every failure is reported as one line per
+Exit codes: 0 success (consistent / certified / simulated / written / a run covered or stopped
+by Ctrl-C); 1 a negative verdict (cross-check disagrees, not certified, no gain, a run the
+certificate did not cover) or a solver, link or internal failure; 2 bad input (arguments,
+configuration, unusable ``--out``); 130 Ctrl-C outside a run's loop. Every failure is reported as one line per
 problem on stderr and never as a traceback, unless ``--debug`` is given, which re-raises.
 """
 
@@ -24,8 +25,10 @@ from auv_hinf._typing import GAIN_METHODS
 from auv_hinf._version import __version__
 from auv_hinf.campaign.setup import MAX_CHUNK
 from auv_hinf.cli.args import (
+    ACTIONS,
     DESIGN_MAX_N,
     EXIT_BAD_INPUT,
+    EXIT_INTERRUPTED,
     EXIT_NEGATIVE,
     EXIT_OK,
     NUMERIC_OPTIONS,
@@ -36,11 +39,12 @@ from auv_hinf.cli.args import (
     UsageError,
     join_numbers,
     numeric,
+    per_vehicle,
     vector,
 )
 from auv_hinf.cli.commands import COMMANDS
 from auv_hinf.config.presets import PRESETS
-from auv_hinf.exceptions import AuvHinfError, SolverError
+from auv_hinf.exceptions import AuvHinfError, LinkError, SolverError
 from auv_hinf.law.gains import DEFAULT_K1
 
 
@@ -122,7 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--preset", choices=PRESETS, default=PRESETS[0], help=f"starting point (default {PRESETS[0]})")
     i.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     _campaign_parser(sub)
-    for p in (d, *(sub.choices[k] for k in ("certify", "simulate", "schema", "init", "campaign"))):
+    _deployment_parsers(sub)
+    commands = ("certify", "simulate", "schema", "init", "campaign", "run", "fleet-sim", "replay")
+    for p in (d, *(sub.choices[k] for k in commands)):
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     return parser
 
@@ -151,6 +157,74 @@ def _campaign_parser(sub: Any) -> None:
     )
 
 
+def _source(c: argparse.ArgumentParser, certificate: bool = True) -> None:
+    """``--preset`` or ``--config`` (or ``--certificate``), exactly one."""
+    src = c.add_mutually_exclusive_group(required=True)
+    src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
+    src.add_argument("--config", type=Path, help="TOML configuration file")
+    if certificate:
+        src.add_argument(
+            "--certificate", type=Path, help="a certificate file written by certify --out (not certified again)"
+        )
+
+
+def _deployment_parsers(sub: Any) -> None:
+    """The ``run``, ``fleet-sim`` and ``replay`` sub-commands' arguments."""
+    r = sub.add_parser(
+        "run", help="run the certified law on MAVLink vehicles under the runtime monitor", allow_abbrev=False
+    )
+    _source(r)
+    r.add_argument("--connect", action="append", metavar="URL", help="pymavlink connection string, one per vehicle")
+    numeric(r, "--duration", float, 1e-3, 1e7, required=True, help="length of the run in s")
+    r.add_argument(
+        "--log", type=Path, required=True, metavar="FILE.parquet", help="the run log (its folder is created)"
+    )
+    r.add_argument("--json", action="store_true", help="print the run's summary as one JSON object")
+    r.add_argument("--on-violation", choices=ACTIONS, help="action on every violated assumption (default: see docs)")
+    r.add_argument(
+        "--action", action="append", default=[], metavar="NAME=ACTION", help="action on one assumption, e.g. delay=hold"
+    )
+    numeric(r, "--gain", float, 0.1, 1.0, help="the vehicles' ArduSub pilot gain (default: [deploy] pilot_gain)")
+    numeric(r, "--voltage", float, 12.0, 20.0, help="thruster supply voltage in V (default: [deploy] voltage)")
+    numeric(r, "--rate", float, 0.1, 50.0, help="navigation rate to ask for, Hz (default: [deploy] telemetry_rate)")
+    numeric(r, "--command-latency", float, 0.0, 60.0, help="delay share of the command's way, s ([deploy])")
+    numeric(r, "--wait", float, 0.1, 600.0, default=5.0, help="how long to wait for every vehicle, s (default 5)")
+    r.add_argument("--uncertified", action="store_true", help="run even when the certificate does not hold")
+    r.add_argument("--realtime", action="store_true", help="ask for real-time scheduling of the loop (Linux)")
+
+    f = sub.add_parser("fleet-sim", help="simulated vehicles speaking ArduSub's MAVLink on UDP", allow_abbrev=False)
+    _source(f)
+    f.add_argument("--listen", action="append", required=True, metavar="URL", help="one connection string per vehicle")
+    for flag, text in (
+        ("--latency", "one-way latency each way, s"),
+        ("--jitter", "uniform extra latency, s"),
+        ("--loss", "navigation message loss probability"),
+        ("--command-loss", "MANUAL_CONTROL loss probability"),
+    ):
+        f.add_argument(
+            flag, type=per_vehicle, default=(0.0,), metavar="X[,X...]", help=f"{text}: one, or one per vehicle"
+        )
+    NUMERIC_OPTIONS.update(("--current", "--latency", "--jitter", "--loss", "--command-loss"))
+    f.add_argument("--current", type=vector(2, "m/s"), default=(0.0, 0.0), metavar="CX,CY", help="current, m/s")
+    numeric(f, "--rate", float, 0.1, 1000.0, default=50.0, help="navigation rate until asked otherwise, Hz")
+    f.add_argument("--odometry", action="store_true", help="also send ODOMETRY")
+    f.add_argument("--no-timesync", action="store_true", help="do not answer TIMESYNC")
+    numeric(f, "--gain", float, 0.1, 1.0, default=1.0, help="the vehicles' pilot gain (default 1)")
+    numeric(f, "--voltage", float, 12.0, 20.0, default=16.0, help="thruster supply voltage, V (default 16)")
+    numeric(f, "--mode", int, 0, 255, default=19, help="custom_mode reported (default 19, MANUAL)")
+    numeric(f, "--sysid", int, 1, 250, default=1, help="system id of vehicle 0 (default 1)")
+    numeric(f, "--seed", int, 0, 2**63 - 1, default=0, help="seed of the jitter and the losses")
+    numeric(f, "--duration", float, 1e-3, 1e7, help="exit after this many s (default: on SIGINT or SIGTERM)")
+    f.add_argument("--report", type=Path, metavar="FILE.json", help="write what the vehicles received on exit")
+    f.add_argument("--realtime", action="store_true", help="ask for real-time scheduling of the vehicles (Linux)")
+
+    p = sub.add_parser("replay", help="re-evaluate a run log against the certificate's assumptions", allow_abbrev=False)
+    p.add_argument("log", type=Path, help="a Parquet log of run, or a CSV log in the documented format")
+    _source(p)
+    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    p.add_argument("--plot", type=Path, metavar="FILE.png", help="plot the errors and ages against the bounds")
+
+
 def _report(kind: str, exc: BaseException) -> None:
     """Print ``exc`` as one line per problem on stderr."""
     lines = [line for line in str(exc).splitlines() if line.strip()] or [type(exc).__name__]
@@ -166,6 +240,8 @@ def _classify(exc: BaseException) -> tuple[int, str]:
         return EXIT_NEGATIVE, "not certified"
     if isinstance(exc, SolverError) or type(exc).__name__ == "SolverError":
         return EXIT_NEGATIVE, "solver failure"
+    if isinstance(exc, LinkError):
+        return EXIT_NEGATIVE, "link failure"
     if isinstance(exc, AuvHinfError) and isinstance(exc, ValueError):
         return EXIT_BAD_INPUT, "error"  # parameter, formation, envelope, design or config input
     if isinstance(exc, OSError):
@@ -195,6 +271,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return EXIT_OK
         return COMMANDS[args.command](args)
+    except KeyboardInterrupt:  # Ctrl-C outside a run's loop (which handles it itself)
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:  # the reader went away (`auv-hinf ... | head`): stop quietly
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())

@@ -244,6 +244,39 @@ class DisturbanceTable(_Table):
     current_rate: float | None = _field(None, "bound on |d current / dt|", "m/s^2", ge=0.0)
 
 
+#: An action of the runtime monitor on a violated assumption (docs/deployment.md).
+ActionName = Literal["warn", "hold", "stop"]
+
+
+class DeployTable(_Table):
+    """``[deploy]``: running the certified law on MAVLink vehicles with ``auv-hinf run`` (its options override these).
+
+    See docs/deployment.md for the ArduSub settings the force mapping assumes.
+    """
+
+    connect: list[Annotated[str, Field(min_length=1)]] | None = _field(
+        None,
+        "one pymavlink connection string per vehicle, in the fleet's order (e.g. udpout:192.168.2.2:14550)",
+        examples=[["udpout:192.168.2.2:14550"]],
+    )
+    pilot_gain: float = _field(
+        1.0,
+        "the vehicles' ArduSub pilot gain, which the force mapping assumes (checked against PilotGain)",
+        ge=0.1,
+        le=1.0,
+    )
+    voltage: float = _field(16.0, "thruster supply voltage, for the T200 thrust curve", "V", ge=12.0, le=20.0)
+    telemetry_rate: float = _field(50.0, "navigation rate asked of every vehicle", "Hz", gt=0.0, le=50.0)
+    command_latency: float = _field(
+        0.0, "share of the [implementation] delay reserved for the command's way to the thrusters", "s", ge=0.0, le=60.0
+    )
+    on_violation: ActionName | None = _field(
+        None,
+        "action on every violated assumption (default: warn, and stop when a vehicle is missing, silent or "
+        "in another mode than MANUAL)",
+    )
+
+
 def schema_default(table: type[BaseModel], key: str) -> Any:
     """The default of ``key`` in ``table`` as the schema declares it: the one source of every default.
 
@@ -522,6 +555,9 @@ class ConfigFile(_Table):
         default_factory=ImplementationTable,
         description="the controller as it runs (default: continuous, undelayed, exact measurements)",
     )
+    deploy: DeployTable = Field(
+        default_factory=DeployTable, description="running the certified law on MAVLink vehicles (auv-hinf run)"
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -590,6 +626,7 @@ TABLES: dict[tuple[str, ...], type[BaseModel]] = {
     ("actuators",): ActuatorsTable,
     ("implementation",): ImplementationTable,
     ("implementation", "noise"): NoiseTable,
+    ("deploy",): DeployTable,
     **{("reference", k): m for k, m in REFERENCE_MODELS.items()},
 }
 
@@ -618,10 +655,12 @@ __all__ = [
     "PARAMETERS",
     "REFERENCE_MODELS",
     "TABLES",
+    "ActionName",
     "ActuatorPreset",
     "ActuatorsTable",
     "CircleReference",
     "ConfigFile",
+    "DeployTable",
     "DesignTable",
     "DisturbanceTable",
     "EnvelopeTable",

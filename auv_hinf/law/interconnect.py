@@ -20,6 +20,11 @@ run without current: ground velocity ``R(psi) [u, v]``, desired motion ``referen
 The default reference is the raw mission of the configuration (formation offsets around the
 mission path, no shaped start), which is what the certificate's start region refers to.
 
+:func:`sampled_formation_controller` is the law as it runs at a sample time: a discrete-time
+``nlsys`` (``dt = sample_time``) whose output at step ``k`` is the law on the measurement of step
+``k - m``, ``m`` the delay in whole samples, the convention of
+:mod:`auv_hinf.implementation.sampled_loop` for a delay that is a multiple of the sample time.
+
 The interconnection is a genuine ``control.interconnect`` of N + 1 subsystems rather than one
 hand-stacked ``nlsys``: it is the python-control round trip the certificate promises. Its cost
 is python-control's per-call overhead (the algebraic loop through the static controller is
@@ -29,12 +34,14 @@ N = 5; use :func:`~auv_hinf.simulation.engine.simulate` for long or large runs.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import control as ct
 import numpy as np
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.exceptions import ParameterError
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
 from auv_hinf.mission.fleet import Motion
 from auv_hinf.models.vehicle import VehicleParams, ground_velocity, vehicle_nlsys
@@ -47,6 +54,9 @@ FORCE_NAMES = ("tau_x", "tau_y", "tau_psi")
 INTEGRATOR_NAMES = ("z_x", "z_y")
 #: Name of the controller subsystem.
 CONTROLLER_NAME = "formation_controller"
+#: A delay within this many seconds of a whole number of samples is that number: ``k h`` and a
+#: declared delay differ by round-off only (the sampled loop snaps its instants likewise).
+WHOLE_SAMPLE_TOLERANCE = 1e-9
 
 
 def fleet_signals(names: tuple[str, ...], n: int) -> list[str]:
@@ -119,6 +129,93 @@ def formation_controller(
     return ct.nlsys(None, outfcn, **signals)
 
 
+def delay_samples(sample_time: float, delay: float) -> int:
+    """Whole samples ``m = floor(delay / sample_time)`` of a delay (up to :data:`WHOLE_SAMPLE_TOLERANCE`).
+
+    Parameters
+    ----------
+    sample_time : float
+        Sample time (s, > 0).
+    delay : float
+        Delay (s, >= 0).
+
+    Returns
+    -------
+    int
+        The number of whole samples the delay spans; a fractional rest is dropped.
+    """
+    if not sample_time > 0.0 or not delay >= 0.0:
+        raise ParameterError(f"need sample_time > 0 and delay >= 0 (s), got {sample_time!r}, {delay!r}")
+    return math.floor((delay + WHOLE_SAMPLE_TOLERANCE) / sample_time)
+
+
+def sampled_formation_controller(
+    law: VehicleLaw,
+    reference: MotionSource,
+    n: int,
+    sample_time: float,
+    delay: float = 0.0,
+    name: str = CONTROLLER_NAME,
+) -> ct.NonlinearIOSystem:
+    """The law as it runs at ``sample_time``: a discrete-time ``nlsys`` with ``dt = sample_time``.
+
+    At step ``k`` (time ``t_k = k h``) the output is the law of :func:`formation_controller` on the
+    input of step ``k - m`` against the desired motion at ``t_{k-m}``, with
+    ``m = floor(delay / h)`` (:func:`delay_samples`): the delay as a shift of whole samples. Its
+    states are the ``m`` inputs before the current one, oldest first; for ``k < m`` they are the
+    initial state, so ``X0 = m`` copies of the state at ``t = 0`` reproduces the sampled loop,
+    which measures ``max(t_k - d, 0)``, and the desired motion is taken at ``max(t_k - m h, 0)``.
+    The output is held by whatever samples the system (a zero-order hold in the sampled loop).
+
+    A fractional delay (``delay`` not a multiple of ``h``) is rounded down to whole samples: the
+    system is then the law delayed by ``m h < delay``, which the certificate covers when it declares
+    ``varying_delay`` (any delay in ``[0, delay]``) and does not reproduce a fixed fractional delay,
+    whose measurements fall between the samples; simulate that with the sampled loop
+    (:func:`auv_hinf.simulation.engine.simulate`).
+
+    Parameters
+    ----------
+    law : VehicleLaw
+        Gains, model and saturation; without integral action (it is certified continuous only).
+    reference : MotionSource
+        Desired motion of the ``n`` vehicles.
+    n : int
+        Number of vehicles.
+    sample_time : float
+        Sample time ``h`` (s, > 0).
+    delay : float
+        Lumped delay (s, >= 0).
+    name : str
+        System name.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        ``dt = h``; inputs ``x[i] .. r[i]``, outputs ``tau_x[i] .. tau_psi[i]`` (N, N, N m), states
+        ``x[i]@k-j .. r[i]@k-j`` for ``j = m .. 1`` (none without a delay of a whole sample).
+    """
+    if law.gains.integral:
+        raise ParameterError("integral action runs with the continuous law only: no sampled controller for it")
+    m = delay_samples(sample_time, delay)
+    h, width = float(sample_time), 6 * n
+
+    def outfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
+        measured = np.asarray(x[:width] if m else u, dtype=float).reshape(n, 6)
+        at = max(float(t) - m * h, 0.0)
+        out: FloatArray = law.forces(measured, ground_velocity(measured, np.zeros(2)), reference.motion(at)).ravel()
+        return out
+
+    def updfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
+        out: FloatArray = np.concatenate([np.asarray(x, dtype=float)[width:], np.asarray(u, dtype=float)])
+        return out
+
+    signals = {"inputs": fleet_signals(STATE_NAMES, n), "outputs": fleet_signals(FORCE_NAMES, n), "name": name}
+    if m == 0:
+        return ct.nlsys(None, outfcn, dt=h, **signals)
+    states = [f"{s}@k-{j}" for j in range(m, 0, -1) for s in fleet_signals(STATE_NAMES, n)]
+    return ct.nlsys(updfcn, outfcn, states=states, dt=h, **signals)
+
+
 def fleet_closed_loop(
     law: VehicleLaw, reference: MotionSource, plant: VehicleParams, n: int, name: str = "formation_closed_loop"
 ) -> ct.NonlinearIOSystem:
@@ -162,7 +259,10 @@ __all__ = [
     "FORCE_NAMES",
     "INTEGRATOR_NAMES",
     "STATE_NAMES",
+    "WHOLE_SAMPLE_TOLERANCE",
+    "delay_samples",
     "fleet_closed_loop",
     "fleet_signals",
     "formation_controller",
+    "sampled_formation_controller",
 ]

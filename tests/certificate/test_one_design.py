@@ -35,7 +35,7 @@ def test_robust_preset_runs_the_robust_gains_everywhere(remus, tmp_path, capsys)
     # exported: the python-control controller applies these gains
     assert remus.law().gains == g
     ctrl = remus.controller()
-    fleet = remus._mission_fleet()
+    fleet = remus.mission_fleet()
     m = fleet.motion(3.0)
     rng = np.random.default_rng(5)
     states = np.column_stack([m.p, m.psi, np.full(3, 1.5), np.zeros(3), np.zeros(3)]) + 0.01 * rng.standard_normal(

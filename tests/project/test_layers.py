@@ -2,7 +2,8 @@
 
 The order is the data flow of a command (docs/modules.md): numerical building blocks, the
 physical world, the mission, the law, actuation, the controller as it runs, simulation,
-design, the certificates, configuration, the assembled certificate, campaigns, figures, CLI.
+design, the certificates, configuration, the assembled certificate, deployment on vehicles,
+campaigns, figures, CLI.
 An import inside a function counts as much as one at the top of a module.
 """
 
@@ -28,6 +29,7 @@ LAYERS = (
     ("robust",),
     ("config",),
     ("certificate",),
+    ("deployment",),
     ("campaign",),
     ("figures",),
     ("cli",),

@@ -41,6 +41,7 @@ def test_walk_finds_the_subpackages():
         "config",
         "certificate",
         "certificate.parts",
+        "deployment",
         "campaign",
         "figures",
         "cli",
