@@ -127,7 +127,13 @@ def vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
 
 
 def per_vehicle(text: str) -> tuple[float, ...]:
-    """argparse type: one finite number >= 0, or a comma-separated list of them (one per vehicle)."""
+    """An argparse type: one finite number >= 0, or a comma-separated list of them (one per vehicle).
+
+    Parameters
+    ----------
+    text : str
+        The option's value as typed.
+    """
     try:
         values = tuple(float(p) for p in text.split(","))
     except ValueError:

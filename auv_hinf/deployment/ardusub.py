@@ -144,6 +144,13 @@ class ArduSubMapping:
     thrusters : ThrusterAllocation
         The horizontal thrusters, in ArduSub's motor order (default: the BlueROV2 Heavy's).
 
+    Attributes
+    ----------
+    curve : T200Curve
+        The thrust curve at ``voltage`` (derived).
+    matrix : ndarray, shape (3, 4)
+        The thrusters' allocation matrix: body force and moment per unit thrust (derived).
+
     Raises
     ------
     ParameterError

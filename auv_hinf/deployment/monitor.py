@@ -398,6 +398,13 @@ class Monitor:
         Number of vehicles.
     model : VehicleParams
         The vehicles' model, for the current estimator.
+
+    Attributes
+    ----------
+    current : CurrentEstimator
+        The running estimate of the current (derived).
+    current_speed : ndarray, shape (N,)
+        The latest estimated current speed per vehicle (m/s).
     """
 
     assumptions: Assumptions
