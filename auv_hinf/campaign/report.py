@@ -67,10 +67,13 @@ def passed(table: pd.DataFrame) -> pd.Series:
 def summarize(camp: Campaign) -> dict[str, Any]:
     """The ``summary.json`` object: counts, fractions, worst ratios, forces (N, N m), throughput (s, runs/s).
 
+    Of an interrupted campaign it summarises the runs that finished (``runs``) and says so
+    (``interrupted``, ``runs_requested``).
+
     Parameters
     ----------
     camp : Campaign
-        The finished campaign (its setup and run table).
+        The campaign, or the part of it that finished.
     """
     t, s = camp.table, camp.setup
     k = len(t)
@@ -96,6 +99,8 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "config": s.name,
         "n": s.n,
         "runs": k,
+        "runs_requested": k if camp.requested is None else camp.requested,
+        "interrupted": camp.interrupted,
         "seed": s.seed,
         "horizon": s.horizon,
         "chunk": camp.chunk,

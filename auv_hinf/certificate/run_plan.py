@@ -329,6 +329,7 @@ DEFINITIONS = {
     "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "
     "('final') and over the run ('max') (m)",
     "commanded_peak": "largest commanded force per channel before saturation (N, N, N m)",
+    "saved_until": "when Ctrl-C stopped simulate --save: the time of the last sample in the file (s)",
 }
 
 

@@ -12,6 +12,7 @@ import json
 import sys
 import tempfile
 from collections.abc import Callable
+from contextlib import ExitStack
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -20,18 +21,28 @@ from auv_hinf._typing import GAIN_METHODS
 from auv_hinf.actuation.limits import Actuators
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.certificate.run_plan import RunPlan
-from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative
+from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative, Stopped
 from auv_hinf.config.messages import input_warnings
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import AuvHinfError, DesignError, SolverError
+from auv_hinf.exceptions import AuvHinfError, ConfigError, DesignError, Interrupted, ParameterError, SolverError
 
 
 def _dump(obj: Any) -> str:
     return json.dumps(json_safe(obj), indent=2)
 
 
-def _prepare_out(path: Path | None) -> None:
-    """Create ``--out`` and check that it is writable, before any computation."""
+def _prepare_out(path: Path | None, option: str = "--out", given: Path | None = None) -> None:
+    """Create the directory ``path`` and check that it is writable, before any computation.
+
+    Parameters
+    ----------
+    path : Path or None
+        The directory (``None``: the option is not given).
+    option : str
+        The option that names it, for the message (``--out``, ``--save``).
+    given : Path, optional
+        What the user typed, when ``path`` is derived from it (``--save``'s folder).
+    """
     if path is None:
         return
     try:
@@ -39,7 +50,8 @@ def _prepare_out(path: Path | None) -> None:
         with tempfile.TemporaryFile(dir=path):
             pass
     except OSError as exc:
-        raise BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
+        what = "" if given is None else f"{str(given)!r}: its folder "
+        raise BadInput(f"{option} {what}{str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
 
 
 def _load(args: argparse.Namespace) -> Any:
@@ -48,7 +60,12 @@ def _load(args: argparse.Namespace) -> Any:
 
     if args.preset:
         return preset_config(args.preset)
-    cfg, data = read_config(args.config)
+    try:
+        cfg, data = read_config(args.config)
+    except ConfigError as exc:  # every line names the option and the file (the file's own lines name the key)
+        given = str(args.config)
+        lines = [line if line.startswith(f"{given}:") else f"{given}: {line}" for line in str(exc).splitlines()]
+        raise ConfigError("\n".join(f"--config {line}" for line in lines)) from None
     for line in input_warnings(data):
         print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
     return cfg
@@ -153,10 +170,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.save is not None:
         from auv_hinf.simulation.stream import parquet_path
 
-        _prepare_out(parquet_path(args.save).parent)  # before any computation, as --out
+        _prepare_out(parquet_path(args.save).parent, "--save", args.save)  # before any computation, as --out
     cfg = _with_actuators(_load(args), args.actuators)
     if args.current is not None:
-        cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
+        try:
+            cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
+        except ConfigError as exc:
+            raise BadInput(f"--current {','.join(f'{c:g}' for c in args.current)}: {exc}") from None
     if args.design:
         cfg = replace(cfg, robust=args.design == "robust")
     try:
@@ -164,13 +184,26 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     except DesignError as exc:
         raise Negative(f"no gain to simulate with: {exc}") from None
     _refuse_uncertified(plan, args.uncertified, "simulate")
-    result = simulate(plan.scenario)
+    try:
+        result = simulate(plan.scenario)
+    except KeyboardInterrupt:
+        raise Stopped("interrupted after 0 of 1 runs; no run finished, nothing written") from None
     summary = run_report(plan, result)
+    stopped = None
     if args.save is not None:
         from auv_hinf.simulation.stream import save_trajectories
 
         try:
             summary["saved_trajectories"] = str(save_trajectories(plan.scenario, args.save))
+        except Interrupted as stop:  # the run is done; its file holds the samples streamed so far
+            summary["saved_trajectories"] = str(args.save)
+            summary["saved_until"] = stop.partial
+            where = f"{args.out} and {args.save}" if args.out else str(args.save)
+            upto = "none saved" if stop.partial is None else f"saved up to t = {stop.partial:.4g} s"
+            stopped = (
+                f"interrupted after 1 of 1 runs; results so far in {where} (the run finished; its trajectories "
+                f"{upto} of {plan.scenario.horizon:.4g} s)"
+            )
         except OSError as exc:
             raise BadInput(f"--save {str(args.save)!r}: {exc.strerror or exc}") from None
     if args.out:
@@ -182,6 +215,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         thrust = rob.thrust if rob is not None and rob.covered else (None if cov is None else cov.thrust)
         bound = thrust.as_tuple() if plan.covered and thrust is not None else None
         save_simulation_plots(result, args.out, certified=bound)
+    if stopped is not None:
+        raise Stopped(stopped)
     if args.json:
         print(_dump(summary))
     else:
@@ -252,7 +287,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
 
     out: Path | None = args.out
     if out is not None and out.exists() and not args.force:
-        raise BadInput(f"{str(out)!r} exists; use --force to overwrite it")
+        raise BadInput(f"--out {str(out)!r} exists; use --force to overwrite it")
     text = annotated_toml(preset_config(args.preset))
     if out is None:
         print(text, end="")
@@ -261,7 +296,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(text, encoding="utf-8")
     except OSError as exc:
-        raise BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
+        raise BadInput(f"--out {str(out)!r} cannot be written: {exc.strerror or exc}") from None
     print(f"wrote {out} (from preset {args.preset}); check it with: {PROG} certify --config {out}")
     return EXIT_OK
 
@@ -278,13 +313,26 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     except DesignError as exc:
         raise Negative(f"no gain to run a campaign with: {exc}") from None
     _refuse_uncertified(plan, args.uncertified, "run a campaign of")
-    with dask_client(args.workers, args.scheduler) as client:
-        try:
-            camp = run_campaign(
-                cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
-            )
-        except DesignError as exc:
-            raise Negative(f"no certified start region to sample from: {exc}") from None
+    try:
+        with ExitStack() as stack:
+            try:
+                client = stack.enter_context(dask_client(args.workers, args.scheduler))
+            except ParameterError as exc:
+                raise BadInput(f"--scheduler {args.scheduler!r}: {exc}" if args.scheduler else str(exc)) from None
+            try:
+                camp = run_campaign(
+                    cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
+                )
+            except DesignError as exc:
+                raise Negative(f"no certified start region to sample from: {exc}") from None
+    except Interrupted as stop:  # keep the runs that finished: their rows and their summary
+        if stop.partial is None:
+            raise Stopped(
+                f"interrupted after 0 of {args.runs} runs; no run finished, nothing written (runs finish a chunk "
+                "at a time: a smaller --chunk keeps more of an interrupted campaign)"
+            ) from None
+        write_outputs(stop.partial, args.out)
+        raise Stopped(f"interrupted after {stop.done} of {args.runs} runs; results so far in {args.out}") from None
     summary = write_outputs(camp, args.out)
     if args.json:
         print(_dump(summary))
