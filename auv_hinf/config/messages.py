@@ -33,6 +33,7 @@ from auv_hinf.exceptions import AuvHinfError, ConfigError
 
 _TYPE_NAMES = {
     "float_type": "a number",
+    "bool_type": "true or false",
     "int_type": "an integer",
     "string_type": "a string",
     "list_type": "an array",
