@@ -87,15 +87,15 @@ def _cmd_design(args: argparse.Namespace) -> int:
         print(_dump(data))
         return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
     a = data["alpha"]
-    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g}, n = {report.n}")
-    print(f"gamma_min = {report.conditions['gamma_min']:.6g}  regime: {report.conditions['regime']} 1/sqrt2")
+    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g} s, n = {report.n} vehicles")
+    print(f"gamma_min = {report.conditions['gamma_min']:.6g} s  regime: gamma {report.conditions['regime']} 1/sqrt2 s")
     for key in ("paper", "stabilizing", "minimal", "care", "scipy_care", "lmi", "lmi_minimal"):
         val = a.get(key)
-        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g}"))
+        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g} 1/s"))
     for flag in report.paper_flags:
         print(f"  paper: {flag}")
     h = data["closed_loop_hinf"]
-    print(f"||T||_inf exact {h['exact']}, python-control {h['python_control']}, LMI {h['lmi']}")
+    print(f"||T||_inf exact {h['exact']} s, python-control {h['python_control']} s, LMI {h['lmi']} s")
     print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
     for c in report.checks:
         if not c.ok:
@@ -163,7 +163,7 @@ def _refuse_uncertified(plan: RunPlan, allowed: bool, what: str) -> None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from auv_hinf.certificate.run_plan import plan_run, run_report
+    from auv_hinf.certificate.run_plan import REPORT_UNITS, plan_run, run_report
     from auv_hinf.simulation.engine import simulate
 
     _prepare_out(args.out)
@@ -227,7 +227,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                     + ("" if val["control_period"] is None else f", seed {val['seed']}")
                 )
             elif key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
-                print(f"{key:>24}: {_short(val)}")
+                print(f"{key:>24}: {_short(val, REPORT_UNITS.get(key))}")
     if plan.certificate is None and not plan.covered:  # integral action: covered by the robust certificate
         return _verdict(False, "; ".join(plan.notes))
     if result.diverged_at is not None:
@@ -259,15 +259,26 @@ def _with_actuators(cfg: FormationConfig, limits: tuple[float, ...] | None) -> F
     return replace(cfg, actuators=Actuators(limits[0], limits[1], limits[2]))
 
 
-def _short(value: Any) -> str:
-    """A value printed with 4-6 significant digits (floats inside dicts and lists too)."""
-    if isinstance(value, float):
-        return f"{value:.6g}"
+def _short(value: Any, unit: Any = None) -> str:
+    """A value printed with 6 significant digits and its unit (floats inside dicts and lists too).
+
+    Parameters
+    ----------
+    value : Any
+        A number, a string, a bool, or a dict or list of them.
+    unit : str, dict, tuple or None
+        The unit of the number, or of every number of a list or dict; a dict of units by key; a
+        tuple of units by position (the forms of ``REPORT_UNITS`` in :mod:`auv_hinf.certificate.run_plan`).
+    """
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{k}: {_short(v)}" for k, v in value.items()) + "}"
+        by_key = unit if isinstance(unit, dict) else dict.fromkeys(value, unit)
+        return "{" + ", ".join(f"{k}: {_short(v, by_key.get(k))}" for k, v in value.items()) + "}"
     if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_short(v) for v in value) + "]"
-    return str(value)
+        by_place = unit if isinstance(unit, tuple) else (unit,) * len(value)
+        return "[" + ", ".join(_short(v, u) for v, u in zip(value, by_place)) + "]"
+    text = f"{value:.6g}" if isinstance(value, float) else str(value)
+    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return f"{text} {unit}" if numeric and isinstance(unit, str) else text
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
@@ -302,7 +313,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from auv_hinf.campaign.report import write_outputs
+    from auv_hinf.campaign.report import SUMMARY_UNITS, write_outputs
     from auv_hinf.campaign.runner import dask_client, run_campaign
     from auv_hinf.certificate.run_plan import plan_run
 
@@ -338,7 +349,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         print(_dump(summary))
     else:
         for key in ("config", "runs", "executor", "counts", "fraction_inside", "worst_ratio", "throughput", "notes"):
-            print(f"{key:>16}: {_short(summary[key])}")
+            print(f"{key:>16}: {_short(summary[key], SUMMARY_UNITS.get(key))}")
     c = summary["counts"]
     return _verdict(
         summary["ok"],
