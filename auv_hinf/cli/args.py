@@ -56,8 +56,9 @@ class Parser(argparse.ArgumentParser):
 def number(
     kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf, *, strict: bool = False
 ) -> Callable[[str], float]:
-    """An argparse type: a finite int or float in ``[lo, hi]`` (``(lo, hi)`` when ``strict``), negative and
-    scientific forms included.
+    """An argparse type: a finite int or float in ``[lo, hi]``, or ``(lo, hi)`` when ``strict``.
+
+    Negative and scientific forms are included (``-1e-3``).
 
     Parameters
     ----------

@@ -87,6 +87,7 @@ def _interrupt_after(calls: int, real):
     return fake
 
 
+@pytest.mark.slow
 def test_an_interrupted_campaign_is_the_chunks_that_finished(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(runner, "run_chunk", _interrupt_after(2, runner.run_chunk))
     with pytest.raises(Interrupted) as info:
@@ -130,6 +131,7 @@ def test_simulate_interrupted_while_saving_keeps_the_run_and_the_rows_so_far(
     assert summary["saved_until"] == pytest.approx(t_last) and (out / "trajectories.png").exists()
 
 
+@pytest.mark.slow
 def test_ctrl_c_before_any_run_is_one_line_and_exit_130(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -88,7 +88,11 @@ def path_cases(tmp: Path) -> dict[tuple[str, str], list[tuple[list[str], str]]]:
 #: Values that parse but that the command refuses, and the option the message names.
 REFUSED_BY_THE_COMMAND = [
     (["simulate", "--preset", "paper-triangle", "--current", "100,0"], "--current"),
-    (["campaign", "--preset", "paper-triangle", "--runs", "2", "--out", "o", "--scheduler", "no-port"], "--scheduler"),
+    pytest.param(  # after the campaign's design (about 1 s)
+        ["campaign", "--preset", "paper-triangle", "--runs", "2", "--out", "o", "--scheduler", "no-port"],
+        "--scheduler",
+        marks=pytest.mark.slow,
+    ),
     (["campaign", "--preset", "paper-triangle", "--runs", "2"], "--out"),  # required
     (["certify", "--preset", "paper-triangle", "--config", "x.toml"], "--config"),  # one or the other
     (["campaign", "--preset", "paper-triangle", "--runs", "2", "--workers", "2", "--scheduler", "x"], "--scheduler"),
