@@ -253,7 +253,7 @@ def _fleet_map(ax: Axes, ax_err: Axes, res: Any, t: FloatArray, xy: FloatArray) 
         cmap=DENSITY_COLOURS,
         linewidths=0,
     )
-    density = Patch(color="0.55", label=f"positions of all {n} vehicles (density)")
+    density = Patch(color=matplotlib.colormaps[DENSITY_COLOURS](0.6), label=f"positions of all {n} vehicles (density)")
     _bands(ax_err, t, np.maximum(err, NUMERICAL_FLOOR))
     for k, i in enumerate(worst):
         colour = VEHICLE_COLOURS[1 + k % (len(VEHICLE_COLOURS) - 1)]  # not the bands' colour

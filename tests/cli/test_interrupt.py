@@ -38,18 +38,18 @@ def test_sigint_to_a_real_campaign_keeps_the_finished_runs(tmp_path: Path) -> No
     cmd = [sys.executable, "-m", "auv_hinf.cli.main", "campaign", "--preset", "paper-triangle", "--runs", str(runs)]
     cmd += ["--chunk", "2", "--horizon", "20", "--out", str(out)]  # serial, one chunk of 2 runs every ~0.2 s
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    err: list[str] = []
+    chunks: list[bytes] = []  # raw: a read may split the bar's multi-byte characters
     assert proc.stderr is not None
-    reader = threading.Thread(target=lambda: err.extend(iter(lambda: proc.stderr.read1(4096).decode(), "")))
+    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")))
     reader.start()
     try:
         deadline = time.monotonic() + TIMEOUT
         while time.monotonic() < deadline:  # wait for the progress bar to pass 6 runs, then press Ctrl-C
-            counts = [int(k) for k in re.findall(rf"(\d+)/{runs} ", "".join(err))]
+            counts = [int(k) for k in re.findall(rf"(\d+)/{runs} ".encode(), b"".join(chunks))]
             if (counts and counts[-1] >= 6) or proc.poll() is not None:
                 break
             time.sleep(0.05)
-        assert proc.poll() is None, "".join(err)
+        assert proc.poll() is None, b"".join(chunks).decode(errors="replace")
         proc.send_signal(signal.SIGINT)
         code = proc.wait(timeout=TIMEOUT)
     finally:
@@ -60,7 +60,7 @@ def test_sigint_to_a_real_campaign_keeps_the_finished_runs(tmp_path: Path) -> No
         assert proc.stdout is not None
         proc.stdout.close()
         proc.stderr.close()
-    text = "".join(err)
+    text = b"".join(chunks).decode(errors="replace")
     assert code == EXIT_INTERRUPTED and "Traceback" not in text, text
     match = LINE.match(_last_line(text))
     assert match is not None, text

@@ -9,6 +9,7 @@ each. Each document is read by ``auv-hinf certify --config``, the way a user mee
 from __future__ import annotations
 
 import re
+import types
 import typing
 from collections.abc import Iterator
 from pathlib import Path
@@ -34,7 +35,7 @@ def _kind(annotation: Any) -> str:
     args = [a for a in typing.get_args(annotation) if a is not type(None)]
     if typing.get_origin(annotation) is typing.Annotated:
         return _kind(args[0])
-    if typing.get_origin(annotation) in (typing.Union, getattr(__import__("types"), "UnionType", None)):
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
         return _kind(args[0])
     if typing.get_origin(annotation) is typing.Literal or annotation is str:
         return "string"
