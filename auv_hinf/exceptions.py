@@ -79,6 +79,27 @@ class LogError(AuvHinfError, ValueError):
     """A run log cannot be read or lacks a column; the message names the file and the column."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) during long work, with the work finished before it kept.
+
+    A ``KeyboardInterrupt``, so a caller that does not look for it still stops; one that does
+    finds what was finished in :attr:`partial`.
+
+    Parameters
+    ----------
+    done, total : int
+        How many of the units of work (runs, samples) were finished, of how many asked.
+    partial : Any
+        What was finished (a partial campaign, the last time saved), or ``None`` when nothing was.
+    """
+
+    def __init__(self, done: int, total: int, partial: Any = None) -> None:
+        super().__init__(f"interrupted after {done} of {total}")
+        self.done = done
+        self.total = total
+        self.partial = partial
+
+
 def require_finite(name: str, value: Any) -> float:
     """Return ``value`` as a float, or raise if it is not a finite real number.
 
@@ -138,6 +159,7 @@ __all__ = [
     "DesignError",
     "EnvelopeError",
     "FormationError",
+    "Interrupted",
     "LinkError",
     "LogError",
     "ParameterError",

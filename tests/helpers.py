@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import importlib
+import inspect
+import json
+import pkgutil
 from dataclasses import replace
 from functools import cache
+from typing import Any
 
 import numpy as np
 
+import auv_hinf
 from auv_hinf.certificate.assembly import Certificate, certify
 from auv_hinf.config.presets import preset_config
 from auv_hinf.mission.fleet import FleetReference
-from auv_hinf.models.envelope import Envelope
 
 #: Four BlueROV2 Heavy on a gentle sine with Theorem 1 gains (gamma = 0.1, method minimal): a loop gentle
 #: enough to be sampled, and a mission that keeps it inside its envelope.
@@ -66,8 +71,41 @@ def preset_certificate(name: str) -> Certificate:
 
 @cache
 def failed_certificate() -> Certificate:
-    """Not certified: the paper's gain is infeasible on this envelope, so there is no closed loop."""
-    cfg = replace(
-        preset_config("paper-triangle"), envelope=Envelope(u=(0, 0.1), v=(-0.1, 0.1), r=(-20, 20)), method="paper"
-    )
+    """Not certified: the paper's gain is infeasible below the Theorem 1 bound of gamma, so there is no closed loop."""
+    cfg = replace(preset_config("paper-triangle"), gamma=0.2, method="paper")
     return certify(cfg)
+
+
+def toml_value(v: Any) -> str:
+    """``v`` as a TOML value (tables inline)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)  # nan, inf and -inf are TOML too
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(k)} = {toml_value(x)}" for k, x in v.items()) + "}"
+    return "[" + ", ".join(toml_value(x) for x in v) + "]"
+
+
+def to_toml(data: dict[str, Any]) -> str:
+    """A TOML document of ``data``: its top-level keys, then one ``[table]`` per dict (sub-tables inline)."""
+    lines = [f"{json.dumps(k)} = {toml_value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for key, table in data.items():
+        if isinstance(table, dict):
+            lines.append(f"[{json.dumps(key)}]")
+            lines += [f"{json.dumps(k)} = {toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"
+
+
+@cache
+def package_class_names() -> frozenset[str]:
+    """The names of every class defined in auv_hinf, found by importing each of its modules."""
+    names = set()
+    for info in pkgutil.walk_packages(auv_hinf.__path__, "auv_hinf."):
+        module = importlib.import_module(info.name)
+        for obj in vars(module).values():
+            if inspect.isclass(obj) and obj.__module__.startswith("auv_hinf"):
+                names.add(obj.__name__)
+    return frozenset(names)

@@ -339,7 +339,7 @@ def bluerov2_heavy_thrusters(
     Default limits: Blue Robotics' T200 figures at 16 V, 5.25 kgf forward and 4.10 kgf reverse
     (51.5 N, 40.2 N). They give channel limits of 129.7 N surge and sway and 34.6 N m yaw. The
     paper's own thruster curve is symmetric and peaks at :data:`BENZON2022_THRUST` (30.6 N);
-    ``forward = reverse = BENZON2022_THRUST`` gives 86.6 N, 86.6 N and 23.1 N m.
+    ``forward = reverse = BENZON2022_THRUST`` gives 86.5 N, 86.5 N and 23.1 N m.
 
     Parameters
     ----------

@@ -20,6 +20,7 @@ from auv_hinf.actuation.limits import CHANNELS
 from auv_hinf.campaign.runs import ERROR_KINDS, FORCE_COLUMNS
 from auv_hinf.campaign.setup import COEFFICIENTS, nominal_certificate
 from auv_hinf.certificate.document import json_safe
+from auv_hinf.mission.margins import ERROR_UNITS
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -27,7 +28,26 @@ if TYPE_CHECKING:
     from auv_hinf.campaign.runner import Campaign
 
 #: Units of the error kinds of :data:`~auv_hinf.campaign.runs.ERROR_KINDS`.
-UNITS = {"position": "m", "velocity": "m/s", "heading": "rad", "yaw_rate": "rad/s"}
+UNITS = ERROR_UNITS
+#: Units of the summary's numbers in the text of ``auv-hinf campaign`` (see ``REPORT_UNITS`` of
+#: :mod:`auv_hinf.certificate.run_plan` for the forms): counts of runs, the fraction of the covered runs inside
+#: their bounds, the worst measured / certified ratio, the throughput.
+SUMMARY_UNITS: dict[str, Any] = {
+    "runs": "runs",
+    "runs_requested": "runs",
+    "n": "vehicles",
+    "horizon": "s",
+    "counts": "runs",
+    "fraction_inside": "of the covered runs",
+    "worst_ratio": "of the certified bound",
+    "worst_tail_position_ratio": "of the certified bound",
+    "throughput": {
+        "runs_per_second": "runs/s",
+        "vehicle_seconds_per_wall_second": "vehicle-s/s",
+        "wall_time": "s",
+        "setup_time": "s",
+    },
+}
 #: Note added to the summary when some runs are outside the nominal certificate's scope.
 ROBUST_NOTE = (
     "runs with a perturbed plant or a current have inside_bounds = NA: the robust certificate "
@@ -67,10 +87,13 @@ def passed(table: pd.DataFrame) -> pd.Series:
 def summarize(camp: Campaign) -> dict[str, Any]:
     """The ``summary.json`` object: counts, fractions, worst ratios, forces (N, N m), throughput (s, runs/s).
 
+    Of an interrupted campaign it summarises the runs that finished (``runs``) and says so
+    (``interrupted``, ``runs_requested``).
+
     Parameters
     ----------
     camp : Campaign
-        The finished campaign (its setup and run table).
+        The campaign, or the part of it that finished.
     """
     t, s = camp.table, camp.setup
     k = len(t)
@@ -96,6 +119,8 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "config": s.name,
         "n": s.n,
         "runs": k,
+        "runs_requested": k if camp.requested is None else camp.requested,
+        "interrupted": camp.interrupted,
         "seed": s.seed,
         "horizon": s.horizon,
         "chunk": camp.chunk,
@@ -274,6 +299,7 @@ def write_outputs(camp: Campaign, out: Path) -> dict[str, Any]:
 
 __all__ = [
     "ROBUST_NOTE",
+    "SUMMARY_UNITS",
     "UNITS",
     "certified_bounds",
     "certified_thrust",

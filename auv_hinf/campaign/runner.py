@@ -30,6 +30,7 @@ the certificate that applies to it.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 import uuid
@@ -45,7 +46,7 @@ from auv_hinf.campaign.runs import run_chunk
 from auv_hinf.campaign.setup import CampaignSetup, chunks, default_chunk, prepare
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import ParameterError
+from auv_hinf.exceptions import Interrupted, ParameterError
 
 
 @dataclass(frozen=True)
@@ -64,6 +65,8 @@ class Campaign:
         ``"serial"`` or the Dask scheduler address.
     setup_time, wall_time : float
         Design + certification time and the time of the runs (s, wall clock).
+    requested : int or None
+        The runs asked for, when fewer finished (an interrupted campaign); ``None``: all of them.
     """
 
     table: pd.DataFrame
@@ -73,6 +76,12 @@ class Campaign:
     executor: str
     setup_time: float
     wall_time: float
+    requested: int | None = None
+
+    @property
+    def interrupted(self) -> bool:
+        """Fewer runs finished than were asked for (Ctrl-C)."""
+        return self.requested is not None and len(self.table) < self.requested
 
 
 def run_campaign(
@@ -110,6 +119,9 @@ def run_campaign(
         For bad ``runs``, ``chunk``, ``seed`` or ``horizon``.
     DesignError
         If the design has no closed-loop certificate.
+    Interrupted
+        On Ctrl-C (SIGINT) during the runs: its ``partial`` is the :class:`Campaign` of the chunks
+        that finished (``requested`` set), or ``None`` when none did.
     """
     for name, val in (("runs", runs), ("chunk", chunk)):
         if val is not None and (isinstance(val, bool) or not isinstance(val, (int, np.integer)) or val < 1):
@@ -118,13 +130,18 @@ def run_campaign(
     setup, cert = prepare(cfg, seed=seed, horizon=horizon)
     size = int(chunk) if chunk is not None else _balanced(default_chunk(setup), int(runs), client)
     t1 = time.perf_counter()
-    parts = _execute(setup, chunks(int(runs), size), client, progress)
+    parts, stopped = _execute(setup, chunks(int(runs), size), client, progress)
     wall = time.perf_counter() - t1
-    table = pd.concat(parts, ignore_index=True)
+    executor = "serial" if client is None else f"dask {getattr(client.scheduler, 'address', client)}"
+    if not parts:
+        raise Interrupted(0, int(runs))
+    table = pd.concat(parts, ignore_index=True).sort_values("run", ignore_index=True)
     for col in ("inside_bounds", "within_certified_force"):
         table[col] = table[col].astype("boolean")
-    executor = "serial" if client is None else f"dask {getattr(client.scheduler, 'address', client)}"
-    return Campaign(table, setup, cert, size, executor, t1 - t0, wall)
+    camp = Campaign(table, setup, cert, size, executor, t1 - t0, wall, int(runs) if stopped else None)
+    if stopped:
+        raise Interrupted(len(table), int(runs), camp)
+    return camp
 
 
 def _balanced(size: int, runs: int, client: Any) -> int:
@@ -140,46 +157,59 @@ def _balanced(size: int, runs: int, client: Any) -> int:
     return max(1, math.ceil(runs / n_chunks))
 
 
-def _execute(setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, progress: bool) -> list[pd.DataFrame]:
-    """Run the chunks in order (serially) or one Dask task per chunk, gathered in order.
+def _execute(
+    setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, progress: bool
+) -> tuple[list[pd.DataFrame], bool]:
+    """Run the chunks in order (serially) or one Dask task per chunk; the finished chunks, and whether Ctrl-C
+    stopped them.
 
     The bar counts runs: a chunk moves it by its runs times the fraction of its samples
     produced so far (:class:`ChunkProgress` on Dask), so it moves as the runs progress and
-    ends at the number of runs.
+    ends at the number of runs. On Dask the result of each chunk is fetched as soon as it
+    finishes, so a Ctrl-C (which also reaches the local workers) keeps every finished chunk.
     """
     from tqdm import tqdm
 
     total = ranges[-1][1] if ranges else 0
+    out: dict[int, pd.DataFrame] = {}  # finished chunks by their first run
     with tqdm(total=total, unit="run", disable=not progress, desc="campaign") as bar:
-        if client is None:
-            out = []
-            for lo, hi in ranges:
-                start = bar.n
+        try:
+            if client is None:
+                for lo, hi in ranges:
+                    start = bar.n
 
-                def advance(done: float, lo: int = lo, hi: int = hi, start: int = start) -> None:
-                    bar.update(start + int(done * (hi - lo)) - bar.n)  # a chunk moves the bar as it runs
+                    def advance(done: float, lo: int = lo, hi: int = hi, start: int = start) -> None:
+                        bar.update(start + int(done * (hi - lo)) - bar.n)  # a chunk moves the bar as it runs
 
-                out.append(run_chunk(setup, lo, hi, progress=advance))
-                bar.update(start + (hi - lo) - bar.n)
-            return out
-        remote = client.scatter(setup, broadcast=True)
-        topic = f"auv-hinf-campaign-{uuid.uuid4().hex}"
-        futures = [
-            client.submit(run_chunk, remote, lo, hi, progress=ChunkProgress(topic, lo), pure=False) for lo, hi in ranges
-        ]
-        done = dict.fromkeys((lo for lo, _ in ranges), 0.0)  # fraction of each chunk's samples produced
-        while True:
-            for _, (lo, frac) in client.get_events(topic):
-                done[lo] = max(done[lo], float(frac))
-            finished = [f.done() for f in futures]
-            for (lo, _), fin in zip(ranges, finished):
-                done[lo] = 1.0 if fin else done[lo]
-            bar.update(sum(int(done[lo] * (hi - lo)) for lo, hi in ranges) - bar.n)
-            if all(finished):
-                break
+                    out[lo] = run_chunk(setup, lo, hi, progress=advance)
+                    bar.update(start + (hi - lo) - bar.n)
+            else:
+                _execute_dask(setup, ranges, client, bar, out)
+        except KeyboardInterrupt:
+            return [out[lo] for lo in sorted(out)], True
+    return [out[lo] for lo in sorted(out)], False
+
+
+def _execute_dask(
+    setup: CampaignSetup, ranges: list[tuple[int, int]], client: Any, bar: Any, out: dict[int, pd.DataFrame]
+) -> None:
+    """One Dask task per chunk; each finished chunk's table goes into ``out`` (by its first run) at once."""
+    remote = client.scatter(setup, broadcast=True)
+    topic = f"auv-hinf-campaign-{uuid.uuid4().hex}"
+    futures = {
+        lo: client.submit(run_chunk, remote, lo, hi, progress=ChunkProgress(topic, lo), pure=False) for lo, hi in ranges
+    }
+    done = dict.fromkeys(futures, 0.0)  # fraction of each chunk's samples produced
+    while len(out) < len(ranges):
+        for _, (lo, frac) in client.get_events(topic):
+            done[lo] = max(done[lo], float(frac))
+        for lo, fut in futures.items():
+            if lo not in out and fut.done():
+                out[lo] = fut.result()
+                done[lo] = 1.0
+        bar.update(sum(int(done[lo] * (hi - lo)) for lo, hi in ranges) - bar.n)
+        if len(out) < len(ranges):
             time.sleep(PROGRESS_POLL)
-        parts: list[pd.DataFrame] = client.gather(futures)
-        return parts
 
 
 #: Seconds between two looks at the workers' progress events of a Dask campaign.
@@ -218,6 +248,31 @@ class ChunkProgress:
 #: the heap and trim it only past 256 MiB free. Workers of an external cluster
 #: (``--scheduler``) need the same two environment variables.
 WORKER_MALLOC = {"MALLOC_TRIM_THRESHOLD_": 2**28, "MALLOC_MMAP_THRESHOLD_": 2**25}
+
+
+def _not_a_cancelled_chunk(record: logging.LogRecord) -> bool:
+    """Log filter: drop Dask's warning that a cancelled task ended (the chunks Ctrl-C abandoned)."""
+    return "ended with CancelledError" not in record.getMessage()
+
+
+def dask_setup(worker: Any) -> None:
+    """Start-up of a local Dask worker (a preload): it ignores SIGINT and keeps quiet about cancelled chunks.
+
+    Ctrl-C in a terminal reaches every process of the group. The client alone stops: it keeps
+    the finished chunks and closes the cluster, which abandons the others; a worker stopping by
+    itself would print its own traceback, and one whose chunk is abandoned a warning per chunk.
+
+    Parameters
+    ----------
+    worker : distributed.Worker
+        The worker starting (unused).
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    logging.getLogger("distributed.worker.state_machine").addFilter(_not_a_cancelled_chunk)
 
 
 @contextmanager
@@ -260,7 +315,9 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
         # then fails to start with "Port 8787 is already in use".
         with (
             dask.config.set(environ),
-            LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=":0") as cluster,  # type: ignore[no-untyped-call]
+            LocalCluster(  # type: ignore[no-untyped-call]
+                n_workers=workers, threads_per_worker=1, dashboard_address=":0", preload=[__name__]
+            ) as cluster,
             Client(cluster) as client,  # type: ignore[no-untyped-call]
         ):
             yield client
@@ -273,4 +330,4 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
         yield client
 
 
-__all__ = ["PROGRESS_POLL", "WORKER_MALLOC", "Campaign", "ChunkProgress", "dask_client", "run_campaign"]
+__all__ = ["PROGRESS_POLL", "WORKER_MALLOC", "Campaign", "ChunkProgress", "dask_client", "dask_setup", "run_campaign"]

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.actuation.limits import CHANNEL_UNITS
 from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
@@ -27,6 +28,7 @@ from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.mission.margins import ERROR_UNITS
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
 from auv_hinf.simulation.results import SimulationResult
@@ -329,6 +331,36 @@ DEFINITIONS = {
     "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "
     "('final') and over the run ('max') (m)",
     "commanded_peak": "largest commanded force per channel before saturation (N, N, N m)",
+    "saved_until": "when Ctrl-C stopped simulate --save: the time of the last sample in the file (s)",
+}
+
+
+#: Units of the numbers of :func:`run_report`, for its text (``auv-hinf simulate`` without ``--json``): a
+#: unit for a number, or for every number of a list or table; a table of units by key; a tuple of units by
+#: position. A key without a unit holds no number (a name, a verdict, a sentence).
+REPORT_UNITS: dict[str, Any] = {
+    "n": "vehicles",
+    "horizon": "s",
+    **dict.fromkeys(("final_shape_error", "final_center_error", "final_position_error", "rms_shape_error"), "m"),
+    "max_force": "N",
+    "max_moment": "N m",
+    **dict.fromkeys(("max_speed", "max_sway", "final_sway"), "m/s"),
+    "max_yaw_rate": "rad/s",
+    "saturation_fraction": "of the vehicle-samples",
+    **dict.fromkeys(("commanded_peak", "actuator_limits", "certified_thrust"), CHANNEL_UNITS),
+    **dict.fromkeys(("first_exit_time", "diverged_at", "blend_time", "turn_time", "saved_until"), "s"),
+    "shape_errors": {"final": "m", "max": "m"},
+    **dict.fromkeys(("measured_decay_rate", "certified_decay_rate"), "1/s"),
+    **{
+        key: {f"{kind}_error": unit for kind, unit in ERROR_UNITS.items()}
+        for key in ("measured_errors", "measured_tail_errors", "certified_errors")
+    },
+    "robust_bounds": ERROR_UNITS,
+    "numerical_floor": "in each error's unit (m, m/s, rad, rad/s)",
+    "alpha": "1/s",
+    "k1": "1/s^2",
+    "k_psi": ("1/s^2", "1/s"),
+    "ki": "1/s^3",
 }
 
 
@@ -366,6 +398,7 @@ def with_start(cfg: FormationConfig, initial: FloatArray) -> FormationConfig:
 __all__ = [
     "DEFINITIONS",
     "MIN_RUN_SAMPLES",
+    "REPORT_UNITS",
     "RUN_SAMPLES",
     "SAMPLE_BUDGET",
     "RunPlan",

@@ -15,6 +15,7 @@ from typing import Any
 
 #: Exit codes: success, a negative verdict, bad input; and Ctrl-C outside a run's loop (128 + SIGINT).
 EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
+#: Exit code after Ctrl-C (SIGINT): 128 + 2, the shell's code for a process stopped by SIGINT.
 EXIT_INTERRUPTED = 130
 #: The runtime monitor's actions (``run --on-violation``).
 ACTIONS = ("warn", "hold", "stop")
@@ -36,6 +37,10 @@ class Negative(Exception):
     """A negative verdict that is not a certificate, e.g. no gain to simulate with (exit 1)."""
 
 
+class Stopped(Exception):
+    """Ctrl-C, after the work that finished was kept: the one line to print (exit 130)."""
+
+
 class Parser(argparse.ArgumentParser):
     """An argparse parser that reports usage errors as one exception (one line, exit code 2)."""
 
@@ -50,15 +55,21 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def number(kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf) -> Callable[[str], float]:
-    """An argparse type: a finite int or float in ``[lo, hi]``, negative and scientific forms included.
+def number(
+    kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf, *, strict: bool = False
+) -> Callable[[str], float]:
+    """An argparse type: a finite int or float in ``[lo, hi]``, or ``(lo, hi)`` when ``strict``.
+
+    Negative and scientific forms are included (``-1e-3``).
 
     Parameters
     ----------
-    kind : {int, float}
-        The type the text is converted with.
+    kind : int or float
+        The type of the value.
     lo, hi : float
-        Bounds of the accepted values (inclusive), in the option's unit.
+        The bounds, in the option's unit; infinite for none.
+    strict : bool
+        Exclude the bounds (``--gamma`` must be > 0, ``--lam`` < 0).
     """
 
     def parse(text: str) -> float:
@@ -69,46 +80,65 @@ def number(kind: type[int] | type[float], lo: float = -math.inf, hi: float = mat
             raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
         if not math.isfinite(value):
             raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:g}], got {text!r}")
+        inside = lo < value < hi if strict else lo <= value <= hi
+        if not inside:
+            raise argparse.ArgumentTypeError(f"must be {_range_text(lo, hi, strict)}, got {text!r}")
         return value
 
     return parse
+
+
+def _range_text(lo: float, hi: float, strict: bool) -> str:
+    """``"in [1, 10]"``, ``"< 0"`` or ``"> 0"``: the range of :func:`number` in words."""
+    if math.isinf(lo) or math.isinf(hi):
+        return f"{'<' if math.isinf(lo) else '>'}{'' if strict else '='} {hi if math.isinf(lo) else lo:g}"
+    return f"in {'(' if strict else '['}{lo:g}, {hi:g}{')' if strict else ']'}"
 
 
 #: Options taking a number; their values may look like options (``-1e-3``), see :func:`join_numbers`.
 NUMERIC_OPTIONS: set[str] = set()
 
 
-def numeric(p: argparse.ArgumentParser, flag: str, kind: type[int] | type[float], *bounds: float, **kw: Any) -> None:
-    """Add the option ``flag`` taking a :func:`number` to ``p``, and register it in :data:`NUMERIC_OPTIONS`.
+def numeric(
+    p: argparse.ArgumentParser,
+    flag: str,
+    kind: type[int] | type[float],
+    *bounds: float,
+    strict: bool = False,
+    **kw: Any,
+) -> None:
+    """Add the option ``flag`` taking a :func:`number` (its value may look like an option: ``-1e-3``).
 
     Parameters
     ----------
     p : argparse.ArgumentParser
-        The (sub)command's parser.
+        The parser or group.
     flag : str
-        The option, e.g. ``"--lam"``.
-    kind : {int, float}
-        The type of its value.
+        The option, ``--lam``.
+    kind : int or float
+        Its type.
     *bounds : float
-        ``lo`` and ``hi`` of :func:`number`, if given.
+        ``lo, hi`` of :func:`number`.
+    strict : bool
+        Exclude the bounds.
     **kw : Any
         Other arguments of ``add_argument`` (``help``, ``default``, ...).
     """
     NUMERIC_OPTIONS.add(flag)
-    p.add_argument(flag, type=number(kind, *bounds), **kw)
+    p.add_argument(flag, type=number(kind, *bounds, strict=strict), **kw)
 
 
-def vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
-    """An argparse type: ``size`` finite comma-separated numbers (``-0.1,0``).
+def vector(size: int, unit: str, *, positive: bool = False) -> Callable[[str], tuple[float, ...]]:
+    """An argparse type: ``size`` finite comma-separated numbers (``-0.1,0``), each > 0 when ``positive``.
 
     Parameters
     ----------
     size : int
-        Number of components.
+        How many numbers.
     unit : str
-        Their unit, for the message (e.g. ``"m/s"``).
+        Their units, for the message (``"N, N, N m"``).
+    positive : bool
+        Every number must be > 0 (actuator limits).
     """
 
     def parse(text: str) -> tuple[float, ...]:
@@ -121,6 +151,8 @@ def vector(size: int, unit: str) -> Callable[[str], tuple[float, ...]]:
             ) from None
         if len(values) != size or not all(math.isfinite(v) for v in values):
             raise argparse.ArgumentTypeError(f"expected {size} finite comma-separated numbers ({unit}), got {text!r}")
+        if positive and not all(v > 0.0 for v in values):
+            raise argparse.ArgumentTypeError(f"every number must be > 0 ({unit}), got {text!r}")
         return values
 
     return parse
@@ -185,6 +217,7 @@ __all__ = [
     "BadInput",
     "Negative",
     "Parser",
+    "Stopped",
     "UsageError",
     "join_numbers",
     "number",

@@ -13,6 +13,7 @@ import os
 import sys
 import tempfile
 from collections.abc import Callable
+from contextlib import ExitStack
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -21,18 +22,28 @@ from auv_hinf._typing import GAIN_METHODS
 from auv_hinf.actuation.limits import Actuators
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.certificate.run_plan import RunPlan
-from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative
+from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative, Stopped
 from auv_hinf.config.messages import input_warnings
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import AuvHinfError, DesignError, SolverError
+from auv_hinf.exceptions import AuvHinfError, ConfigError, DesignError, Interrupted, ParameterError, SolverError
 
 
 def _dump(obj: Any) -> str:
     return json.dumps(json_safe(obj), indent=2)
 
 
-def _prepare_out(path: Path | None) -> None:
-    """Create ``--out`` and check that it is writable, before any computation."""
+def _prepare_out(path: Path | None, option: str = "--out", given: Path | None = None) -> None:
+    """Create the directory ``path`` and check that it is writable, before any computation.
+
+    Parameters
+    ----------
+    path : Path or None
+        The directory (``None``: the option is not given).
+    option : str
+        The option that names it, for the message (``--out``, ``--save``).
+    given : Path, optional
+        What the user typed, when ``path`` is derived from it (``--save``'s folder).
+    """
     if path is None:
         return
     try:
@@ -40,7 +51,8 @@ def _prepare_out(path: Path | None) -> None:
         with tempfile.TemporaryFile(dir=path):
             pass
     except OSError as exc:
-        raise BadInput(f"--out {str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
+        what = "" if given is None else f"{str(given)!r}: its folder "
+        raise BadInput(f"{option} {what}{str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
 
 
 def _load(args: argparse.Namespace) -> Any:
@@ -49,7 +61,12 @@ def _load(args: argparse.Namespace) -> Any:
 
     if args.preset:
         return preset_config(args.preset)
-    cfg, data = read_config(args.config)
+    try:
+        cfg, data = read_config(args.config)
+    except ConfigError as exc:  # every line names the option and the file (the file's own lines name the key)
+        given = str(args.config)
+        lines = [line if line.startswith(f"{given}:") else f"{given}: {line}" for line in str(exc).splitlines()]
+        raise ConfigError("\n".join(f"--config {line}" for line in lines)) from None
     for line in input_warnings(data):
         print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
     return cfg
@@ -71,15 +88,15 @@ def _cmd_design(args: argparse.Namespace) -> int:
         print(_dump(data))
         return _verdict(report.ok, f"cross-check disagrees (max relative difference {report.max_rel_diff:.3g})")
     a = data["alpha"]
-    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g}, n = {report.n}")
-    print(f"gamma_min = {report.conditions['gamma_min']:.6g}  regime: {report.conditions['regime']} 1/sqrt2")
+    print(f"lambda = {report.lam:g} 1/s, gamma = {report.gamma:g} s, n = {report.n} vehicles")
+    print(f"gamma_min = {report.conditions['gamma_min']:.6g} s  regime: gamma {report.conditions['regime']} 1/sqrt2 s")
     for key in ("paper", "stabilizing", "minimal", "care", "scipy_care", "lmi", "lmi_minimal"):
         val = a.get(key)
-        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g}"))
+        print(f"  alpha[{key:<11}] = " + ("n/a" if val is None else f"{val:.9g} 1/s"))
     for flag in report.paper_flags:
         print(f"  paper: {flag}")
     h = data["closed_loop_hinf"]
-    print(f"||T||_inf exact {h['exact']}, python-control {h['python_control']}, LMI {h['lmi']}")
+    print(f"||T||_inf exact {h['exact']} s, python-control {h['python_control']} s, LMI {h['lmi']} s")
     print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
     for c in report.checks:
         if not c.ok:
@@ -147,17 +164,20 @@ def _refuse_uncertified(plan: RunPlan, allowed: bool, what: str) -> None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from auv_hinf.certificate.run_plan import plan_run, run_report
+    from auv_hinf.certificate.run_plan import REPORT_UNITS, plan_run, run_report
     from auv_hinf.simulation.engine import simulate
 
     _prepare_out(args.out)
     if args.save is not None:
         from auv_hinf.simulation.stream import parquet_path
 
-        _prepare_out(parquet_path(args.save).parent)  # before any computation, as --out
+        _prepare_out(parquet_path(args.save).parent, "--save", args.save)  # before any computation, as --out
     cfg = _with_actuators(_load(args), args.actuators)
     if args.current is not None:
-        cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
+        try:
+            cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
+        except ConfigError as exc:
+            raise BadInput(f"--current {','.join(f'{c:g}' for c in args.current)}: {exc}") from None
     if args.design:
         cfg = replace(cfg, robust=args.design == "robust")
     try:
@@ -165,13 +185,26 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     except DesignError as exc:
         raise Negative(f"no gain to simulate with: {exc}") from None
     _refuse_uncertified(plan, args.uncertified, "simulate")
-    result = simulate(plan.scenario)
+    try:
+        result = simulate(plan.scenario)
+    except KeyboardInterrupt:
+        raise Stopped("interrupted after 0 of 1 runs; no run finished, nothing written") from None
     summary = run_report(plan, result)
+    stopped = None
     if args.save is not None:
         from auv_hinf.simulation.stream import save_trajectories
 
         try:
             summary["saved_trajectories"] = str(save_trajectories(plan.scenario, args.save))
+        except Interrupted as stop:  # the run is done; its file holds the samples streamed so far
+            summary["saved_trajectories"] = str(args.save)
+            summary["saved_until"] = stop.partial
+            where = f"{args.out} and {args.save}" if args.out else str(args.save)
+            upto = "none saved" if stop.partial is None else f"saved up to t = {stop.partial:.4g} s"
+            stopped = (
+                f"interrupted after 1 of 1 runs; results so far in {where} (the run finished; its trajectories "
+                f"{upto} of {plan.scenario.horizon:.4g} s)"
+            )
         except OSError as exc:
             raise BadInput(f"--save {str(args.save)!r}: {exc.strerror or exc}") from None
     if args.out:
@@ -183,6 +216,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         thrust = rob.thrust if rob is not None and rob.covered else (None if cov is None else cov.thrust)
         bound = thrust.as_tuple() if plan.covered and thrust is not None else None
         save_simulation_plots(result, args.out, certified=bound)
+    if stopped is not None:
+        raise Stopped(stopped)
     if args.json:
         print(_dump(summary))
     else:
@@ -193,7 +228,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                     + ("" if val["control_period"] is None else f", seed {val['seed']}")
                 )
             elif key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
-                print(f"{key:>24}: {_short(val)}")
+                print(f"{key:>24}: {_short(val, REPORT_UNITS.get(key))}")
     if plan.certificate is None and not plan.covered:  # integral action: covered by the robust certificate
         return _verdict(False, "; ".join(plan.notes))
     if result.diverged_at is not None:
@@ -225,15 +260,26 @@ def _with_actuators(cfg: FormationConfig, limits: tuple[float, ...] | None) -> F
     return replace(cfg, actuators=Actuators(limits[0], limits[1], limits[2]))
 
 
-def _short(value: Any) -> str:
-    """A value printed with 4-6 significant digits (floats inside dicts and lists too)."""
-    if isinstance(value, float):
-        return f"{value:.6g}"
+def _short(value: Any, unit: Any = None) -> str:
+    """A value printed with 6 significant digits and its unit (floats inside dicts and lists too).
+
+    Parameters
+    ----------
+    value : Any
+        A number, a string, a bool, or a dict or list of them.
+    unit : str, dict, tuple or None
+        The unit of the number, or of every number of a list or dict; a dict of units by key; a
+        tuple of units by position (the forms of ``REPORT_UNITS`` in :mod:`auv_hinf.certificate.run_plan`).
+    """
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{k}: {_short(v)}" for k, v in value.items()) + "}"
+        by_key = unit if isinstance(unit, dict) else dict.fromkeys(value, unit)
+        return "{" + ", ".join(f"{k}: {_short(v, by_key.get(k))}" for k, v in value.items()) + "}"
     if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_short(v) for v in value) + "]"
-    return str(value)
+        by_place = unit if isinstance(unit, tuple) else (unit,) * len(value)
+        return "[" + ", ".join(_short(v, u) for v, u in zip(value, by_place)) + "]"
+    text = f"{value:.6g}" if isinstance(value, float) else str(value)
+    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return f"{text} {unit}" if numeric and isinstance(unit, str) else text
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
@@ -253,7 +299,7 @@ def _cmd_init(args: argparse.Namespace) -> int:
 
     out: Path | None = args.out
     if out is not None and out.exists() and not args.force:
-        raise BadInput(f"{str(out)!r} exists; use --force to overwrite it")
+        raise BadInput(f"--out {str(out)!r} exists; use --force to overwrite it")
     text = annotated_toml(preset_config(args.preset))
     if out is None:
         print(text, end="")
@@ -262,13 +308,13 @@ def _cmd_init(args: argparse.Namespace) -> int:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(text, encoding="utf-8")
     except OSError as exc:
-        raise BadInput(f"cannot write {str(out)!r}: {exc.strerror or exc}") from None
+        raise BadInput(f"--out {str(out)!r} cannot be written: {exc.strerror or exc}") from None
     print(f"wrote {out} (from preset {args.preset}); check it with: {PROG} certify --config {out}")
     return EXIT_OK
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from auv_hinf.campaign.report import write_outputs
+    from auv_hinf.campaign.report import SUMMARY_UNITS, write_outputs
     from auv_hinf.campaign.runner import dask_client, run_campaign
     from auv_hinf.certificate.run_plan import plan_run
 
@@ -279,19 +325,32 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     except DesignError as exc:
         raise Negative(f"no gain to run a campaign with: {exc}") from None
     _refuse_uncertified(plan, args.uncertified, "run a campaign of")
-    with dask_client(args.workers, args.scheduler) as client:
-        try:
-            camp = run_campaign(
-                cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
-            )
-        except DesignError as exc:
-            raise Negative(f"no certified start region to sample from: {exc}") from None
+    try:
+        with ExitStack() as stack:
+            try:
+                client = stack.enter_context(dask_client(args.workers, args.scheduler))
+            except ParameterError as exc:
+                raise BadInput(f"--scheduler {args.scheduler!r}: {exc}" if args.scheduler else str(exc)) from None
+            try:
+                camp = run_campaign(
+                    cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True
+                )
+            except DesignError as exc:
+                raise Negative(f"no certified start region to sample from: {exc}") from None
+    except Interrupted as stop:  # keep the runs that finished: their rows and their summary
+        if stop.partial is None:
+            raise Stopped(
+                f"interrupted after 0 of {args.runs} runs; no run finished, nothing written (runs finish a chunk "
+                "at a time: a smaller --chunk keeps more of an interrupted campaign)"
+            ) from None
+        write_outputs(stop.partial, args.out)
+        raise Stopped(f"interrupted after {stop.done} of {args.runs} runs; results so far in {args.out}") from None
     summary = write_outputs(camp, args.out)
     if args.json:
         print(_dump(summary))
     else:
         for key in ("config", "runs", "executor", "counts", "fraction_inside", "worst_ratio", "throughput", "notes"):
-            print(f"{key:>16}: {_short(summary[key])}")
+            print(f"{key:>16}: {_short(summary[key], SUMMARY_UNITS.get(key))}")
     c = summary["counts"]
     return _verdict(
         summary["ok"],

@@ -3,13 +3,16 @@
 Exit codes: 0 success (consistent / certified / simulated / written / a run covered or stopped
 by Ctrl-C); 1 a negative verdict (cross-check disagrees, not certified, no gain, a run the
 certificate did not cover) or a solver, link or internal failure; 2 bad input (arguments,
-configuration, unusable ``--out``); 130 Ctrl-C outside a run's loop. Every failure is reported as one line per
-problem on stderr and never as a traceback, unless ``--debug`` is given, which re-raises.
+configuration, unusable ``--out``); 130 Ctrl-C (SIGINT) elsewhere, after ``campaign`` and
+``simulate`` have written what finished (``interrupted after K of M runs; results so far in
+...``). Every failure is reported as one line per problem on stderr and never as a traceback,
+unless ``--debug`` is given, which re-raises.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from collections.abc import Sequence
@@ -36,6 +39,7 @@ from auv_hinf.cli.args import (
     BadInput,
     Negative,
     Parser,
+    Stopped,
     UsageError,
     join_numbers,
     numeric,
@@ -56,8 +60,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", parser_class=Parser)
 
     d = sub.add_parser("design", help="Theorem 1 gains three ways, cross-checked four ways", allow_abbrev=False)
-    numeric(d, "--lam", float, required=True, help="nominal lambda < 0 (1/s)")
-    numeric(d, "--gamma", float, required=True, help="H-infinity bound gamma > 0")
+    numeric(d, "--lam", float, -math.inf, 0.0, strict=True, required=True, help="nominal lambda < 0 (1/s)")
+    numeric(d, "--gamma", float, 0.0, math.inf, strict=True, required=True, help="H-infinity bound gamma > 0 (s)")
     numeric(d, "--n", int, 2, DESIGN_MAX_N, default=3, help=f"number of vehicles, 2..{DESIGN_MAX_N} (default 3)")
     numeric(d, "--k1", float, default=DEFAULT_K1, help=f"Theorem 2 position gain (1/s^2), default {DEFAULT_K1:g}")
     d.add_argument("--json", action="store_true", help="print one JSON object")
@@ -103,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
         NUMERIC_OPTIONS.add("--actuators")
         c.add_argument(
             "--actuators",
-            type=vector(3, "N, N, N m"),
+            type=vector(3, "N, N, N m", positive=True),
             metavar="FX,FY,M",
             help="actuator limits |tau_x|, |tau_y| (N) and |tau_psi| (N m); overrides [actuators]",
         )
@@ -226,10 +230,10 @@ def _deployment_parsers(sub: Any) -> None:
 
 
 def _report(kind: str, exc: BaseException) -> None:
-    """Print ``exc`` as one line per problem on stderr."""
+    """Print ``exc`` as one line per problem on stderr (``kind`` empty: the line alone)."""
     lines = [line for line in str(exc).splitlines() if line.strip()] or [type(exc).__name__]
     for line in lines:
-        print(f"{PROG}: {kind}: {line}", file=sys.stderr)
+        print(f"{PROG}: {kind}: {line}" if kind else f"{PROG}: {line}", file=sys.stderr)
 
 
 def _classify(exc: BaseException) -> tuple[int, str]:
@@ -238,6 +242,8 @@ def _classify(exc: BaseException) -> tuple[int, str]:
         return EXIT_BAD_INPUT, "error"
     if isinstance(exc, Negative):
         return EXIT_NEGATIVE, "not certified"
+    if isinstance(exc, Stopped):
+        return EXIT_INTERRUPTED, ""
     if isinstance(exc, SolverError) or type(exc).__name__ == "SolverError":
         return EXIT_NEGATIVE, "solver failure"
     if isinstance(exc, LinkError):
@@ -271,7 +277,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return EXIT_OK
         return COMMANDS[args.command](args)
-    except KeyboardInterrupt:  # Ctrl-C outside a run's loop (which handles it itself)
+    except KeyboardInterrupt:  # Ctrl-C before anything finished: one line, no traceback
+        if debug:
+            raise
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except BrokenPipeError:  # the reader went away (`auv-hinf ... | head`): stop quietly

@@ -3,19 +3,24 @@
 Pydantic's errors are rewritten as ``design.gamma must be > 0.0 s, got -1``,
 ``design.gama is not a known key; did you mean 'gamma'?`` or
 ``[extra] is an unknown table; expected one of: ...`` and raised together as one
-:class:`~auv_hinf.exceptions.ConfigError`.
+:class:`~auv_hinf.exceptions.ConfigError`. Every line names the TOML path of what the user
+typed (``reference.spacing``), never a Python class.
 
-:func:`input_warnings` flags input that validates but is probably not what the user meant;
-the CLI prints the lines on standard error before it runs:
+Numbers that look like another unit are errors, raised by the schema
+(:data:`~auv_hinf.config.schema.MAX_ANGLE`, :data:`~auv_hinf.config.schema.MAX_RATE`,
+:data:`~auv_hinf.config.schema.MAX_SPEED`): the line names the key, the value, the likely unit
+and the value converted (``reference.heading must be <= 6.28319 [rad], got 90.0: it looks like
+degrees; 90 degrees is 1.571 rad``). They are errors rather than warnings because read in the
+documented unit they certify or simulate another mission without a word, and a warning is not
+seen from Python or in a CI log.
 
-* an angle (rad) beyond ``2 pi`` in magnitude, which usually means degrees typed by mistake
-  (``envelope.psi``, ``reference.heading``, the heading column of ``simulation.initial``);
-* a configuration file that sets nothing, so every default is certified without a word.
+:func:`input_warnings` flags input that validates and is meaningful but is probably not what
+the user meant; the CLI prints the lines on standard error before it runs: a configuration
+file that sets nothing, so every default is certified without a word.
 """
 
 from __future__ import annotations
 
-import math
 import numbers
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -23,11 +28,12 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from auv_hinf.config.schema import TABLES, ConfigFile, suggest_key, table_keys
+from auv_hinf.config.schema import TABLES, ConfigFile, suggest_key, table_keys, unit_slip
 from auv_hinf.exceptions import AuvHinfError, ConfigError
 
 _TYPE_NAMES = {
     "float_type": "a number",
+    "bool_type": "true or false",
     "int_type": "an integer",
     "string_type": "a string",
     "list_type": "an array",
@@ -105,9 +111,12 @@ def _message(err: Any) -> str:
         fields = {f.alias or k: f for k, f in TABLES[table].model_fields.items()}
         info = fields.get(str(rest[0])) if rest else None
         extra = info.json_schema_extra if info is not None else None
-        unit = f" [{extra['unit']}]" if isinstance(extra, dict) and "unit" in extra else ""
+        unit = str(extra["unit"]) if isinstance(extra, dict) and "unit" in extra else ""
         key, op = _BOUNDS[kind]
-        return f"{path} must be {op} {ctx.get(key):g}{unit}, got {_show(value)}"
+        limit = float(ctx[key])
+        too_large = key in ("lt", "le") or limit < 0.0  # an upper bound, or a lower one such as -2 pi
+        slip = unit_slip(unit, value) if too_large and isinstance(value, (int, float)) else ""
+        return f"{path} must be {op} {limit:g}{f' [{unit}]' if unit else ''}, got {_show(value)}{slip}"
     if kind in ("too_short", "too_long"):
         n = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
         bound = "at least" if kind == "too_short" else "at most"
@@ -117,6 +126,8 @@ def _message(err: Any) -> str:
     if kind in _TYPE_NAMES or kind.endswith("_type"):
         return f"{path} has the wrong type: expected {_TYPE_NAMES.get(kind, kind[:-5])}, got {_show(value)}"
     msg = str(err["msg"]).removeprefix("Value error, ")
+    if table and not rest and msg.split(" ", 1)[0] in table_keys(TABLES[table]):  # a table's check names its key
+        return f"{path}.{msg}"
     return f"{path}: {msg}" if path else msg
 
 
@@ -228,50 +239,22 @@ def set_fields(obj: Any, **values: Any) -> None:
         object.__setattr__(obj, key, val)
 
 
-#: Magnitude (rad) beyond which an angle looks like degrees: one full turn.
-DEGREES_THRESHOLD = 2.0 * math.pi
-
-
-def _angles(data: dict[str, Any]) -> list[tuple[str, float]]:
-    """``(TOML path, value)`` of every angle (rad) the file sets."""
-    out: list[tuple[str, float]] = []
-    env = data.get("envelope", {})
-    if isinstance(env, dict) and isinstance(env.get("psi"), list):
-        out += [(f"envelope.psi[{k}]", v) for k, v in enumerate(env["psi"]) if isinstance(v, (int, float))]
-    ref = data.get("reference", {})
-    if isinstance(ref, dict) and isinstance(ref.get("heading"), (int, float)):
-        out.append(("reference.heading", ref["heading"]))
-    sim = data.get("simulation", {})
-    rows = sim.get("initial") if isinstance(sim, dict) else None
-    if isinstance(rows, list):
-        for k, row in enumerate(rows):
-            if isinstance(row, list) and len(row) > 2 and isinstance(row[2], (int, float)):
-                out.append((f"simulation.initial[{k}][2] (heading)", row[2]))
-    return out
-
-
 def input_warnings(data: Any) -> list[str]:
     """One readable line per suspicious entry of a parsed TOML document (empty: nothing to say).
+
+    Numbers in the wrong unit are not warnings but errors of the schema (see the module docstring).
 
     Parameters
     ----------
     data : dict
         The parsed configuration file.
     """
-    if not isinstance(data, dict):
-        return []
-    if not data:
+    if isinstance(data, dict) and not data:
         return ["the configuration file sets nothing: every table takes its defaults (see docs/config.md)"]
-    return [
-        f"{path} = {value:g} rad is more than a full turn: angles are in radians "
-        f"(did you mean {math.radians(value):.4g}?)"
-        for path, value in _angles(data)
-        if not isinstance(value, bool) and abs(float(value)) > DEGREES_THRESHOLD
-    ]
+    return []
 
 
 __all__ = [
-    "DEGREES_THRESHOLD",
     "as_dict",
     "format_errors",
     "input_warnings",

@@ -15,12 +15,15 @@ The default of every key is declared here once (:func:`schema_default`).
 from __future__ import annotations
 
 import difflib
+import math
+from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
 from auv_hinf.law.gains import DEFAULT_K1
+from auv_hinf.mission.paths import lawnmower_min_spacing
 from auv_hinf.models.envelope import PAPER_ENVELOPE, check_interval
 from auv_hinf.models.jacobi import (
     JacobiTransform,
@@ -74,6 +77,108 @@ MAX_HORIZON = 1e5  # s
 MAX_COORDINATE = 1e6  # m: offsets and radii beyond 1000 km are refused
 
 
+#: Largest angle (rad) taken as radians: one full turn. Every heading can be written within one turn, so a
+#: heading, a bound of the heading range or a start heading beyond it is degrees typed by mistake (90 is a
+#: quarter turn in degrees and 14 turns in radians). An error, not a warning: read as radians it silently
+#: certifies and simulates another mission or another start.
+MAX_ANGLE = 2.0 * math.pi
+
+
+#: Largest yaw rate or angular frequency (rad/s) taken as rad/s: 2 rad/s is 115 deg/s. The presets' envelopes
+#: allow at most 0.5 rad/s and their missions turn at most s / R (remus-survey: 1.5 m/s on 60 m turns,
+#: 0.025 rad/s), while the yaw-rate bounds of these vehicles written in deg/s (5 to 30) are all above it. An
+#: error: with the value read as rad/s the certificate fails with advice for another problem, or certifies an
+#: envelope no run of these vehicles comes near.
+MAX_RATE = 2.0
+
+
+#: Largest speed (m/s) taken as m/s: 20 m/s (39 kn) is over five times the fastest preset envelope (the
+#: paper's u <= 3.5 m/s; remus-line 2.5 m/s, bluerov2-line 1 m/s) and ten times the strongest ocean
+#: currents, while a cruise speed written in cm/s (50 to 250) is far above it. An error, as for angles.
+MAX_SPEED = 20.0
+
+
+#: A reference speed above this many times the envelope's fastest surge speed (m/s over m/s) cannot be
+#: tracked inside the envelope (each vehicle's surge is about the path speed), so the certificate could only
+#: fail, saying the mission does not fit; 2 flags a speed typed in km/h (3.6 times its value in m/s) or cm/s
+#: (100 times) and leaves room for a mission that is merely a little too fast, which the certificate explains.
+SPEED_FACTOR = 2.0
+
+
+#: What a number too large for its unit probably is: unit -> (likely unit, factor to the expected unit).
+_LIKELY_UNIT = {
+    "rad": ("degrees", math.pi / 180.0),
+    "rad/s": ("deg/s", math.pi / 180.0),
+    "m/s": ("cm/s", 0.01),
+}
+
+
+def _numbers(value: float | Sequence[float], scale: float = 1.0) -> str:
+    """``value`` (a number or a list) times ``scale``, with 4 significant digits."""
+    if isinstance(value, (int, float)):
+        return f"{value * scale:.4g}"
+    return "[" + ", ".join(f"{v * scale:.4g}" for v in value) + "]"
+
+
+def unit_slip(unit: str, value: float | Sequence[float]) -> str:
+    """``": it looks like degrees; 90 degrees is 1.571 rad"``: the likely unit of a value too large for ``unit``.
+
+    Parameters
+    ----------
+    unit : str
+        The unit the key expects (``"rad"``, ``"rad/s"`` or ``"m/s"``; others give ``""``).
+    value : float or sequence of float
+        The value as written.
+    """
+    if unit not in _LIKELY_UNIT:
+        return ""
+    likely, factor = _LIKELY_UNIT[unit]
+    return f": it looks like {likely}; {_numbers(value)} {likely} is {_numbers(value, factor)} {unit}"
+
+
+def _in_range(value: Sequence[float], unit: str, limit: float, what: str) -> None:
+    """Raise ``ValueError`` naming the likely unit when some ``|value|`` exceeds ``limit`` (in ``unit``)."""
+    if any(abs(v) > limit for v in value):
+        raise ValueError(f"{_numbers(value)} {unit} is {what}{unit_slip(unit, value)}")
+
+
+_ANGLE_TEXT = f"more than a full turn (|angle| > 2 pi = {MAX_ANGLE:.4g} rad)"
+
+
+_RATE_TEXT = f"faster than these vehicles turn (|rate| > {MAX_RATE:g} rad/s = {math.degrees(MAX_RATE):.0f} deg/s)"
+
+
+_SPEED_TEXT = f"faster than these vehicles go (|speed| > {MAX_SPEED:g} m/s)"
+
+
+def speed_misfit(speed: float, u: Sequence[float]) -> str | None:
+    """Why a reference ``speed`` cannot be meant for the surge range ``u``, or ``None`` when it can.
+
+    The speed is refused above :data:`SPEED_FACTOR` times the envelope's fastest surge; the message
+    names the unit that would bring it inside.
+
+    Parameters
+    ----------
+    speed : float
+        ``reference.speed`` (m/s).
+    u : sequence of 2 float
+        ``envelope.u``, the surge range ``[min, max]`` (m/s).
+    """
+    top = max(abs(u[0]), abs(u[1]))
+    if speed <= SPEED_FACTOR * top:
+        return None
+    hint = ": lower the speed or widen envelope.u"
+    for name, factor in (("km/h", 1.0 / 3.6), ("cm/s", 0.01)):
+        if speed * factor <= top:
+            hint = f": it looks like {name}; {speed:g} {name} is {speed * factor:.4g} m/s"
+            break
+    times = f"{speed / top:.3g} times" if top > 0 else "above"
+    return (
+        f"reference.speed = {speed:g} m/s is {times} the fastest surge speed of envelope.u ({top:g} m/s), so "
+        f"no run at this speed stays in the envelope{hint}"
+    )
+
+
 def _field(default: Any, description: str, unit: str = "", **kw: Any) -> Any:
     """A pydantic ``Field`` whose description ends with the unit, which is also kept in the schema."""
     text = f"{description} [{unit}]" if unit else description
@@ -108,7 +213,7 @@ _KIND_TEXT = "path kind: sine, line, circle or lawnmower, each with its own keys
 
 
 class _Reference(_Table):
-    speed: float = _field(1.0, "speed of the formation centre along the path", "m/s", gt=0.0)
+    speed: float = _field(1.0, "speed of the formation centre along the path", "m/s", gt=0.0, le=MAX_SPEED)
 
 
 class SineReference(_Reference):
@@ -116,14 +221,14 @@ class SineReference(_Reference):
 
     kind: Literal["sine"] = _field("sine", _KIND_TEXT)
     amplitude: float = _field(30.0, "amplitude of the lateral sine", "m", ge=0.0)
-    omega: float = _field(0.1, "angular frequency of the sine", "rad/s", gt=0.0)
+    omega: float = _field(0.1, "angular frequency of the sine", "rad/s", gt=0.0, le=MAX_RATE)
 
 
 class LineReference(_Reference):
     """Straight line at constant heading."""
 
     kind: Literal["line"] = _field("line", _KIND_TEXT)
-    heading: float = _field(0.0, "direction of travel from the x axis", "rad")
+    heading: float = _field(0.0, "direction of travel from the x axis", "rad", ge=-MAX_ANGLE, le=MAX_ANGLE)
 
 
 class CircleReference(_Reference):
@@ -148,6 +253,17 @@ class LawnmowerReference(_Reference):
     turn_radius: float = _field(
         ..., "smallest radius of the turns; at most about spacing / 3.97", "m", gt=0.0, examples=[20.0]
     )
+
+    @model_validator(mode="after")
+    def _turns_fit(self) -> LawnmowerReference:
+        need = lawnmower_min_spacing(self.speed, self.turn_radius)
+        if self.spacing < need:
+            raise ValueError(
+                f"spacing must be >= {need:.6g} m to hold two 90-degree turns of turn_radius {self.turn_radius:g} m "
+                f"(2 D, about 3.97 turn_radius), got {self.spacing:g} m: widen spacing, or lower turn_radius to at "
+                f"most {self.spacing * self.turn_radius / need:.4g} m"
+            )
+        return self
 
 
 REFERENCE_MODELS: dict[str, type[_Reference]] = {
@@ -221,9 +337,9 @@ class NoiseTable(_Table):
     """``[implementation.noise]``: bounds of the measurement errors (default: exact)."""
 
     position: float = _field(0.0, "bound of the horizontal position error (Euclidean)", "m", ge=0.0, le=MAX_COORDINATE)
-    velocity: float = _field(0.0, "bound of the body-velocity error |(u, v)| (Euclidean)", "m/s", ge=0.0, le=100.0)
+    velocity: float = _field(0.0, "bound of the body-velocity error |(u, v)| (Euclidean)", "m/s", ge=0.0, le=MAX_SPEED)
     heading: float = _field(0.0, "bound of the heading error", "rad", ge=0.0, le=3.14159)
-    yaw_rate: float = _field(0.0, "bound of the yaw-rate error", "rad/s", ge=0.0, le=100.0)
+    yaw_rate: float = _field(0.0, "bound of the yaw-rate error", "rad/s", ge=0.0, le=MAX_RATE)
 
 
 class ImplementationTable(_Table):
@@ -240,7 +356,7 @@ class ImplementationTable(_Table):
 class DisturbanceTable(_Table):
     """``[disturbance]``: declared bounds of the ocean current."""
 
-    current_speed: float | None = _field(None, "bound on |current|", "m/s", ge=0.0)
+    current_speed: float | None = _field(None, "bound on |current|", "m/s", ge=0.0, le=MAX_SPEED)
     current_rate: float | None = _field(None, "bound on |d current / dt|", "m/s^2", ge=0.0)
 
 
@@ -408,17 +524,38 @@ class FormationTable(_Table):
         return tuple((float(a), float(b)) for a, b in rho)
 
 
+#: The unit, the largest magnitude and its words of each envelope range (see :data:`MAX_SPEED` and others).
+_ENVELOPE_LIMITS = {
+    "u": ("m/s", MAX_SPEED, _SPEED_TEXT),
+    "v": ("m/s", MAX_SPEED, _SPEED_TEXT),
+    "r": ("rad/s", MAX_RATE, _RATE_TEXT),
+    "psi": ("rad", MAX_ANGLE, _ANGLE_TEXT),
+}
+
+
+#: The columns of a ``simulation.initial`` row that carry an angle, a speed or a rate: column -> (name, unit,
+#: largest magnitude, words).
+_STATE_LIMITS = {
+    2: ("psi", "rad", MAX_ANGLE, _ANGLE_TEXT),
+    3: ("u", "m/s", MAX_SPEED, _SPEED_TEXT),
+    4: ("v", "m/s", MAX_SPEED, _SPEED_TEXT),
+    5: ("r", "rad/s", MAX_RATE, _RATE_TEXT),
+}
+
+
 class EnvelopeTable(_Table):
     """``[envelope]``: ranges [min, max] of the body velocities and heading."""
 
-    u: Pair = _field(list(PAPER_ENVELOPE.u), "surge speed range [min, max]", "m/s")
-    v: Pair = _field(list(PAPER_ENVELOPE.v), "sway speed range [min, max]", "m/s")
-    r: Pair = _field(list(PAPER_ENVELOPE.r), "yaw-rate range [min, max]", "rad/s")
-    psi: Pair = _field(list(PAPER_ENVELOPE.psi), "heading range [min, max], at most 2 pi wide", "rad")
+    u: Pair = _field(list(PAPER_ENVELOPE.u), f"surge speed range [min, max], |u| <= {MAX_SPEED:g}", "m/s")
+    v: Pair = _field(list(PAPER_ENVELOPE.v), f"sway speed range [min, max], |v| <= {MAX_SPEED:g}", "m/s")
+    r: Pair = _field(list(PAPER_ENVELOPE.r), f"yaw-rate range [min, max], |r| <= {MAX_RATE:g}", "rad/s")
+    psi: Pair = _field(list(PAPER_ENVELOPE.psi), "heading range [min, max], at most 2 pi wide, |psi| <= 2 pi", "rad")
 
     @field_validator("u", "v", "r", "psi")
     @classmethod
     def _interval(cls, value: list[float], info: Any) -> list[float]:
+        unit, limit, what = _ENVELOPE_LIMITS[info.field_name]
+        _in_range(value, unit, limit, what)
         return list(check_interval(info.field_name, value))
 
 
@@ -483,9 +620,10 @@ class SimulationTable(_Table):
     )
     initial: list[StateRow] | None = _field(
         None,
-        "[x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s); default: each on its slot, zero error",
+        f"[x, y, psi, u, v, r] per vehicle (m, m, rad, m/s, m/s, rad/s; |psi| <= 2 pi, |u|, |v| <= {MAX_SPEED:g}, "
+        f"|r| <= {MAX_RATE:g}); default: each on its slot, zero error",
     )
-    current: Pair = _field([0.0, 0.0], "constant ocean current, inertial frame", "m/s")
+    current: Pair = _field([0.0, 0.0], f"constant ocean current, inertial frame, |current| <= {MAX_SPEED:g}", "m/s")
     blend_time: float | None = _field(
         None,
         "reference blending time (default: chosen by the certificate)",
@@ -497,6 +635,27 @@ class SimulationTable(_Table):
         default_factory=PlantTable,
         description="true plant as multipliers of the parameters",
     )
+
+    @field_validator("initial")
+    @classmethod
+    def _state_units(cls, rows: list[list[float]] | None) -> list[list[float]] | None:
+        for k, row in enumerate(rows or []):
+            for col, (name, unit, limit, what) in _STATE_LIMITS.items():
+                if abs(row[col]) > limit:
+                    raise ValueError(
+                        f"row {k} (vehicle {k + 1}), {name} = {row[col]:g} {unit} is {what}{unit_slip(unit, row[col])}"
+                    )
+        return rows
+
+    @field_validator("current")
+    @classmethod
+    def _current_speed(cls, value: list[float]) -> list[float]:
+        if math.hypot(value[0], value[1]) > MAX_SPEED:
+            raise ValueError(
+                f"|{_numbers(value)}| m/s is stronger than any ocean current (|current| > {MAX_SPEED:g} m/s)"
+                f"{unit_slip('m/s', value)}"
+            )
+        return value
 
     @model_validator(mode="before")
     @classmethod
@@ -649,11 +808,15 @@ __all__ = [
     "DEFAULT_SEED",
     "DEFAULT_START",
     "DEFAULT_SYNTHESIS",
+    "MAX_ANGLE",
     "MAX_COORDINATE",
     "MAX_HORIZON",
+    "MAX_RATE",
+    "MAX_SPEED",
     "MAX_VEHICLES",
     "PARAMETERS",
     "REFERENCE_MODELS",
+    "SPEED_FACTOR",
     "TABLES",
     "ActionName",
     "ActuatorPreset",
@@ -684,7 +847,9 @@ __all__ = [
     "VehicleTable",
     "json_schema",
     "schema_default",
+    "speed_misfit",
     "suggest_key",
     "table_keys",
+    "unit_slip",
     "unknown_key_hints",
 ]

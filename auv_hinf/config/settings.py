@@ -33,12 +33,14 @@ from auv_hinf.config.schema import (
     ActuatorsTable,
     DesignTable,
     DisturbanceTable,
+    EnvelopeTable,
     FormationTable,
     ImplementationTable,
     ReferenceKind,
     SimulationTable,
     StartKind,
     UncertaintyTable,
+    speed_misfit,
 )
 from auv_hinf.exceptions import AuvHinfError, ConfigError
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
@@ -273,7 +275,9 @@ class FormationConfig:
     ------
     ConfigError
         At construction, for any invalid field: e.g. ``len(shape) != n - 1``, coincident
-        vehicles, or ``simulation.initial`` without one row per vehicle.
+        vehicles, ``simulation.initial`` without one row per vehicle, an envelope in degrees
+        (:data:`~auv_hinf.config.schema.MAX_RATE`), or a reference speed far above the envelope
+        (:func:`~auv_hinf.config.schema.speed_misfit`).
     """
 
     name: str
@@ -314,6 +318,10 @@ class FormationConfig:
         if self.actuators is not None and not isinstance(self.actuators, Actuators):
             raise ConfigError(f"actuators must be an Actuators or None, got {self.actuators!r}")
         form = validate_table(FormationTable, plain_data(self._formation_table()), ("formation",))
+        validate_table(EnvelopeTable, plain_data(self.envelope.to_dict()), ("envelope",))  # the units, from Python too
+        misfit = speed_misfit(self.reference.kwargs()["speed"], self.envelope.u)
+        if misfit is not None:
+            raise ConfigError(misfit)
         design = self._design_table()
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
         if self.integral and not self.implementation.continuous:

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from auv_hinf.figures.simulation import VEHICLE_COLOURS
 from auv_hinf.simulation.results import SimulationResult
 
 #: Points per inch: a line width is in points, the swath in data metres.
@@ -55,13 +56,15 @@ def survey_figure(result: SimulationResult, course: np.ndarray, swath: float) ->
     fig, ax = plt.subplots(figsize=(9, 6))
     pos = result.states[:, :, :2]
     ax.set_aspect("equal")
-    ax.plot(pos[..., 0], pos[..., 1], lw=0.8)
+    colours = [VEHICLE_COLOURS[i % len(VEHICLE_COLOURS)] for i in range(pos.shape[1])]  # none red: the lead's
+    for i, colour in enumerate(colours):
+        ax.plot(pos[:, i, 0], pos[:, i, 1], lw=0.8, color=colour)
     fig.canvas.draw()  # fixes the axes' scale, so the band width in points matches swath metres
     x0, x1 = ax.get_xlim()
     width_in = ax.get_window_extent().width / fig.dpi
     band = swath * width_in * _POINTS_PER_INCH / (x1 - x0)
     for i in range(pos.shape[1]):
-        ax.plot(pos[:, i, 0], pos[:, i, 1], lw=band, alpha=0.25, solid_capstyle="butt", color=f"C{i}")
+        ax.plot(pos[:, i, 0], pos[:, i, 1], lw=band, alpha=0.25, solid_capstyle="butt", color=colours[i])
     for k in leg_midpoints(course):
         ax.plot(pos[k, :, 0], pos[k, :, 1], "k.", ms=6)
         ax.plot(pos[k, 0, 0], pos[k, 0, 1], "r^", ms=8)
@@ -71,8 +74,8 @@ def survey_figure(result: SimulationResult, course: np.ndarray, swath: float) ->
             xytext=(pos[k, 0, 0], pos[k, 0, 1]),
             arrowprops={"arrowstyle": "->", "color": "r"},
         )
-    ax.set_xlabel("x (m, inertial)")
-    ax.set_ylabel("y (m, inertial)")
+    ax.set_xlabel("x, inertial [m]")
+    ax.set_ylabel("y, inertial [m]")
     ax.set_title(f"{result.scenario.name}: tracks, {swath:g} m swaths and the formation on each leg (lead: red)")
     return fig
 

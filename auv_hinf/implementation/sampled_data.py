@@ -111,6 +111,13 @@ def _fits(prob: ImplementationProblem, b: ErrorBounds) -> bool:
     return b.heading < MAX_HEADING_ERROR and envelope_margins(prob.tube, b, prob.envelope).ok
 
 
+#: What decides that an implementation is not covered: the stability limit of the lagged loops (no
+#: decay is certified at ``sample_time + delay``), the envelope (the error bounds that the hold, the
+#: delay and the noise leave do not fit it, or do not settle) or the actuators (the forces of those
+#: errors exceed them).
+GOVERNORS = ("stability", "envelope", "actuators")
+
+
 @dataclass(frozen=True)
 class LagBounds:
     """The outcome of :func:`bound_errors` (bounds in m, m/s, rad, rad/s; ``None`` when not covered).
@@ -122,6 +129,8 @@ class LagBounds:
         the actuators).
     reasons : tuple of str
         Why not (empty when it covers).
+    governed_by : str or None
+        Which of :data:`GOVERNORS` decides when it does not cover (``None`` when it covers).
     decay_rate : float or None
         Rate (1/s) of the ISS certificates (the smaller of the two).
     bounds : ErrorBounds or None
@@ -138,6 +147,7 @@ class LagBounds:
 
     covers: bool
     reasons: tuple[str, ...]
+    governed_by: str | None = None
     decay_rate: float | None = None
     bounds: ErrorBounds | None = None
     ultimate: ErrorBounds | None = None
@@ -154,6 +164,7 @@ class LagBounds:
             "thrust": self.thrust,
             "covers": self.covers,
             "reasons": self.reasons,
+            "governed_by": self.governed_by,
             "disturbance": self.disturbance,
             "certificates": self.certificates,
         }
@@ -183,7 +194,7 @@ def bound_errors(prob: ImplementationProblem, impl: Implementation, start: Error
         for loop, beta in zip(loops, rates, strict=True)
     )
     if certs[0] is None or certs[1] is None:
-        return LagBounds(False, (f"no decay rate is certified at sample_time + delay = {lag:.4g} s",))
+        return LagBounds(False, (f"no decay rate is certified at sample_time + delay = {lag:.4g} s",), "stability")
     pair = (certs[0], certs[1])
     v0 = (box_level(pair[0].p, start.position, start.velocity), box_level(pair[1].p, start.heading, start.yaw_rate))
     # the fixed point runs on (error bounds, disturbance bounds): the body accelerations that
@@ -204,21 +215,25 @@ def bound_errors(prob: ImplementationProblem, impl: Implementation, start: Error
     else:
         reasons.append(f"the error bounds did not settle in {FIXED_POINT_ITERATIONS} iterations")
     if reasons:
-        return LagBounds(False, tuple(reasons), decay_rate=min(c.beta for c in pair), certificates=pair)
+        return LagBounds(False, tuple(reasons), "envelope", decay_rate=min(c.beta for c in pair), certificates=pair)
     wide_state = state * (1.0 + FIXED_POINT_RTOL)
     wide = _bounds(wide_state)
     new, ult, dist, force = _step(prob, impl, pair, v0, wide_state, channel)
+    governed_by = None
     if not (np.all(new <= wide_state) and _fits(prob, wide)):
         reasons.append("the error bounds are not self-consistent (fixed-point check failed)")
+        governed_by = "envelope"
     if not reasons and prob.actuators is not None and not prob.actuators.admits(force.as_tuple()):
         reasons.append(
             f"the commanded forces (|tau_x| <= {force.force_x:.4g} N, |tau_y| <= {force.force_y:.4g} N, "
             f"|tau_psi| <= {force.moment:.4g} N m, noise included) exceed the actuators"
         )
+        governed_by = "actuators"
     ok = not reasons
     return LagBounds(
         ok,
         tuple(reasons),
+        governed_by,
         decay_rate=min(c.beta for c in pair),
         bounds=wide if ok else None,
         ultimate=ult if ok else None,
@@ -296,6 +311,8 @@ class ImplementationCertificate:
     covers : bool
     reasons : tuple of str
         Why it does not cover (empty when it does).
+    governed_by : str or None
+        Which of :data:`GOVERNORS` decides that it does not cover (``None`` when it covers).
     disturbance : LagDisturbance or None
     certificates : tuple of LagResult
         The verified position and heading certificates (empty when none).
@@ -316,6 +333,7 @@ class ImplementationCertificate:
     disturbance: LagDisturbance | None = None
     certificates: tuple[LagResult, ...] = ()
     method: str = METHOD
+    governed_by: str | None = None
 
     @property
     def tightness(self) -> float | None:
@@ -346,6 +364,7 @@ class ImplementationCertificate:
             else {"position": self.disturbance.position, "heading": self.disturbance.heading},
             "covers": self.covers,
             "reasons": list(self.reasons),
+            "governed_by": self.governed_by,
             "method": self.method,
         }
 
@@ -372,7 +391,7 @@ def certify_implementation(
             f"the sample time must be <= {max(limits.lag - impl.delay, 0.0):.4g} s (exact nominal limit "
             f"{limits.exact_sample_time:.4g} s); lower the gains' bandwidth or sample faster"
         )
-        return _certificate(impl, limits, LagBounds(False, (why,)))
+        return _certificate(impl, limits, LagBounds(False, (why,), "stability"))
     first = bound_errors(prob, impl, start, True)
     return _certificate(impl, limits, first if first.covers else bound_errors(prob, impl, start, False))
 
@@ -391,12 +410,14 @@ def _certificate(impl: Implementation, limits: LagLimits, b: LagBounds) -> Imple
         reasons=b.reasons,
         disturbance=b.disturbance,
         certificates=b.certificates,
+        governed_by=b.governed_by,
     )
 
 
 __all__ = [
     "FIXED_POINT_ITERATIONS",
     "FIXED_POINT_RTOL",
+    "GOVERNORS",
     "ISS_DECAY_FRACTION",
     "METHOD",
     "ImplementationCertificate",

@@ -29,6 +29,10 @@ ENVELOPE_INFLATION_RTOL = 1e-9
 MAX_HEADING_ERROR = 0.5 * math.pi
 
 
+#: Units of the four tracking errors, by the field names of :class:`ErrorBounds`.
+ERROR_UNITS = {"position": "m", "velocity": "m/s", "heading": "rad", "yaw_rate": "rad/s"}
+
+
 @dataclass(frozen=True)
 class ErrorBounds:
     """Bounds of one vehicle's errors over all time (sup_t).
@@ -215,6 +219,7 @@ def cell_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -
 
 __all__ = [
     "ENVELOPE_INFLATION_RTOL",
+    "ERROR_UNITS",
     "MARGIN_NAMES",
     "MAX_HEADING_ERROR",
     "ErrorBounds",

@@ -614,6 +614,29 @@ class LawnmowerReference(_Base):
         )
 
 
+def lawnmower_min_spacing(speed: float, turn_radius: float) -> float:
+    """The smallest ``spacing`` a :class:`LawnmowerReference` accepts: two 90-degree turns, ``2 D`` (m).
+
+    ``2 D`` is about ``3.97 turn_radius``; it is computed exactly as the path computes it, on a
+    path with the same speed and turn radius and legs far apart, so a spacing at least this large
+    is accepted by the path.
+
+    Parameters
+    ----------
+    speed : float
+        Speed along the path (m/s), > 0.
+    turn_radius : float
+        Smallest radius of the turns (m), > 0.
+
+    Raises
+    ------
+    ParameterError
+        If ``speed`` or ``turn_radius`` is not finite and positive.
+    """
+    probe = LawnmowerReference(speed=speed, leg_length=1.0, spacing=1e300, turn_radius=turn_radius)  # legs far apart
+    return 2.0 * probe._extent
+
+
 __all__ = [
     "BOUND_RTOL",
     "GL_NODES",
@@ -628,6 +651,7 @@ __all__ = [
     "MissionReference",
     "SineReference",
     "heading_from_velocity",
+    "lawnmower_min_spacing",
     "poly_sup",
     "times",
 ]

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.exceptions import ParameterError
+from auv_hinf.exceptions import Interrupted, ParameterError
 from auv_hinf.implementation.sampled_loop import integrate_sampled
 from auv_hinf.simulation.engine import integrate_batch
 from auv_hinf.simulation.scenario import Scenario, ScenarioBatch
@@ -75,6 +75,9 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
     ------
     ParameterError
         If the file name does not end in ``.parquet`` or ``interval`` is not positive.
+    Interrupted
+        On Ctrl-C: the file is closed, valid, with the samples integrated so far; ``partial`` is
+        the time of the last one (s), ``None`` when none was written.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -89,6 +92,7 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
     schema = pa.schema([("t", pa.float64()), ("vehicle", pa.int32())] + [(c, pa.float64()) for c in names])
     vehicle = np.arange(n, dtype=np.int32)
     pending: list[tuple[NDArray[np.int_], FloatArray]] = []  # samples not yet written
+    written = [0, -1]  # samples written, index of the last one
     with pq.ParquetWriter(out, schema) as writer:
 
         def flush() -> None:
@@ -100,6 +104,7 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
             cols = {"t": np.repeat(times[idx], n), "vehicle": np.tile(vehicle, idx.size)}
             cols |= {c: states[:, :, k].ravel() for k, c in enumerate(names)}
             writer.write_table(pa.table(cols, schema=schema))
+            written[0], written[1] = written[0] + idx.size, max(written[1], int(idx.max()))
 
         def sink(idx: NDArray[np.int_], systems: NDArray[np.int_], values: FloatArray) -> None:
             pending.append((idx.copy(), values.copy()))  # one scenario: every row is one sample of it
@@ -107,10 +112,15 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
                 flush()
 
         batch = ScenarioBatch((run,))
-        if run.implementation.continuous:
-            integrate_batch(batch, sink=sink)
-        else:
-            integrate_sampled(batch, sink=sink)
+        try:
+            if run.implementation.continuous:
+                integrate_batch(batch, sink=sink)
+            else:
+                integrate_sampled(batch, sink=sink)
+        except KeyboardInterrupt:  # keep what was integrated: the file closes valid, with every sample so far
+            flush()
+            last = float(times[written[1]]) if written[1] >= 0 else None
+            raise Interrupted(written[0], samples, last) from None
         flush()
     return out
 

@@ -21,6 +21,7 @@ from auv_hinf.cli.main import main
 from auv_hinf.config.settings import FormationConfig, config_from_dict
 from auv_hinf.exceptions import ConfigError, EnvelopeError
 from auv_hinf.models.envelope import Envelope
+from tests.helpers import to_toml
 
 
 def fuzz(examples: int) -> settings:
@@ -34,27 +35,6 @@ def fuzz(examples: int) -> settings:
 NAMES = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
 PAPER = dict(zip(NAMES, (200.0, 250.0, 80.0, 70.0, 100.0, 100.0, 200.0, 50.0, 100.0)))
 SQRT_HALF = 1 / math.sqrt(2)
-
-
-def toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v)  # nan, inf and -inf are TOML too
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, dict):
-        return "{" + ", ".join(f"{json.dumps(k)} = {toml_value(x)}" for k, x in v.items()) + "}"
-    return "[" + ", ".join(toml_value(x) for x in v) + "]"
-
-
-def to_toml(data: dict[str, Any]) -> str:
-    lines = [f"{json.dumps(k)} = {toml_value(v)}" for k, v in data.items() if not isinstance(v, dict)]
-    for key, table in data.items():
-        if isinstance(table, dict):
-            lines.append(f"[{json.dumps(key)}]")
-            lines += [f"{json.dumps(k)} = {toml_value(v)}" for k, v in table.items()]
-    return "\n".join(lines) + "\n"
 
 
 def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:

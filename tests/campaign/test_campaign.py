@@ -251,6 +251,9 @@ def test_the_dask_bar_moves_with_the_chunk_events_before_the_chunks_finish(monke
         def done(self) -> bool:
             return self.client.polls > 2
 
+        def result(self) -> pd.DataFrame:  # fetched as soon as the chunk is done
+            return pd.DataFrame()
+
     class Scripted:
         """Poll 1: no events; poll 2: each chunk half done; poll 3: all finished."""
 
@@ -266,9 +269,6 @@ def test_the_dask_bar_moves_with_the_chunk_events_before_the_chunks_finish(monke
         def get_events(self, topic: str) -> list[tuple[float, tuple[int, float]]]:
             self.polls += 1
             return [(0.0, (lo, 0.5)) for lo in (0, 4)] if self.polls == 2 else []
-
-        def gather(self, futures: list[Future]) -> list[pd.DataFrame]:
-            return [pd.DataFrame() for _ in futures]
 
     monkeypatch.setattr(runner, "PROGRESS_POLL", 0.0)
     runner._execute(None, [(0, 4), (4, 8)], Scripted(), progress=True)  # type: ignore[arg-type]

@@ -48,7 +48,7 @@ def test_presets_certify(name):
 
 def test_bad_design_not_certified_with_reasons():
     cfg = preset_config("paper-triangle")
-    bad = replace(cfg, envelope=Envelope(u=(0, 0.1), v=(-0.1, 0.1), r=(-20, 20)), method="paper")
+    bad = replace(cfg, gamma=0.2, method="paper")  # below 1/sqrt(lambda^2 + 2) = 0.395 s
     c = certify(bad)
     assert not c.certified
     assert any("below the Theorem 1 bound" in r for r in c.reasons)
@@ -56,7 +56,7 @@ def test_bad_design_not_certified_with_reasons():
 
 def test_minimal_with_gamma_equal_inverse_sigma_is_strictly_zero_margin():
     cfg = replace(
-        preset_config("paper-triangle"), envelope=Envelope(u=(0, 0.5), v=(-1, 1), r=(-3, 3)), method="minimal"
+        preset_config("paper-triangle"), envelope=Envelope(u=(0, 1.5), v=(-1, 1), r=(-2, 2)), method="minimal"
     )
     c = certify(cfg)
     assert c.small_gain_margin == pytest.approx(0.0, abs=1e-9)

@@ -114,7 +114,7 @@ def test_config_problems_one_line_each(tmp_path, capsys):
 
 def test_negative_verdict_exit_1_with_reason(tmp_path, capsys):
     f = tmp_path / "weak.toml"
-    f.write_text("[envelope]\nu = [0, 0.1]\nv = [-0.1, 0.1]\nr = [-20, 20]\n[design]\nmethod = 'paper'\n")
+    f.write_text("[envelope]\nr = [-2, 2]\n[design]\nmethod = 'paper'\ngamma = 0.2\n")  # gamma below the bound
     code, out, err = run(["certify", "--config", str(f)], capsys)
     assert code == 1 and "CERTIFIED: no" in out
     assert err.count("\n") == 1 and err.startswith("auv-hinf: not certified: ") and "Theorem 1 bound" in err

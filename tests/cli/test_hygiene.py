@@ -14,22 +14,19 @@ from auv_hinf.design import crosscheck as crosscheck_module
 from auv_hinf.exceptions import SolverError
 
 
-def test_degrees_and_empty_files_are_flagged():
+def test_empty_files_are_flagged_and_degrees_are_errors_not_warnings():
     assert input_warnings({}) and "sets nothing" in input_warnings({})[0]
-    lines = input_warnings({"reference": {"kind": "line", "heading": 90.0}})
-    assert len(lines) == 1 and "reference.heading" in lines[0] and "1.571" in lines[0]
-    rows = [[0.0, 0.0, 45.0, 1.0, 0.0, 0.0], [5.0, 0.0, 0.5, 1.0, 0.0, 0.0]]
-    lines = input_warnings({"simulation": {"initial": rows}})
-    assert len(lines) == 1 and "initial[0][2]" in lines[0]
+    assert input_warnings({"reference": {"kind": "line", "heading": 90.0}}) == []  # an error now (tests/config)
     assert input_warnings({"reference": {"kind": "line", "heading": 1.0}}) == []
 
 
-def test_cli_prints_the_warning(tmp_path, capsys):
+def test_cli_refuses_degrees_with_one_line_naming_the_key(tmp_path, capsys):
     path = tmp_path / "deg.toml"
     path.write_text('[reference]\nkind = "line"\nspeed = 1.0\nheading = 90.0\n', encoding="utf-8")
-    main(["certify", "--config", str(path), "--json"])
-    err = capsys.readouterr().err
-    assert "warning" in err and "reference.heading = 90 rad" in err
+    assert main(["certify", "--config", str(path), "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1
+    assert "error" in err and "reference.heading" in err and "degrees" in err and "1.571 rad" in err
 
 
 @pytest.mark.slow

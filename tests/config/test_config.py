@@ -91,7 +91,9 @@ def test_missing_vehicle_parameters_listed():
 
 
 def test_envelope_psi_range_rejected_in_toml_and_python():
-    assert problems({"envelope": {"psi": [0, 100]}})[0].startswith("envelope.psi: envelope psi must span at most")
+    assert problems({"envelope": {"psi": [-4, 4]}})[0].startswith("envelope.psi: envelope psi must span at most")
+    (line,) = problems({"envelope": {"psi": [0, 100]}})  # beyond a full turn: degrees, said so
+    assert line.startswith("envelope.psi: [0, 100] rad is more than a full turn") and "[0, 1.745] rad" in line
     with pytest.raises(ValueError, match="psi"):
         Envelope(u=(0, 1), v=(0, 1), r=(0, 1), psi=(0, 100))
 
@@ -103,7 +105,7 @@ def test_wrong_number_of_shape_vectors_at_construction():
     with pytest.raises(ConfigError, match="shape must have 3 rows"):
         replace(cfg, n=4)
     assert problems({"formation": {"n": 3, "offsets": [[0, 0], [1, 0]]}}) == [
-        "formation: offsets must have 3 rows [x, y] for n = 3, got 2"
+        "formation.offsets must have 3 rows [x, y] for n = 3, got 2"
     ]
 
 
@@ -153,8 +155,10 @@ def test_reference_tables():
     assert config_from_dict({}).reference == ReferenceConfig(
         "sine", (("speed", 1.0), ("amplitude", 30.0), ("omega", 0.1))
     )
-    ref = config_from_dict({"reference": {"kind": "lawnmower", "leg_length": 100, "spacing": 20, "turn_radius": 10}})
-    assert ref.reference.kwargs() == {"speed": 1.0, "leg_length": 100.0, "spacing": 20.0, "turn_radius": 10.0}
+    ref = config_from_dict({"reference": {"kind": "lawnmower", "leg_length": 100, "spacing": 40, "turn_radius": 10}})
+    assert ref.reference.kwargs() == {"speed": 1.0, "leg_length": 100.0, "spacing": 40.0, "turn_radius": 10.0}
+    (line,) = problems({"reference": {"kind": "lawnmower", "leg_length": 100, "spacing": 20, "turn_radius": 10}})
+    assert line.startswith("reference.spacing must be >= 39.7032 m") and "turn_radius to at most 5.037 m" in line
     assert problems({"reference": {"kind": "circle"}}) == ["reference.radius is required"]
     assert problems({"reference": {"kind": "spiral"}})[0].startswith("reference.kind must be one of")
     assert problems({"reference": {"speed": 0}}) == ["reference.speed must be > 0 [m/s], got 0"]

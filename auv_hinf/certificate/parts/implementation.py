@@ -41,6 +41,18 @@ COVERED_SEARCH_RTOL = 0.05
 #: The search starts at this fraction of the certified sample-time limit.
 COVERED_SEARCH_FLOOR = 1e-3
 
+#: What decides that the declared implementation is not covered, in words: the implementation certificate's own
+#: :data:`~auv_hinf.implementation.sampled_data.GOVERNORS`, the declared box or current it does not cover yet, or
+#: the missing closed-loop certificate it extends.
+GOVERNOR_WORDS = {
+    "stability": "the stability limit",
+    "envelope": "the envelope",
+    "actuators": "the actuators",
+    "uncertainty": "the declared uncertainty",
+    "closed_loop": "the closed loop",
+    "computation": "the certificate's computation",
+}
+
 #: What the implementation certificate does not yet cover, said when it would matter.
 BOX_NOT_COVERED = (
     "the implementation certificate covers the controller's own model as the plant: the declared "
@@ -128,6 +140,11 @@ class ImplementationSummary:
     covered_sample_time : float or None
         When the declared implementation is not covered: the largest sample time (s) that is,
         with the declared delay and noise (``None``: none is, or not searched).
+    governed_by : str or None
+        What decides that it is not covered, a key of :data:`GOVERNOR_WORDS` (``None``: covered).
+    searched : bool
+        The largest covered sample time was searched for (``covered_sample_time`` ``None`` then
+        means that none is covered).
     """
 
     implementation: Implementation
@@ -135,6 +152,8 @@ class ImplementationSummary:
     covers: bool
     reasons: tuple[str, ...]
     covered_sample_time: float | None = None
+    governed_by: str | None = None
+    searched: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """The ``implementation`` object of ``auv-hinf certify --json``.
@@ -169,6 +188,8 @@ class ImplementationSummary:
             "control_period": None if self.implementation.continuous else period,
             "covers": self.covers,
             "covered_sample_time": self.covered_sample_time,
+            "searched_sample_time": self.searched,
+            "governed_by": self.governed_by,
             "description": self.implementation.describe(),
             "reasons": list(self.reasons),
         }
@@ -208,9 +229,10 @@ def implementation_summary(
         impl = replace(declared, sample_time=period)
     if point.gains is not None and point.gains.integral:  # continuous only (the config refuses the rest)
         why = () if continuous_ok else ("the continuous certificates do not hold",)
-        return ImplementationSummary(declared, None, continuous_ok, why)
+        return ImplementationSummary(declared, None, continuous_ok, why, governed_by="closed_loop" if why else None)
     if nominal is None or point.gains is None:
-        return ImplementationSummary(impl, None, False, ("no closed-loop certificate to extend to the implementation",))
+        why = ("no closed-loop certificate to extend to the implementation",)
+        return ImplementationSummary(impl, None, False, why, governed_by="closed_loop")
     try:
         prob, start = implementation_problem(point, nominal), start_errors(point)
         limits = lag_limits(prob.loops, prob.nominal_dampings, impl.delay)
@@ -219,7 +241,8 @@ def implementation_summary(
             return ImplementationSummary(declared, cert, continuous_ok, ())
         covered = None if cert.covers or not search else covered_sample_time(prob, impl, start, limits)
     except AuvHinfError as exc:
-        return ImplementationSummary(declared, None, False, (f"implementation not certified: {exc}",))
+        why = (f"implementation not certified: {exc}",)
+        return ImplementationSummary(declared, None, False, why, governed_by="computation")
     reasons = list(cert.reasons)
     if covered is not None:
         reasons.append(
@@ -230,7 +253,10 @@ def implementation_summary(
         reasons.append(no_sample_time_covered(impl))
     if point.declared:
         reasons.append(BOX_NOT_COVERED)
-    return ImplementationSummary(declared, cert, cert.covers and not point.declared, tuple(reasons), covered)
+    covers = cert.covers and not point.declared
+    governed_by = None if covers else (cert.governed_by or "uncertainty")
+    searched = search and not cert.covers
+    return ImplementationSummary(declared, cert, covers, tuple(reasons), covered, governed_by, searched)
 
 
 def no_sample_time_covered(impl: Implementation) -> str:
@@ -351,23 +377,27 @@ class ImplementationPart:
         return Verdict(self.name, False, True, (why,), impl.to_dict(), binding=binding, detail=impl)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
-        """The implementation, its limits, its bounds and one verdict (s, Hz, 1/s, m, m/s, rad, rad/s)."""
+        """The implementation, its limits, its bounds and one verdict with what governs it (s, Hz, 1/s, m, rad).
+
+        The stability limit says what it is the largest of (the loops alone, at the declared delay), the
+        covered sample time what it is covered with (this delay and noise, this mission); a declared
+        implementation gets one verdict line, naming what decides it. The continuous default gets none:
+        it decides nothing (the continuous certificates do).
+        """
         f = figures
         if f is None:
             return []
         declared = not f["continuous"]
         described = f.get("description") or f"sample time {f['sample_time']:g} s, delay {f['delay']:g} s"
         out = [f"  implementation            {described}"]
-        if f["max_sample_time"] is None:
-            if not declared:
-                return out
-            return [*out, f"  implementation covered    NO: {'; '.join(f['reasons']) or 'not certified'}"]
-        ex, tight = f["exact_max_sample_time"], f["tightness"]
-        vs = "" if tight is None else f", {tight:.2f} of the exact nominal limit {ex:.4g} s"
-        out.append(
-            f"  stability limit (LK)      sample time <= {f['max_sample_time']:.4g} s at delay {f['delay']:.4g} s{vs}; "
-            f"delay <= {f['max_delay']:.4g} s (the loop alone: no noise, no envelope)"
-        )
+        if f["max_sample_time"] is not None:
+            ex, tight = f["exact_max_sample_time"], f["tightness"]
+            vs = "" if tight is None else f"; {tight:.2f} of the exact nominal limit {ex:.4g} s"
+            out.append(
+                f"  stability limit (LK)      sample time <= {f['max_sample_time']:.4g} s, the largest at which the "
+                f"error loops alone (no noise, no envelope) are certified stable with delay {f['delay']:.4g} s{vs}; "
+                f"delay <= {f['max_delay']:.4g} s at sample time {f['sample_time']:.4g} s"
+            )
         b, u = f["error_bounds"], f["ultimate_bounds"]
         if declared and b is not None and u is not None:
             out.append(
@@ -379,10 +409,10 @@ class ImplementationPart:
                 f"  ultimate bounds           |e| <= {u['position']:.3g} m, |e'| <= {u['velocity']:.3g} m/s, "
                 f"|e_psi| <= {u['heading']:.3g} rad, |e_r| <= {u['yaw_rate']:.3g} rad/s"
             )
-        if declared:
-            verdict = "yes" if f["covers"] else "NO: " + ("; ".join(f["reasons"]) or "not certified")
-            out.append(f"  implementation covered    {verdict}")
-        return out
+        if not declared:
+            return out
+        covered = _covered_line(f)
+        return [*out, *([covered] if covered else []), _verdict_line(f)]
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
         """Does the implementation certificate cover this sampled, delayed or noisy run (a condition)?
@@ -405,10 +435,34 @@ class ImplementationPart:
         return RunCheck(self.name, "condition", True, impl.covers, "; ".join(impl.reasons), notes, detail=impl)
 
 
+def _covered_line(f: Mapping[str, Any]) -> str | None:
+    """The largest sample time covered with the declared delay and noise on this mission, when it was searched."""
+    h, with_this = f.get("covered_sample_time"), f"with this delay ({f['delay']:.4g} s) and noise, on this mission"
+    if f["covers"] or (h is None and not f.get("searched_sample_time")):
+        return None
+    if h is None:
+        return f"  covered sample time       none: no sample time is covered {with_this}"
+    return f"  covered sample time       <= {h:.4g} s ({1.0 / h:.3g} Hz): the largest covered {with_this}"
+
+
+def _verdict_line(f: Mapping[str, Any]) -> str:
+    """The one verdict of a declared implementation: yes, or NO with what governs it and why."""
+    if f["covers"]:
+        return "  implementation covered    yes"
+    first = (f["reasons"] or ["not certified"])[0]
+    governor = GOVERNOR_WORDS.get(f.get("governed_by") or "")
+    if governor is None:  # a record written before the verdicts named what governs them
+        return f"  implementation covered    NO: {first}"
+    stable = f["max_sample_time"] is not None and f["sample_time"] <= f["max_sample_time"]
+    within = f" (sample time {f['sample_time']:.4g} s, within the stability limit)" if stable else ""
+    return f"  implementation covered    NO, governed by {governor}: {first}{within}"
+
+
 __all__ = [
     "BOX_NOT_COVERED",
     "COVERED_SEARCH_FLOOR",
     "COVERED_SEARCH_RTOL",
+    "GOVERNOR_WORDS",
     "ImplementationSummary",
     "covered_sample_time",
     "implementation_problem",
