@@ -55,21 +55,29 @@ def _prepare_out(path: Path | None, option: str = "--out", given: Path | None = 
         raise BadInput(f"{option} {what}{str(path)!r} is not a writable directory: {exc.strerror or exc}") from None
 
 
-def _load(args: argparse.Namespace) -> Any:
+def _read(args: argparse.Namespace) -> tuple[FormationConfig, dict[str, Any] | None]:
+    """The configuration of ``--preset`` or ``--config`` (with the parsed TOML of a file, for its tables).
+
+    Every error line names the option and the file (the file's own lines name the key).
+    """
     from auv_hinf.config.presets import preset_config
     from auv_hinf.config.settings import read_config
 
     if args.preset:
-        return preset_config(args.preset)
+        return preset_config(args.preset), None
     try:
         cfg, data = read_config(args.config)
-    except ConfigError as exc:  # every line names the option and the file (the file's own lines name the key)
+    except ConfigError as exc:
         given = str(args.config)
         lines = [line if line.startswith(f"{given}:") else f"{given}: {line}" for line in str(exc).splitlines()]
         raise ConfigError("\n".join(f"--config {line}" for line in lines)) from None
     for line in input_warnings(data):
         print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
-    return cfg
+    return cfg, data
+
+
+def _load(args: argparse.Namespace) -> Any:
+    return _read(args)[0]
 
 
 def _cmd_design(args: argparse.Namespace) -> int:
@@ -363,19 +371,16 @@ def _deploy_source(args: argparse.Namespace) -> tuple[FormationConfig, Any, Any]
     """The configuration, the certificate of ``--certificate`` (else ``None``) and the ``[deploy]`` table."""
     from auv_hinf.certificate.assembly import Certificate
     from auv_hinf.config.messages import parse_config
-    from auv_hinf.config.presets import preset_config
     from auv_hinf.config.schema import DeployTable
-    from auv_hinf.config.settings import read_config
 
     if args.certificate is not None:
-        cert = Certificate.load(args.certificate)
+        try:
+            cert = Certificate.load(args.certificate)
+        except ConfigError as exc:
+            raise ConfigError("\n".join(f"--certificate {line}" for line in str(exc).splitlines())) from None
         return cert.config, cert, DeployTable()
-    if args.preset:
-        return preset_config(args.preset), None, DeployTable()
-    cfg, data = read_config(args.config)
-    for line in input_warnings(data):
-        print(f"{PROG}: warning: {args.config}: {line}", file=sys.stderr)
-    return cfg, None, parse_config(data).deploy
+    cfg, data = _read(args)
+    return cfg, None, DeployTable() if data is None else parse_config(data).deploy
 
 
 def _certified(cfg: FormationConfig, cert: Any) -> Any:
@@ -406,12 +411,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from auv_hinf.deployment.monitor import MonitorConfig
     from auv_hinf.deployment.runner import run
 
+    _prepare_out(args.log.parent, "--log", args.log)  # before any computation or connection
     cfg, cert, deploy = _deploy_source(args)
     urls = list(args.connect or deploy.connect or [])
     n = cfg.n
     if len(urls) != n:
         raise BadInput(f"give one --connect URL per vehicle ({n}; or [deploy] connect), got {len(urls)}")
-    _prepare_out(args.log.parent)
     cert = _certified(cfg, cert)
     law = _runtime_law(cert, args.uncertified)
     if law.sample_time <= 0.0:
@@ -481,6 +486,8 @@ def _cmd_fleet_sim(args: argparse.Namespace) -> int:
     from auv_hinf.deployment.ardusub import ArduSubMapping
     from auv_hinf.deployment.loopback import LinkFaults, LoopbackFleet, loopback_starts
 
+    if args.report is not None:
+        _prepare_out(args.report.parent, "--report", args.report)  # before the fleet starts
     cfg = _deploy_source(args)[0]
     n = len(args.listen)
     if n != cfg.n:
@@ -538,6 +545,8 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     from auv_hinf.deployment.log import read_log
     from auv_hinf.deployment.replay import replay
 
+    if args.plot is not None:
+        _prepare_out(args.plot.parent, "--plot", args.plot)  # before the log is read and replayed
     cfg, cert, _ = _deploy_source(args)
     data = read_log(args.log)
     law = _runtime_law(_certified(cfg, cert), uncertified=True)

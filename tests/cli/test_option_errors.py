@@ -78,6 +78,25 @@ def path_cases(tmp: Path) -> dict[tuple[str, str], list[tuple[list[str], str]]]:
         (["simulate", *preset, "--save", str(under_file / "x.parquet")], "--save"),
         (["simulate", *preset, "--save", str(tmp / "x.csv")], "--save"),
     ]
+    log = tmp / "log.csv"
+    log.write_text("not a log\n", encoding="utf-8")
+    deploy = {
+        "run": ["--connect", "udpin:127.0.0.1:9", "--duration", "1", "--log", str(tmp / "run.parquet")],
+        "fleet-sim": ["--listen", "udpout:127.0.0.1:9", "--duration", "1"],
+        "replay": [str(log)],
+    }
+    for command, rest in deploy.items():
+        out[(command, "--config")] = [
+            ([command, *rest, "--config", str(p)], "--config") for p in (tmp / "missing.toml", bad_toml)
+        ]
+        out[(command, "--certificate")] = [
+            ([command, *rest, "--certificate", str(p)], "--certificate") for p in (tmp / "missing.json", file)
+        ]
+    out[("run", "--log")] = [(["run", *deploy["run"][:-2], *preset, "--log", str(under_file / "x.parquet")], "--log")]
+    out[("fleet-sim", "--report")] = [
+        (["fleet-sim", *deploy["fleet-sim"], *preset, "--report", str(under_file / "r.json")], "--report")
+    ]
+    out[("replay", "--plot")] = [(["replay", str(log), *preset, "--plot", str(under_file / "x.png")], "--plot")]
     out[("init", "--out")] = [
         (["init", "--out", str(file)], "--out"),
         (["init", "--out", str(under_file / "x")], "--out"),
