@@ -2,19 +2,25 @@
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import importlib
 import inspect
 import json
+import pickle
 import pkgutil
+import tempfile
 from dataclasses import replace
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import auv_hinf
 from auv_hinf.certificate.assembly import Certificate, certify
-from auv_hinf.config.presets import preset_config
+from auv_hinf.config.presets import annotated_toml, preset_config
+from auv_hinf.config.settings import FormationConfig
 from auv_hinf.mission.fleet import FleetReference
 
 #: Four BlueROV2 Heavy on a gentle sine with Theorem 1 gains (gamma = 0.1, method minimal): a loop gentle
@@ -64,9 +70,58 @@ def starts_from_errors(fleet: FleetReference, errors: np.ndarray) -> np.ndarray:
 
 
 @cache
+def _source_digest() -> str:
+    """SHA-256 of the package's sources: a cached certificate is only ever reused by the same code."""
+    digest = hashlib.sha256()
+    root = Path(auv_hinf.__file__).parent
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def certificate_of(cfg: FormationConfig) -> Certificate:
+    """``certify(cfg)``, computed once for the whole test run (every xdist worker shares it).
+
+    The heavy presets take 10-30 s to certify and several test files need the same certificate:
+    the first process to ask computes it under a file lock and pickles it into a folder keyed on
+    the package's sources and on the configuration; the others wait for it and read it.
+    """
+    key = hashlib.sha256(json.dumps(cfg.to_toml_dict(), sort_keys=True, default=str).encode()).hexdigest()[:16]
+    folder = Path(tempfile.gettempdir()) / f"auv-hinf-test-certificates-{_source_digest()}"
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{cfg.name}-{key}.pickle"
+    with open(folder / f"{key}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if path.exists():
+            cert: Certificate = pickle.loads(path.read_bytes())
+            return cert
+        cert = certify(cfg)
+        path.write_bytes(pickle.dumps(cert))
+        return cert
+
+
+def fully_actuated(name: str) -> FormationConfig:
+    """Preset ``name`` with its ``[actuators]`` left undeclared: its hydrodynamics with a sway actuator.
+
+    The REMUS presets declare the vehicle's propeller and rudder, on which the fully actuated law
+    is refused; the tests of the robust, sampled and campaign machinery use the same fleet as if
+    each vehicle had a sway actuator (no force limits), which is what those certificates are about.
+    """
+    return replace(preset_config(name), actuators=None)
+
+
+def fully_actuated_file(name: str, folder: Path) -> Path:
+    """:func:`fully_actuated` written as a TOML file in ``folder`` (for the command-line tests)."""
+    path = folder / f"{name}.toml"  # the file name is the configuration name
+    path.write_text(annotated_toml(fully_actuated(name)), encoding="utf-8")
+    return path
+
+
+@cache
 def preset_certificate(name: str) -> Certificate:
-    """The certificate of preset ``name``, computed once per test process (the heavy presets take seconds)."""
-    return certify(preset_config(name))
+    """The certificate of preset ``name``, computed once for the whole test run (:func:`certificate_of`)."""
+    return certificate_of(preset_config(name))
 
 
 @cache

@@ -1,4 +1,4 @@
-"""What a vehicle can push: per-channel force limits in the body frame, and the saturation model.
+"""What a vehicle can push: per-channel force limits in the body frame, a rudder, and the saturation models.
 
 :class:`Actuators` holds the largest body force ``|tau_x|`` (N), ``|tau_y|`` (N) and yaw
 moment ``|tau_psi|`` (N m) the vehicle's propulsion gives, channel by channel. A certificate
@@ -10,14 +10,22 @@ a box, so the test is exact channel by channel. With a thruster allocation
 box is tested at its 8 corners, exact by convexity. The simulator applies
 :meth:`Actuators.saturate` to the commanded forces; a certified run never reaches it.
 
-The vehicle presets' limits, with their sources, are in :data:`VEHICLE_ACTUATORS` and
+A torpedo AUV (REMUS 100, Iver3, LAUV) has no such box: :class:`RudderActuation` is a propeller
+(surge thrust) and a tail rudder whose deflection ``delta`` (rad) gives a sway force and a yaw
+moment *together*, ``Y = Y_uu_delta u^2 delta`` and ``N = N_uu_delta u^2 delta``, at the surge
+speed ``u``. The deliverable ``(tau_y, tau_psi)`` is a segment through the origin, so no box of
+sway force and yaw moment with a nonzero width lies inside it: the fully actuated formation law,
+which commands the two independently, is refused on such a vehicle, whatever its gains.
+
+The vehicle presets' actuation, with its sources, is in :data:`VEHICLE_ACTUATORS` and
 ``docs/vehicles.md``.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +40,18 @@ CHANNELS = ("force_x", "force_y", "moment")
 CHANNEL_WORDS = {"force_x": "surge force", "force_y": "sway force", "moment": "yaw moment"}
 #: Units of the channels.
 CHANNEL_UNITS = {"force_x": "N", "force_y": "N", "moment": "N m"}
+#: Units of the ``limits`` objects of either kind of actuation: the channels, and the rudder's deflection.
+LIMIT_UNITS = {**CHANNEL_UNITS, "rudder": "rad"}
+#: The two kinds of horizontal actuation (``[actuators] kind``): independent surge, sway and yaw
+#: (:class:`Actuators`), or a propeller and a rudder (:class:`RudderActuation`).
+ActuationKind = Literal["fully-actuated", "underactuated"]
+ACTUATION_KINDS: tuple[ActuationKind, ...] = ("fully-actuated", "underactuated")
+#: Largest rudder deflection accepted (rad): 45 degrees. Control fins stall near 20-25 degrees of
+#: angle of attack; a larger figure is a unit mistake (degrees for radians) rather than a fin.
+MAX_RUDDER = math.pi / 4
+#: Relative tolerance under which a delivered force counts as the commanded one (-): the rudder's
+#: forces are products ``c u^2 delta`` whose rounding is a few ulps, far below this.
+DELIVERY_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -67,6 +87,8 @@ class Actuators:
     source: str = "declared"
     thrusters: ThrusterAllocation | None = None
     note: str = ""
+    #: The ``[actuators] kind`` of these limits.
+    kind: ClassVar[ActuationKind] = "fully-actuated"
 
     def __post_init__(self) -> None:
         for name in ("tau_x", "tau_y", "tau_psi"):
@@ -137,7 +159,7 @@ class Actuators:
                 return "thrusters", used
         return CHANNELS[k], float(r[k])
 
-    def saturate(self, tau: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    def saturate(self, tau: FloatArray, surge: FloatArray | None = None) -> tuple[FloatArray, NDArray[np.bool_]]:
         """Clip commanded forces ``tau (..., 3)`` to the limits; also the per-vehicle active flag.
 
         With thrusters the command is first saturated by the allocation, then clipped per channel.
@@ -146,6 +168,8 @@ class Actuators:
         ----------
         tau : ndarray, shape (..., 3)
             Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
+        surge : ndarray, optional
+            Surge speeds ``u`` (m/s), shape ``tau.shape[:-1]``: unused, thrusters do not depend on it.
 
         Returns
         -------
@@ -165,6 +189,132 @@ class Actuators:
     def to_dict(self) -> dict[str, Any]:
         """The ``limits`` object of the JSON reports: ``{force_x, force_y, moment}`` (N, N, N m)."""
         return dict(zip(CHANNELS, self.limits()))
+
+
+@dataclass(frozen=True)
+class RudderActuation:
+    """A propeller and a tail rudder: the horizontal actuation of a torpedo AUV (no sway thruster).
+
+    The body force at surge speed ``u`` (m/s), thrust ``T`` (N) and rudder angle ``delta`` (rad) is
+    ``(T, Y_uu_delta u^2 delta, N_uu_delta u^2 delta)`` (N, N, N m): the sway force and the yaw
+    moment come from one deflection and keep the ratio ``N_uu_delta / Y_uu_delta`` (m, the
+    rudder's signed lever arm, negative behind the centre).
+
+    Attributes
+    ----------
+    tau_x : float
+        Largest propeller thrust ``|T|`` (N), > 0.
+    rudder_max : float
+        Largest rudder deflection ``|delta|`` (rad), in ``(0, MAX_RUDDER]``.
+    rudder_sway : float
+        ``Y_uu_delta``, sway force per ``u^2 delta`` (kg/(m rad)), nonzero.
+    rudder_yaw : float
+        ``N_uu_delta``, yaw moment per ``u^2 delta`` (kg/rad), nonzero.
+    source : str
+        Where the figures come from (a vehicle preset name or ``"declared"``).
+    note : str
+        What a user should know, in plain words; added to the actuator reason.
+
+    Raises
+    ------
+    ParameterError
+        If a figure is not finite, the thrust is not positive, the deflection is outside
+        ``(0, MAX_RUDDER]`` or a rudder derivative is zero.
+    """
+
+    tau_x: float
+    rudder_max: float
+    rudder_sway: float
+    rudder_yaw: float
+    source: str = "declared"
+    note: str = ""
+    #: The ``[actuators] kind`` of this actuation.
+    kind: ClassVar[ActuationKind] = "underactuated"
+
+    def __post_init__(self) -> None:
+        for name in ("tau_x", "rudder_max", "rudder_sway", "rudder_yaw"):
+            object.__setattr__(self, name, require_finite(name, getattr(self, name)))
+        if self.tau_x <= 0.0:
+            raise ParameterError(f"actuators.tau_x (propeller thrust) must be > 0 N, got {self.tau_x!r}")
+        if not 0.0 < self.rudder_max <= MAX_RUDDER:
+            raise ParameterError(
+                f"actuators.rudder_max must be in (0, {MAX_RUDDER:.4g}] rad (45 deg), got {self.rudder_max!r}: "
+                "give the largest fin deflection in radians"
+            )
+        for name in ("rudder_sway", "rudder_yaw"):
+            if getattr(self, name) == 0.0:
+                raise ParameterError(f"actuators.{name} must be nonzero (kg/(m rad) or kg/rad), got 0")
+
+    @property
+    def lever_arm(self) -> float:
+        """``N_uu_delta / Y_uu_delta`` (m): the rudder's signed x position (negative: behind the centre)."""
+        return self.rudder_yaw / self.rudder_sway
+
+    def authority(self, speed: float) -> tuple[float, float]:
+        """The largest sway force (N) and yaw moment (N m) at surge speed ``speed``, both from full rudder.
+
+        Parameters
+        ----------
+        speed : float
+            Surge speed ``u`` (m/s).
+        """
+        q = speed * speed * self.rudder_max
+        return abs(self.rudder_sway) * q, abs(self.rudder_yaw) * q
+
+    def saturate(self, tau: FloatArray, surge: FloatArray | None = None) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """The forces delivered for commands ``tau (..., 3)`` at surge speeds ``surge``; also where they differ.
+
+        The thrust is clipped to ``|T| <= tau_x``. The rudder answers the yaw command: ``delta =
+        tau_psi / (N_uu_delta u^2)``, clipped to ``|delta| <= rudder_max`` (zero at ``u = 0``,
+        where it has no authority), and the sway force is the one that deflection makes, not the
+        commanded one.
+
+        Parameters
+        ----------
+        tau : ndarray, shape (..., 3)
+            Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
+        surge : ndarray
+            Surge speeds ``u`` (m/s), shape ``tau.shape[:-1]``; required, the rudder's forces depend on it.
+
+        Returns
+        -------
+        applied : ndarray, shape (..., 3)
+            The delivered forces (N, N, N m).
+        active : ndarray of bool, shape (...)
+            The delivered force differs from the command by more than :data:`DELIVERY_RTOL` (a
+            limit is reached, or a sway force was commanded that the rudder does not give).
+
+        Raises
+        ------
+        ParameterError
+            Without ``surge``.
+        """
+        if surge is None:
+            raise ParameterError("a rudder's forces depend on the surge speed: pass surge (m/s)")
+        t = np.asarray(tau, dtype=float)
+        q = np.broadcast_to(np.asarray(surge, dtype=float) ** 2, t.shape[:-1])
+        safe = np.where(q > 0.0, q, 1.0)
+        delta = np.where(q > 0.0, t[..., 2] / (self.rudder_yaw * safe), 0.0)
+        delta = np.clip(delta, -self.rudder_max, self.rudder_max)
+        applied = np.stack(
+            [np.clip(t[..., 0], -self.tau_x, self.tau_x), self.rudder_sway * q * delta, self.rudder_yaw * q * delta],
+            axis=-1,
+        )
+        scale = 1.0 + np.abs(t)
+        active = np.any(np.abs(applied - t) > DELIVERY_RTOL * scale, axis=-1)
+        return applied, active
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``limits`` object of the JSON reports: ``{force_x, rudder}`` (N, rad)."""
+        return {"force_x": self.tau_x, "rudder": self.rudder_max}
+
+    def describe(self) -> dict[str, Any]:
+        """The rudder's figures: ``rudder_sway`` (kg/(m rad)), ``rudder_yaw`` (kg/rad), ``lever_arm`` (m)."""
+        return {"rudder_sway": self.rudder_sway, "rudder_yaw": self.rudder_yaw, "lever_arm": self.lever_arm}
+
+
+#: Horizontal actuation of either kind.
+Actuation = Actuators | RudderActuation
 
 
 def actuator_shortfall(actuators: Actuators, peak: tuple[float, float, float]) -> str:
@@ -194,20 +344,21 @@ def actuator_shortfall(actuators: Actuators, peak: tuple[float, float, float]) -
     return "; ".join(parts)
 
 
-#: Horizontal actuation of the vehicle presets (N, N, N m); sources in ``docs/vehicles.md``.
-#: ``remus100``: about 67 N of propeller thrust at 1.5 m/s; no sway thruster, so its fins give
-#: at most about 5.6 N of sway force, locked to a yaw moment of about 4.5 N m (the largest
-#: values of the fin model; sway and yaw are coupled, so this box is optimistic).
+#: Horizontal actuation of the vehicle presets; sources in ``docs/vehicles.md``.
+#: ``remus100``: a propeller (67 N at its 1525 rpm limit at 1.5 m/s, Fossen's model after Allen
+#: et al. 2000) and a tail rudder of +-13.6 deg with Prestero's (2001) fin derivatives
+#: ``Y_uu_delta = 9.64 kg/(m rad)``, ``N_uu_delta = -6.15 kg/rad``: underactuated.
 #: ``bluerov2-heavy``: four vectored T200 thrusters, about 86 N surge, 86 N sway and 23 N m yaw
 #: one channel at a time, with von Benzon et al.'s (2022) thruster curve (30.6 N a thruster);
 #: the allocation polytope is checked too, since the thrusters cannot give all three at once.
-VEHICLE_ACTUATORS: dict[str, Actuators] = {
-    "remus100": Actuators(
+VEHICLE_ACTUATORS: dict[str, Actuation] = {
+    "remus100": RudderActuation(
         67.0,
-        5.6,
-        4.5,
+        math.radians(13.6),
+        9.64,
+        -6.15,
         source="remus100",
-        note="the fully actuated law needs a sway force that the REMUS 100's fins cannot give",
+        note="a REMUS 100 has a propeller and a rudder, no sway thruster",
     ),
     "bluerov2-heavy": Actuators(
         86.0, 86.0, 23.0, "bluerov2-heavy", bluerov2_heavy_thrusters(BENZON2022_THRUST, BENZON2022_THRUST)
@@ -215,8 +366,8 @@ VEHICLE_ACTUATORS: dict[str, Actuators] = {
 }
 
 
-def vehicle_actuators(name: str) -> Actuators:
-    """The actuator limits of vehicle preset ``name``.
+def vehicle_actuators(name: str) -> Actuation:
+    """The actuation of vehicle preset ``name``.
 
     Parameters
     ----------
@@ -237,11 +388,18 @@ def vehicle_actuators(name: str) -> Actuators:
 
 
 __all__ = [
+    "ACTUATION_KINDS",
     "CHANNELS",
     "CHANNEL_UNITS",
     "CHANNEL_WORDS",
+    "DELIVERY_RTOL",
+    "LIMIT_UNITS",
+    "MAX_RUDDER",
     "VEHICLE_ACTUATORS",
+    "Actuation",
+    "ActuationKind",
     "Actuators",
+    "RudderActuation",
     "actuator_shortfall",
     "vehicle_actuators",
 ]

@@ -157,10 +157,10 @@ def prepare(
         thrust = (float(rob.thrust[0]), float(rob.thrust[1]), float(rob.thrust[2]))
     else:
         raise DesignError(f"integral action is certified by the robust certificate, which does not cover this: {why}")
-    limit = cfg.actuators
-    applies = limit is None or limit.admits(thrust)
+    limit = cfg.force_limits  # none for a rudder: the fully actuated law's forces are not deliverable there
+    applies = cfg.actuators is None or (limit is not None and limit.admits(thrust))
     reg = None if cert is None else cert.region
-    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=limit)
+    law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators)
     setup = CampaignSetup(
         name=cfg.name,
         law=law,

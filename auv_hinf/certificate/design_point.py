@@ -267,7 +267,7 @@ def _design(cfg: FormationConfig) -> DesignPoint:
                 cfg.envelope,
                 tube,
                 float(cfg.disturbance.current_speed or 0.0),
-                cfg.actuators,
+                cfg.force_limits,
                 progress=True,
                 integral=cfg.integral,
             )

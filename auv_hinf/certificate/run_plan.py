@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.actuation.limits import CHANNEL_UNITS
+from auv_hinf.actuation.limits import CHANNEL_UNITS, LIMIT_UNITS
 from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
@@ -347,7 +347,8 @@ REPORT_UNITS: dict[str, Any] = {
     **dict.fromkeys(("max_speed", "max_sway", "final_sway"), "m/s"),
     "max_yaw_rate": "rad/s",
     "saturation_fraction": "of the vehicle-samples",
-    **dict.fromkeys(("commanded_peak", "actuator_limits", "certified_thrust"), CHANNEL_UNITS),
+    **dict.fromkeys(("commanded_peak", "certified_thrust"), CHANNEL_UNITS),
+    "actuator_limits": LIMIT_UNITS,
     **dict.fromkeys(("first_exit_time", "diverged_at", "blend_time", "turn_time", "saved_until"), "s"),
     "shape_errors": {"final": "m", "max": "m"},
     **dict.fromkeys(("measured_decay_rate", "certified_decay_rate"), "1/s"),

@@ -156,6 +156,7 @@ def _remus_line() -> FormationConfig:
         ),
         uncertainty=UncertaintyConfig(REMUS_BOX),
         disturbance=DisturbanceConfig(current_speed=0.2),
+        actuators=vehicle_actuators("remus100"),
     )
 
 
@@ -226,6 +227,7 @@ def _remus_survey() -> FormationConfig:
         frame="path",
         reference=ReferenceConfig("lawnmower", SURVEY_PATH),
         simulation=SimulationConfig(horizon=SURVEY_HORIZON, initial=initial),
+        actuators=vehicle_actuators("remus100"),
     )
 
 

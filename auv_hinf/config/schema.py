@@ -22,6 +22,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
+from auv_hinf.actuation.limits import MAX_RUDDER, ActuationKind
 from auv_hinf.law.gains import DEFAULT_K1
 from auv_hinf.mission.paths import lawnmower_min_spacing
 from auv_hinf.models.envelope import PAPER_ENVELOPE, check_interval
@@ -318,19 +319,64 @@ class UncertaintyTable(_Table):
 class ActuatorsTable(_Table):
     """``[actuators]``: what the vehicle can push; the certificate checks the law's peak force against it."""
 
-    preset: ActuatorPreset | None = _field(None, "published limits of a vehicle preset (see docs/vehicles.md)")
-    tau_x: float | None = _field(None, "largest surge force", "N", gt=0.0, examples=[86.0])
-    tau_y: float | None = _field(None, "largest sway force", "N", gt=0.0, examples=[86.0])
-    tau_psi: float | None = _field(None, "largest yaw moment", "N m", gt=0.0, examples=[23.0])
+    preset: ActuatorPreset | None = _field(None, "published actuation of a vehicle preset (see docs/vehicles.md)")
+    kind: ActuationKind = _field(
+        "fully-actuated",
+        "fully-actuated: independent surge force, sway force and yaw moment (tau_x, tau_y, tau_psi); "
+        "underactuated: a propeller (tau_x) and a rudder (rudder_max, rudder_sway, rudder_yaw), no sway thruster",
+    )
+    tau_x: float | None = _field(
+        None, "largest surge force (the propeller's thrust when underactuated)", "N", gt=0.0, examples=[86.0]
+    )
+    tau_y: float | None = _field(None, "largest sway force (fully actuated only)", "N", gt=0.0, examples=[86.0])
+    tau_psi: float | None = _field(None, "largest yaw moment (fully actuated only)", "N m", gt=0.0, examples=[23.0])
+    rudder_max: float | None = _field(
+        None,
+        f"largest rudder deflection (underactuated only), at most {MAX_RUDDER:.4g} rad",
+        "rad",
+        gt=0.0,
+        le=MAX_RUDDER,
+        examples=[0.2374],
+    )
+    rudder_sway: float | None = _field(
+        None, "Y_uu_delta: sway force per u^2 delta (underactuated only)", "kg/(m rad)", examples=[9.64]
+    )
+    rudder_yaw: float | None = _field(
+        None, "N_uu_delta: yaw moment per u^2 delta (underactuated only)", "kg/rad", examples=[-6.15]
+    )
 
     @model_validator(mode="after")
     def _one_source(self) -> ActuatorsTable:
-        given = [k for k in ("tau_x", "tau_y", "tau_psi") if getattr(self, k) is not None]
-        if self.preset is not None and given:
-            raise ValueError(f"give either preset or the limits, not both (got preset and {', '.join(given)})")
-        if self.preset is None and len(given) != 3:
-            raise ValueError("give all three limits tau_x, tau_y, tau_psi (N, N, N m), or a preset")
+        keys = ("tau_x", "tau_y", "tau_psi", *_RUDDER_KEYS)
+        given = [k for k in keys if getattr(self, k) is not None]
+        if self.preset is not None:
+            if given or "kind" in self.model_fields_set:
+                extra = given + (["kind"] if "kind" in self.model_fields_set else [])
+                raise ValueError(f"give either preset or the limits, not both (got preset and {', '.join(extra)})")
+            return self
+        need = ("tau_x", "tau_y", "tau_psi") if self.kind == "fully-actuated" else ("tau_x", *_RUDDER_KEYS)
+        other = [k for k in given if k not in need]
+        if other:
+            raise ValueError(
+                f"{', '.join(other)} do not apply to kind = {self.kind!r}: give {', '.join(need)}"
+                + (
+                    " (a rudder gives its sway force with a yaw moment, never alone)"
+                    if self.kind == "underactuated"
+                    else ' (or kind = "underactuated" for a propeller and a rudder)'
+                )
+            )
+        missing = [k for k in need if getattr(self, k) is None]
+        if missing:
+            units = "N, N, N m" if self.kind == "fully-actuated" else "N, rad, kg/(m rad), kg/rad"
+            raise ValueError(f"give all of {', '.join(need)} ({units}) for kind = {self.kind!r}, or a preset")
+        for k in _RUDDER_KEYS[1:]:
+            if getattr(self, k) == 0.0:
+                raise ValueError(f"{k} must be nonzero: a rudder with no {k[7:]} effect")
         return self
+
+
+#: The keys of a rudder in ``[actuators]`` (underactuated kind).
+_RUDDER_KEYS = ("rudder_max", "rudder_sway", "rudder_yaw")
 
 
 class NoiseTable(_Table):

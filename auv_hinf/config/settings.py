@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
-from auv_hinf.actuation.limits import VEHICLE_ACTUATORS, Actuators, vehicle_actuators
+from auv_hinf.actuation.limits import VEHICLE_ACTUATORS, Actuation, Actuators, RudderActuation, vehicle_actuators
 from auv_hinf.config.messages import as_dict, parse_config, plain_data, set_fields, validate_table
 from auv_hinf.config.schema import (
     DEFAULT_FRAME,
@@ -258,8 +258,10 @@ class FormationConfig:
     integral : bool
         Integral action in the position loop (``[design] integral``; needs ``robust``): the
         robust design adds ``ki`` (:func:`~auv_hinf.law.gains.integral_gain`) to each candidate.
-    actuators : Actuators or None
-        What the vehicles can push (``None``: none declared, unlimited thrust).
+    actuators : Actuators, RudderActuation or None
+        What the vehicles can push (``None``: none declared, unlimited thrust): independent
+        surge, sway and yaw limits, or a propeller and a rudder (an underactuated vehicle, on
+        which the fully actuated formation law is refused).
     implementation : Implementation
         The controller as it runs: sample time, delay, measurement noise (default:
         continuous, undelayed, exact, as in the paper).
@@ -298,7 +300,7 @@ class FormationConfig:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     uncertainty: UncertaintyConfig = field(default_factory=UncertaintyConfig)
     disturbance: DisturbanceConfig = field(default_factory=DisturbanceConfig)
-    actuators: Actuators | None = None
+    actuators: Actuation | None = None
     implementation: Implementation = field(default_factory=Implementation)
     frame: FormationFrame = DEFAULT_FRAME
 
@@ -315,8 +317,8 @@ class FormationConfig:
         ):
             if not isinstance(getattr(self, key), kind):
                 raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
-        if self.actuators is not None and not isinstance(self.actuators, Actuators):
-            raise ConfigError(f"actuators must be an Actuators or None, got {self.actuators!r}")
+        if self.actuators is not None and not isinstance(self.actuators, (Actuators, RudderActuation)):
+            raise ConfigError(f"actuators must be an Actuators, a RudderActuation or None, got {self.actuators!r}")
         form = validate_table(FormationTable, plain_data(self._formation_table()), ("formation",))
         validate_table(EnvelopeTable, plain_data(self.envelope.to_dict()), ("envelope",))  # the units, from Python too
         misfit = speed_misfit(self.reference.kwargs()["speed"], self.envelope.u)
@@ -364,6 +366,16 @@ class FormationConfig:
     def transform(self) -> JacobiTransform:
         """The Jacobi transform of this configuration."""
         return JacobiTransform(self.n, self.jacobi)
+
+    @property
+    def force_limits(self) -> Actuators | None:
+        """The force box limits the certificates hold the law's peaks against (N, N, N m).
+
+        The declared :class:`~auv_hinf.actuation.limits.Actuators`; ``None`` when none are
+        declared, or when the vehicle is underactuated (a rudder has no force box: the actuator
+        part refuses the fully actuated law on it, and the other parts bound the force it would need).
+        """
+        return self.actuators if isinstance(self.actuators, Actuators) else None
 
     def with_method(self, method: str) -> FormationConfig:
         """Copy with another gain method (validated).
@@ -418,21 +430,36 @@ class FormationConfig:
         return {k: v for k, v in out.items() if v != {}}
 
 
-def _actuators_table(act: Actuators | None) -> dict[str, Any]:
+def _actuators_table(act: Actuation | None) -> dict[str, Any]:
     """The ``[actuators]`` table of ``act`` (empty when none is declared)."""
     if act is None:
         return {}
     if act.source in VEHICLE_ACTUATORS and VEHICLE_ACTUATORS[act.source] == act:
         return {"preset": act.source}
+    if isinstance(act, RudderActuation):
+        return {
+            "kind": act.kind,
+            "tau_x": act.tau_x,
+            "rudder_max": act.rudder_max,
+            "rudder_sway": act.rudder_sway,
+            "rudder_yaw": act.rudder_yaw,
+        }
     return {"tau_x": act.tau_x, "tau_y": act.tau_y, "tau_psi": act.tau_psi}
 
 
-def _actuators(table: ActuatorsTable | None) -> Actuators | None:
-    """Runtime limits of a validated ``[actuators]`` table."""
+def _actuators(table: ActuatorsTable | None) -> Actuation | None:
+    """Runtime actuation of a validated ``[actuators]`` table."""
     if table is None:
         return None
     if table.preset is not None:
         return vehicle_actuators(table.preset)
+    if table.kind == "underactuated":
+        return RudderActuation(
+            float(table.tau_x or 0.0),
+            float(table.rudder_max or 0.0),
+            float(table.rudder_sway or 0.0),
+            float(table.rudder_yaw or 0.0),
+        )
     return Actuators(float(table.tau_x or 0.0), float(table.tau_y or 0.0), float(table.tau_psi or 0.0))
 
 

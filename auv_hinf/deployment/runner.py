@@ -345,7 +345,7 @@ def _loop(
         commanded = law.commanded(measured_at, states)
         reference = _reference_rows(law, measured_at)
         if active.name == "certified":
-            sent = saturate(commanded, law.law.actuators)[0]
+            sent = saturate(commanded, law.law.actuators, states[..., 3])[0]
         else:
             sent = active.step(measured_at, states)
         cmds = [mapping.forces_to_manual_control(sent[i]) for i in range(n)]

@@ -176,7 +176,7 @@ class Assumptions:
                 region = (figures("closed_loop") or {}).get("region_error_bounds")
                 keys = ("position_error", "velocity_error", "heading_error", "yaw_rate_error")
                 bounds, source = _bounds(region, keys), "closed_loop"
-        limits = None if cfg.actuators is None else cfg.actuators.limits()
+        limits = None if cfg.force_limits is None else cfg.force_limits.limits()
         current = cfg.disturbance.current_speed
         return cls(
             sample_time=impl.sample_time,
@@ -517,7 +517,9 @@ class RuntimeLaw:
         ndarray
             The delivered forces of the configured actuators (unchanged without any).
         """
-        return saturate(self.commanded(t, states, ground, current), self.law.actuators)[0]
+        return saturate(
+            self.commanded(t, states, ground, current), self.law.actuators, np.asarray(states, dtype=float)[..., 3]
+        )[0]
 
     def errors(
         self, t: float | ArrayLike, states: ArrayLike, ground: ArrayLike | None = None, current: ArrayLike = (0.0, 0.0)

@@ -400,7 +400,7 @@ class SampledLoop:
         cs = (np.cos(meas[..., 2]), np.sin(meas[..., 2]))
         p_dot = ground_velocity(meas, self.current, cs)
         tau = self.law.unsaturated(meas, p_dot, self.ref.motion(self.buf_at[slot]), cs)
-        self.forces, active = saturate(tau, self.law.actuators)
+        self.forces, active = saturate(tau, self.law.actuators, meas[..., 3])
         self.peak = np.maximum(self.peak, np.abs(tau).max(axis=1))
         self.saturated += active.any(axis=1)
         if self.cmd_out is not None:

@@ -188,13 +188,16 @@ class ForceLimits(Protocol):
     limits, or a thruster allocation polytope); the law depends on this protocol only.
     """
 
-    def saturate(self, tau: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    def saturate(self, tau: FloatArray, surge: FloatArray | None = None) -> tuple[FloatArray, NDArray[np.bool_]]:
         """The delivered forces for commands ``tau (..., 3)`` (N, N, N m), and where a limit is active.
 
         Parameters
         ----------
         tau : ndarray, shape (..., 3)
             Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
+        surge : ndarray, optional
+            The vehicles' surge speeds ``u`` (m/s), shape ``tau.shape[:-1]``: a rudder's forces
+            depend on them (thrusters' do not).
         """
         ...
 
@@ -203,7 +206,9 @@ class ForceLimits(Protocol):
         ...
 
 
-def saturate(tau: FloatArray, actuators: ForceLimits | None) -> tuple[FloatArray, NDArray[np.bool_]]:
+def saturate(
+    tau: FloatArray, actuators: ForceLimits | None, surge: FloatArray | None = None
+) -> tuple[FloatArray, NDArray[np.bool_]]:
     """The forces ``actuators`` deliver for commands ``tau (..., 3)`` (N, N, N m); also the active flag.
 
     Without declared actuators nothing saturates.
@@ -214,10 +219,12 @@ def saturate(tau: FloatArray, actuators: ForceLimits | None) -> tuple[FloatArray
         Commanded ``[tau_x, tau_y, tau_psi]`` (N, N, N m, body frame).
     actuators : ForceLimits or None
         The vehicles' actuators; None for unlimited.
+    surge : ndarray, optional
+        The vehicles' surge speeds ``u`` (m/s), shape ``tau.shape[:-1]`` (a rudder needs them).
     """
     if actuators is None:
         return tau, np.zeros(tau.shape[:-1], dtype=bool)
-    return actuators.saturate(tau)
+    return actuators.saturate(tau, surge)
 
 
 @dataclass(frozen=True)
@@ -305,7 +312,7 @@ class VehicleLaw:
         cs : tuple of ndarray, optional
             ``(cos psi, sin psi)`` of the measured headings, when the caller has them.
         """
-        return saturate(self.unsaturated(states, p_dot, motion, cs), self.actuators)[0]
+        return saturate(self.unsaturated(states, p_dot, motion, cs), self.actuators, states[..., 3])[0]
 
 
 @dataclass(frozen=True)
@@ -374,7 +381,7 @@ class FormationController:
         body = np.einsum("nji,nj->ni", rotation(psi), w)
         tau_psi = heading_torque(par, self.gains.k_psi, self.orientation, states, m.psi, m.r, m.r_dot)
         tau = np.column_stack([body * np.array([par.m11, par.m22]), tau_psi])
-        clipped, active = saturate(tau, self.actuators)
+        clipped, active = saturate(tau, self.actuators, u)
         return clipped, bool(active.any())
 
 

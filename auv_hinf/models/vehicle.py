@@ -195,16 +195,6 @@ def remus100(design_speed: float = 1.5) -> VehicleParams:
     )
 
 
-#: REMUS 100 horizontal actuation at its best: ``(tau_x, tau_y, tau_psi)`` in N, N, N m. Sources (Fossen's
-#: ``remus100`` in the Marine Systems Simulator / PythonVehicleSimulator, after Allen et al. 2000):
-#: propeller at its 1525 rpm maximum less 10 % thrust deduction, about 67 N at 1.5 m/s (105 N at rest,
-#: 41 N at 2.5 m/s); the tail rudder at its 15 degree maximum gives a sway force of 0.89 U^2 N, 2.0 N at
-#: 1.5 m/s and 5.6 N at 2.5 m/s, with the yaw moment 0.8 m times that, 1.6 to 4.5 N m. Sway and yaw both
-#: come from the one rudder, so they are coupled (tau_psi = -0.8 m * tau_y), not independent, and vanish
-#: at low speed. The figures are the largest horizontal forces the fins and propeller give (docs/vehicles.md).
-REMUS100_LIMITS = (67.0, 5.6, 4.5)
-
-
 def bluerov2_heavy() -> VehicleParams:
     """BlueROV2 Heavy (Blue Robotics' open-frame ROV, 8 thrusters) in the paper's 3-DOF structure.
 
@@ -555,7 +545,6 @@ class _Coefficients:
 
 __all__ = [
     "PRESETS",
-    "REMUS100_LIMITS",
     "PlantBatch",
     "VehicleParams",
     "bluerov2_heavy",

@@ -170,7 +170,7 @@ class ErrorSink:
         if self._law is not None:
             tau = self._law.unsaturated(states, p_dot, motion, cs)  # (m, N, 3)
             self._force[systems] = np.maximum(self._force[systems], np.abs(tau).max(axis=1))
-            self._saturated[systems] += saturate(tau, self._law.actuators)[1].any(axis=1)
+            self._saturated[systems] += saturate(tau, self._law.actuators, states[..., 3])[1].any(axis=1)
         pos = np.hypot(tr.e[..., 0], tr.e[..., 1])
         now = stack_last([pos, np.hypot(tr.e_dot[..., 0], tr.e_dot[..., 1]), np.abs(tr.e_psi), np.abs(tr.e_psi_dot)])
         self._max[systems] = np.maximum(self._max[systems], now)

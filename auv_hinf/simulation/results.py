@@ -236,7 +236,7 @@ def build_results(
     if commanded is None:
         commanded = first.law.unsaturated(states, p_dot, motion)  # with the integrator columns, if any
     states = states[..., :6]
-    forces, active = saturate(commanded, first.law.actuators)
+    forces, active = saturate(commanded, first.law.actuators, states[..., 3])
     if peaks is None:
         peaks = np.abs(commanded).max(axis=(0, 2))  # (S, 3): over samples and vehicles
     desired = None if first.mission is None else first.mission.motion(t)

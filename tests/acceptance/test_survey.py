@@ -1,4 +1,8 @@
-"""The remus-survey preset: a path-frame V on a lawn-mower certifies and flies covered, facing forward."""
+"""The remus-survey fleet: a path-frame V on a lawn-mower certifies and flies covered, facing forward.
+
+The preset declares the REMUS 100's propeller and rudder and is refused (no sway actuator); the
+path-frame machinery is checked on the same fleet with a sway actuator (:func:`fully_actuated`).
+"""
 
 from __future__ import annotations
 
@@ -8,20 +12,20 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.run_plan import plan_run, run_report
 from auv_hinf.cli.args import EXIT_NEGATIVE
 from auv_hinf.cli.main import main
-from auv_hinf.config.presets import annotated_toml, preset_config
+from auv_hinf.config.presets import annotated_toml
 from auv_hinf.config.settings import ReferenceConfig
 from auv_hinf.simulation.engine import simulate
+from tests.helpers import certificate_of, fully_actuated, fully_actuated_file
 
 
 @pytest.mark.slow
 def test_survey_certifies_and_a_simulation_is_covered_with_the_v_facing_forward_on_every_leg():
-    cfg = preset_config("remus-survey")
-    cert = certify(cfg)
+    cfg = fully_actuated("remus-survey")
+    cert = certificate_of(cfg)
     assert cert.certified, cert.reasons
     assert cert.to_dict()["closed_loop"]["reference_inside_envelope"] == [True] * 5
     plan = plan_run(cfg)
@@ -43,10 +47,14 @@ def test_survey_certifies_and_a_simulation_is_covered_with_the_v_facing_forward_
 
 @pytest.mark.slow
 def test_cli_keys_and_a_too_tight_turn_is_refused_before_simulating(tmp_path, capsys):
-    assert main(["certify", "--preset", "remus-survey", "--json"]) == 0
-    loop = json.loads(capsys.readouterr().out)["closed_loop"]
+    # the preset itself, with its rudder, is refused: the law needs a sway force
+    assert main(["certify", "--preset", "remus-survey", "--json"]) == EXIT_NEGATIVE
+    out = capsys.readouterr()
+    data = json.loads(out.out)
+    assert data["actuators"]["kind"] == "underactuated" and "sway actuator" in out.err
+    loop = data["closed_loop"]
     assert loop["reference_inside_envelope"] == [True] * 5 and loop["binding"] is None
-    cfg = preset_config("remus-survey")
+    cfg = fully_actuated("remus-survey")
     tight = replace(
         cfg,
         reference=ReferenceConfig(
@@ -64,6 +72,9 @@ def test_cli_keys_and_a_too_tight_turn_is_refused_before_simulating(tmp_path, ca
     assert main(["simulate", "--config", str(path), "--json"]) == EXIT_NEGATIVE
     err = capsys.readouterr().err
     assert "refusing to simulate" in err and "smallest turn radius that fits" in err and "Traceback" not in err
-    assert main(["simulate", "--preset", "remus-survey", "--horizon", "60", "--json"]) == 0
+    assert (
+        main(["simulate", "--config", str(fully_actuated_file("remus-survey", tmp_path)), "--horizon", "60", "--json"])
+        == 0
+    )
     summary = json.loads(capsys.readouterr().out)
     assert summary["shape_errors"]["frame"] == "path" and len(summary["shape_errors"]["max"]) == 2

@@ -20,6 +20,7 @@ from auv_hinf.config.presets import preset_config
 from auv_hinf.simulation.engine import integrate_batch, simulate_batch
 from auv_hinf.simulation.metrics import ErrorSink
 from auv_hinf.simulation.scenario import ScenarioBatch
+from tests.helpers import fully_actuated
 
 RUNS, HORIZON, SEED = 24, 15.0, 11
 #: Columns every campaign table gains for the commanded forces.
@@ -130,7 +131,7 @@ def test_declared_actuators_bound_the_certified_force_and_are_reported() -> None
 
 @pytest.mark.slow
 def test_robust_runs_stay_within_the_robust_thrust_bound() -> None:
-    camp = run_campaign(preset_config("remus-line"), 12, seed=5, horizon=12.0, chunk=6)
+    camp = run_campaign(fully_actuated("remus-line"), 12, seed=5, horizon=12.0, chunk=6)
     t = camp.table
     rob = camp.setup.robust
     assert rob is not None and rob.certificate.thrust is not None

@@ -14,8 +14,8 @@ from auv_hinf.campaign.runs import initial_state, sample_run
 from auv_hinf.campaign.setup import COEFFICIENTS, prepare
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.robust import check_robust_run
-from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import SimulationConfig
+from tests.helpers import fully_actuated
 
 RUNS, HORIZON, SEED = 12, 12.0, 5
 
@@ -23,7 +23,7 @@ RUNS, HORIZON, SEED = 12, 12.0, 5
 @pytest.fixture(scope="module")
 def remus_setup():
     """The robust remus-line preset prepared for a campaign (about 5 s): its tests are marked slow."""
-    return prepare(preset_config("remus-line"), seed=SEED, horizon=HORIZON)[0]
+    return prepare(fully_actuated("remus-line"), seed=SEED, horizon=HORIZON)[0]
 
 
 @pytest.mark.slow
@@ -34,7 +34,7 @@ def test_vertex_runs_enumerate_the_box_corners(remus_setup) -> None:
     for i in range(0, 2 * s.robust.vertices, 2):  # every other run is a vertex
         x = sample_run(s, i)
         assert np.all((x.multipliers == s.box[:, 0]) | (x.multipliers == s.box[:, 1]))
-        assert np.hypot(*x.current) == pytest.approx(design_point(preset_config("remus-line")).current, rel=1e-12)
+        assert np.hypot(*x.current) == pytest.approx(design_point(fully_actuated("remus-line")).current, rel=1e-12)
         corners.add(tuple(x.multipliers))
     assert len(corners) == 2**9
     for i in (1, 3, 2 * s.robust.vertices + 2):  # odd runs, and every run after the vertices are used
@@ -50,7 +50,7 @@ def test_sampled_starts_are_covered_by_the_robust_certificate(remus_setup, index
     s = remus_setup
     x = sample_run(s, index)
     init = initial_state(s, x)
-    base = preset_config("remus-line")
+    base = fully_actuated("remus-line")
     cfg = replace(
         base,
         simulation=SimulationConfig(
@@ -82,7 +82,7 @@ def test_starts_fill_the_certified_sets(remus_setup) -> None:
 
 @pytest.mark.slow
 def test_robust_campaign_stays_inside_the_robust_bounds() -> None:
-    camp = run_campaign(preset_config("remus-line"), RUNS, seed=SEED, horizon=HORIZON, chunk=5)
+    camp = run_campaign(fully_actuated("remus-line"), RUNS, seed=SEED, horizon=HORIZON, chunk=5)
     t = camp.table
     assert t["inside_bounds"].notna().all() and t["inside_bounds"].all()
     summary = summarize(camp)

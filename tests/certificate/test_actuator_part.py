@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from auv_hinf.actuation.limits import Actuators, actuator_shortfall, vehicle_actuators
+from auv_hinf.actuation.limits import Actuators, RudderActuation, actuator_shortfall, vehicle_actuators
 from auv_hinf.actuation.thrust import thrust_bounds
 from auv_hinf.certificate import assembly as certificate_module
 from auv_hinf.certificate.assembly import Certificate, certify
@@ -24,7 +25,7 @@ from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.mission.margins import ErrorBounds, inflate_envelope
 from auv_hinf.simulation.engine import simulate_batch
 from auv_hinf.simulation.scenario import ScenarioBatch
-from tests.helpers import starts_from_errors
+from tests.helpers import certificate_of, preset_certificate, starts_from_errors
 
 #: Limits between what the paper triangle's mission needs at zero error and what its
 #: envelope-limited start region needs, so the region must shrink (N, N, N m).
@@ -101,31 +102,41 @@ def test_starts_in_the_fitted_region_never_command_more_than_the_limits():
 def test_old_thrust_limit_key_is_refused_with_the_new_name():
     with pytest.raises(ConfigError, match=r"\[actuators\]"):
         config_from_dict({"simulation": {"thrust_limit": [1.0, 1.0, 1.0]}})
-    with pytest.raises(ConfigError, match="all three limits"):
+    with pytest.raises(ConfigError, match="give all of tau_x, tau_y, tau_psi"):
         config_from_dict({"actuators": {"tau_x": 1.0}})
-    cfg = config_from_dict({"actuators": {"preset": "remus100"}})
-    assert cfg.actuators is not None and cfg.actuators.limits() == (67.0, 5.6, 4.5)
+    cfg = config_from_dict({"actuators": {"preset": "bluerov2-heavy"}})
+    assert cfg.actuators is not None and cfg.actuators.kind == "fully-actuated"
     again = config_from_dict(cfg.to_toml_dict())
     assert again.actuators == cfg.actuators
 
 
 @pytest.fixture(scope="module")
-def remus_limited() -> Certificate:
-    return certify(replace(preset_config("remus-line"), actuators=vehicle_actuators("remus100")))
+def remus_rudder() -> Certificate:
+    """``remus-line``: three REMUS 100 with their propeller and rudder (``[actuators] preset = "remus100"``)."""
+    cfg = preset_config("remus-line")
+    assert cfg.actuators == vehicle_actuators("remus100")
+    return certificate_of(cfg)
 
 
 @pytest.mark.slow
-def test_remus_with_its_real_limits_names_the_sway_channel(remus_limited, tmp_path):
-    cert = remus_limited
-    assert not cert.certified
+def test_remus_with_its_rudder_refuses_the_fully_actuated_law_naming_sway(remus_rudder, tmp_path):
+    cert = remus_rudder
+    rudder = cert.config.actuators
+    assert isinstance(rudder, RudderActuation) and not cert.certified
     act = cert.to_dict()["actuators"]
-    assert act["certified"] is False and act["limits"] == {"force_x": 67.0, "force_y": 5.6, "moment": 4.5}
-    assert act["binding"] == "force_y" and act["binding_ratio"] > 50.0
-    assert any("sway force" in r and "fins" in r for r in cert.reasons)
-    # the answer within the limits, by bisection on certificates: re-certified at that scale
-    best = act["largest_certifiable"]
-    assert best is not None and set(best) >= {"box_scale", "current_speed", "box_scale_alone", "current_speed_alone"}
-    assert best["box_scale"] is not None and 0.0 < best["box_scale"] < 1.0
+    assert act["kind"] == "underactuated" and act["certified"] is False
+    assert act["limits"] == {"force_x": 67.0, "rudder": math.radians(13.6)}
+    peak = act["certified_peak"]
+    assert peak["rudder"] is None and peak["force_y"] > 0.0  # the law needs a sway force: none is deliverable
+    (why,) = [r for r in cert.findings if r.part == "actuators"]
+    assert why.kind == "unsupported" and why.channel == "force_y" and why.value == peak["force_y"] and why.limit == 0.0
+    assert "sway actuator" in why.message and "only together" in why.message
+    # what the rudder gives at the envelope's top speed, in closed form: Y = Y_uu_delta u^2 delta_max
+    top = cert.config.envelope.u[1]
+    auth = act["rudder_authority"]
+    assert auth["speed"] == top
+    assert auth["force_y"] == pytest.approx(9.64 * top**2 * math.radians(13.6), rel=1e-12)
+    assert auth["moment"] == pytest.approx(6.15 * top**2 * math.radians(13.6), rel=1e-12)
     # saved and loaded with its actuator verdict
     path = cert.save(tmp_path / "c.json")
     stored = Certificate.load(path).to_dict()["actuators"]
@@ -133,29 +144,30 @@ def test_remus_with_its_real_limits_names_the_sway_channel(remus_limited, tmp_pa
 
 
 @pytest.mark.slow
-def test_cli_remus100_limits_exit_1_naming_sway(remus_limited, tmp_path, capsys, monkeypatch):
+def test_cli_remus_rudder_exit_1_naming_sway(remus_rudder, tmp_path, capsys, monkeypatch):
     path = tmp_path / "remus.toml"
     assert main(["init", "--preset", "remus-line", "--out", str(path)]) == 0
-    path.write_text(path.read_text(encoding="utf-8") + '\n[actuators]\npreset = "remus100"\n', encoding="utf-8")
     capsys.readouterr()
     # the configuration the CLI reads is the fixture's: reuse its certificate (the API test above
     # computes it) and check what the command line makes of it
-    assert load_config(path).actuators == remus_limited.config.actuators
-    monkeypatch.setattr(certificate_module, "certify", lambda cfg, **kw: remus_limited)
+    assert load_config(path).actuators == remus_rudder.config.actuators
+    monkeypatch.setattr(certificate_module, "certify", lambda cfg, **kw: remus_rudder)
     code = main(["certify", "--config", str(path), "--json"])
     out = capsys.readouterr()
     data = json.loads(out.out)
     assert code == 1 and data["certified"] is False
-    assert "sway force" in out.err and "fins" in out.err
-    assert data["actuators"]["limits"]["force_y"] == 5.6
+    assert "sway actuator" in out.err
+    assert data["actuators"]["limits"]["rudder"] == math.radians(13.6)
     # simulate refuses the uncertified gains unless asked
     code = main(["simulate", "--config", str(path), "--horizon", "2"])
     err = capsys.readouterr().err
-    assert code == 1 and "--uncertified" in err and "sway force" in err
+    assert code == 1 and "--uncertified" in err and "rudder cannot make" in err
     code = main(["simulate", "--config", str(path), "--horizon", "2", "--json", "--uncertified"])
     run = json.loads(capsys.readouterr().out)
     assert code == 1 and run["certificate_covers_run"] is False
-    assert run["actuator_limits"]["force_y"] == 5.6 and set(run["commanded_peak"]) == {"force_x", "force_y", "moment"}
+    assert run["actuator_limits"] == {"force_x": 67.0, "rudder": math.radians(13.6)}
+    assert set(run["commanded_peak"]) == {"force_x", "force_y", "moment"}
+    assert run["saturation_fraction"] > 0.5  # the commanded sway force is never the delivered one
     # and so does a campaign
     code = main(["campaign", "--config", str(path), "--runs", "2", "--horizon", "2", "--out", str(tmp_path / "c")])
     err = capsys.readouterr().err
@@ -177,7 +189,7 @@ def test_simulate_reports_commanded_peak_before_saturation(capsys):
 def test_bluerov2_line_answers_and_the_answer_certifies():
     """Not certifiable as declared: the answer is a box scale and a current that, re-run, certify."""
     cfg = preset_config("bluerov2-line")
-    cert = certify(cfg)
+    cert = preset_certificate("bluerov2-line")
     act = cert.to_dict()["actuators"]
     assert not cert.certified and act["certified"] is False and act["binding_ratio"] > 1.0
     best = act["largest_certifiable"]

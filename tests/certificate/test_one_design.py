@@ -13,11 +13,12 @@ from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
+from tests.helpers import certificate_of, fully_actuated, fully_actuated_file
 
 
 @pytest.fixture(scope="module")
 def remus() -> Certificate:
-    return certify(preset_config("remus-line"))
+    return certificate_of(fully_actuated("remus-line"))
 
 
 @pytest.mark.slow
@@ -51,10 +52,10 @@ def test_robust_preset_runs_the_robust_gains_everywhere(remus, tmp_path, capsys)
     np.testing.assert_allclose(out, remus.law().forces(states, vel, m), rtol=1e-12)
     assert remus.closed_loop_system().nstates == 3 * 6
     # simulated: plan_run uses the same gains
-    plan = plan_run(preset_config("remus-line"), horizon=1.0, samples=11)
+    plan = plan_run(fully_actuated("remus-line"), horizon=1.0, samples=11)
     assert plan.scenario.law.gains == g and plan.design.gains == g
     # saved by `certify --out` and loaded back
-    code = main(["certify", "--preset", "remus-line", "--out", str(tmp_path)])
+    code = main(["certify", "--config", str(fully_actuated_file("remus-line", tmp_path)), "--out", str(tmp_path)])
     capsys.readouterr()
     assert code == 0
     loaded = Certificate.load(tmp_path / "certificate.json")
@@ -78,7 +79,7 @@ def test_certify_computes_the_design_once(monkeypatch):
     monkeypatch.setattr(design_module, "vehicle_sigma", count_sigma)
     monkeypatch.setattr(design_module, "design_robust", count_robust)
     design_module._design.cache_clear()
-    cfg = preset_config("remus-line")
+    cfg = fully_actuated("remus-line")
     certify(cfg)
     plan_run(cfg, horizon=1.0, samples=11)  # a later command on the same design reuses it
     assert calls == {"sigma": 1, "robust": 1}

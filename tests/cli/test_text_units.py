@@ -10,6 +10,7 @@ import pytest
 from auv_hinf.certificate.run_plan import REPORT_UNITS
 from auv_hinf.cli.commands import _short
 from auv_hinf.cli.main import main
+from tests.helpers import fully_actuated_file
 
 #: A number in a line of text (not part of a word such as ``d11_lin`` or ``1/sqrt2``).
 NUMBER = re.compile(r"(?<![\w./^])[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?(?![\w./^])")
@@ -49,8 +50,12 @@ def test_units_reach_numbers_inside_tables_and_lists():
 
 
 @pytest.mark.slow
-def test_simulate_prints_every_number_with_its_unit(capsys: pytest.CaptureFixture[str]):
-    assert main(["simulate", "--preset", "remus-line", "--horizon", "3"]) == 0
+@pytest.mark.parametrize("rudder", [False, True], ids=["fully-actuated", "rudder"])
+def test_simulate_prints_every_number_with_its_unit(tmp_path: Path, capsys: pytest.CaptureFixture[str], rudder: bool):
+    if rudder:  # the REMUS's propeller and rudder: uncertified, simulated on request, limits in N and rad
+        assert main(["simulate", "--preset", "remus-line", "--horizon", "3", "--uncertified"]) == 1
+    else:
+        assert main(["simulate", "--config", str(fully_actuated_file("remus-line", tmp_path)), "--horizon", "3"]) == 0
     out = capsys.readouterr().out
     assert "max_force: " in out and re.search(r"max_force: [\d.e+-]+ N\n", out)
     assert unitless_numbers(out) == []

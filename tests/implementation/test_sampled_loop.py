@@ -18,6 +18,7 @@ from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation import engine
 from auv_hinf.simulation.engine import fleet_derivative, simulate, simulate_batch
 from auv_hinf.simulation.scenario import ScenarioBatch
+from tests.helpers import fully_actuated
 from tests.implementation.sampled_reference import reference_loop
 
 NOISE = MeasurementNoise(position=0.05, velocity=0.02, heading=0.01, yaw_rate=0.005)
@@ -69,7 +70,7 @@ def test_held_forces_are_the_law_at_the_measurement_and_match_an_independent_loo
 
 @pytest.mark.slow
 def test_remus_at_50_hz_matches_the_independent_loop():
-    scn = plan_run(preset_config("remus-line"), horizon=5.0, samples=51).scenario
+    scn = plan_run(fully_actuated("remus-line"), horizon=5.0, samples=51).scenario
     impl = Implementation(0.02, 0.01, varying_delay=True, noise=NOISE)
     sol = _run(scn, impl, trace=True)
     ref, _ = reference_loop(
@@ -131,7 +132,7 @@ def test_a_run_gives_the_same_numbers_in_any_batch(triangle):
 
 @pytest.mark.slow
 def test_an_unstable_implementation_is_stopped_and_reported():
-    plan = plan_run(preset_config("remus-line"), horizon=30.0, samples=301)
+    plan = plan_run(fully_actuated("remus-line"), horizon=30.0, samples=301)
     res = simulate(replace(plan.scenario, implementation=Implementation(0.1, 0.1)))
     assert res.diverged_at is not None or res.exit_time is not None
     assert np.all(np.isfinite(res.states))

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from auv_hinf.actuation.limits import VEHICLE_ACTUATORS
+from auv_hinf.actuation.limits import VEHICLE_ACTUATORS, RudderActuation
 from auv_hinf.actuation.thrusters import (
     BENZON2022_THRUST,
     T200_FORWARD_16V,
@@ -26,7 +26,7 @@ from auv_hinf.actuation.thrusters import (
 from auv_hinf.config.presets import SURVEY_V, preset_config
 from auv_hinf.config.schema import PARAMETERS
 from auv_hinf.mission.paths import lawnmower_min_spacing
-from auv_hinf.models.vehicle import PRESETS, REMUS100_LIMITS
+from auv_hinf.models.vehicle import PRESETS
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "vehicles.md"
 NUMBER = r"-?\d+(?:\.\d+)?"
@@ -87,13 +87,27 @@ def test_every_model_parameter_on_the_page_is_the_presets(name):
     assert wrong == {}, f"{name}: page vs code {wrong}"
 
 
-def test_the_remus100_limits_on_the_page_are_the_presets():
+def test_the_remus100_propeller_and_rudder_on_the_page_are_the_presets():
     text = section("remus100")
-    (heading,) = re.findall(r"### Actuation: `REMUS100_LIMITS = \(([^)]*)\)`", text)
-    printed = [float(x) for x in heading.split(",")]
-    assert printed == list(REMUS100_LIMITS) == list(VEHICLE_ACTUATORS["remus100"].limits())
-    bold = {m.group(1): m.group(2) for m in re.finditer(rf"\*\*`(tau_\w+)` limit\*\* \| \*\*({NUMBER})\*\*", text)}
-    assert {k: float(v) for k, v in bold.items()} == dict(zip(("tau_x", "tau_y", "tau_psi"), REMUS100_LIMITS))
+    preset = VEHICLE_ACTUATORS["remus100"]
+    assert isinstance(preset, RudderActuation)
+    bold = {
+        m.group(1): m.group(2) for m in re.finditer(rf"\*\*`(\w+)(?: = \w+)?`(?: limit)?\*\* \| \*\*({NUMBER})", text)
+    }
+    code = {
+        "tau_x": preset.tau_x,
+        "rudder_max": preset.rudder_max,
+        "rudder_sway": preset.rudder_sway,
+        "rudder_yaw": preset.rudder_yaw,
+    }
+    assert set(bold) == set(code), f"the page's bold figures: {sorted(bold)}"
+    wrong = {k: (v, code[k]) for k, v in bold.items() if not agrees(v, code[k])}
+    assert wrong == {}, f"page vs code {wrong}"
+    assert math.isclose(math.degrees(preset.rudder_max), 13.6, rel_tol=1e-12)
+    (row,) = [r for r in rows(text) if r[0].startswith("rudder authority")]
+    printed = [float(x) for x in re.findall(NUMBER, row[1])]
+    assert agrees(f"{printed[0]:.1f}", preset.authority(printed[2])[0]), row
+    assert agrees(f"{printed[1]:.1f}", preset.authority(printed[3])[0]), row
 
 
 def _channel_row(text: str, label: str) -> list[str]:

@@ -23,6 +23,12 @@ The nominal start region needs no answer of its own: it is already shrunk to fit
 
 ``required_limits`` (the certified peak itself) are the smallest per-channel limits that would
 certify the declared case.
+
+On an underactuated vehicle (:class:`~auv_hinf.actuation.limits.RudderActuation`: a propeller and
+a rudder) the part refuses the fully actuated law outright: the law commands sway force and yaw
+moment independently, and the rudder gives them only together, on one line through the origin, so
+no box of the law's commands with a nonzero sway width is deliverable, whatever the gains. The
+figures then say what the law would need against what the rudder gives at the envelope's top speed.
 """
 
 from __future__ import annotations
@@ -31,7 +37,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from auv_hinf.actuation.limits import CHANNELS, Actuators, actuator_shortfall
+from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting
@@ -50,8 +56,8 @@ class ActuatorCheck:
 
     Attributes
     ----------
-    limits : Actuators or None
-        The declared limits (``None``: none declared, the certificate assumes unlimited thrust).
+    limits : Actuators, RudderActuation or None
+        The declared actuation (``None``: none declared, the certificate assumes unlimited thrust).
     certified_peak : tuple of float or None
         ``(|tau_x|, |tau_y|, |tau_psi|)`` the law can command on the certified set (N, N, N m);
         ``None`` when no certificate bounds it.
@@ -68,23 +74,30 @@ class ActuatorCheck:
         When the limits bind: a ``box_scale`` and ``current_speed`` that certify together within
         them, with the scaled ``uncertainty`` table, and each answer alone (see
         :func:`largest_certifiable`).
+    rudder_authority : dict or None
+        For a rudder: the largest sway force (N) and yaw moment (N m) it gives at the envelope's top
+        surge speed (m/s), ``{speed, force_y, moment}``, and its lever arm (m).
     """
 
-    limits: Actuators | None
+    limits: Actuation | None
     certified_peak: Peak | None
     binding: str | None
     binding_ratio: float | None
     certified: bool
     reason: str
     largest_certifiable: dict[str, Any] | None = None
+    rudder_authority: dict[str, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The ``actuators`` object of ``auv-hinf certify --json``."""
-        peak = None if self.certified_peak is None else dict(zip(CHANNELS, self.certified_peak))
+        peak: dict[str, Any] | None = None if self.certified_peak is None else dict(zip(CHANNELS, self.certified_peak))
+        if peak is not None and isinstance(self.limits, RudderActuation):
+            peak["rudder"] = None  # the fully actuated law has no rudder command: nothing is certified for it
         out: dict[str, Any] = {
+            "kind": None if self.limits is None else self.limits.kind,
             "limits": None if self.limits is None else self.limits.to_dict(),
             "certified_peak": peak,
-            "required_limits": peak,
+            "required_limits": None if peak is None else dict(zip(CHANNELS, self.certified_peak or ())),
             "binding": self.binding,
             "binding_ratio": self.binding_ratio,
             "certified": self.certified,
@@ -92,6 +105,8 @@ class ActuatorCheck:
         }
         if self.largest_certifiable is not None:
             out["largest_certifiable"] = dict(self.largest_certifiable)
+        if self.rudder_authority is not None:
+            out["rudder_authority"] = dict(self.rudder_authority)
         return out
 
 
@@ -125,6 +140,8 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
     if act is None:
         why = "no actuator limits declared ([actuators]): the certificate assumes unlimited thrust"
         return ActuatorCheck(None, peak, None, None, False, why)
+    if isinstance(act, RudderActuation):
+        return rudder_check(point, act, peak)
     if peak is None:
         return ActuatorCheck(act, None, None, None, False, "no certificate bounds the commanded force")
     channel, ratio = act.binding(peak)
@@ -150,6 +167,33 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
     elif answers and point.declared:
         best = {"box_scale": None, "current_speed": None}
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)
+
+
+def rudder_check(point: DesignPoint, act: RudderActuation, peak: Peak | None) -> ActuatorCheck:
+    """The refusal of the fully actuated law on a vehicle with a propeller and a rudder, with the figures.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design (its envelope gives the top surge speed at which the rudder is strongest).
+    act : RudderActuation
+        The vehicle's propeller and rudder.
+    peak : Peak or None
+        The certified peak ``(|tau_x|, |tau_y|, |tau_psi|)`` the law would command (N, N, N m).
+    """
+    speed = float(point.config.envelope.u[1])
+    sway, moment = act.authority(speed)
+    authority = {"speed": speed, "force_y": sway, "moment": moment, "lever_arm": act.lever_arm}
+    need = "" if peak is None else f" (it needs |tau_y| <= {peak[1]:.4g} N with |tau_psi| <= {peak[2]:.4g} N m)"
+    why = (
+        f"the formation law is fully actuated: it commands sway force and yaw moment independently{need}, and "
+        f"this vehicle has no sway actuator: its rudder (+-{act.rudder_max:.4g} rad) gives sway force and yaw moment "
+        f"only together (N = {act.lever_arm:.3g} m x Y), at most {sway:.3g} N with {moment:.3g} N m at {speed:.3g} m/s"
+    )
+    if act.note:
+        why += f" ({act.note})"
+    why += "; this version certifies no law for a propeller-and-rudder vehicle: only a vehicle with a sway actuator"
+    return ActuatorCheck(act, peak, "force_y", None, False, why, rudder_authority=authority)
 
 
 def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
@@ -182,7 +226,18 @@ class ActuatorPart:
             binding = f"actuators ({act.binding}, {act.binding_ratio:.3g} of its limit)"
         if act.certified:
             return Verdict(self.name, True, True, (), act.to_dict(), binding=binding, detail=act)
-        peak, limits = act.certified_peak, act.limits.limits()
+        peak = act.certified_peak
+        if isinstance(act.limits, RudderActuation):
+            why = Reason(
+                self.name,
+                "unsupported",
+                f"actuators: {act.reason}",
+                channel="force_y",
+                value=None if peak is None else peak[1],
+                limit=0.0,
+            )
+            return Verdict(self.name, False, True, (why,), act.to_dict(), detail=act)
+        limits = act.limits.limits()
         k = CHANNELS.index(act.binding) if act.binding in CHANNELS else None
         why = Reason(
             self.name,
@@ -211,6 +266,13 @@ class ActuatorPart:
         if lim is None:
             out.append(f"  actuators                 {f['reason']}")
             return out
+        if f.get("kind") == "underactuated":
+            out.append(
+                f"  actuators (underactuated) propeller {lim['force_x']:.5g} N, rudder +-{lim['rudder']:.4g} rad: "
+                "the fully actuated law is refused"
+            )
+            out.append(f"    {f['reason']}")
+            return out
         verdict = "fit" if f["certified"] else "do NOT fit"
         out.append(
             f"  actuator limits           {lim['force_x']:.5g} N, {lim['force_y']:.5g} N, {lim['moment']:.5g} N m: "
@@ -233,8 +295,12 @@ class ActuatorPart:
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
-        """Nothing of its own: the certificates that cover a run bound its force."""
-        return None
+        """A condition never met on a vehicle with a rudder; else nothing (the certificates bound a run's force)."""
+        act = ctx.point.config.actuators
+        if not isinstance(act, RudderActuation):
+            return None
+        why = "the fully actuated law commands a sway force that this vehicle's rudder cannot make on its own"
+        return RunCheck(self.name, "condition", True, False, why, refuses_gains=why)
 
 
-__all__ = ["ActuatorCheck", "Peak", "check_actuators", "peak_of"]
+__all__ = ["ActuatorCheck", "Peak", "check_actuators", "peak_of", "rudder_check"]

@@ -103,20 +103,20 @@ def closed_loop_for(point: DesignPoint) -> ClosedLoopCertificate:
             kind="unsupported",
         )
     cert = closed_loop_certificate(cfg.vehicle, cfg.envelope, point.tube, gains, lam=point.lam, sigma=point.sigma.upper)
-    if cfg.actuators is None:
+    if cfg.force_limits is None:
         return cert
-    fitted = within_actuators(cert, cfg.vehicle, cfg.envelope, point.tube, gains, cfg.actuators)
+    fitted = within_actuators(cert, cfg.vehicle, cfg.envelope, point.tube, gains, cfg.force_limits)
     if fitted is None:
         need = mission_thrust(cfg.vehicle, cfg.envelope, point.tube, gains).as_tuple()
-        channel, ratio = cfg.actuators.binding(need)
+        channel, ratio = cfg.force_limits.binding(need)
         k = CHANNELS.index(channel) if channel in CHANNELS else None
         raise DesignError(
             "no start region fits the actuators: even tracked exactly, the mission needs "
-            + actuator_shortfall(cfg.actuators, need),
+            + actuator_shortfall(cfg.force_limits, need),
             kind="thrust",
             channel=channel,
             value=ratio if k is None else need[k],
-            limit=1.0 if k is None else cfg.actuators.limits()[k],
+            limit=1.0 if k is None else cfg.force_limits.limits()[k],
         )
     return fitted
 
@@ -152,7 +152,7 @@ def coverage_for(
         start=start,
         frame=cfg.frame,
         blend_time=cfg.simulation.blend_time,
-        actuators=cfg.actuators,
+        actuators=cfg.force_limits,
         current=cfg.simulation.current,
         progress=progress,
     )

@@ -81,7 +81,7 @@ def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> I
         sigma=cert.region.sigma,
         c_range=cert.region.c_range,
         jerk=jerk,
-        actuators=cfg.actuators,
+        actuators=cfg.force_limits,
         yaw_jerk=yaw_jerk,
     )
 

@@ -177,18 +177,18 @@ def robust_summary(
                 settings=(Setting("disturbance", "current_rate", 0.0),),
             )
         )
-    cert = robust_certificate(box, cfg.envelope, tube, gains, current, cfg.actuators)
+    cert = robust_certificate(box, cfg.envelope, tube, gains, current, cfg.force_limits)
     margin = None
     if margins and cert.stable:
 
         def covers(s: float) -> bool:
-            return robust_certificate(box.scaled(s), cfg.envelope, tube, gains, current * s, cfg.actuators).covers
+            return robust_certificate(box.scaled(s), cfg.envelope, tube, gains, current * s, cfg.force_limits).covers
 
         margin = robust_margin(box, gains, speed, current, covers)
     worst = weakest_corner(box, gains, speed, current)
     without = None
     if gains.integral:
-        without = robust_certificate(box, cfg.envelope, tube, replace(gains, ki=0.0), current, cfg.actuators)
+        without = robust_certificate(box, cfg.envelope, tube, replace(gains, ki=0.0), current, cfg.force_limits)
     return RobustSummary(True, cert, margin, worst, design, None, tuple(reasons), gains, without)
 
 
@@ -265,7 +265,7 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
                     False, None, f"not evaluated: shaped start of more than {RUN_TUBE_MAX_N} vehicles"
                 )
             tube = ReferenceTube.concatenate([tube, fleet_tube(fleet)])
-        cert = robust_certificate(box, cfg.envelope, tube, gains, bound, cfg.actuators)
+        cert = robust_certificate(box, cfg.envelope, tube, gains, bound, cfg.force_limits)
     except AuvHinfError as exc:
         return RobustRunCheck(False, None, f"not certified: {exc}")
     if not cert.covers or cert.bounds is None:
