@@ -43,6 +43,9 @@ START_BOUND = 30.0
 #: 80 ms one-way latency (its measurements arrive about 90 ms old, above the certified 50 ms).
 FAULTS = ("--loss", "0,0.8,0,0", "--latency", "0,0,0.08,0")
 NEUTRAL_STICKS = [0, 0, 500, 0]
+#: Length of the covered real-time run (s): 300 steps at 10 Hz, long enough for the errors to settle
+#: and the timing statistics to mean something (the measured figures of docs/deployment.md are of a 60 s run).
+RUN_SECONDS = 30.0
 
 pytestmark = pytest.mark.slow
 
@@ -112,16 +115,16 @@ def _names(violations: list[dict], vehicle: int | None = None) -> set[str]:
 
 @pytest.fixture(scope="module")
 def four_at_10hz(certificate, tmp_path_factory) -> dict:
-    """The 60 s run of four vehicles, through :func:`run` with links that keep every message sent."""
+    """The :data:`RUN_SECONDS` run of four vehicles, through :func:`run` with links that keep every message sent."""
     cert, cert_file = certificate
-    tmp = tmp_path_factory.mktemp("run60")
+    tmp = tmp_path_factory.mktemp("run")
     report, log = tmp / "fleet.json", tmp / "run.parquet"
     mapping = ArduSubMapping()
     with fleet(cert_file, report) as urls:
         links = [VehicleLink(u, i, mapping, record=True) for i, u in enumerate(urls)]
         try:
             t0 = time.monotonic()
-            summary = run(RuntimeLaw.from_certificate(cert), links, 60.0, log, realtime=True)
+            summary = run(RuntimeLaw.from_certificate(cert), links, RUN_SECONDS, log, realtime=True)
             elapsed = time.monotonic() - t0
         finally:
             for link in links:
@@ -141,7 +144,7 @@ def test_four_vehicles_at_10hz_stay_inside_the_certified_bounds(four_at_10hz):
         f"{np.abs(periods - 0.1).max() * 1e3:.2f} ms; ages {log.age.min() * 1e3:.1f}-{log.age.max() * 1e3:.1f} ms"
     )
     assert summary["covered"] and summary["violation_count"] == 0, summary["violations"][:5]
-    assert summary["steps"] >= 595 and summary["stopped_by"] == "duration"
+    assert summary["steps"] >= round(RUN_SECONDS / 0.1) - 5 and summary["stopped_by"] == "duration"
     # every step within its certified age, on a TIMESYNC clock
     assert (log.age <= cert.config.implementation.delay).all() and log.age_source.eq("timesync").all()
     # the measured errors stay inside the implementation certificate's bounds (no noise on the loopback)
@@ -157,9 +160,9 @@ def test_four_vehicles_at_10hz_stay_inside_the_certified_bounds(four_at_10hz):
     print("largest errors " + ", ".join(f"{k} {e.max():.3g} of {bounds[k]:.3g}" for k, e in errors.items()))
     for name, e in errors.items():
         assert e.max() <= bounds[name], (name, e.max(), bounds[name])
-    # the fleet moved along its mission: 60 s at 0.05 m/s
+    # the fleet moved along its mission at 0.05 m/s
     last = log[log.step == log.step.max()]
-    assert np.allclose(last.x, 3.0, atol=0.1) and np.all(last.law == "certified")
+    assert np.allclose(last.x, 0.05 * RUN_SECONDS, atol=0.1) and np.all(last.law == "certified")
 
 
 def test_every_sent_message_decodes_to_its_command(four_at_10hz):
