@@ -191,19 +191,40 @@ class SeparationPart:
     """The smallest distance between any two vehicles of the configured run, held against ``min_separation``.
 
     It applies to every design and runs after the parts that bound the tracking errors.
+
+    Attributes
+    ----------
+    name : str
+        The registry name (:data:`PART`).
+    key : str or None
+        The JSON key of the figures (:data:`KEY`).
     """
 
     name: str = PART
     key: str | None = KEY
 
     def evaluate(self, ctx: PartContext) -> Verdict:
-        """The separation of ``ctx.point`` from the earlier parts' position bounds (see :func:`separation_bound`)."""
+        """The separation of ``ctx.point`` from the earlier parts' position bounds (see :func:`separation_bound`).
+
+        Parameters
+        ----------
+        ctx : PartContext
+            The design point and the earlier verdicts.
+        """
         sep = separation_bound(ctx.point, ctx.verdicts)
         reasons = () if sep.ok else (refusal(ctx.point, sep),)
         return Verdict(self.name, sep.ok, True, reasons, sep.to_dict(), detail=sep)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
-        """The certified and required separation, the closest pair, its slot distance and the bound (m)."""
+        """The certified and required separation, the closest pair, its slot distance and the bound (m).
+
+        Parameters
+        ----------
+        figures : Any
+            The part's ``formation`` object (``None``: a record without the part).
+        record : mapping
+            The whole certificate record.
+        """
         f = figures
         if f is None:
             return []
@@ -222,7 +243,13 @@ class SeparationPart:
         ]
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
-        """The part says nothing about single runs (``simulate`` reports the measured separation)."""
+        """The part says nothing about single runs (``simulate`` reports the measured separation).
+
+        Parameters
+        ----------
+        ctx : RunContext
+            The run.
+        """
         return None
 
 
