@@ -17,9 +17,11 @@ Soundness: each part's bound holds for its own modelled system (the nominal plan
 of the declared box and current, the sampled implementation); every part of
 :data:`BOUNDING_PARTS` that applies must hold and prove a bound, and the most inclusive of them
 covers the declared system, so the maximum is a bound of the declared system. When one of them
-applies without a bound (the configured start outside its certified set, or the part does not
-hold), the part does not hold: no separation is certified. The part holds when the certified
-separation is at least ``[formation] min_separation``.
+applies and holds without a bound (the configured start outside its certified set), the part does
+not hold: no separation is certified. When one of them does not hold, or none applies (no closed
+loop), no separation is certified either, but that part's reasons are the verdict: this part
+then does not apply (and adds no reason). The part holds when the certified separation is at least
+``[formation] min_separation``.
 """
 
 from __future__ import annotations
@@ -67,6 +69,9 @@ class SeparationBound:
         The parts whose bounds enter it.
     missing : str or None
         Why no bound is proved (``None`` when one is).
+    decided_elsewhere : bool
+        No bound because a part that bounds the errors does not hold, or none applies (the design
+        gives no closed loop): that part's reasons are the verdict, and this part does not apply.
     """
 
     required: float
@@ -74,6 +79,7 @@ class SeparationBound:
     position_bound: float | None
     parts: tuple[str, ...]
     missing: str | None = None
+    decided_elsewhere: bool = False
 
     @property
     def certified(self) -> float | None:
@@ -117,13 +123,15 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
         v = verdicts.get(name)
         if v is None or not v.applies:
             continue
-        if not v.ok or v.position_bound is None:
-            why = "it does not hold" if not v.ok else "the configured start is outside its certified set"
-            return SeparationBound(required, slot_separation(point.fleet()), None, (), f"{name}: {why}")
+        if not v.ok:
+            return SeparationBound(required, slot_separation(point.fleet()), None, (), f"{name} does not hold", True)
+        if v.position_bound is None:
+            why = f"the configured start is outside the certified set of {name}"
+            return SeparationBound(required, slot_separation(point.fleet()), None, (), why)
     proving = [v for v in verdicts.values() if v.applies and v.ok and v.position_bound is not None]
     if not proving:
         why = "no part that bounds the tracking errors applies"
-        return SeparationBound(required, slot_separation(point.fleet()), None, (), why)
+        return SeparationBound(required, slot_separation(point.fleet()), None, (), why, True)
     references: dict[int, FleetReference] = {}
     for v in proving:
         ref = point.fleet() if v.bound_reference is None else v.bound_reference
@@ -162,7 +170,7 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
             PART,
             "not_covered",
             f"no certified minimum distance between the vehicles: no position-error bound for the configured run "
-            f"({sep.missing}); start the fleet on its slots (remove [simulation] initial) or make that part hold",
+            f"({sep.missing}); start the fleet nearer its slots (without [simulation] initial it starts on them)",
             channel="separation",
             limit=sep.required,
             settings=(Setting("simulation", "initial", None),) if point.config.simulation.initial is not None else (),
@@ -190,7 +198,8 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
 class SeparationPart:
     """The smallest distance between any two vehicles of the configured run, held against ``min_separation``.
 
-    It applies to every design and runs after the parts that bound the tracking errors.
+    It applies whenever the parts that bound the tracking errors hold (see the module docstring) and
+    runs after them.
 
     Attributes
     ----------
@@ -212,6 +221,8 @@ class SeparationPart:
             The design point and the earlier verdicts.
         """
         sep = separation_bound(ctx.point, ctx.verdicts)
+        if sep.decided_elsewhere:  # the failing part's reasons are the verdict
+            return Verdict(self.name, True, False, (), sep.to_dict(), detail=sep)
         reasons = () if sep.ok else (refusal(ctx.point, sep),)
         return Verdict(self.name, sep.ok, True, reasons, sep.to_dict(), detail=sep)
 
