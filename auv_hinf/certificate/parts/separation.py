@@ -48,6 +48,8 @@ KEY = "formation"
 BOUNDING_PARTS = ("closed_loop", "robust", "implementation")
 #: Largest fleet for which a refusal suggests the scaled ``[formation] offsets`` themselves.
 OFFSETS_ADVICE_MAX_N = 12
+#: Relative margin on the advised spread, above the rounding of the advised values to 4 digits.
+ADVICE_MARGIN = 1e-3
 #: Relative tolerance of the test that the formation is a regular polygon (then ``polygon_radius`` is advised).
 POLYGON_RTOL = 1e-9
 
@@ -190,7 +192,7 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
         vehicle=i,
         value=certified,
         limit=sep.required,
-        settings=_scale_settings(point, factor),
+        settings=_scale_settings(point, factor * (1.0 + ADVICE_MARGIN)),
     )
 
 
@@ -265,6 +267,7 @@ class SeparationPart:
 
 
 __all__ = [
+    "ADVICE_MARGIN",
     "BOUNDING_PARTS",
     "KEY",
     "OFFSETS_ADVICE_MAX_N",
