@@ -355,7 +355,7 @@ REPORT_UNITS: dict[str, Any] = {
     **dict.fromkeys(
         ("first_exit_time", "diverged_at", "blend_time", "turn_time", "saved_until", "min_separation_time"), "s"
     ),
-    "min_separation_pair": "vehicles (0-based)",
+    "min_separation_pair": "of the vehicles (the first is vehicle zero)",
     "shape_errors": {"final": "m", "max": "m"},
     **dict.fromkeys(("measured_decay_rate", "certified_decay_rate"), "1/s"),
     **{
