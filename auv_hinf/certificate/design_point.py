@@ -24,6 +24,7 @@ import numpy as np
 
 from auv_hinf._typing import GAIN_METHODS, FloatArray
 from auv_hinf.certificate.reason import Reason
+from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION
 from auv_hinf.config.settings import FormationConfig, SimulationConfig
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.design.theorem1 import GainDesign, design_alpha
@@ -234,9 +235,16 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
 
 def _design_key(cfg: FormationConfig) -> FormationConfig:
     """``cfg`` without what the design does not depend on (name, start, plant, current of the run,
-    horizon, and the implementation: the gains are designed for the continuous law and the
-    implementation certificate says whether they survive the declared one)."""
-    return replace(cfg, name="design", simulation=SimulationConfig(), implementation=Implementation())
+    horizon, the implementation: the gains are designed for the continuous law and the
+    implementation certificate says whether they survive the declared one, and the required
+    separation, which only the separation part reads)."""
+    return replace(
+        cfg,
+        name="design",
+        simulation=SimulationConfig(),
+        implementation=Implementation(),
+        min_separation=DEFAULT_MIN_SEPARATION,
+    )
 
 
 @lru_cache(maxsize=16)

@@ -79,6 +79,13 @@ class Verdict:
         The JSON key of the figures (set by the assembly from the part; ``None``: top-level keys).
     note : str or None
         Where the verdict comes from, when it is not a part of this session (a stored record).
+    position_bound : float or None
+        The sup over all ``t >= 0`` of every vehicle's position error ``||p_i - p_d,i||`` (m) that
+        this part proves for the configured start, on the system it models (``None``: it proves
+        none; a bound that holds only as ``t -> inf`` is not one). The separation part reads it.
+    bound_reference : Any
+        The :class:`~auv_hinf.mission.fleet.FleetReference` ``p_d`` that ``position_bound`` is
+        measured against (``None``: the raw mission, no shaped start).
     """
 
     part: str
@@ -91,6 +98,8 @@ class Verdict:
     detail: Any = field(default=None, compare=False)
     key: str | None = None
     note: str | None = None
+    position_bound: float | None = None
+    bound_reference: Any = field(default=None, compare=False)
 
     def record(self) -> dict[str, Any]:
         """The verdict's entry in ``certify --json``'s ``parts`` object.

@@ -14,6 +14,7 @@ from auv_hinf.certificate.parts.actuators import ActuatorPart
 from auv_hinf.certificate.parts.closed_loop import ClosedLoopPart
 from auv_hinf.certificate.parts.implementation import ImplementationPart
 from auv_hinf.certificate.parts.robust import RobustPart
+from auv_hinf.certificate.parts.separation import SeparationPart
 from auv_hinf.certificate.parts.theorem1 import Theorem1Part
 from auv_hinf.exceptions import ParameterError
 
@@ -24,6 +25,7 @@ PARTS: tuple[CertificatePart, ...] = (
     RobustPart(),
     ActuatorPart(),
     ImplementationPart(),
+    SeparationPart(),
 )
 
 _registered: list[CertificatePart] = list(PARTS)

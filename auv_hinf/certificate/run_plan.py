@@ -331,6 +331,8 @@ DEFINITIONS = {
     "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "
     "('final') and over the run ('max') (m)",
     "commanded_peak": "largest commanded force per channel before saturation (N, N, N m)",
+    "min_separation": "smallest distance between any two vehicles over the samples (m); min_separation_pair is "
+    "the pair (0-based) and min_separation_time the time (s)",
     "saved_until": "when Ctrl-C stopped simulate --save: the time of the last sample in the file (s)",
 }
 
@@ -341,7 +343,9 @@ DEFINITIONS = {
 REPORT_UNITS: dict[str, Any] = {
     "n": "vehicles",
     "horizon": "s",
-    **dict.fromkeys(("final_shape_error", "final_center_error", "final_position_error", "rms_shape_error"), "m"),
+    **dict.fromkeys(
+        ("final_shape_error", "final_center_error", "final_position_error", "rms_shape_error", "min_separation"), "m"
+    ),
     "max_force": "N",
     "max_moment": "N m",
     **dict.fromkeys(("max_speed", "max_sway", "final_sway"), "m/s"),
@@ -349,7 +353,10 @@ REPORT_UNITS: dict[str, Any] = {
     "saturation_fraction": "of the vehicle-samples",
     **dict.fromkeys(("commanded_peak", "certified_thrust"), CHANNEL_UNITS),
     "actuator_limits": LIMIT_UNITS,
-    **dict.fromkeys(("first_exit_time", "diverged_at", "blend_time", "turn_time", "saved_until"), "s"),
+    **dict.fromkeys(
+        ("first_exit_time", "diverged_at", "blend_time", "turn_time", "saved_until", "min_separation_time"), "s"
+    ),
+    "min_separation_pair": "of the vehicles (the first is vehicle zero)",
     "shape_errors": {"final": "m", "max": "m"},
     **dict.fromkeys(("measured_decay_rate", "certified_decay_rate"), "1/s"),
     **{

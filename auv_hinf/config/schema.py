@@ -542,6 +542,15 @@ class FormationTable(_Table):
         gt=0.0,
         le=MAX_COORDINATE,
     )
+    min_separation: float = _field(
+        2.0,
+        "smallest distance between any two vehicles the certificate must prove for the configured run "
+        "(certified: the smallest slot distance less twice the certified position-error bound); the default "
+        "exceeds a REMUS 100's hull length (1.6 m) and a BlueROV2 Heavy's width (0.58 m)",
+        "m",
+        gt=0.0,
+        le=MAX_COORDINATE,
+    )
 
     @model_validator(mode="after")
     def _one_shape(self) -> FormationTable:
@@ -723,6 +732,9 @@ DEFAULT_METHOD: GainMethod = schema_default(DesignTable, "method")
 DEFAULT_FRAME: FormationFrame = schema_default(FormationTable, "frame")
 
 
+DEFAULT_MIN_SEPARATION: float = schema_default(FormationTable, "min_separation")
+
+
 DEFAULT_SYNTHESIS: SynthesisKind = schema_default(DesignTable, "synthesis")
 
 
@@ -849,6 +861,7 @@ __all__ = [
     "DEFAULT_HORIZON",
     "DEFAULT_INTEGRAL",
     "DEFAULT_METHOD",
+    "DEFAULT_MIN_SEPARATION",
     "DEFAULT_POLES",
     "DEFAULT_POLYGON_RADIUS",
     "DEFAULT_SEED",

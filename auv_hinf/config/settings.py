@@ -25,6 +25,7 @@ from auv_hinf.config.schema import (
     DEFAULT_HORIZON,
     DEFAULT_INTEGRAL,
     DEFAULT_METHOD,
+    DEFAULT_MIN_SEPARATION,
     DEFAULT_POLES,
     DEFAULT_SEED,
     DEFAULT_START,
@@ -270,6 +271,10 @@ class FormationConfig:
         default: the Jacobi shape is fixed in the earth frame, vehicle i tracks ``q + d_i``) or
         ``"path"`` (the offsets, ``x`` along the track and ``y`` across it on the body y axis, turn with the
         path's course: ``q + R(chi) d_i``; see :mod:`auv_hinf.mission.fleet`).
+    min_separation : float
+        Smallest distance between any two vehicles (m, > 0) the certificate must prove for the
+        configured run (``[formation] min_separation``; see
+        :mod:`auv_hinf.certificate.parts.separation`).
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
 
@@ -303,6 +308,7 @@ class FormationConfig:
     actuators: Actuation | None = None
     implementation: Implementation = field(default_factory=Implementation)
     frame: FormationFrame = DEFAULT_FRAME
+    min_separation: float = DEFAULT_MIN_SEPARATION
 
     def __post_init__(self) -> None:
         for key, kind in (
@@ -343,11 +349,18 @@ class FormationConfig:
             lam=des.lam,
             k1=des.k1,
             heading_poles=(des.heading_poles[0], des.heading_poles[1]),
+            min_separation=form.min_separation,
         )
 
     def _formation_table(self) -> dict[str, Any]:
         """The ``[formation]`` table of this configuration."""
-        return {"n": self.n, "jacobi": self.jacobi, "frame": self.frame, "shape": [list(s) for s in self.shape]}
+        return {
+            "n": self.n,
+            "jacobi": self.jacobi,
+            "frame": self.frame,
+            "shape": [list(s) for s in self.shape],
+            "min_separation": self.min_separation,
+        }
 
     def _design_table(self) -> dict[str, Any]:
         """The ``[design]`` table of this configuration (``None`` for an option not set)."""
@@ -396,6 +409,7 @@ class FormationConfig:
             "jacobi": self.jacobi,
             "frame": self.frame,
             "shape": [list(s) for s in self.shape],
+            "min_separation": self.min_separation,
             "envelope": self.envelope.to_dict(),
             **self._design_table(),
             "reference": self.reference.to_dict(),
@@ -525,6 +539,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
         actuators=_actuators(cf.actuators),
         implementation=_implementation(cf.implementation),
         frame=cf.formation.frame,
+        min_separation=cf.formation.min_separation,
     )
 
 

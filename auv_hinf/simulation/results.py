@@ -14,6 +14,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNELS
 from auv_hinf.law.formation_law import saturate
 from auv_hinf.mission.fleet import Motion
+from auv_hinf.mission.separation import closest_approach
 from auv_hinf.models.vehicle import ground_velocity
 from auv_hinf.simulation.postprocess import TrackingErrors, formation_errors, in_path_frame, tracking_errors
 
@@ -125,6 +126,22 @@ class SimulationResult:
             "first_exit_time": exit_time,
             "shape_errors": self.shape_errors(),
             "diverged_at": self.diverged_at,
+            **self.separation(),
+        }
+
+    def separation(self) -> dict[str, Any]:
+        """``min_separation``: the smallest distance between any two vehicles over the samples (m), and its pair.
+
+        ``min_separation_pair`` is ``[i, j]`` (0-based) and ``min_separation_time`` the sample's time (s);
+        see :func:`~auv_hinf.mission.separation.closest_approach` (k-d trees for large fleets).
+        """
+        if self.states.shape[1] < 2:
+            return {"min_separation": None, "min_separation_pair": None, "min_separation_time": None}
+        c = closest_approach(self.states[..., :2])
+        return {
+            "min_separation": c.distance,
+            "min_separation_pair": list(c.pair),
+            "min_separation_time": float(self.t[c.sample]),
         }
 
     def shape_errors(self) -> dict[str, Any]:

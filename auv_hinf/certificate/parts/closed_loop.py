@@ -25,6 +25,7 @@ from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_cert
 from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fit import ReferenceFit
+from auv_hinf.mission.fleet import FleetReference
 
 #: The part's registry name and JSON key.
 PART = "closed_loop"
@@ -188,6 +189,18 @@ class ClosedLoopSummary:
         """The closed loop is certified."""
         return not self.reasons
 
+    def start_bound(self) -> tuple[float | None, FleetReference | None]:
+        """The sup over all ``t`` of the position error (m) the certificate proves for the configured start.
+
+        With the reference it is measured against (the shaped start the coverage search chose, or the raw
+        mission); ``(None, None)`` when the closed loop is not certified or does not cover the start. The
+        nominal plant without current: the certificate's own model.
+        """
+        s = self.shaped
+        if not self.ok or self.certificate is None or s is None or not s.covered:
+            return None, None
+        return float(s.bounds.position), s.reference
+
     @staticmethod
     def _fit_keys(fit: ReferenceFit) -> dict[str, Any]:
         """``reference_frame``, ``binding`` (vehicle, time, channel, edge, margin) and ``reference_fit``."""
@@ -303,7 +316,19 @@ class ClosedLoopPart:
         if c is not None and s is not None and s.covered and s.thrust is not None:
             peaks.append(s.thrust.as_tuple())
         binding = None if c is None else f"operating envelope (smallest margin {c.region.margins.min:.3g})"
-        return Verdict(self.name, loop.ok, True, loop.reasons, loop.to_dict(), tuple(peaks), binding, loop)
+        bound, reference = loop.start_bound()
+        return Verdict(
+            self.name,
+            loop.ok,
+            True,
+            loop.reasons,
+            loop.to_dict(),
+            tuple(peaks),
+            binding,
+            loop,
+            position_bound=bound,
+            bound_reference=reference,
+        )
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
         """Decay, region, thrust and start of the closed loop (4-6 digits, with units)."""

@@ -363,7 +363,10 @@ class ImplementationPart:
                 f"certified sample time up to {c.max_sample_time:.3g} s)"
             )
         if not declared or impl.covers:
-            return Verdict(self.name, True, declared, (), impl.to_dict(), binding=binding, detail=impl)
+            bound = None if not declared or c is None or c.bounds is None else float(c.bounds.position)
+            return Verdict(
+                self.name, True, declared, (), impl.to_dict(), binding=binding, detail=impl, position_bound=bound
+            )
         covered = impl.covered_sample_time
         why = Reason(
             self.name,

@@ -17,7 +17,7 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.thrust import ThrustBounds
-from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.design_point import DesignPoint, initial_states
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
 from auv_hinf.certificate.reason import Reason, Setting, reason_from
@@ -230,6 +230,50 @@ def _in_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
     return None
 
 
+def _run_outside(point: DesignPoint) -> str | None:
+    """Why the configured run's plant or current is outside what is declared (``None``: inside)."""
+    cfg = point.config
+    speed = float(np.hypot(*cfg.simulation.current))
+    why = _in_box(cfg, point.box)
+    if why is None and speed > point.current * (1 + BOX_RTOL):
+        why = f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s"
+    if why is None and cfg.disturbance.current_rate:
+        why = "a time-varying current is not certified"
+    return why
+
+
+def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReference | None) -> float | None:
+    """The sup over all ``t`` of the position error (m) the robust certificate proves for the configured run.
+
+    It holds when the certificate covers the declared box and current, the configured plant and
+    current are inside them, and the configured start lies in the certified invariant set against
+    ``reference``: then the errors stay within ``bounds`` for every ``t >= 0`` (not only
+    ultimately). A shaped ``reference`` is checked on its own tube (:func:`check_robust_run`).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured start, plant and current).
+    rob : RobustSummary
+        Its robust summary.
+    reference : FleetReference or None
+        The reference the run tracks (``None``: the raw mission).
+    """
+    c = rob.certificate
+    if not rob.declared or rob.reasons or c is None or not c.covers or c.bounds is None:
+        return None
+    fleet = point.fleet() if reference is None else reference
+    initial = initial_states(point)
+    if fleet.shaping is not None:
+        rc = check_robust_run(point, fleet, initial)
+        return None if not rc.covered or rc.bounds is None else float(rc.bounds["position"])
+    if _run_outside(point) is not None:
+        return None
+    cur = np.asarray(point.config.simulation.current, dtype=float)
+    e, de, epsi, depsi = initial_errors(fleet, initial, cur)
+    return float(c.bounds.position) if c.start_inside(e, de, epsi, depsi, cur) else None
+
+
 def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatArray) -> RobustRunCheck:
     """Whether the robust certificate covers the run of the design's configuration tracking ``fleet`` from ``initial``.
 
@@ -249,11 +293,7 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
     cfg = point.config
     box, bound = point.box, point.current
     cur = np.asarray(cfg.simulation.current, dtype=float)
-    why = _in_box(cfg, box)
-    if why is None and float(np.hypot(*cur)) > bound * (1 + BOX_RTOL):
-        why = f"current {float(np.hypot(*cur)):.4g} m/s exceeds the declared bound {bound:g} m/s"
-    if why is None and cfg.disturbance.current_rate:
-        why = "a time-varying current is not certified"
+    why = _run_outside(point)
     if why is not None:
         return RobustRunCheck(False, None, why)
     try:
@@ -313,7 +353,24 @@ class RobustPart:
                 + ("; ".join(figures["reasons"]) or "see robust"),
             )
             return Verdict(self.name, False, True, (why,), figures, peaks, binding, rob)
-        return Verdict(self.name, True, applies, (), figures, peaks, binding, rob)
+        earlier = ctx.verdicts.get("closed_loop")
+        reference = None if earlier is None else earlier.bound_reference  # the start the closed loop chose
+        if rob.declared:
+            bound = start_bound(point, rob, reference)
+        else:  # nothing declared: the robust certificate is the nominal one, and so is its bound
+            bound = None if earlier is None or not rob.covers else earlier.position_bound
+        return Verdict(
+            self.name,
+            True,
+            applies,
+            (),
+            figures,
+            peaks,
+            binding,
+            rob,
+            position_bound=bound,
+            bound_reference=None if bound is None else reference,
+        )
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
         """The robust certificate's lines when a box or a current is declared (none otherwise)."""

@@ -1,0 +1,279 @@
+"""The separation part: a certified minimum distance between any two vehicles of the configured run.
+
+The parts that bound the tracking errors (:data:`BOUNDING_PARTS`) each give, when they prove one, a
+bound ``b_k`` of ``sup_t ||p_i(t) - p_d,i(t)||`` for every vehicle of the configured start, on the
+system they model, against a reference ``p_d`` (the raw mission or the shaped start the closed
+loop chose; :attr:`~auv_hinf.certificate.part.Verdict.position_bound`). Then for every pair and
+every ``t >= 0``::
+
+    ||p_i - p_j|| >= ||p_d,i - p_d,j|| - ||p_i - p_d,i|| - ||p_j - p_d,j|| >= D_k - 2 b_k
+
+with ``D_k`` the closed-form lower bound of the desired distance of the pair
+(:func:`~auv_hinf.mission.separation.slot_separation`). The certified minimum separation is
+``min_k D_k - 2 max_k b_k`` (below every ``D_k - 2 b_k``), with the bound raised to the
+integrator's numerical floor so that a simulated run is never measured below it.
+
+Soundness: each part's bound holds for its own modelled system (the nominal plant, every plant
+of the declared box and current, the sampled implementation); every part of
+:data:`BOUNDING_PARTS` that applies must hold and prove a bound, and the most inclusive of them
+covers the declared system, so the maximum is a bound of the declared system. When one of them
+applies and holds without a bound (the configured start outside its certified set), the part does
+not hold: no separation is certified. When one of them does not hold, or none applies (no closed
+loop), no separation is certified either, but that part's reasons are the verdict: this part
+then does not apply (and adds no reason). The part holds when the certified separation is at least
+``[formation] min_separation``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.mission.fleet import FleetReference
+from auv_hinf.mission.separation import SlotSeparation, slot_separation
+from auv_hinf.models.jacobi import regular_polygon
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
+
+#: The part's registry name.
+PART = "separation"
+#: The JSON key of its figures.
+KEY = "formation"
+#: The parts that bound the tracking errors: each one that applies must prove a position bound.
+BOUNDING_PARTS = ("closed_loop", "robust", "implementation")
+#: Largest fleet for which a refusal suggests the scaled ``[formation] offsets`` themselves.
+OFFSETS_ADVICE_MAX_N = 12
+#: Relative margin on the advised spread, above the rounding of the advised values to 4 digits.
+ADVICE_MARGIN = 1e-3
+#: Relative tolerance of the test that the formation is a regular polygon (then ``polygon_radius`` is advised).
+POLYGON_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class SeparationBound:
+    """The certified separation of a design point, or why there is none.
+
+    Attributes
+    ----------
+    required : float
+        ``[formation] min_separation`` (m).
+    slots : SlotSeparation
+        The closed-form lower bound of the desired distance of the closest pair (m), over the
+        references the bounds are about (the raw mission when no part proves a bound).
+    position_bound : float or None
+        ``max_k b_k`` raised to the numerical floor (m); ``None``: no bound is proved.
+    parts : tuple of str
+        The parts whose bounds enter it.
+    missing : str or None
+        Why no bound is proved (``None`` when one is).
+    decided_elsewhere : bool
+        No bound because a part that bounds the errors does not hold, or none applies (the design
+        gives no closed loop): that part's reasons are the verdict, and this part does not apply.
+    """
+
+    required: float
+    slots: SlotSeparation
+    position_bound: float | None
+    parts: tuple[str, ...]
+    missing: str | None = None
+    decided_elsewhere: bool = False
+
+    @property
+    def certified(self) -> float | None:
+        """The certified minimum distance between any two vehicles (m; ``None`` without a bound)."""
+        return None if self.position_bound is None else self.slots.distance - 2.0 * self.position_bound
+
+    @property
+    def ok(self) -> bool:
+        """A bound is proved and the certified separation reaches the required one."""
+        c = self.certified
+        return c is not None and c >= self.required
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``formation`` object of ``auv-hinf certify --json`` (m; vehicles 0-based)."""
+        return {
+            "min_separation": self.required,
+            "min_separation_certified": self.certified,
+            "closest_pair": list(self.slots.pair),
+            "slot_distance": self.slots.distance,
+            "offset_distance": self.slots.slot_distance,
+            "shaping": self.slots.shaping,
+            "position_bound": self.position_bound,
+            "bound_parts": list(self.parts),
+            "certified": self.ok,
+            "missing": self.missing,
+        }
+
+
+def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> SeparationBound:
+    """The certified separation of ``point`` from the position bounds of the earlier ``verdicts``.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (offsets, frame, mission, required separation).
+    verdicts : mapping of str to Verdict
+        The earlier parts' verdicts, by name.
+    """
+    required = point.config.min_separation
+    for name in BOUNDING_PARTS:
+        v = verdicts.get(name)
+        if v is None or not v.applies:
+            continue
+        if not v.ok:
+            return SeparationBound(required, slot_separation(point.fleet()), None, (), f"{name} does not hold", True)
+        if v.position_bound is None:
+            why = f"the configured start is outside the certified set of {name}"
+            return SeparationBound(required, slot_separation(point.fleet()), None, (), why)
+    proving = [v for v in verdicts.values() if v.applies and v.ok and v.position_bound is not None]
+    if not proving:
+        why = "no part that bounds the tracking errors applies"
+        return SeparationBound(required, slot_separation(point.fleet()), None, (), why, True)
+    references: dict[int, FleetReference] = {}
+    for v in proving:
+        ref = point.fleet() if v.bound_reference is None else v.bound_reference
+        references.setdefault(id(v.bound_reference), ref)
+    slots = min((slot_separation(r) for r in references.values()), key=lambda s: s.distance)
+    bound = max(NUMERICAL_FLOOR, *(float(v.position_bound or 0.0) for v in proving))
+    return SeparationBound(required, slots, bound, tuple(v.part for v in proving))
+
+
+def _scale_settings(point: DesignPoint, factor: float) -> tuple[Setting, ...]:
+    """The ``[formation]`` value that spreads the formation by ``factor``: its polygon radius, or its offsets."""
+    off = point.offsets
+    n = off.shape[0]
+    radius = float(np.hypot(off[:, 0], off[:, 1]).mean())
+    if np.allclose(off, regular_polygon(n, radius), rtol=0.0, atol=POLYGON_RTOL * max(radius, 1.0)):
+        return (Setting("formation", "polygon_radius", float(f"{radius * factor:.4g}")),)
+    if n <= OFFSETS_ADVICE_MAX_N:
+        return (Setting("formation", "offsets", [[float(f"{x * factor:.4g}") for x in row] for row in off]),)
+    return ()
+
+
+def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
+    """The reason of a separation that is not certified: the pair, the distances, the bound, what to change.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point.
+    sep : SeparationBound
+        Its separation (not ``ok``).
+    """
+    s = sep.slots
+    i, j = s.pair
+    if sep.position_bound is None:
+        return Reason(
+            PART,
+            "not_covered",
+            f"no certified minimum distance between the vehicles: no position-error bound for the configured run "
+            f"({sep.missing}); start the fleet nearer its slots (without [simulation] initial it starts on them)",
+            channel="separation",
+            limit=sep.required,
+            settings=(Setting("simulation", "initial", None),) if point.config.simulation.initial is not None else (),
+        )
+    b, certified = sep.position_bound, s.distance - 2.0 * sep.position_bound
+    shaped = f" less {s.shaping:.4g} m for the shaped start" if s.shaping > 0.0 else ""
+    factor = (sep.required + 2.0 * b + s.shaping) / s.slot_distance
+    return Reason(
+        PART,
+        "envelope",
+        f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below "
+        f"[formation] min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped}, "
+        f"and each vehicle's position error is certified <= {b:.4g} m (certified = slot distance - 2 x bound); "
+        f"spread the formation about {factor:.3g} times ([formation] polygon_radius, offsets or shape), or "
+        "reduce the certified error bound (a start nearer the slots, a smaller [uncertainty] box or current)",
+        channel="separation",
+        vehicle=i,
+        value=certified,
+        limit=sep.required,
+        settings=_scale_settings(point, factor * (1.0 + ADVICE_MARGIN)),
+    )
+
+
+@dataclass(frozen=True)
+class SeparationPart:
+    """The smallest distance between any two vehicles of the configured run, held against ``min_separation``.
+
+    It applies whenever the parts that bound the tracking errors hold (see the module docstring) and
+    runs after them.
+
+    Attributes
+    ----------
+    name : str
+        The registry name (:data:`PART`).
+    key : str or None
+        The JSON key of the figures (:data:`KEY`).
+    """
+
+    name: str = PART
+    key: str | None = KEY
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The separation of ``ctx.point`` from the earlier parts' position bounds (see :func:`separation_bound`).
+
+        Parameters
+        ----------
+        ctx : PartContext
+            The design point and the earlier verdicts.
+        """
+        sep = separation_bound(ctx.point, ctx.verdicts)
+        if sep.decided_elsewhere:  # the failing part's reasons are the verdict
+            return Verdict(self.name, True, False, (), sep.to_dict(), detail=sep)
+        reasons = () if sep.ok else (refusal(ctx.point, sep),)
+        return Verdict(self.name, sep.ok, True, reasons, sep.to_dict(), detail=sep)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """The certified and required separation, the closest pair, its slot distance and the bound (m).
+
+        Parameters
+        ----------
+        figures : Any
+            The part's ``formation`` object (``None``: a record without the part).
+        record : mapping
+            The whole certificate record.
+        """
+        f = figures
+        if f is None:
+            return []
+        i, j = f["closest_pair"]
+        shaped = f" less {f['shaping']:.4g} m of shaped start" if f["shaping"] > 0.0 else ""
+        slots = f"vehicles {i + 1}-{j + 1}: slots {f['offset_distance']:.4g} m apart{shaped}"
+        if f["min_separation_certified"] is None:
+            return [
+                f"  min separation            not certified (required {f['min_separation']:g} m): "
+                f"no position bound ({f['missing']}); {slots}"
+            ]
+        return [
+            f"  min separation            {f['min_separation_certified']:.4g} m certified "
+            f"(required {f['min_separation']:g} m; {slots}, position error <= {f['position_bound']:.4g} m "
+            f"from {', '.join(f['bound_parts'])})"
+        ]
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """The part says nothing about single runs (``simulate`` reports the measured separation).
+
+        Parameters
+        ----------
+        ctx : RunContext
+            The run.
+        """
+        return None
+
+
+__all__ = [
+    "ADVICE_MARGIN",
+    "BOUNDING_PARTS",
+    "KEY",
+    "OFFSETS_ADVICE_MAX_N",
+    "POLYGON_RTOL",
+    "SeparationBound",
+    "SeparationPart",
+    "refusal",
+    "separation_bound",
+]

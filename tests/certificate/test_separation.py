@@ -1,0 +1,171 @@
+"""The certified minimum distance between vehicles: sound against simulations and dense evaluation, refused
+when the slots are too close, reported in the JSON, the text and the stored file."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from auv_hinf.certificate.assembly import Certificate, certify, load_certificate
+from auv_hinf.certificate.run_plan import plan_run, with_start
+from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION
+from auv_hinf.config.settings import config_from_dict
+from auv_hinf.mission.fleet import H0_SUP, H1_SUP, FleetReference, shaped_start
+from auv_hinf.mission.paths import CircleReference, SineReference
+from auv_hinf.mission.separation import PAIRWISE_MAX_N, closest_approach, slot_separation
+from auv_hinf.simulation.engine import simulate
+from tests.helpers import preset_certificate, starts_from_errors
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+FORMATION_KEYS = {"min_separation", "min_separation_certified", "closest_pair", "slot_distance", "position_bound"}
+
+
+def _dense_min(fleet: FleetReference, horizon: float, count: int = 40001) -> tuple[float, tuple[int, int]]:
+    """Brute force: the smallest desired distance of any pair on a dense grid (m), and the pair."""
+    p = fleet.kinematics(np.linspace(0.0, horizon, count))[0][0]
+    iu, ju = np.triu_indices(p.shape[1], 1)
+    d = np.linalg.norm(p[:, iu] - p[:, ju], axis=-1).min(axis=0)
+    k = int(np.argmin(d))
+    return float(d[k]), (int(iu[k]), int(ju[k]))
+
+
+@pytest.mark.parametrize("frame", ["inertial", "path"])
+def test_the_closed_form_is_the_dense_slot_distance_without_shaping(frame):
+    rng = np.random.default_rng(4)
+    offsets = rng.uniform(-20.0, 20.0, (7, 2))
+    fleet = FleetReference(CircleReference(speed=1.0, radius=60.0), offsets, None, frame)
+    sep = slot_separation(fleet)
+    dense, pair = _dense_min(fleet, 400.0, 4001)
+    assert sep.distance == pytest.approx(dense, rel=1e-9) and sep.pair == pair and sep.shaping == 0.0
+
+
+@pytest.mark.parametrize("frame", ["inertial", "path"])
+def test_a_shaped_start_is_bounded_below_its_dense_minimum(frame):
+    rng = np.random.default_rng(7)
+    mission = SineReference()
+    offsets = np.array([[0.0, 0.0], [6.0, 0.0], [0.0, 8.0], [-7.0, -5.0]])
+    for _ in range(3):
+        slots = FleetReference(mission, offsets, None, frame).motion(0.0).p
+        initial = np.column_stack(
+            [slots + rng.normal(0.0, 4.0, (4, 2)), rng.uniform(-0.5, 0.5, 4), np.ones(4), np.zeros(4), np.zeros(4)]
+        )
+        fleet = shaped_start(mission, offsets, initial, 30.0, turn_time=10.0, frame=frame)
+        sep = slot_separation(fleet)
+        dense, _ = _dense_min(fleet, 31.0)
+        assert sep.distance <= dense + 1e-12
+        assert sep.distance >= dense - 0.05  # the grid refinement is tight, not only sound
+        # the triangle bound with the sups of |h0|, |h1| is sound too, and never above the refined one
+        sh = fleet.shaping
+        iu, ju = np.triu_indices(4, 1)
+        triangle = (
+            np.linalg.norm(offsets[iu] - offsets[ju], axis=-1)
+            - H0_SUP[0] * np.linalg.norm(sh.dp[iu] - sh.dp[ju], axis=-1)
+            - sh.th * H1_SUP[0] * np.linalg.norm(sh.dv[iu] - sh.dv[ju], axis=-1)
+        ).min()
+        assert triangle <= sep.distance <= dense + 1e-12
+        i, j = sep.pair
+        assert sep.slot_distance == pytest.approx(float(np.linalg.norm(offsets[i] - offsets[j])))
+
+
+@pytest.mark.parametrize("n", [5, PAIRWISE_MAX_N + 36])
+def test_the_measured_closest_approach_is_the_brute_force_one(n):
+    rng = np.random.default_rng(n)
+    p = rng.uniform(-50.0, 50.0, (1, n, 2)) + np.cumsum(rng.normal(0.0, 0.3, (120, n, 2)), axis=0)
+    c = closest_approach(p)
+    iu, ju = np.triu_indices(n, 1)
+    d = np.linalg.norm(p[:, iu] - p[:, ju], axis=-1)
+    k, m = np.unravel_index(int(np.argmin(d)), d.shape)
+    assert c.distance == pytest.approx(float(d[k, m]), rel=1e-12)
+    assert c.pair == (int(iu[m]), int(ju[m])) and c.sample == int(k)
+
+
+def test_the_default_is_documented_once():
+    assert preset_config("paper-hexagon").min_separation == DEFAULT_MIN_SEPARATION == 2.0
+    assert "min_separation" in Path("docs/config.md").read_text(encoding="utf-8")
+
+
+def test_json_keys_and_text():
+    cert = preset_certificate("paper-hexagon")
+    f = cert.to_dict()["formation"]
+    assert FORMATION_KEYS <= set(f)
+    assert f["min_separation"] == DEFAULT_MIN_SEPARATION and len(f["closest_pair"]) == 2
+    assert f["min_separation_certified"] == pytest.approx(f["slot_distance"] - 2.0 * f["position_bound"])
+    assert f["min_separation_certified"] >= f["min_separation"] and cert.certified
+    assert cert.to_dict()["parts"]["separation"] == {"ok": True, "applies": True, "reasons": [], "key": "formation"}
+    assert "min separation" in cert.summary() and " m certified (required 2 m" in cert.summary()
+
+
+def test_slots_closer_than_twice_the_bound_plus_the_requirement_are_refused_with_the_pair():
+    """Vehicles 2 and 3 of a line 1.5 m apart (the others 10 m): refused, the pair and the distances named."""
+    data = preset_config("paper-hexagon").to_toml_dict()
+    data["formation"] = {"n": 3, "offsets": [[0.0, 0.0], [10.0, 0.0], [11.5, 0.0]]}
+    data["simulation"].pop("initial", None)
+    cert = certify(config_from_dict(data, "close-pair"))
+    v = cert.verdict("separation")
+    f = v.figures
+    assert f["closest_pair"] == [1, 2] and f["slot_distance"] == pytest.approx(1.5)
+    assert f["slot_distance"] < 2.0 * f["position_bound"] + f["min_separation"]
+    assert not v.ok and not cert.certified and [r.part for r in cert.findings] == ["separation"]
+    (why,) = v.reasons
+    assert why.kind == "envelope" and why.vehicle == 1 and why.limit == 2.0
+    assert why.value == pytest.approx(f["min_separation_certified"])
+    assert "vehicles 2 and 3" in why.message and "1.5 m apart" in why.message and "min_separation = 2 m" in why.message
+    (setting,) = why.settings
+    scaled = np.array(setting.value)
+    assert setting.key == "offsets" and np.linalg.norm(scaled[1] - scaled[2]) >= 2.0
+    # the same slots with a smaller requirement hold
+    assert certify(replace(cert.config, min_separation=1.0)).verdict("separation").ok
+
+
+def test_a_stored_certificate_round_trips_and_older_records_load(tmp_path):
+    cert = preset_certificate("paper-hexagon")
+    loaded = Certificate.load(cert.save(tmp_path / "c.json"))
+    assert loaded.to_dict()["formation"] == json.loads(json.dumps(cert.to_dict()["formation"]))
+    assert loaded.verdict("separation").ok and loaded.summary() == cert.summary()
+    for path in sorted(FIXTURES.glob("certificate-*.json")):
+        old = load_certificate(path)
+        assert old.verdict("separation") is None and "formation" not in old.to_dict()
+        assert "min separation" not in old.summary()
+
+
+def test_certify_json_has_the_formation_object(capsys):
+    assert main(["certify", "--preset", "paper-hexagon", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert FORMATION_KEYS <= set(out["formation"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["paper-triangle", "paper-hexagon", "remus-survey", "remus-line"])
+def test_the_certified_separation_is_below_every_simulated_one(name):
+    cert = preset_certificate(name)
+    certified = cert.to_dict()["formation"]["min_separation_certified"]
+    assert cert.certified and certified is not None
+    plan = plan_run(cert.config)
+    assert plan.covered
+    run = simulate(plan.scenario).summary()
+    assert certified <= run["min_separation"]
+
+
+@pytest.mark.slow
+def test_random_starts_inside_the_certified_set_keep_the_certified_separation():
+    cfg = preset_config("paper-hexagon")
+    rng = np.random.default_rng(11)
+    fleet = certify(cfg).verdict("closed_loop").detail.shaped.reference.unshaped()
+    checked = 0
+    for _ in range(3):
+        errors = np.concatenate([rng.normal(0.0, 0.3, (6, 2)), rng.normal(0.0, 0.05, (6, 4))], axis=1)
+        start = with_start(cfg, starts_from_errors(fleet, errors))
+        cert = certify(start)
+        certified = cert.to_dict()["formation"]["min_separation_certified"]
+        plan = plan_run(start)
+        if certified is None or not plan.covered:
+            continue
+        checked += 1
+        assert certified <= simulate(plan.scenario).summary()["min_separation"]
+    assert checked >= 1
