@@ -18,15 +18,18 @@ from typing import Any
 
 import control as ct
 
+from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.certificate.design_point import design_point, formation_offsets, mission_reference
 from auv_hinf.certificate.document import read_certificate, record_from_document, save_certificate
 from auv_hinf.certificate.part import PartContext, Verdict, reasons_of
+from auv_hinf.certificate.parts.guidance import FORMATION_LAW_IDLE, FORMATION_LAW_PARTS
 from auv_hinf.certificate.parts.theorem1 import DEFAULT_JACOBI_SAMPLES, Theorem1Result
 from auv_hinf.certificate.reason import Reason
 from auv_hinf.certificate.registry import parts
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, DesignError
+from auv_hinf.guidance.export import guidance_controller
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
 from auv_hinf.law.gains import Gains
 from auv_hinf.law.interconnect import fleet_closed_loop, formation_controller, sampled_formation_controller
@@ -288,7 +291,9 @@ class Certificate:
         rounded down; see :func:`auv_hinf.law.interconnect.sampled_formation_controller`).
         Otherwise it is the continuous static law
         (:func:`auv_hinf.law.interconnect.formation_controller`, ``dt = 0``), and a delay declared
-        with ``sample_time = 0`` is not in it.
+        with ``sample_time = 0`` is not in it. With ``[guidance]`` it is the line-of-sight cascade
+        (:func:`auv_hinf.guidance.export.guidance_controller`: inputs each vehicle's state and
+        ground velocity, outputs its thrust and rudder); ``reference`` is then ignored.
 
         Parameters
         ----------
@@ -301,6 +306,10 @@ class Certificate:
         control.NonlinearIOSystem
             The controller.
         """
+        cfg = self.config
+        if cfg.guidance is not None and isinstance(cfg.actuators, RudderActuation):  # the cascade runs
+            fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
+            return guidance_controller(cfg.guidance, cfg.vehicle, cfg.actuators, fleet)
         ref, impl = reference or self.mission_fleet(), self.config.implementation
         if impl.sampled:
             return sampled_formation_controller(self.law(), ref, self.config.n, impl.sample_time, impl.delay)
@@ -397,7 +406,10 @@ def certify(
     options = {"jacobi_samples": jacobi_samples, "refine_jacobi": refine_jacobi}
     verdicts: dict[str, Verdict] = {}
     for part in parts():
-        verdict = part.evaluate(PartContext(point, dict(verdicts), options))
+        if config.guidance is not None and part.name in FORMATION_LAW_PARTS:
+            verdict = Verdict(part.name, True, False, note=FORMATION_LAW_IDLE)  # that law does not run
+        else:
+            verdict = part.evaluate(PartContext(point, dict(verdicts), options))
         verdicts[part.name] = replace(verdict, part=part.name, key=part.key)
     binding = next((v.binding for v in reversed(list(verdicts.values())) if v.binding is not None), None)
     design = {**point.summary(), "binding": binding}

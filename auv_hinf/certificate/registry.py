@@ -12,6 +12,7 @@ from __future__ import annotations
 from auv_hinf.certificate.part import CertificatePart
 from auv_hinf.certificate.parts.actuators import ActuatorPart
 from auv_hinf.certificate.parts.closed_loop import ClosedLoopPart
+from auv_hinf.certificate.parts.guidance import GuidancePart
 from auv_hinf.certificate.parts.implementation import ImplementationPart
 from auv_hinf.certificate.parts.robust import RobustPart
 from auv_hinf.certificate.parts.separation import SeparationPart
@@ -26,6 +27,7 @@ PARTS: tuple[CertificatePart, ...] = (
     ActuatorPart(),
     ImplementationPart(),
     SeparationPart(),
+    GuidancePart(),
 )
 
 _registered: list[CertificatePart] = list(PARTS)

@@ -5,7 +5,8 @@ computed once), certifies the full error loop along the configured mission
 (:func:`~auv_hinf.certificate.parts.closed_loop.closed_loop_for`), chooses the reference of one run (shaped
 or raw start, :mod:`auv_hinf.closed_loop.coverage`) and builds the
 :class:`~auv_hinf.simulation.scenario.Scenario`; :func:`run_report` puts the measured and the
-certified numbers side by side.
+certified numbers side by side. A ``[guidance]`` configuration runs the line-of-sight cascade
+instead (:func:`guidance_run`).
 """
 
 from __future__ import annotations
@@ -17,8 +18,14 @@ from typing import Any
 import numpy as np
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.actuation.limits import CHANNEL_UNITS, LIMIT_UNITS
-from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
+from auv_hinf.actuation.limits import CHANNEL_UNITS, LIMIT_UNITS, RudderActuation
+from auv_hinf.certificate.design_point import (
+    DesignPoint,
+    design_point,
+    formation_offsets,
+    initial_states,
+    mission_reference,
+)
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
 from auv_hinf.certificate.parts.robust import RobustRunCheck
@@ -26,8 +33,11 @@ from auv_hinf.certificate.registry import parts
 from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
+from auv_hinf.exceptions import ConfigError
+from auv_hinf.guidance.simulation import GuidanceRun, simulate_guidance
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.margins import ERROR_UNITS
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
@@ -411,6 +421,7 @@ __all__ = [
     "SAMPLE_BUDGET",
     "RunPlan",
     "certified_errors",
+    "guidance_run",
     "implementation_report",
     "measured_decay_rate",
     "measured_errors",
@@ -419,3 +430,38 @@ __all__ = [
     "run_samples",
     "with_start",
 ]
+
+
+def guidance_run(cfg: FormationConfig, horizon: float | None = None) -> GuidanceRun:
+    """Simulate a ``[guidance]`` configuration: its fleet under the line-of-sight cascade.
+
+    The plant is ``[simulation] plant`` applied to the vehicle, the current ``[simulation] current``,
+    the start ``[simulation] initial`` (default: every vehicle on its slot, heading into the current).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        A configuration with ``[guidance]`` and an underactuated ``[actuators]``.
+    horizon : float, optional
+        Simulated time (s); default ``[simulation] horizon``.
+
+    Raises
+    ------
+    ConfigError
+        If the configuration has no ``[guidance]`` table.
+    """
+    if cfg.guidance is None or not isinstance(cfg.actuators, RudderActuation):
+        raise ConfigError("guidance_run: the configuration has no [guidance] table for a propeller-and-rudder vehicle")
+    sim = cfg.simulation
+    initial = None if sim.initial is None else np.asarray(sim.initial, dtype=float)
+    fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
+    return simulate_guidance(
+        cfg.guidance,
+        sim.plant_params(cfg.vehicle),
+        cfg.vehicle,
+        cfg.actuators,
+        fleet,
+        sim.horizon if horizon is None else horizon,
+        sim.current,
+        initial,
+    )

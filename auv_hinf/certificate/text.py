@@ -32,7 +32,9 @@ def certificate_text(record: Mapping[str, Any], registered: Mapping[str, Certifi
     lines = [f"auv-hinf certificate: {record['preset']} (N={record['n']}, {vehicle.get('name', 'vehicle')})"]
     for name, entry in record["parts"].items():
         part = registered.get(name)
-        if part is not None:
+        if not entry["applies"] and not figures_in(entry, record) and entry.get("note"):
+            lines.append(f"  {name:<26}not evaluated: {entry['note']}")
+        elif part is not None:
             lines += part.lines(figures_in(entry, record), record)
         else:
             where = entry.get("note") or "a part not registered in this session"

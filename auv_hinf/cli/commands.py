@@ -80,6 +80,16 @@ def _load(args: argparse.Namespace) -> Any:
     return _read(args)[0]
 
 
+def _formation_law_only(cfg: FormationConfig, command: str) -> FormationConfig:
+    """``cfg``, or a clear refusal when it declares ``[guidance]`` (``command`` runs the formation law only)."""
+    if cfg.guidance is not None:
+        raise BadInput(
+            f"{command} runs the fully actuated formation law; this configuration's [guidance] steers "
+            f"propeller-and-rudder vehicles, which `{PROG} simulate` runs (and `{PROG} certify` reports on)"
+        )
+    return cfg
+
+
 def _cmd_design(args: argparse.Namespace) -> int:
     from auv_hinf.design.crosscheck import crosscheck
 
@@ -156,7 +166,8 @@ def _cmd_certify(args: argparse.Namespace) -> int:
         from auv_hinf.figures.sigma import save_sigma_heatmap
 
         cert.save(args.out / "certificate.json")  # the file Certificate.load reads
-        save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
+        if cfg.guidance is None:  # the sigma sweep is of the fully actuated law's Theorem 1
+            save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
     print(_dump(data) if args.json else cert.summary())
     return _verdict(cert.certified, "; ".join(cert.reasons) or "no reason given")
 
@@ -187,6 +198,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))
         except ConfigError as exc:
             raise BadInput(f"--current {','.join(f'{c:g}' for c in args.current)}: {exc}") from None
+    if cfg.guidance is not None:
+        return _simulate_guidance(args, cfg)
     if args.design:
         cfg = replace(cfg, robust=args.design == "robust")
     try:
@@ -252,6 +265,37 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not plan.covered:  # it stayed inside, but no certificate says it had to
         return _verdict(False, f"the run stayed inside, but no certificate covers it: {_run_reason(plan)}")
     return EXIT_OK
+
+
+def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
+    """``simulate`` of a ``[guidance]`` configuration: the line-of-sight cascade on the 3-DOF model."""
+    from auv_hinf.certificate.run_plan import guidance_run
+
+    if args.save is not None or args.design or args.start:
+        raise BadInput("--save, --design and --start are for the fully actuated law; a [guidance] run takes none")
+    print(
+        f"{PROG}: note: the {cfg.guidance.kind.upper() if cfg.guidance else ''} guidance cascade has no certificate "
+        "in this version; this run measures it",
+        file=sys.stderr,
+    )
+    try:
+        run = guidance_run(cfg, horizon=args.horizon)
+    except KeyboardInterrupt:
+        raise Stopped("interrupted after 0 of 1 runs; no run finished, nothing written") from None
+    summary = run.report()
+    if args.out:
+        from auv_hinf.figures.guidance import save_guidance_plots
+
+        (args.out / "summary.json").write_text(_dump(summary))
+        save_guidance_plots(run, args.out)
+    if args.json:
+        print(_dump(summary))
+    else:
+        from auv_hinf.guidance.simulation import REPORT_UNITS as GUIDANCE_UNITS
+
+        for key, val in summary.items():
+            print(f"{key:>24}: {_short(val, GUIDANCE_UNITS.get(key))}")
+    return _verdict(False, "the guidance cascade is not certified in this version (the run measured it)")
 
 
 def _run_reason(plan: RunPlan) -> str:
@@ -328,7 +372,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from auv_hinf.certificate.run_plan import plan_run
 
     _prepare_out(args.out)
-    cfg = _load(args)
+    cfg = _formation_law_only(_load(args), "campaign")
     try:
         plan = plan_run(cfg, horizon=args.horizon, samples=2)  # the gains' verdict; the runs come later
     except DesignError as exc:
@@ -414,6 +458,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     _prepare_out(args.log.parent, "--log", args.log)  # before any computation or connection
     cfg, cert, deploy = _deploy_source(args)
+    _formation_law_only(cfg, "run")
     urls = list(args.connect or deploy.connect or [])
     n = cfg.n
     if len(urls) != n:
@@ -489,7 +534,7 @@ def _cmd_fleet_sim(args: argparse.Namespace) -> int:
 
     if args.report is not None:
         _prepare_out(args.report.parent, "--report", args.report)  # before the fleet starts
-    cfg = _deploy_source(args)[0]
+    cfg = _formation_law_only(_deploy_source(args)[0], "fleet-sim")
     n = len(args.listen)
     if n != cfg.n:
         raise BadInput(f"give one --listen URL per vehicle of {cfg.name!r} ({cfg.n}), got {n}")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any, Literal, get_args, get_origin
 
 import numpy as np
@@ -24,6 +25,7 @@ from auv_hinf.config.schema import (
     DisturbanceTable,
     EnvelopeTable,
     FormationTable,
+    GuidanceTable,
     PlantTable,
     SimulationTable,
     UncertaintyTable,
@@ -37,6 +39,7 @@ from auv_hinf.config.settings import (
     UncertaintyConfig,
 )
 from auv_hinf.exceptions import ConfigError
+from auv_hinf.guidance.law import GuidanceConfig
 from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope
 from auv_hinf.models.jacobi import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
@@ -236,6 +239,22 @@ def _remus_survey() -> FormationConfig:
     )
 
 
+#: Cross current of ``remus-survey-ilos`` (m/s, inertial): across the first leg, as strong as the
+#: currents REMUS surveys are planned for (the issue's 0.2 m/s).
+SURVEY_CURRENT = (0.0, 0.2)
+
+
+def _remus_survey_ilos() -> FormationConfig:
+    """``remus-survey`` steered as the REMUS really is: ILOS on each slot, propeller and rudder only."""
+    base = _remus_survey()
+    return replace(
+        base,
+        name="remus-survey-ilos",
+        simulation=SimulationConfig(horizon=SURVEY_HORIZON, current=SURVEY_CURRENT),
+        guidance=GuidanceConfig(kind="ilos"),
+    )
+
+
 #: The registry: preset name -> factory of the complete configuration.
 PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "paper-triangle": _paper_triangle,
@@ -243,6 +262,7 @@ PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "remus-line": _remus_line,
     "bluerov2-line": _bluerov2_line,
     "remus-survey": _remus_survey,
+    "remus-survey-ilos": _remus_survey_ilos,
 }
 #: Names of the built-in presets (the CLI's ``--preset`` choices).
 PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)
@@ -371,13 +391,31 @@ def annotated_toml(cfg: FormationConfig) -> str:
         data.get("disturbance", {}),
         {"current_speed": 0.1, "current_rate": 0.0},
     )
-    act = _table(
-        "actuators", ActuatorsTable, data.get("actuators", {}), {"tau_x": 86.0, "tau_y": 86.0, "tau_psi": 23.0}
+    lines += _optional_table(
+        "actuators",
+        ActuatorsTable,
+        data,
+        {"tau_x": 86.0, "tau_y": 86.0, "tau_psi": 23.0},
+        "none declared: unlimited thrust",
     )
-    if "actuators" not in data:  # none declared: the whole table stays a comment (an empty one is an error)
-        act = [line if not line.startswith("[") else f"# {line}  (none declared: unlimited thrust)" for line in act]
-    lines += act
+    lines += _optional_table(
+        "guidance", GuidanceTable, data, {"kind": "ilos"}, "none declared: the fully actuated formation law"
+    )
     return "\n".join(lines) + "\n"
+
+
+def _optional_table(
+    name: str, model: type[BaseModel], data: dict[str, Any], examples: dict[str, Any], absent: str
+) -> list[str]:
+    """The lines of a table that may be left out; when ``data`` has none it stays a comment.
+
+    An empty table would be an error (it declares the feature with its defaults), so an absent
+    one is written with its header commented out too, saying what ``absent`` means.
+    """
+    lines = _table(name, model, data.get(name, {}), examples)
+    if name in data:
+        return lines
+    return [line if not line.startswith("[") else f"# {line}  ({absent})" for line in lines]
 
 
 __all__ = [

@@ -23,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
 from auv_hinf.actuation.limits import MAX_RUDDER, ActuationKind
+from auv_hinf.guidance import law as guidance_law
 from auv_hinf.law.gains import DEFAULT_K1
 from auv_hinf.mission.paths import lawnmower_min_spacing
 from auv_hinf.models.envelope import PAPER_ENVELOPE, check_interval
@@ -397,6 +398,37 @@ class ImplementationTable(_Table):
     delay: float = _field(0.0, "lumped input + measurement delay", "s", ge=0.0, le=60.0)
     varying_delay: bool = _field(False, "false: every sample late by exactly delay; true: by any value in [0, delay]")
     noise: NoiseTable = Field(default_factory=NoiseTable, description="bounds of the measurement errors")
+
+
+class GuidanceTable(_Table):
+    """``[guidance]``: line-of-sight guidance and autopilots, for a vehicle with a propeller and a rudder."""
+
+    kind: guidance_law.GuidanceKind = _field(
+        "ilos", "los: plain line of sight; ilos: integral LOS, no cross-track offset in a constant current"
+    )
+    lookahead: float = _field(
+        guidance_law.DEFAULT_LOOKAHEAD, "lookahead distance Delta", "m", gt=0.0, le=MAX_COORDINATE
+    )
+    integral_gain: float = _field(
+        guidance_law.DEFAULT_INTEGRAL_GAIN, "ILOS integral gain sigma (below the speed less the current)", "m/s",
+        gt=0.0, le=MAX_SPEED,
+    )  # fmt: skip
+    heading_bandwidth: float = _field(
+        guidance_law.DEFAULT_HEADING_BANDWIDTH, "natural frequency of the critically damped heading loop",
+        "rad/s", gt=0.0, le=MAX_RATE * 10,
+    )  # fmt: skip
+    speed_gain: float = _field(
+        guidance_law.DEFAULT_SPEED_GAIN, "gain of the along-track ground-speed loop", "1/s", gt=0.0, le=100.0
+    )
+    along_track_gain: float = _field(
+        guidance_law.DEFAULT_ALONG_TRACK_GAIN, "gain of the along-track position correction", "1/s",
+        ge=0.0, le=100.0,
+    )  # fmt: skip
+    along_track_length: float = _field(
+        guidance_law.DEFAULT_ALONG_TRACK_LENGTH,
+        "along-track error at which the speed correction saturates (to gain x length)", "m",
+        gt=0.0, le=MAX_COORDINATE,
+    )  # fmt: skip
 
 
 class DisturbanceTable(_Table):
@@ -774,6 +806,10 @@ class ConfigFile(_Table):
     )
     deploy: DeployTable = Field(
         default_factory=DeployTable, description="running the certified law on MAVLink vehicles (auv-hinf run)"
+    )
+    guidance: GuidanceTable | None = Field(
+        default=None,
+        description="line-of-sight guidance for a propeller-and-rudder vehicle (default: the fully actuated law)",
     )
 
     @model_validator(mode="before")

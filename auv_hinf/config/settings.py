@@ -44,6 +44,7 @@ from auv_hinf.config.schema import (
     speed_misfit,
 )
 from auv_hinf.exceptions import AuvHinfError, ConfigError
+from auv_hinf.guidance.law import GuidanceConfig
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.law.gains import DEFAULT_K1
 from auv_hinf.models.envelope import Envelope
@@ -277,6 +278,9 @@ class FormationConfig:
         :mod:`auv_hinf.certificate.parts.separation`).
     reference, simulation, uncertainty, disturbance
         The ``[reference]``, ``[simulation]``, ``[uncertainty]`` and ``[disturbance]`` tables.
+    guidance : GuidanceConfig or None
+        The ``[guidance]`` table: line-of-sight guidance for a propeller-and-rudder vehicle
+        (:mod:`auv_hinf.guidance.law`); ``None``: the fully actuated formation law.
 
     Raises
     ------
@@ -309,6 +313,7 @@ class FormationConfig:
     implementation: Implementation = field(default_factory=Implementation)
     frame: FormationFrame = DEFAULT_FRAME
     min_separation: float = DEFAULT_MIN_SEPARATION
+    guidance: GuidanceConfig | None = None
 
     def __post_init__(self) -> None:
         for key, kind in (
@@ -325,6 +330,15 @@ class FormationConfig:
                 raise ConfigError(f"{key} must be a {kind.__name__}, got {getattr(self, key)!r}")
         if self.actuators is not None and not isinstance(self.actuators, (Actuators, RudderActuation)):
             raise ConfigError(f"actuators must be an Actuators, a RudderActuation or None, got {self.actuators!r}")
+        if self.guidance is not None:
+            if not isinstance(self.guidance, GuidanceConfig):
+                raise ConfigError(f"guidance must be a GuidanceConfig or None, got {self.guidance!r}")
+            if not isinstance(self.actuators, RudderActuation):
+                raise ConfigError(
+                    "guidance: line-of-sight guidance steers a propeller-and-rudder vehicle; declare its "
+                    '[actuators] with kind = "underactuated" (tau_x, rudder_max, rudder_sway, rudder_yaw) or a '
+                    'preset such as "remus100", or remove [guidance] to use the fully actuated law'
+                )
         form = validate_table(FormationTable, plain_data(self._formation_table()), ("formation",))
         validate_table(EnvelopeTable, plain_data(self.envelope.to_dict()), ("envelope",))  # the units, from Python too
         misfit = speed_misfit(self.reference.kwargs()["speed"], self.envelope.u)
@@ -418,6 +432,7 @@ class FormationConfig:
             "disturbance": self.disturbance.to_dict(),
             "actuators": None if self.actuators is None else self.actuators.to_dict(),
             "implementation": self.implementation.to_dict(),
+            "guidance": None if self.guidance is None else self.guidance.to_dict(),
         }
 
     def to_toml_dict(self) -> dict[str, Any]:
@@ -440,6 +455,7 @@ class FormationConfig:
             "disturbance": self.disturbance.to_dict(),
             "actuators": _actuators_table(self.actuators),
             "implementation": {} if self.implementation == Implementation() else self.implementation.to_dict(),
+            "guidance": {} if self.guidance is None else self.guidance.to_dict(),
         }
         return {k: v for k, v in out.items() if v != {}}
 
@@ -540,6 +556,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
         implementation=_implementation(cf.implementation),
         frame=cf.formation.frame,
         min_separation=cf.formation.min_separation,
+        guidance=None if cf.guidance is None else GuidanceConfig(**cf.guidance.model_dump()),
     )
 
 

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from auv_hinf.design.sigma import sigma_grid
+from auv_hinf.figures.simulation import PNG_DPI
 
 if TYPE_CHECKING:
     from auv_hinf.certificate.assembly import Certificate
@@ -112,7 +113,7 @@ def save_sigma_heatmap(cfg: FormationConfig, cert: Certificate, path: Path) -> N
         Image file; the format follows the suffix.
     """
     fig = sigma_heatmap(cfg, cert)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=PNG_DPI)
     plt.close(fig)
 
 

@@ -292,7 +292,7 @@ def velocities(res: SimulationResult) -> Figure:
         Three stacked axes; the top one carries one legend entry per vehicle.
     """
     env = _scenario_envelope(res)
-    fig, axes = _per_vehicle_axes(
+    fig, axes = per_vehicle_axes(
         res.t,
         np.asarray(res.states, dtype=float)[:, :, 3:6],
         ("u [m/s]", "v [m/s]", "r [rad/s]"),
@@ -303,10 +303,22 @@ def velocities(res: SimulationResult) -> Figure:
     return fig
 
 
-def _per_vehicle_axes(
+def per_vehicle_axes(
     t: Any, data: FloatArray, labels: tuple[str, str, str], ranges: Any = (None, None, None)
 ) -> tuple[Figure, Any]:
-    """Three stacked axes of ``data[:, i, k]`` (one line per vehicle i, axis k), bounds dotted."""
+    """Three stacked axes of ``data[:, i, k]`` (one line per vehicle i, axis k), bounds dotted.
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+        Times (s).
+    data : ndarray, shape (T, N, 3)
+        The three quantities of every vehicle.
+    labels : tuple of 3 str
+        The axes' labels, with their units.
+    ranges : sequence of 3 (sequence of float or None)
+        Levels drawn dotted in the limit colour on each axis (``None``: none).
+    """
     n = data.shape[1]
     tt = np.asarray(t, dtype=float)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
@@ -401,7 +413,7 @@ def forces(
         act = getattr(getattr(getattr(res, "scenario", None), "law", None), "actuators", None)
         limits = None if act is None else act.limits()
     data = np.asarray(res.forces, dtype=float)
-    fig, axes = _per_vehicle_axes(res.t, data, ("tau_x [N]", "tau_y [N]", "tau_psi [N m]"))
+    fig, axes = per_vehicle_axes(res.t, data, ("tau_x [N]", "tau_y [N]", "tau_psi [N m]"))
     notes = []
     for levels, label, word, style in (
         (_channel_levels("certified", certified), CERTIFIED_LABEL, "dashed", {"color": REFERENCE_COLOUR, "ls": "--"}),
@@ -450,11 +462,36 @@ def save_simulation_plots(
         ("errors", errors),
         ("forces", functools.partial(forces, certified=certified, limits=limits)),
     ]
+    return save_pngs(figures, res, out)
+
+
+#: Resolution of the PNG files the toolbox writes (dots per inch): sharp on a laptop screen at
+#: the figures' 10-12 in widths, and well under 1 MB a file.
+PNG_DPI = 110
+
+
+def save_pngs(figures: Sequence[tuple[str, Callable[[Any], Figure]]], data: Any, out: Path) -> list[Path]:
+    """Draw each ``(name, figure_of)`` on ``data`` and write it as ``out/name.png``, closing each figure.
+
+    Parameters
+    ----------
+    figures : sequence of (str, callable)
+        File stems and the functions that draw the figure from ``data``.
+    data : Any
+        The run (or result) every function draws.
+    out : pathlib.Path
+        Existing directory.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in the order of ``figures``.
+    """
     paths = []
-    for name, fn in figures:
-        fig = fn(res)
+    for name, figure_of in figures:
+        fig = figure_of(data)
         path = Path(out) / f"{name}.png"
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=PNG_DPI)
         plt.close(fig)
         paths.append(path)
     return paths
@@ -471,6 +508,7 @@ __all__ = [
     "MAX_TRAJECTORY_PATHS",
     "MAX_VEHICLE_LINES",
     "OUTLINE_COLOUR",
+    "PNG_DPI",
     "RED_HUE_WIDTH",
     "REFERENCE_COLOUR",
     "TRAJECTORY_MARGIN",
@@ -479,6 +517,8 @@ __all__ = [
     "distinct_from_references",
     "errors",
     "forces",
+    "per_vehicle_axes",
+    "save_pngs",
     "save_simulation_plots",
     "trajectories",
     "velocities",

@@ -298,6 +298,7 @@ def test_thousand_starts_in_the_region(triangle):
 # 2. Other vehicles, missions and envelopes
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", [*sorted(CASES), pytest.param("paper-hexagon", marks=pytest.mark.slow)])
 def test_random_starts_in_the_region(case):
     cfg = preset_config(case) if case == "paper-hexagon" else CASES[case]()
@@ -416,6 +417,7 @@ def run_cli(argv, capsys):
     return code, out, err
 
 
+@pytest.mark.slow
 def test_cli_start_inside_the_region_is_covered(tmp_path, capsys, triangle):
     loop = triangle
     rng = np.random.default_rng(5)
@@ -441,6 +443,7 @@ def test_cli_start_inside_the_region_is_covered(tmp_path, capsys, triangle):
         assert rep["measured_errors"][k] <= rep["certified_errors"][k] * (1 + BOUND_RTOL) + ERR_ATOL
 
 
+@pytest.mark.slow
 def test_cli_paper_start_leaves_the_envelope(capsys):
     code, out, err = run_cli(
         ["simulate", "--preset", "paper-triangle", "--start", "paper", "--horizon", "60", "--json"], capsys

@@ -83,6 +83,7 @@ def test_contains_every_sampled_image_and_rejects_far_points(name, rng):
         assert not alloc.contains(far)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(LAYOUTS))
 def test_contains_box_agrees_with_sampled_points(name, rng):
     alloc = LAYOUTS[name]

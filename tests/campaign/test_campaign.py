@@ -70,6 +70,7 @@ def test_dask_in_process_gives_an_identical_table(serial: pd.DataFrame) -> None:
     pd.testing.assert_frame_equal(table, serial, check_exact=True)
 
 
+@pytest.mark.slow
 def test_sampling_does_not_depend_on_the_chunking(serial: pd.DataFrame) -> None:
     other = run_campaign(preset_config("paper-triangle"), RUNS, seed=SEED, chunk=5, horizon=HORIZON).table
     inputs = [c for c in serial.columns if c.endswith("_mult") or c.startswith(("start_", "current_"))]
@@ -78,6 +79,7 @@ def test_sampling_does_not_depend_on_the_chunking(serial: pd.DataFrame) -> None:
     assert chunks(8, 3) == [(0, 3), (3, 6), (6, 8)]
 
 
+@pytest.mark.slow
 def test_uncovered_box_and_current_make_the_verdict_not_applicable() -> None:
     """The nominal paper gains are not robustly certified for this box: no verdict on such runs."""
     cfg = replace(
@@ -161,6 +163,7 @@ def test_cli_campaign_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFi
     )
 
 
+@pytest.mark.slow
 def test_local_workers_get_the_allocator_settings_and_even_chunks() -> None:
     """Dask's default trims the heap so hard that every temporary is re-mapped (page faults)."""
     pytest.importorskip("distributed")
@@ -179,6 +182,7 @@ def test_local_workers_get_the_allocator_settings_and_even_chunks() -> None:
         assert _balanced(4096, 3, client) == 2  # both workers get a chunk
 
 
+@pytest.mark.slow
 def test_a_chunk_reports_its_progress_as_it_runs() -> None:
     setup, _ = prepare(preset_config("paper-triangle"), seed=SEED, horizon=HORIZON)
     seen: list[float] = []
@@ -275,6 +279,7 @@ def test_the_dask_bar_moves_with_the_chunk_events_before_the_chunks_finish(monke
     assert 4 in seen and seen[-1] == 8, seen
 
 
+@pytest.mark.slow
 def test_sampled_campaign_draws_per_run_and_does_not_depend_on_the_chunk():
     impl = Implementation(0.1, 0.1, varying_delay=True, noise=MeasurementNoise(0.05, 0.02, 0.01, 0.005))
     cfg = replace(preset_config("paper-triangle"), implementation=impl)

@@ -55,6 +55,7 @@ def test_every_certified_run_stays_within_its_certified_force(campaign: Campaign
     assert (t["saturated_fraction"] == 0.0).all()
 
 
+@pytest.mark.slow
 def test_the_summary_counts_the_runs_over_their_certified_force(campaign: Campaign, tmp_path: Path) -> None:
     summary = write_outputs(campaign, tmp_path)
     assert summary["counts"]["exceeded_certified_force"] == 0
@@ -75,6 +76,7 @@ def test_the_summary_counts_the_runs_over_their_certified_force(campaign: Campai
     assert table["within_certified_force"].all()
 
 
+@pytest.mark.slow
 def test_a_run_over_its_certified_force_fails(campaign: Campaign) -> None:
     t = campaign.table.copy()
     assert passed(t).all()
@@ -85,6 +87,7 @@ def test_a_run_over_its_certified_force_fails(campaign: Campaign) -> None:
     assert summary["counts"]["exceeded_certified_force"] == 1 and not summary["ok"]
 
 
+@pytest.mark.slow
 def test_streamed_peaks_equal_the_stored_post_processing() -> None:
     """Independent path: simulate_batch's commanded_peak and saturated flags from stored samples."""
     setup, cert = prepare(preset_config("paper-triangle"), seed=SEED, horizon=10.0)
@@ -115,6 +118,7 @@ def test_streamed_peaks_equal_the_stored_post_processing() -> None:
     assert np.isnan(plain.result().commanded_peak).all() and np.isnan(plain.result().saturated_fraction).all()
 
 
+@pytest.mark.slow
 def test_declared_actuators_bound_the_certified_force_and_are_reported() -> None:
     cfg = replace(preset_config("paper-triangle"), actuators=TIGHT)
     camp = run_campaign(cfg, 12, seed=SEED, horizon=HORIZON)

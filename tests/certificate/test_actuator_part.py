@@ -44,6 +44,7 @@ def test_actuators_validate_and_report():
         Actuators(1.0, 0.0, 1.0)
 
 
+@pytest.mark.slow
 def test_region_shrinks_to_the_largest_fraction_that_fits():
     cfg = preset_config("paper-triangle")
     point = design_point(cfg)

@@ -141,6 +141,7 @@ def test_bad_toml(tmp_path, text, pattern, capsys):
     assert main(["certify", "--config", str(f)]) == 2
 
 
+@pytest.mark.slow
 def test_toml_round_trip(tmp_path):
     f = tmp_path / "remus.toml"
     f.write_text(
@@ -165,6 +166,7 @@ def test_toml_round_trip(tmp_path):
     assert main(["certify", "--config", str(f)]) == 1
 
 
+@pytest.mark.slow
 def test_large_fleet_caps_the_crosscheck_size():
     """The cross-check size is capped (every channel is identical), and the Jacobi upper bound is cond(Phi) sigma."""
     from auv_hinf.certificate.parts.theorem1 import CROSSCHECK_MAX_N

@@ -14,6 +14,7 @@ from auv_hinf.config.settings import config_from_dict
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [3, 40, 400])
 def test_default_start_has_zero_error_and_is_covered(n):
     cfg = config_from_dict({"formation": {"n": n, "polygon_radius": 0.5 * n}})
@@ -33,6 +34,7 @@ def test_default_start_has_zero_error_and_is_covered(n):
     assert cert.certified and loop["covers_shaped_start"] is True and loop["shaped_start_note"] is None
 
 
+@pytest.mark.slow
 def test_large_default_run_is_covered_and_measured_within_its_bounds(tmp_path, capsys):
     path = tmp_path / "big.toml"
     path.write_text("[formation]\nn = 300\npolygon_radius = 150.0\n[simulation]\nhorizon = 20.0\n", encoding="utf-8")

@@ -63,6 +63,7 @@ def registered(request):
     assert [p.name for p in parts()] == [p.name for p in PARTS]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("registered", [1e6], indirect=True)
 def test_a_failing_plug_in_part_is_in_the_json_the_text_the_file_and_the_exit_code(registered, tmp_path, capsys):
     cert = certify(preset_config("paper-triangle"))
@@ -84,6 +85,7 @@ def test_a_failing_plug_in_part_is_in_the_json_the_text_the_file_and_the_exit_co
     assert out["parts"]["spacing"]["ok"] is False
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("registered", [0.5], indirect=True)
 def test_a_holding_plug_in_part_keeps_the_exit_code_zero(registered, capsys):
     assert main(["certify", "--preset", "paper-triangle"]) == 0
@@ -104,6 +106,7 @@ def test_the_registry_refuses_clashes_and_keeps_its_own_parts():
     assert "advice" in REASON_KINDS
 
 
+@pytest.mark.slow
 def test_a_stored_part_that_is_not_registered_still_loads(tmp_path):
     part = SpacingPart(1e6)
     register_part(part)

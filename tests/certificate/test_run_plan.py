@@ -69,6 +69,7 @@ def inside_start(cfg: FormationConfig, cert, rng: np.random.Generator, scale: fl
     return np.column_stack([m.p + e, psi, c * vel[:, 0] + s * vel[:, 1], -s * vel[:, 0] + c * vel[:, 1], r])
 
 
+@pytest.mark.slow
 def test_run_report_keys_and_measured_errors(triangle, rng):
     cfg, cert = triangle
     x = inside_start(cfg, cert, rng)
@@ -109,6 +110,7 @@ def test_run_report_keys_and_measured_errors(triangle, rng):
     assert rep["certified_thrust"] == plan.coverage.thrust.to_dict()
 
 
+@pytest.mark.slow
 def test_measured_decay_rate_matches_its_definition(triangle, rng):
     cfg, cert = triangle
     plan = plan_run(with_start(cfg, inside_start(cfg, cert, rng)), start="paper", horizon=40.0, samples=801)
@@ -144,6 +146,7 @@ def test_measured_decay_is_none_for_the_shaped_start(triangle):
     assert rep["measured_errors"]["position_error"] < 1e-4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "change, note",
     [

@@ -101,6 +101,7 @@ def test_json_keys_and_text():
     assert "min separation" in cert.summary() and " m certified (required 2 m" in cert.summary()
 
 
+@pytest.mark.slow
 def test_slots_closer_than_twice_the_bound_plus_the_requirement_are_refused_with_the_pair():
     """Vehicles 2 and 3 of a line 1.5 m apart (the others 10 m): refused, the pair and the distances named."""
     data = preset_config("paper-hexagon").to_toml_dict()
@@ -134,6 +135,7 @@ def test_a_stored_certificate_round_trips_and_older_records_load(tmp_path):
         assert "min separation" not in old.summary()
 
 
+@pytest.mark.slow
 def test_certify_json_has_the_formation_object(capsys):
     assert main(["certify", "--preset", "paper-hexagon", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)

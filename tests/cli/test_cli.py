@@ -28,6 +28,7 @@ def run(argv, capsys):
     return code, out, err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("lam", ["-1e-3", "-1E-3", "-2.5e0", "-.5", "-1"])
 def test_negative_and_scientific_numbers_parse(lam, capsys):
     code, out, _ = run(["design", "--lam", lam, "--gamma", "1", "--json"], capsys)
@@ -83,6 +84,7 @@ def test_schema_command(capsys):
     assert code == 0 and schema["additionalProperties"] is False and "design" in schema["properties"]
 
 
+@pytest.mark.slow
 def test_init_writes_loadable_config_and_refuses_overwrite(tmp_path, capsys):
     f = tmp_path / "dir" / "start.toml"
     code, out, _ = run(["init", "--out", str(f), "--preset", "paper-hexagon"], capsys)
@@ -166,6 +168,7 @@ def test_bad_arguments_exit_2(argv, capsys):
     assert code == 2 and out == "" and err.count("\n") == 1 and err.startswith("auv-hinf: error: ")
 
 
+@pytest.mark.slow
 def test_simulate_short_horizon_from_config(tmp_path, capsys):
     f = tmp_path / "short.toml"
     f.write_text("[formation]\nn = 2\npolygon_radius = 5.0\n[simulation]\nhorizon = 2.0\ncurrent = [0.05, 0.0]\n")
@@ -191,6 +194,7 @@ def test_simulate_short_horizon_from_config(tmp_path, capsys):
     assert data["measured_errors"] == pytest.approx(report["measured_errors"], rel=1e-12)
 
 
+@pytest.mark.slow
 def test_simulate_current_and_actuator_options(capsys):
     """--current and --actuators override the TOML; a current voids the nominal certificate's coverage."""
     code = main(
@@ -256,6 +260,7 @@ def test_simulate_json_reports_the_implementation_it_ran(tmp_path, capsys):
     assert "implementation: 10 Hz (0.1 s ZOH), delay 0.1 s, noise <= 0.05 m" in text and "seed 7" in text
 
 
+@pytest.mark.slow
 def test_simulate_json_of_the_continuous_default_says_so(capsys):
     _, out, _ = run(["simulate", "--preset", "paper-triangle", "--horizon", "5", "--json"], capsys)
     impl = json.loads(out)["implementation"]

@@ -145,6 +145,7 @@ def test_every_option_with_a_value_is_walked():
     assert typed == walked, typed - walked  # each refuses something
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("case", "argv", "option"), list(generated_cases()), ids=lambda x: str(x)[:60])
 def test_a_refused_value_names_its_option(case, argv, option, capsys):
     _check(argv, option, capsys)

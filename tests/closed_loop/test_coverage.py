@@ -124,6 +124,7 @@ def ellipsoid_extent_sampled(m: np.ndarray, rho: float, k: int = 200_001) -> tup
     return float(np.abs(x[0]).max()), float(np.abs(x[1]).max())
 
 
+@pytest.mark.slow
 def test_raw_start_inside_region_is_covered(tri, rng):
     x = worst_corner(tri, 1.0, rng)
     cov = tri.check(x)
@@ -216,6 +217,7 @@ def test_blend_time_search_returns_smallest_covered_candidate(tri):
         assert not too_short.covered and too_short.blend_time == order[0][0]
 
 
+@pytest.mark.slow
 def test_actuator_limit_below_certified_thrust_is_not_covered(tri, rng):
     x = worst_corner(tri, 0.8, rng)
     cov = tri.check(x)
@@ -304,6 +306,7 @@ def assert_same_search(setup: Setup, x: np.ndarray) -> None:
     assert new.reason.endswith(old.reason.removeprefix("not covered: "))
 
 
+@pytest.mark.slow
 def test_search_gives_the_verdict_blend_margins_and_thrust_of_the_full_search(tri):
     x = far_start(tri, np.random.default_rng(4), dist=25.0)
     assert_same_search(tri, x)

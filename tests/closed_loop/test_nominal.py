@@ -326,6 +326,7 @@ def _boundary_starts(rp: float, rv: float, rng: np.random.Generator, n: int = 64
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("strategy", ["greedy", "switching", "constant"])
 def test_position_region_and_decay_under_adversarial_d(triangle: dict, strategy: str, rng: np.random.Generator) -> None:
     cert: ClosedLoopCertificate = triangle["cert"]
@@ -340,6 +341,7 @@ def test_position_region_and_decay_under_adversarial_d(triangle: dict, strategy:
     assert np.all(ratio <= np.exp(-2 * cert.position.rate * t)[:, None] * (1 + SIM_RTOL))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("strategy", ["greedy", "switching", "lo", "hi"])
 def test_heading_region_and_decay_under_switching_c(triangle: dict, strategy: str, rng: np.random.Generator) -> None:
     cert: ClosedLoopCertificate = triangle["cert"]

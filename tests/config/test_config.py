@@ -199,7 +199,8 @@ def test_simulation_uncertainty_disturbance():
 def test_presets_round_trip_through_toml_dict(name):
     cfg = preset_config(name)
     assert config_from_dict(cfg.to_toml_dict()) == cfg
-    assert cfg.to_dict()["simulation"]["initial"] == [list(r) for r in cfg.simulation.initial]
+    initial = cfg.simulation.initial
+    assert cfg.to_dict()["simulation"]["initial"] == (None if initial is None else [list(r) for r in initial])
 
 
 def test_custom_config_round_trips():

@@ -162,6 +162,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("case", "document", "key"), CASES, ids=[c[0] for c in CASES])
 def test_every_config_error_names_the_toml_key_and_no_class(case, document, key, tmp_path: Path, capsys):
     path = tmp_path / "bad.toml"

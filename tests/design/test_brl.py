@@ -79,6 +79,7 @@ def test_solve_lets_interrupts_through():
         solve(_Broken(KeyboardInterrupt(), fails=1), "test LMI")  # type: ignore[arg-type]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "lam, gamma",
     [(-1e-6, 0.5), (-1e-6, 3.0), (-0.002, 1 / 0.0021), (-1e6, 1.0), (-1e6, 1e-7), (-1.2, 0.5), (-1e3, 5e-4)],

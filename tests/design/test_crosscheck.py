@@ -42,6 +42,7 @@ def test_care_full_size(n):
         assert r.alpha == pytest.approx(alpha_stabilizing(-0.9, g).alpha, rel=ARE_RTOL)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [2, 5, pytest.param(8, marks=pytest.mark.slow)])
 def test_full_crosscheck_sizes(n):
     r = crosscheck(-0.8, 0.65, n)
@@ -117,6 +118,7 @@ def test_lmi_norm_at_lambda_minus_1e6_is_accurate():
     assert not check.with_value(13.7 * r.hinf_exact).ok
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "lam, gamma",
     [

@@ -9,6 +9,7 @@ from auv_hinf.design.crosscheck import crosscheck
 GRID = [(lam, g) for lam in (-2.1, -1.2, -0.4) for g in (0.45, 0.6, 2**-0.5, 0.9, 2.86)]
 
 
+@pytest.mark.slow
 @pytest.mark.ci_crosscheck
 @pytest.mark.parametrize("lam, gamma", GRID)
 def test_analytic_vs_lmi_grid(lam, gamma):

@@ -41,6 +41,7 @@ def test_position_loop_peak(b, k1):
     assert hinf_norm(position_block(lam, alpha, k1)) == pytest.approx(1 / b, rel=NORM_RTOL)
 
 
+@pytest.mark.slow
 def test_peak_against_brute_force_sweep(rng):
     for _ in range(10):
         n, m, p = 5, 2, 3

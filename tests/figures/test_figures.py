@@ -208,6 +208,7 @@ def test_sigma_heatmap_contour_at_ninety_percent():
     assert "not reached" not in contour_label
 
 
+@pytest.mark.slow
 def test_save_simulation_plots_writes_four_pngs(tmp_path):
     paths = plots.save_simulation_plots(synthetic_result(), tmp_path)
     assert [p.name for p in paths] == ["trajectories.png", "velocities.png", "errors.png", "forces.png"]
@@ -282,6 +283,7 @@ def test_force_figure_rejects_bad_bounds(bad):
         plots.forces(synthetic_result(), limits=bad)
 
 
+@pytest.mark.slow
 def test_save_simulation_plots_passes_the_bound_and_limits_to_the_force_figure(tmp_path, monkeypatch):
     drawn: list[plt.Figure] = []
     real = plots.forces
@@ -299,6 +301,7 @@ def test_save_simulation_plots_passes_the_bound_and_limits_to_the_force_figure(t
         assert [y for y, _, _ in labelled_levels(ax, "actuator limit")] == [-limit, limit]
 
 
+@pytest.mark.slow
 def test_force_figure_of_a_simulated_run_with_actuators(tmp_path):
     """A real (short) certified run: the law's limits are drawn, its forces stay within the bound."""
     from dataclasses import replace
@@ -323,6 +326,7 @@ def test_force_figure_of_a_simulated_run_with_actuators(tmp_path):
     assert len(plots.save_simulation_plots(res, tmp_path, certified=certified)) == 4
 
 
+@pytest.mark.slow
 def test_large_fleets_are_drawn_as_bands_without_warnings():
     n = plots.MAX_VEHICLE_LINES + 188  # 200 vehicles
     res = synthetic_result(n)

@@ -84,6 +84,7 @@ def check_units(fig: plt.Figure) -> None:
             )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [3, pytest.param(1000, marks=pytest.mark.slow)])
 def test_every_figure_reads_at_this_fleet_size(n):
     figs = figures(n)

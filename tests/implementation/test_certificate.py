@@ -53,6 +53,7 @@ def _no_tighter(looser: ErrorBounds, tighter: ErrorBounds) -> list[str]:
     return [k for k in ERRORS if getattr(looser, k) < getattr(tighter, k)]
 
 
+@pytest.mark.slow
 def test_a_fast_small_noise_implementation_is_covered_with_consistent_bounds(slow):
     prob, start = slow
     cert = certify_implementation(prob, Implementation(0.01, 0.0, noise=SMALL_NOISE), start)
@@ -92,6 +93,7 @@ def test_more_noise_or_slower_sampling_never_tightens_the_bounds(slow, slow_limi
         assert looser.ultimate.position > tighter.ultimate.position * (1.0 + 1e-3)
 
 
+@pytest.mark.slow
 def test_slower_sampling_never_shrinks_the_lag_disturbance(slow, base):
     """For fixed error and force bounds, the disturbance the held, older command adds grows with the lag.
 
@@ -125,6 +127,7 @@ def test_slower_sampling_never_shrinks_the_lag_disturbance(slow, base):
     assert disturbance(0.0, MeasurementNoise()) == (0.0, 0.0)
 
 
+@pytest.mark.slow
 def test_a_sample_time_above_the_exact_limit_is_not_covered(slow):
     prob, start = slow
     limits = lag_limits(prob.loops, prob.nominal_dampings, 0.0)
@@ -203,6 +206,7 @@ def fast(slow, slow_limits):
     return certify_implementation(prob, Implementation(1e-3, 0.0, noise=SMALL_NOISE), start, slow_limits)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("h", [1e-12, pytest.param(1e-6, marks=pytest.mark.slow)])
 def test_tiny_sample_times_are_certified_like_fast_ones(slow, slow_limits, fast, h):
     """A sample time far below the LMI's smallest solved lag is covered, at the same rate, with bounds like 1 kHz's.

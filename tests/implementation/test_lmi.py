@@ -87,6 +87,7 @@ def test_exact_limit_is_where_the_held_loop_starts_to_grow():
             assert (ratio > 1.0) == grows, (delay, factor, ratio)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(6))
 def test_certified_lag_never_exceeds_the_exact_limit(seed):
     rng = np.random.default_rng(seed)
@@ -111,6 +112,7 @@ def test_paper_triangle_limits_and_tightness():
     assert 0.3 * exact <= lag <= exact
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(4))
 def test_certificate_holds_for_sampled_lags_and_uncertainty(seed):
     """Brute force: random varying delays up to the certified lag and a random time-varying D."""

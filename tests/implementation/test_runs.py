@@ -53,6 +53,7 @@ def test_an_uncovered_implementation_is_reported_and_has_no_bounds():
     assert "certified_errors" in report["null_reasons"]
 
 
+@pytest.mark.slow
 def test_a_sample_time_beyond_the_exact_limit_is_never_covered():
     cfg = config_from_dict(_config(1.0, 0.0, 0.0))
     plan = plan_run(cfg, horizon=10.0)

@@ -39,6 +39,7 @@ def _run(scn, impl, **kw):
     return integrate_sampled(ScenarioBatch((replace(scn, implementation=impl),)), **kw)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "impl",
     [
@@ -79,6 +80,7 @@ def test_remus_at_50_hz_matches_the_independent_loop():
     assert np.abs(sol.y[:, 0].reshape(ref.shape) - ref).max() < NUMERICAL_FLOOR
 
 
+@pytest.mark.slow
 def test_converges_to_the_continuous_loop_linearly_in_h(triangle):
     short = replace(triangle, horizon=8.0, samples=161)
     exact = simulate(short).states
@@ -121,6 +123,7 @@ def test_draws_are_reproducible_and_per_vehicle_streams():
     assert_array_equal(np.stack([again.noise(k) for k in range(300)]), noise_a)
 
 
+@pytest.mark.slow
 def test_a_run_gives_the_same_numbers_in_any_batch(triangle):
     impl = Implementation(0.1, 0.15, varying_delay=True, noise=NOISE)
     runs = [replace(triangle, implementation=impl, seed=s, horizon=5.0, samples=51) for s in (1, 2)]
@@ -138,6 +141,7 @@ def test_an_unstable_implementation_is_stopped_and_reported():
     assert np.all(np.isfinite(res.states))
 
 
+@pytest.mark.slow
 def test_continuous_default_runs_the_continuous_engine(triangle, monkeypatch):
     monkeypatch.setattr(engine, "_sampled_batch", lambda batch: pytest.fail("sampled path taken"))
     res = simulate(triangle)
@@ -146,6 +150,7 @@ def test_continuous_default_runs_the_continuous_engine(triangle, monkeypatch):
         integrate_sampled(ScenarioBatch((triangle,)))
 
 
+@pytest.mark.slow
 def test_fleet_derivative_is_unchanged_by_the_shared_plant():
     scn = plan_run(preset_config("paper-triangle"), horizon=1.0, samples=2).scenario
     rng = np.random.default_rng(3)

@@ -71,6 +71,7 @@ def test_controller_is_static_with_fleet_signals(cert):
     assert ctrl.output_labels[-3:] == [f"tau_x[{n - 1}]", f"tau_y[{n - 1}]", f"tau_psi[{n - 1}]"]
 
 
+@pytest.mark.slow
 def test_controller_matches_the_paper_jacobi_form(cert, rng):
     """The nlsys output equals the independent O(N^2) Jacobi-coordinate law of eqs. (39), (41)."""
     cfg, law = cert.config, cert.law()
@@ -130,6 +131,7 @@ def test_closed_loop_matches_simulate(cert):
     )
 
 
+@pytest.mark.slow
 def test_closed_loop_keeps_the_line_reference_exactly(line_cert):
     """On the reference the closed-loop vector field is the reference's own derivative."""
     sys = line_cert.closed_loop_system()
@@ -143,6 +145,7 @@ def test_closed_loop_keeps_the_line_reference_exactly(line_cert):
         np.testing.assert_allclose(dx[:, 2:], 0.0, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_linearisation_on_a_line_mission(line_cert):
     """ct.linearize about the reference at t = 0 has, per vehicle, the poles of the exact
     linearisation: along-track ``s^2 + (alpha + d11(U)/m11) s + k1``, cross-track
@@ -168,6 +171,7 @@ def test_linearisation_on_a_line_mission(line_cert):
     assert eig.real.max() < 0
 
 
+@pytest.mark.slow
 def test_controller_needs_a_gain(cert):
     no_gain = replace(cert, gains=None)
     with pytest.raises(DesignError, match="has no gains"):

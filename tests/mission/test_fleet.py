@@ -389,6 +389,7 @@ def _check_tube(fleet: FleetReference, tube, t: np.ndarray) -> None:
     assert np.all(_norm(a) <= tube.accel[rows]) and np.all(np.abs(m.r_dot) <= tube.yaw_accel[rows])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["sine-paper", "lawnmower", "circle"])
 def test_shaped_tube_is_sound(name: str, rng: np.random.Generator) -> None:
     mission = MISSIONS[name]

@@ -61,6 +61,7 @@ def test_eq20_equals_eq8_numerically(vehicle, rng):
     assert_allclose(inertial_block(vehicle, psi, u, v, r), expected, rtol=EXACT_RTOL, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_eq20_equals_eq8_symbolically():
     m11, m22, d11, d22 = sp.symbols("m11 m22 d11 d22", positive=True)
     r, psi = sp.symbols("r psi", real=True)

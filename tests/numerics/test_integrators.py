@@ -36,6 +36,7 @@ def test_dense_output_accuracy_against_exact_solution():
     assert len(set(sol.n_steps.tolist())) == len(PARAMS)  # each system chose its own steps
 
 
+@pytest.mark.slow
 def test_matches_tight_scipy_reference():
     tight = np.concatenate(
         [

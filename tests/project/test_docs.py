@@ -146,6 +146,7 @@ def test_the_walk_finds_the_public_api():
     assert len(DATACLASSES) > 80
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", CALLABLES)
 def test_callable_numpydoc(path):
     """Every public function and method documents each parameter (PR01) and passes the class checks."""
@@ -154,6 +155,7 @@ def test_callable_numpydoc(path):
     assert not errors, f"{path}: " + "; ".join(errors)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", CLASSES)
 def test_class_numpydoc(path):
     """Every public class of every module passes the checks (PR01 aside: see NUMPYDOC_CHECKS)."""

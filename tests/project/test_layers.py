@@ -12,6 +12,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import pytest
+
 PACKAGE = Path(__file__).resolve().parents[2] / "auv_hinf"
 
 #: The packages from the bottom up; the private modules and ``exceptions`` are the ground.
@@ -22,6 +24,7 @@ LAYERS = (
     ("mission",),
     ("law",),
     ("actuation",),
+    ("guidance",),
     ("implementation",),
     ("simulation",),
     ("design",),
@@ -82,6 +85,7 @@ def test_imports_go_down_the_layers_only():
     assert not upward, f"imports against the layer order (package, imported package, file): {upward}"
 
 
+@pytest.mark.slow
 def test_the_check_sees_imports():
     pairs = {(s, d) for s, d, _ in _imports()}
     assert ("certificate", "closed_loop") in pairs and ("cli", "certificate") in pairs

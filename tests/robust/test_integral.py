@@ -58,6 +58,7 @@ def _ellipsoid_loop(sigma: float, delta: float) -> tuple[np.ndarray, np.ndarray,
     return a0, c, ell
 
 
+@pytest.mark.slow
 def test_the_three_state_ellipsoid_is_invariant_under_the_worst_case_perturbation() -> None:
     """x' = A0 x + b (w1 + w2 + d), |w1| <= sigma |x3|, |w2| <= delta |c x|, |d| <= 1: V <= 1 stays.
 

@@ -88,6 +88,7 @@ def test_heading_stiffness_range_contains_sampled_values() -> None:
         assert hp.damping[0] * (1 - SAMPLE_RTOL) <= c <= hp.damping[1] * (1 + SAMPLE_RTOL)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("poles,current", [((-1.0, -1.5), 0.0), ((-1.0, -1.5), 0.2), ((-2.0, -3.0), 0.2)])
 def test_linearised_heading_margin_agrees_with_simulator_jacobian(poles, current) -> None:
     """Closed-form vertex scale (heading stiffness) vs eigenvalues of the simulator's Jacobian."""
@@ -122,6 +123,7 @@ def remus_certificate():
     return box, gains, cert
 
 
+@pytest.mark.slow
 def test_remus_certificate_covers_and_reverifies(remus_certificate) -> None:
     cert = remus_certificate[2]
     assert cert.stable and cert.covers, cert.reasons

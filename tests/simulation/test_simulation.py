@@ -159,6 +159,7 @@ def test_batch_equals_single_runs(rng):
         assert res.exit_time == pytest.approx(one.exit_time, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_shaped_reference_reports_mission_errors():
     base = paper_scenario("paper-triangle", horizon=20.0, samples=21)
     ref = shaped_start(SineReference(), base.reference.offsets, base.initial, blend_time=40.0)  # type: ignore[attr-defined]
@@ -168,6 +169,7 @@ def test_shaped_reference_reports_mission_errors():
     assert_allclose(res.mission_error[0], expected, rtol=1e-12)
 
 
+@pytest.mark.slow
 def test_decoupled_vehicle_systems_match_scenario_systems():
     base = paper_scenario("paper-triangle", horizon=20.0, samples=41)
     scn = replace(base, reference=RigidReference(SineReference(), base.reference.offsets))  # type: ignore[attr-defined]
@@ -176,6 +178,7 @@ def test_decoupled_vehicle_systems_match_scenario_systems():
     assert a.exit_time == pytest.approx(b.exit_time, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_vectorised_rhs_equals_per_vehicle_reference(rng):
     scn = paper_scenario("paper-triangle")
     y = scn.initial.ravel() + rng.normal(scale=0.5, size=18)

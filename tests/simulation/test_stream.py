@@ -30,6 +30,7 @@ def _scenario(integral: bool = False) -> object:
     return scn
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("integral", [False, True])
 def test_the_streamed_file_is_the_run(tmp_path: Path, integral: bool) -> None:
     scn = _scenario(integral)
@@ -47,6 +48,7 @@ def test_the_streamed_file_is_the_run(tmp_path: Path, integral: bool) -> None:
         assert np.all(z == 0.0) and np.any(df[list(INTEGRATOR_COLUMNS)].to_numpy() != 0.0)
 
 
+@pytest.mark.slow
 def test_save_refuses_other_formats(tmp_path: Path, capsys) -> None:
     with pytest.raises(ParameterError, match="parquet"):
         save_trajectories(_scenario(), tmp_path / "run.npz")

@@ -91,13 +91,15 @@ class ActuatorCheck:
     def to_dict(self) -> dict[str, Any]:
         """The ``actuators`` object of ``auv-hinf certify --json``."""
         peak: dict[str, Any] | None = None if self.certified_peak is None else dict(zip(CHANNELS, self.certified_peak))
-        if peak is not None and isinstance(self.limits, RudderActuation):
+        if peak is None and isinstance(self.limits, RudderActuation):
+            peak = {"force_x": None, "rudder": None}  # nothing is certified for the propeller or the rudder
+        elif peak is not None and isinstance(self.limits, RudderActuation):
             peak["rudder"] = None  # the fully actuated law has no rudder command: nothing is certified for it
         out: dict[str, Any] = {
             "kind": None if self.limits is None else self.limits.kind,
             "limits": None if self.limits is None else self.limits.to_dict(),
             "certified_peak": peak,
-            "required_limits": None if peak is None else dict(zip(CHANNELS, self.certified_peak or ())),
+            "required_limits": None if self.certified_peak is None else dict(zip(CHANNELS, self.certified_peak)),
             "binding": self.binding,
             "binding_ratio": self.binding_ratio,
             "certified": self.certified,
@@ -184,6 +186,12 @@ def rudder_check(point: DesignPoint, act: RudderActuation, peak: Peak | None) ->
     speed = float(point.config.envelope.u[1])
     sway, moment = act.authority(speed)
     authority = {"speed": speed, "force_y": sway, "moment": moment, "lever_arm": act.lever_arm}
+    if point.config.guidance is not None:  # the guidance cascade runs: the guidance part decides
+        why = (
+            "the guidance cascade commands the propeller and the rudder (no sway force); no bound of its thrust or "
+            "rudder is certified in this version (see guidance)"
+        )
+        return ActuatorCheck(act, None, None, None, False, why, rudder_authority=authority)
     need = "" if peak is None else f" (it needs |tau_y| <= {peak[1]:.4g} N with |tau_psi| <= {peak[2]:.4g} N m)"
     why = (
         f"the formation law is fully actuated: it commands sway force and yaw moment independently{need}, and "
@@ -227,6 +235,8 @@ class ActuatorPart:
         if act.certified:
             return Verdict(self.name, True, True, (), act.to_dict(), binding=binding, detail=act)
         peak = act.certified_peak
+        if isinstance(act.limits, RudderActuation) and point.config.guidance is not None:
+            return Verdict(self.name, True, False, (), act.to_dict(), detail=act)  # the guidance part decides
         if isinstance(act.limits, RudderActuation):
             why = Reason(
                 self.name,
@@ -256,7 +266,7 @@ class ActuatorPart:
         if f is None:
             return []
         peak = f["certified_peak"]
-        if peak is None:
+        if peak is None or peak.get("force_y") is None:  # none certified (a rudder's entries are null)
             return [f"  actuators                 {f['reason']}"]
         out = [
             f"  commanded force (certified) |tau_x| <= {peak['force_x']:.5g} N, |tau_y| <= {peak['force_y']:.5g} N, "

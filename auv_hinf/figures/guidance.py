@@ -1,0 +1,100 @@
+"""Figures of a guidance run: the fleet's paths over its slots, the errors, the thrust and the rudder.
+
+The limits are drawn in the limit colour (red, dotted); a large fleet is drawn as percentile
+bands (:func:`~auv_hinf.figures.simulation.per_vehicle_axes`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from auv_hinf.figures.simulation import (
+    MAX_TRAJECTORY_PATHS,
+    REFERENCE_COLOUR,
+    VEHICLE_COLOURS,
+    per_vehicle_axes,
+    save_pngs,
+)
+from auv_hinf.guidance.simulation import GuidanceRun
+
+
+def guidance_paths(run: GuidanceRun) -> Figure:
+    """The vehicles' paths (colour) over their slots' paths (black, dashed), north up (m).
+
+    Parameters
+    ----------
+    run : GuidanceRun
+        The simulated run.
+    """
+    fig, ax = plt.subplots(figsize=(8, 7), constrained_layout=True)
+    n = run.states.shape[1]
+    step = max(1, n // MAX_TRAJECTORY_PATHS)
+    for i in range(0, n, step):
+        ax.plot(run.slots[:, i, 1], run.slots[:, i, 0], color=REFERENCE_COLOUR, ls="--", lw=0.6)
+        colour = VEHICLE_COLOURS[i % len(VEHICLE_COLOURS)]
+        ax.plot(run.states[:, i, 1], run.states[:, i, 0], color=colour, lw=1.0, label=f"AUV {i + 1}")
+    ax.set_xlabel("east y [m]")
+    ax.set_ylabel("north x [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title("paths (colour) over the slots (dashed)")
+    if n <= 12:
+        ax.legend(fontsize=7, loc="best")
+    return fig
+
+
+def guidance_errors(run: GuidanceRun) -> Figure:
+    """Along-track and cross-track errors (m) and heading error (deg) against time, per vehicle.
+
+    Parameters
+    ----------
+    run : GuidanceRun
+        The simulated run.
+    """
+    data = np.stack([run.along_track, run.cross_track, np.degrees(run.heading_error)], axis=-1)
+    fig, _ = per_vehicle_axes(run.t, data, ("along-track [m]", "cross-track [m]", "heading error [deg]"))
+    return fig
+
+
+def guidance_actuators(run: GuidanceRun) -> Figure:
+    """Commanded thrust (N) and rudder (deg) against time, with the limits, and the sway speed (m/s).
+
+    Parameters
+    ----------
+    run : GuidanceRun
+        The simulated run.
+    """
+    data = np.stack([run.thrust_cmd, np.degrees(run.rudder_cmd), run.states[:, :, 4]], axis=-1)
+    lim_t, lim_r = run.act.tau_x, float(np.degrees(run.act.rudder_max))
+    fig, _ = per_vehicle_axes(
+        run.t,
+        data,
+        ("thrust [N]", "rudder [deg]", "sway speed [m/s]"),
+        ((-lim_t, lim_t), (-lim_r, lim_r), None),
+    )
+    return fig
+
+
+def save_guidance_plots(run: GuidanceRun, out: Path) -> list[Path]:
+    """Write the path, error and actuator figures of ``run`` as PNGs into the existing folder ``out``.
+
+    Parameters
+    ----------
+    run : GuidanceRun
+        The simulated run.
+    out : pathlib.Path
+        Existing directory.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
+    figures = (("paths", guidance_paths), ("errors", guidance_errors), ("actuators", guidance_actuators))
+    return save_pngs(figures, run, out)
+
+
+__all__ = ["guidance_actuators", "guidance_errors", "guidance_paths", "save_guidance_plots"]

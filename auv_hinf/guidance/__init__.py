@@ -1,0 +1,1 @@
+"""Line-of-sight guidance for vehicles with a propeller and a rudder: law, autopilots, simulation."""

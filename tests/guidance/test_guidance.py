@@ -1,0 +1,209 @@
+"""The line-of-sight cascade: closed-form steady states, limits, the configuration and the CLI."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from auv_hinf.actuation.limits import vehicle_actuators
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.run_plan import guidance_run
+from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.settings import ReferenceConfig, SimulationConfig, config_from_dict
+from auv_hinf.exceptions import ConfigError, ParameterError
+from auv_hinf.guidance.law import GuidanceConfig
+from auv_hinf.guidance.simulation import simulate_guidance
+from auv_hinf.mission.fleet import FleetReference, reference_from_dict
+from auv_hinf.models.vehicle import remus100
+from tests.helpers import to_toml
+
+REMUS = remus100()
+RUDDER = vehicle_actuators("remus100")
+SPEED = 1.5  # m/s, the REMUS cruise speed
+
+
+def line_fleet(n: int = 1, heading: float = 0.0) -> FleetReference:
+    """``n`` slots 20 m apart across a straight line at the cruise speed."""
+    offsets = np.column_stack([np.zeros(n), 20.0 * np.arange(n)])
+    return FleetReference(reference_from_dict("line", speed=SPEED, heading=heading), offsets, None, "path")
+
+
+def steady(kind: str, current: tuple[float, float], plant=REMUS, horizon: float = 400.0, lookahead: float = 8.0):
+    g = GuidanceConfig(kind=kind, lookahead=lookahead)
+    return g, simulate_guidance(g, plant, REMUS, RUDDER, line_fleet(), horizon, current)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("c", [0.1, 0.2, -0.15])
+def test_los_leaves_the_closed_form_offset_of_a_cross_current(c):
+    # At rest in the path frame v = 0 and r = 0, so the ground velocity across the track,
+    # u sin(psi - gamma) + c, vanishes while the along-track one, u cos(psi - gamma), is U:
+    # tan(atan(y_e / Delta)) = c / U, i.e. y_e = Delta c / U.
+    g, run = steady("los", (0.0, c))
+    assert run.cross_track[-1, 0] == pytest.approx(g.lookahead * c / SPEED, rel=2e-3)
+    assert abs(run.along_track[-1, 0]) < 1e-3
+    assert run.report()["saturation_fraction"] == 0.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("c", [(0.0, 0.2), (0.0, -0.2), (0.1, 0.17)])
+def test_ilos_removes_the_cross_track_offset_of_a_constant_current(c):
+    g, run = steady("ilos", c)
+    assert abs(run.cross_track[-1, 0]) < 0.1  # the issue's target
+    assert abs(run.cross_track[-1, 0]) < 1e-3  # and in fact it goes to zero
+    # the integrator holds the crab angle: the water speed is U - c_along along the track, so
+    # sigma y_i = Delta tan(crab) = Delta c_across / (U - c_along)
+    crab = c[1] / (SPEED - c[0])
+    assert g.integral_gain * run.integral[-1, 0] == pytest.approx(g.lookahead * crab, rel=2e-3)
+    assert run.report()["saturation_fraction"] == 0.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "scale",
+    [
+        {"m11": 1.1, "m22": 0.9, "m33": 1.1, "d22_lin": 0.8, "d33_lin": 1.2},
+        {"m11": 0.9, "m22": 1.1, "m33": 0.9, "d11_quad": 1.2, "d22_quad": 0.8, "d33_quad": 0.8},
+    ],
+)
+def test_ilos_holds_a_box_corner_plant_in_a_current(scale):
+    plant = replace(REMUS, **{k: getattr(REMUS, k) * m for k, m in scale.items()})
+    g, run = steady("ilos", (0.0, 0.2), plant=plant, horizon=500.0)
+    rep = run.report()
+    assert abs(run.cross_track[-1, 0]) < 1e-3
+    # along the track the surge loop is proportional: a drag the model does not know, dD (N) at the
+    # water speed u = |(U, 0) - c|, is held by m11 k_u k_x sat(x_e) = -dD, sat(x) = x / sqrt(1 + (x/L)^2)
+    u = np.hypot(SPEED, 0.2)
+    drag = (plant.damping(u, 0.0, 0.0)[0] - REMUS.damping(u, 0.0, 0.0)[0]) * u
+    q = -float(drag) / (REMUS.m11 * g.speed_gain * g.along_track_gain)
+    assert run.along_track[-1, 0] == pytest.approx(q / np.sqrt(1.0 - (q / g.along_track_length) ** 2), abs=1e-3)
+    assert rep["saturation_fraction"] == 0.0 and rep["commanded_peak"]["rudder"] < RUDDER.rudder_max
+
+
+@pytest.mark.slow
+def test_the_limits_hold_and_the_command_is_reported_before_them():
+    # a start 30 m off the track and 90 degrees off course asks for more than full rudder
+    g = GuidanceConfig()
+    start = np.array([[0.0, 30.0, np.pi / 2, 1.0, 0.0, 0.0]])
+    run = simulate_guidance(g, REMUS, REMUS, RUDDER, line_fleet(), 200.0, (0.0, 0.0), start)
+    rep = run.report()
+    assert np.all(np.abs(run.rudder) <= RUDDER.rudder_max) and np.all(np.abs(run.thrust) <= RUDDER.tau_x)
+    assert rep["commanded_peak"]["rudder"] > RUDDER.rudder_max and 0.0 < rep["saturation_fraction"] < 1.0
+    assert rep["delivered_peak"]["rudder"] == pytest.approx(RUDDER.rudder_max)
+    assert abs(run.cross_track[-1, 0]) < 0.05  # and it still converges onto the track
+
+
+@pytest.mark.slow
+def test_min_separation_is_the_closest_approach_of_the_pair():
+    g = GuidanceConfig()
+    run = simulate_guidance(g, REMUS, REMUS, RUDDER, line_fleet(3), 60.0, (0.0, 0.1))
+    d, pair = run.min_separation()
+    p = run.states[:, :, :2]
+    brute = min(np.hypot(*(p[:, i] - p[:, j]).T).min() for i in range(3) for j in range(i + 1, 3))
+    assert d == pytest.approx(brute) and pair in ((0, 1), (1, 2))
+
+
+def test_bad_gains_are_refused_with_the_key():
+    for kw in ({"lookahead": 0.0}, {"integral_gain": -1.0}, {"kind": "pure-pursuit"}, {"along_track_gain": -0.1}):
+        with pytest.raises(ParameterError, match="guidance"):
+            GuidanceConfig(**kw)
+
+
+def test_guidance_needs_a_rudder_vehicle_and_round_trips():
+    cfg = preset_config("remus-survey-ilos")
+    data = cfg.to_toml_dict()
+    assert config_from_dict(data, "x").guidance == cfg.guidance
+    with pytest.raises(ConfigError, match="underactuated"):
+        config_from_dict({**data, "actuators": {"tau_x": 10.0, "tau_y": 10.0, "tau_psi": 1.0}}, "x")
+    with pytest.raises(ConfigError, match="lookahead"):
+        config_from_dict({**data, "guidance": {"lookahead": -2.0}}, "x")
+
+
+@pytest.mark.slow
+def test_a_guidance_fleet_is_never_certified_and_its_formation_law_is_not_evaluated():
+    cfg = replace(preset_config("remus-survey-ilos"), simulation=SimulationConfig(horizon=30.0))
+    data = certify(cfg).to_dict()
+    assert data["certified"] is False
+    assert data["guidance"]["certified"] is False and data["guidance"]["error_bounds"] is None
+    assert data["actuators"]["certified_peak"] == {"force_x": None, "rudder": None}
+    assert data["formation"]["min_separation_certified"] is None
+    for name in ("theorem1", "closed_loop", "robust", "implementation"):
+        assert data["parts"][name]["applies"] is False
+    assert [r["part"] for r in data["parts"]["guidance"]["reasons"]] == ["guidance"]
+
+
+@pytest.mark.slow
+def test_cli_simulate_and_certify_of_a_guidance_file(tmp_path, capsys):
+    cfg = preset_config("remus-survey-ilos")
+    data = cfg.to_toml_dict()
+    data["simulation"] = {"horizon": 40.0, "current": [0.0, 0.2]}
+    data["reference"] = {"kind": "line", "speed": SPEED, "heading": 0.3}
+    path = tmp_path / "torpedo.toml"
+    path.write_text(to_toml(data))
+    capsys.readouterr()
+    code = main(["simulate", "--config", str(path), "--json", "--out", str(tmp_path / "out")])
+    out, err = capsys.readouterr()
+    assert code == 1 and "Traceback" not in err and "no certificate" in err
+    rep = json.loads(out)
+    assert set(rep["commanded_peak"]) == {"force_x", "rudder"}
+    assert set(rep["measured_errors"]) == {"along_track", "cross_track", "heading"}
+    assert rep["certificate_covers_run"] is False and rep["min_separation"] > 0.0
+    assert 0.0 <= rep["saturation_fraction"] <= 1.0
+    assert {p.name for p in (tmp_path / "out").iterdir()} >= {"paths.png", "errors.png", "actuators.png"}
+    code = main(["certify", "--config", str(path), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 1 and json.loads(out)["certified"] is False and "Traceback" not in err
+    code = main(["simulate", "--config", str(path), "--start", "paper"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "guidance" in err
+
+
+@pytest.mark.slow
+def test_guidance_run_follows_the_configuration():
+    cfg = replace(
+        preset_config("remus-survey-ilos"),
+        reference=ReferenceConfig("line", (("speed", SPEED), ("heading", 0.0))),
+        simulation=SimulationConfig(horizon=300.0, current=(0.0, 0.15), plant=(("m22", 1.1),)),
+    )
+    run = guidance_run(cfg)
+    assert run.t[-1] == pytest.approx(300.0) and run.states.shape[1] == cfg.n
+    assert np.max(np.abs(run.cross_track[-1])) < 0.1
+
+
+@pytest.mark.slow
+def test_the_python_control_export_is_the_cascade(rng):
+    from auv_hinf.guidance.export import VEHICLE_INPUTS, guidance_controller
+    from auv_hinf.guidance.law import SlotMotion, commands
+
+    g, fleet = GuidanceConfig(), line_fleet(3, heading=0.4)
+    sys = guidance_controller(g, REMUS, RUDDER, fleet)
+    assert (sys.nstates, sys.ninputs, sys.noutputs) == (3, 3 * len(VEHICLE_INPUTS), 6) and sys.dt == 0
+    for _ in range(5):
+        t = float(rng.uniform(0.0, 100.0))
+        (p, v, a, _), _ = fleet.kinematics(np.asarray(t))
+        states = np.column_stack([p + rng.normal(0, 3, (3, 2)), rng.normal(0.4, 0.3, 3), rng.uniform(0.5, 2, 3),
+                                  rng.normal(0, 0.05, (3, 2))])  # fmt: skip
+        ground = rng.normal(0.0, 1.0, (3, 2))
+        yi = rng.normal(0.0, 2.0, 3)
+        u = np.hstack([states, ground]).ravel()
+        cmd = commands(g, REMUS, RUDDER, states, yi, SlotMotion(p, v, a), ground)
+        np.testing.assert_allclose(sys.dynamics(t, yi, u), cmd.integral_rate, rtol=1e-12)
+        np.testing.assert_allclose(sys.output(t, yi, u), np.column_stack([cmd.thrust, cmd.rudder]).ravel(), rtol=1e-12)
+    cert_sys = certify(
+        replace(preset_config("remus-survey-ilos"), simulation=SimulationConfig(horizon=30.0))
+    ).controller()
+    assert cert_sys.noutputs == 2 * 5 and cert_sys.output_labels[:2] == ["thrust[0]", "rudder[0]"]
+
+
+@pytest.mark.parametrize(
+    "command", [["campaign", "--runs", "2", "--out", "OUT"], ["fleet-sim", "--listen", "udpin:127.0.0.1:0"]]
+)
+def test_commands_of_the_formation_law_refuse_a_guidance_fleet(command, tmp_path, capsys):
+    capsys.readouterr()
+    code = main([str(tmp_path / "out") if c == "OUT" else c for c in command] + ["--preset", "remus-survey-ilos"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "Traceback" not in err and "[guidance]" in err and err.count("\n") == 1
