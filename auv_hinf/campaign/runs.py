@@ -17,7 +17,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup, nominal_certificate
+from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup, nominal_certificate, scaled_plant
 from auv_hinf.campaign.starts import vertex_current
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.implementation.sampled_loop import integrate_sampled
@@ -119,10 +119,7 @@ def initial_state(setup: CampaignSetup, inputs: RunInputs) -> FloatArray:
 
 
 def _plant(setup: CampaignSetup, mult: FloatArray) -> VehicleParams:
-    if np.all(mult == 1.0):
-        return setup.nominal
-    base = setup.nominal
-    return VehicleParams(**{k: getattr(base, k) * float(m) for k, m in zip(COEFFICIENTS, mult)}, name="sampled")
+    return scaled_plant(setup.nominal, mult)
 
 
 def implementation_seed(seed: int, index: int) -> int:

@@ -147,9 +147,7 @@ def prepare(
     ref = point.fleet()
     m0 = ref.motion(0.0)
     start = np.stack([m0.p, m0.v, np.column_stack([m0.psi, m0.r])], axis=1)
-    box = np.ones((len(COEFFICIENTS), 2))
-    for k, (lo, hi) in cfg.uncertainty.box:
-        box[COEFFICIENTS.index(k)] = (lo, hi)
+    box = box_multipliers(cfg)
     rob, why = robust_start(point, box, cert)
     if cert is not None:
         thrust = cert.thrust.as_tuple()
@@ -183,6 +181,38 @@ def prepare(
         implementation=cfg.implementation,
     )
     return setup, cert
+
+
+def box_multipliers(cfg: FormationConfig) -> FloatArray:
+    """``[lo, hi]`` multipliers of the :data:`COEFFICIENTS` (shape (9, 2)): the declared ``[uncertainty]`` box.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration; coefficients it does not declare are ``[1, 1]``.
+    """
+    box = np.ones((len(COEFFICIENTS), 2))
+    for k, (lo, hi) in cfg.uncertainty.box:
+        box[COEFFICIENTS.index(k)] = (lo, hi)
+    return box
+
+
+def scaled_plant(nominal: VehicleParams, mult: FloatArray, name: str = "sampled") -> VehicleParams:
+    """``nominal`` with its :data:`COEFFICIENTS` times ``mult`` (``nominal`` itself when all are 1).
+
+    Parameters
+    ----------
+    nominal : VehicleParams
+        The configured vehicle.
+    mult : ndarray, shape (9,)
+        Multipliers in :data:`COEFFICIENTS` order.
+    name : str
+        Name of the scaled plant.
+    """
+    if np.all(mult == 1.0):
+        return nominal
+    scaled = {k: getattr(nominal, k) * float(m) for k, m in zip(COEFFICIENTS, mult, strict=True)}
+    return VehicleParams(**scaled, name=name)
 
 
 def nominal_certificate(setup: CampaignSetup) -> ClosedLoopCertificate:
@@ -230,8 +260,10 @@ __all__ = [
     "SAMPLE_INTERVAL",
     "WORKING_ARRAYS",
     "CampaignSetup",
+    "box_multipliers",
     "chunks",
     "default_chunk",
     "nominal_certificate",
     "prepare",
+    "scaled_plant",
 ]

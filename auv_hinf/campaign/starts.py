@@ -120,9 +120,7 @@ class RobustStart:
         run : int
             Run index within the campaign.
         """
-        if run % CORNER_PERIOD == 0 and run // CORNER_PERIOD < self.vertices:
-            return run // CORNER_PERIOD
-        return None
+        return vertex_index(run, self.vertices)
 
     def vertex_runs(self, runs: int) -> int:
         """How many of the first ``runs`` runs are box vertices.
@@ -132,7 +130,7 @@ class RobustStart:
         runs : int
             Number of runs.
         """
-        return min(self.vertices, (runs + CORNER_PERIOD - 1) // CORNER_PERIOD)
+        return vertex_runs(runs, self.vertices)
 
     def sample_errors(
         self, rng: np.random.Generator, n: int, current: FloatArray
@@ -185,7 +183,7 @@ class RobustStart:
         return self.certificate.start_inside(e, de, epsi, depsi, current)
 
     def vertex(self, box: FloatArray, index: int) -> FloatArray:
-        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)): bit ``k`` picks the upper end.
+        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)); see :func:`box_vertex`.
 
         Parameters
         ----------
@@ -194,11 +192,7 @@ class RobustStart:
         index : int
             Vertex index; its bit ``k`` refers to the ``k``-th declared parameter.
         """
-        mult = box[:, 0].copy()
-        for bit, k in enumerate(self.declared):
-            if (index >> bit) & 1:
-                mult[k] = box[k, 1]
-        return mult
+        return box_vertex(box, self.declared, index)
 
 
 def _integrator_slice(p: FloatArray, z: FloatArray, level: float) -> tuple[FloatArray, FloatArray, float]:
@@ -266,4 +260,60 @@ def vertex_current(rng: np.random.Generator, speed: float) -> FloatArray:
     return np.array([speed * math.cos(ang), speed * math.sin(ang)]) + 0.0
 
 
-__all__ = ["CORNER_PERIOD", "START_SHRINK", "RobustStart", "robust_start", "vertex_current"]
+def vertex_index(run: int, vertices: int) -> int | None:
+    """The box vertex run ``run`` samples, or ``None`` for an interior run (see the module docstring).
+
+    Parameters
+    ----------
+    run : int
+        Run index within the campaign.
+    vertices : int
+        Number of vertices of the box (``2^d``).
+    """
+    if run % CORNER_PERIOD == 0 and run // CORNER_PERIOD < vertices:
+        return run // CORNER_PERIOD
+    return None
+
+
+def vertex_runs(runs: int, vertices: int) -> int:
+    """How many of the first ``runs`` runs are box vertices.
+
+    Parameters
+    ----------
+    runs : int
+        Number of runs.
+    vertices : int
+        Number of vertices of the box.
+    """
+    return min(vertices, (runs + CORNER_PERIOD - 1) // CORNER_PERIOD)
+
+
+def box_vertex(box: FloatArray, declared: tuple[int, ...], index: int) -> FloatArray:
+    """Multipliers of vertex ``index`` of ``box``: bit ``b`` of ``index`` picks the upper end of ``declared[b]``.
+
+    Parameters
+    ----------
+    box : ndarray, shape (p, 2)
+        ``[lo, hi]`` multipliers of the coefficients.
+    declared : tuple of int
+        Rows of ``box`` with a non-degenerate range, in bit order.
+    index : int
+        Vertex index, ``0 <= index < 2^len(declared)``.
+    """
+    mult = box[:, 0].copy()
+    for bit, k in enumerate(declared):
+        if (index >> bit) & 1:
+            mult[k] = box[k, 1]
+    return mult
+
+
+__all__ = [
+    "CORNER_PERIOD",
+    "START_SHRINK",
+    "RobustStart",
+    "box_vertex",
+    "robust_start",
+    "vertex_current",
+    "vertex_index",
+    "vertex_runs",
+]

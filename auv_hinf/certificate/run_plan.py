@@ -39,6 +39,7 @@ from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.margins import ERROR_UNITS
+from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
 from auv_hinf.simulation.results import SimulationResult
@@ -432,7 +433,12 @@ __all__ = [
 ]
 
 
-def guidance_run(cfg: FormationConfig, horizon: float | None = None) -> GuidanceRun:
+def guidance_run(
+    cfg: FormationConfig,
+    horizon: float | None = None,
+    plant: VehicleParams | None = None,
+    current: tuple[float, float] | None = None,
+) -> GuidanceRun:
     """Simulate a ``[guidance]`` configuration: its fleet under the line-of-sight cascade.
 
     The plant is ``[simulation] plant`` applied to the vehicle, the current ``[simulation] current``,
@@ -444,6 +450,10 @@ def guidance_run(cfg: FormationConfig, horizon: float | None = None) -> Guidance
         A configuration with ``[guidance]`` and an underactuated ``[actuators]``.
     horizon : float, optional
         Simulated time (s); default ``[simulation] horizon``.
+    plant : VehicleParams, optional
+        The true vehicle instead of the configured one (a campaign's sample of the box).
+    current : tuple of float, optional
+        The constant current (m/s, inertial) instead of ``[simulation] current``.
 
     Raises
     ------
@@ -457,11 +467,11 @@ def guidance_run(cfg: FormationConfig, horizon: float | None = None) -> Guidance
     fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
     return simulate_guidance(
         cfg.guidance,
-        sim.plant_params(cfg.vehicle),
+        sim.plant_params(cfg.vehicle) if plant is None else plant,
         cfg.vehicle,
         cfg.actuators,
         fleet,
         sim.horizon if horizon is None else horizon,
-        sim.current,
+        sim.current if current is None else current,
         initial,
     )

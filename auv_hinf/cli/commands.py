@@ -372,7 +372,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from auv_hinf.certificate.run_plan import plan_run
 
     _prepare_out(args.out)
-    cfg = _formation_law_only(_load(args), "campaign")
+    cfg = _load(args)
+    if cfg.guidance is not None:
+        return _campaign_guidance(args, cfg)
     try:
         plan = plan_run(cfg, horizon=args.horizon, samples=2)  # the gains' verdict; the runs come later
     except DesignError as exc:
@@ -409,6 +411,41 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         summary["ok"],
         f"{c['outside_bounds']} of {c['certificate_applies']} covered runs outside the "
         f"certified bounds, {c['left_envelope']} of {c['runs']} runs left the envelope",
+    )
+
+
+def _campaign_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
+    """``campaign`` of a ``[guidance]`` configuration: the cascade on sampled plants and currents."""
+    from auv_hinf.campaign.guidance import SUMMARY_UNITS as GUIDANCE_SUMMARY_UNITS
+    from auv_hinf.campaign.guidance import run_guidance_campaign
+    from auv_hinf.figures.guidance import save_guidance_campaign_figure
+
+    if args.scheduler or args.workers not in (None, 1):
+        raise BadInput("--workers and --scheduler are for the formation law's campaigns; a [guidance] one runs here")
+    print(
+        f"{PROG}: note: the guidance cascade has no certificate in this version; this campaign measures it",
+        file=sys.stderr,
+    )
+    try:
+        camp = run_guidance_campaign(cfg, args.runs, seed=args.seed, horizon=args.horizon, progress=True)
+    except Interrupted as stop:
+        if stop.partial is None:
+            raise Stopped(f"interrupted after 0 of {args.runs} runs; no run finished, nothing written") from None
+        stop.partial.write(args.out)
+        save_guidance_campaign_figure(stop.partial, args.out)
+        raise Stopped(f"interrupted after {stop.done} of {args.runs} runs; results so far in {args.out}") from None
+    summary = camp.write(args.out)
+    save_guidance_campaign_figure(camp, args.out)
+    if args.json:
+        print(_dump(summary))
+    else:
+        for key, val in summary.items():
+            print(f"{key:>26}: {_short(val, GUIDANCE_SUMMARY_UNITS.get(key))}")
+    return _verdict(
+        False,
+        f"the guidance cascade is not certified in this version ({summary['saturated_runs']} of "
+        f"{summary['runs']} runs saturated, {summary['runs_below_min_separation']} came closer than "
+        f"{summary['required_min_separation']:g} m)",
     )
 
 

@@ -26,6 +26,8 @@ from auv_hinf.config.schema import (
     EnvelopeTable,
     FormationTable,
     GuidanceTable,
+    ImplementationTable,
+    NoiseTable,
     PlantTable,
     SimulationTable,
     UncertaintyTable,
@@ -239,18 +241,23 @@ def _remus_survey() -> FormationConfig:
     )
 
 
-#: Cross current of ``remus-survey-ilos`` (m/s, inertial): across the first leg, as strong as the
-#: currents REMUS surveys are planned for (the issue's 0.2 m/s).
+#: Cross current of ``remus-survey-ilos`` (m/s, inertial): across the first leg, 0.2 m/s, the
+#: current a 1.5 m/s REMUS survey is planned to hold its lines in (docs/vehicles.md).
 SURVEY_CURRENT = (0.0, 0.2)
 
 
 def _remus_survey_ilos() -> FormationConfig:
-    """``remus-survey`` steered as the REMUS really is: ILOS on each slot, propeller and rudder only."""
+    """``remus-survey`` steered as the REMUS really is: ILOS on each slot, propeller and rudder only.
+
+    It declares the ``remus-line`` box and a current up to 0.2 m/s, which ``campaign`` samples.
+    """
     base = _remus_survey()
     return replace(
         base,
         name="remus-survey-ilos",
         simulation=SimulationConfig(horizon=SURVEY_HORIZON, current=SURVEY_CURRENT),
+        uncertainty=UncertaintyConfig(REMUS_BOX),
+        disturbance=DisturbanceConfig(current_speed=float(np.hypot(*SURVEY_CURRENT))),
         guidance=GuidanceConfig(kind="ilos"),
     )
 
@@ -390,6 +397,19 @@ def annotated_toml(cfg: FormationConfig) -> str:
         DisturbanceTable,
         data.get("disturbance", {}),
         {"current_speed": 0.1, "current_rate": 0.0},
+    )
+    impl = data.get("implementation", {})
+    lines += _table(
+        "implementation",
+        ImplementationTable,
+        {k: v for k, v in impl.items() if k != "noise"},
+        {"sample_time": 0.1, "delay": 0.1},
+    )
+    lines += _table(
+        "implementation.noise",
+        NoiseTable,
+        impl.get("noise", {}),
+        {"position": 0.1, "velocity": 0.02, "heading": 0.02, "yaw_rate": 0.01},
     )
     lines += _optional_table(
         "actuators",

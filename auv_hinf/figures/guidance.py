@@ -7,6 +7,7 @@ bands (:func:`~auv_hinf.figures.simulation.per_vehicle_axes`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -20,6 +21,9 @@ from auv_hinf.figures.simulation import (
     save_pngs,
 )
 from auv_hinf.guidance.simulation import GuidanceRun
+
+if TYPE_CHECKING:
+    from auv_hinf.campaign.guidance import GuidanceCampaign
 
 
 def guidance_paths(run: GuidanceRun) -> Figure:
@@ -97,4 +101,59 @@ def save_guidance_plots(run: GuidanceRun, out: Path) -> list[Path]:
     return save_pngs(figures, run, out)
 
 
-__all__ = ["guidance_actuators", "guidance_errors", "guidance_paths", "save_guidance_plots"]
+def guidance_campaign_figure(camp: GuidanceCampaign) -> Figure:
+    """Per run: the worst cross- and along-track errors (m), and the thrust and rudder peaks over their limits.
+
+    Box-vertex runs are red, interior runs blue; the dashed line on the right is the limit.
+
+    Parameters
+    ----------
+    camp : GuidanceCampaign
+        A finished (or interrupted) campaign.
+    """
+    t, act = camp.table, camp.config.actuators
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 3.6), layout="constrained")
+    run = t["run"].to_numpy(int)
+    colour = np.where(t["vertex"].to_numpy(int) >= 0, "tab:red", "tab:blue")
+    left.scatter(run, t["cross_track"], c=colour, marker="o", s=18, label="cross-track")
+    left.scatter(run, t["along_track"], c=colour, marker="x", s=18, label="along-track")
+    left.set_xlabel("run")
+    left.set_ylabel("worst error over the run [m]")
+    left.legend(fontsize=7, title="red: box vertex", title_fontsize=7)
+    tau_x, rudder_max = float(getattr(act, "tau_x", np.inf)), float(getattr(act, "rudder_max", np.inf))
+    right.scatter(run, t["force_x"].to_numpy(float) / tau_x, c=colour, marker="s", s=18, label="thrust")
+    right.scatter(run, t["rudder"].to_numpy(float) / rudder_max, c=colour, marker="^", s=18, label="rudder")
+    right.axhline(1.0, color="k", lw=1.0, ls="--", label="limit")
+    right.set_xlabel("run")
+    right.set_ylabel("commanded peak / limit")
+    right.legend(fontsize=7)
+    fig.suptitle(f"{camp.config.name}: {len(t)} guidance runs of {camp.horizon:g} s, measured (not certified)")
+    return fig
+
+
+def save_guidance_campaign_figure(camp: GuidanceCampaign, out: Path) -> list[Path]:
+    """Write :func:`guidance_campaign_figure` as ``out/runs.png``.
+
+    Parameters
+    ----------
+    camp : GuidanceCampaign
+        The campaign.
+    out : pathlib.Path
+        Existing directory.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The file written.
+    """
+    return save_pngs((("runs", guidance_campaign_figure),), camp, out)
+
+
+__all__ = [
+    "guidance_actuators",
+    "guidance_campaign_figure",
+    "guidance_errors",
+    "guidance_paths",
+    "save_guidance_campaign_figure",
+    "save_guidance_plots",
+]

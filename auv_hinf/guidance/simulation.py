@@ -12,14 +12,14 @@ autopilot runs it.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.guidance.law import GuidanceConfig, SlotMotion, commands
+from auv_hinf.guidance.law import Commands, GuidanceConfig, SlotMotion, commands
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.models.vehicle import VehicleParams, rhs
 
@@ -27,12 +27,12 @@ from auv_hinf.models.vehicle import VehicleParams, rhs
 #: the default loop (the 1 s of the heading loop; the sway and surge dynamics are slower).
 STEP = 0.1
 #: Units of the figures of :meth:`GuidanceRun.report` (the text of ``simulate``).
-REPORT_UNITS: dict[str, str] = {
-    "commanded_peak": "N, rad",
-    "delivered_peak": "N, rad",
-    "limits": "N, rad",
-    "measured_errors": "m, m, rad",
-    "final_errors": "m, m, rad",
+REPORT_UNITS: dict[str, Any] = {
+    "commanded_peak": {"force_x": "N", "rudder": "rad"},
+    "delivered_peak": {"force_x": "N", "rudder": "rad"},
+    "limits": {"force_x": "N", "rudder": "rad"},
+    "measured_errors": {"along_track": "m", "cross_track": "m", "heading": "rad"},
+    "final_errors": {"along_track": "m", "cross_track": "m", "heading": "rad", "after": "s"},
     "peak_sway_speed": "m/s",
     "min_separation": "m",
     "horizon": "s",
@@ -61,6 +61,9 @@ class GuidanceRun:
         The slots' positions (m).
     act : RudderActuation
         The limits the run used.
+    vertical : ndarray, shape (T, N, 3) or None
+        ``[z, phi, theta]`` (m, rad, rad) of a 6-DOF plant (:mod:`auv_hinf.guidance.six_dof`);
+        ``None`` on the 3-DOF model.
     """
 
     t: FloatArray
@@ -75,6 +78,7 @@ class GuidanceRun:
     heading_error: FloatArray
     slots: FloatArray
     act: RudderActuation
+    vertical: FloatArray | None = None
 
     @property
     def saturated(self) -> np.ndarray:
@@ -208,10 +212,106 @@ def simulate_guidance(
     ParameterError
         If the horizon or step is not positive, or ``initial`` has the wrong shape.
     """
+    true_act = act if plant_act is None else plant_act
+    three_dof = ThreeDofPlant(plant, true_act, np.asarray(current, dtype=float))
+    return run_cascade(gcfg, model, act, ref, horizon, three_dof, initial, step)
+
+
+class GuidancePlant(Protocol):
+    """What :func:`run_cascade` needs of a plant: its start, horizontal view, ground velocity and derivative."""
+
+    @property
+    def current(self) -> FloatArray:
+        """The constant current (m/s, inertial), shape (2,)."""
+        ...
+
+    def start(self, horizontal: FloatArray) -> FloatArray:
+        """The full state of every vehicle from ``[x, y, psi, u, v, r]`` per vehicle ``(N, 6)``."""
+        ...
+
+    def horizontal(self, state: FloatArray) -> FloatArray:
+        """``[x, y, psi, u, v, r]`` per vehicle ``(N, 6)`` of the full state: what the cascade measures."""
+        ...
+
+    def ground(self, state: FloatArray) -> FloatArray:
+        """The ground velocity ``(N, 2)`` (m/s, inertial): what a DVL's bottom track measures."""
+        ...
+
+    def derivative(self, state: FloatArray, cmd: Commands) -> FloatArray:
+        """The time derivative of the full state under the delivered thrust and rudder of ``cmd``."""
+        ...
+
+    def vertical(self, state: FloatArray) -> FloatArray | None:
+        """``[z, phi, theta]`` per vehicle ``(N, 3)``, or ``None`` for a plant in the plane."""
+        ...
+
+
+@dataclass(frozen=True)
+class ThreeDofPlant:
+    """The 3-DOF model (:func:`~auv_hinf.models.vehicle.rhs`) in a constant current; states ``[x, y, psi, u, v, r]``.
+
+    Attributes
+    ----------
+    params : VehicleParams
+        The true vehicle.
+    act : RudderActuation
+        The true propeller and rudder (their derivatives make the forces).
+    current : ndarray, shape (2,)
+        Constant current (m/s, inertial).
+    """
+
+    params: VehicleParams
+    act: RudderActuation
+    current: FloatArray
+
+    def start(self, horizontal: FloatArray) -> FloatArray:
+        """``horizontal`` itself (see :class:`GuidancePlant`)."""
+        return np.array(horizontal, dtype=float)
+
+    def horizontal(self, state: FloatArray) -> FloatArray:
+        """``state`` itself."""
+        return state
+
+    def ground(self, state: FloatArray) -> FloatArray:
+        """The body velocity turned to the earth, plus the current."""
+        c = self.current
+        cs, sn = np.cos(state[:, 2]), np.sin(state[:, 2])
+        u, v = state[:, 3], state[:, 4]
+        return np.stack([cs * u - sn * v + c[0], sn * u + cs * v + c[1]], axis=-1)
+
+    def derivative(self, state: FloatArray, cmd: Commands) -> FloatArray:
+        """:func:`~auv_hinf.models.vehicle.rhs` with the forces of ``cmd``, and the current on the position."""
+        d = rhs(self.params, state, cmd.body_forces(self.act, state[:, 3]))
+        d[:, 0:2] += self.current
+        return d
+
+    def vertical(self, state: FloatArray) -> FloatArray | None:
+        """``None``: the model is planar."""
+        return None
+
+
+def run_cascade(
+    gcfg: GuidanceConfig,
+    model: VehicleParams,
+    act: RudderActuation,
+    ref: FleetReference,
+    horizon: float,
+    plant: GuidancePlant,
+    initial: FloatArray | None = None,
+    step: float = STEP,
+) -> GuidanceRun:
+    """Run the cascade at ``step`` on ``plant`` (see :func:`simulate_guidance` for the arguments).
+
+    The controller samples the plant's horizontal view every ``step`` s and holds its thrust and
+    rudder over the step; the plant is integrated by RK4 at the same step.
+
+    Raises
+    ------
+    ParameterError
+        If the horizon or step is not positive, ``initial`` has the wrong shape, or the run diverges.
+    """
     if not (np.isfinite(horizon) and horizon > 0.0 and np.isfinite(step) and step > 0.0):
         raise ParameterError(f"horizon and step must be > 0 s, got {horizon!r} and {step!r}")
-    true_act = act if plant_act is None else plant_act
-    c = np.asarray(current, dtype=float)
     n_steps = int(np.ceil(horizon / step))
     t = np.arange(n_steps + 1) * step
     slots = slot_motion(ref, t)
@@ -221,39 +321,32 @@ def simulate_guidance(
 
     slot0 = at(0)
     n = slot0.p.shape[0]
-    x = slot_start(slot0, c) if initial is None else np.array(initial, dtype=float)
-    if x.shape != (n, 6) or not np.all(np.isfinite(x)):
-        raise ParameterError(f"initial states must be finite with shape ({n}, 6), got {x.shape}")
+    start = slot_start(slot0, plant.current) if initial is None else np.array(initial, dtype=float)
+    if start.shape != (n, 6) or not np.all(np.isfinite(start)):
+        raise ParameterError(f"initial states must be finite with shape ({n}, 6), got {start.shape}")
+    x = plant.start(start)
     yi = np.zeros(n)
-    rec: dict[str, list[FloatArray]] = {k: [] for k in ("x", "yi", "tc", "rc", "th", "rd", "xe", "ye", "eh", "sl")}
-
-    def ground(s: FloatArray) -> FloatArray:
-        cs, sn = np.cos(s[:, 2]), np.sin(s[:, 2])
-        return np.stack([cs * s[:, 3] - sn * s[:, 4] + c[0], sn * s[:, 3] + cs * s[:, 4] + c[1]], axis=-1)
-
-    def deriv(s: FloatArray, forces: FloatArray) -> FloatArray:
-        d = rhs(plant, s, forces)
-        d[:, 0:2] += c
-        return d
-
+    keys = ("x", "yi", "tc", "rc", "th", "rd", "xe", "ye", "eh", "sl", "vt")
+    rec: dict[str, list[FloatArray]] = {k: [] for k in keys}
     for k in range(n_steps + 1):
         slot = at(k)
-        cmd = commands(gcfg, model, act, x, yi, slot, ground(x))
+        view = plant.horizontal(x)
+        cmd = commands(gcfg, model, act, view, yi, slot, plant.ground(x))
+        vertical = plant.vertical(x)
         for key, val in (
-            ("x", x), ("yi", yi), ("tc", cmd.thrust_cmd), ("rc", cmd.rudder_cmd), ("th", cmd.thrust),
+            ("x", view), ("yi", yi), ("tc", cmd.thrust_cmd), ("rc", cmd.rudder_cmd), ("th", cmd.thrust),
             ("rd", cmd.rudder), ("xe", cmd.along_track), ("ye", cmd.cross_track), ("eh", cmd.heading_error),
-            ("sl", slot.p),
+            ("sl", slot.p), ("vt", np.zeros((n, 3)) if vertical is None else vertical),
         ):  # fmt: skip
             rec[key].append(np.array(val, dtype=float))
         if k == n_steps:
             break
-        forces = cmd.body_forces(true_act, x[:, 3])
         # RK4 with the forces held over the step (the autopilot's zero-order hold); the ILOS state
         # integrates its rate at the sample (Euler: it is the controller's own discrete integrator).
-        k1 = deriv(x, forces)
-        k2 = deriv(x + 0.5 * step * k1, forces)
-        k3 = deriv(x + 0.5 * step * k2, forces)
-        k4 = deriv(x + step * k3, forces)
+        k1 = plant.derivative(x, cmd)
+        k2 = plant.derivative(x + 0.5 * step * k1, cmd)
+        k3 = plant.derivative(x + 0.5 * step * k2, cmd)
+        k4 = plant.derivative(x + step * k3, cmd)
         x = x + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         yi = yi + step * cmd.integral_rate
         if not np.all(np.isfinite(x)):
@@ -272,7 +365,19 @@ def simulate_guidance(
         heading_error=arr["eh"],
         slots=arr["sl"],
         act=act,
+        vertical=None if plant.vertical(x) is None else arr["vt"],
     )
 
 
-__all__ = ["REPORT_UNITS", "SATURATION_RTOL", "STEP", "GuidanceRun", "simulate_guidance", "slot_motion", "slot_start"]
+__all__ = [
+    "REPORT_UNITS",
+    "SATURATION_RTOL",
+    "STEP",
+    "GuidancePlant",
+    "GuidanceRun",
+    "ThreeDofPlant",
+    "run_cascade",
+    "simulate_guidance",
+    "slot_motion",
+    "slot_start",
+]

@@ -21,6 +21,7 @@ from auv_hinf.config.settings import (
     load_config,
 )
 from auv_hinf.exceptions import ConfigError
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
 from auv_hinf.models.vehicle import paper2011
@@ -308,3 +309,14 @@ def test_formation_config_rejects_wrong_object_types():
         replace(cfg, n=True)
     assert isinstance(FormationConfig(name="x", vehicle=paper2011(), n=2, jacobi="paper", shape=((1, 0),),
                                       envelope=cfg.envelope), FormationConfig)  # fmt: skip
+
+
+def test_annotated_toml_writes_a_declared_implementation_and_loads_it_back(tmp_path):
+    impl = Implementation(0.1, 0.05, True, MeasurementNoise(0.1, 0.02, 0.02, 0.01))
+    cfg = replace(preset_config("bluerov2-line"), implementation=impl)
+    text = annotated_toml(cfg)
+    parsed = tomllib.loads(text)["implementation"]
+    assert parsed["sample_time"] == 0.1 and parsed["noise"]["position"] == 0.1
+    f = tmp_path / "deployed.toml"
+    f.write_text(text)
+    assert load_config(f).implementation == impl
