@@ -131,6 +131,27 @@ def require_finite(name: str, value: Any) -> float:
     return out
 
 
+def require_positive(name: str, value: Any) -> float:
+    """Return ``value`` as a float, or raise if it is not a finite real number > 0.
+
+    Parameters
+    ----------
+    name : str
+        Name of the quantity, used in the error message.
+    value : Any
+        The value to check.
+
+    Raises
+    ------
+    ParameterError
+        If the value is not finite or not > 0.
+    """
+    out = require_finite(name, value)
+    if out <= 0.0:
+        raise ParameterError(f"{name} must be > 0, got {out!r}")
+    return out
+
+
 def require_fleet_size(n: Any, minimum: int = 2) -> int:
     """Return ``n`` as an int, or raise if it is not an integer number of vehicles >= ``minimum``.
 
@@ -166,4 +187,5 @@ __all__ = [
     "SolverError",
     "require_finite",
     "require_fleet_size",
+    "require_positive",
 ]

@@ -35,6 +35,7 @@ from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.simulation import GuidanceRun, simulate_guidance
+from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
 from auv_hinf.mission.fleet import FleetReference
@@ -438,6 +439,7 @@ def guidance_run(
     horizon: float | None = None,
     plant: VehicleParams | None = None,
     current: tuple[float, float] | None = None,
+    six_dof: bool = False,
 ) -> GuidanceRun:
     """Simulate a ``[guidance]`` configuration: its fleet under the line-of-sight cascade.
 
@@ -454,6 +456,9 @@ def guidance_run(
         The true vehicle instead of the configured one (a campaign's sample of the box).
     current : tuple of float, optional
         The constant current (m/s, inertial) instead of ``[simulation] current``.
+    six_dof : bool
+        Run the cascade on the 6-DOF REMUS 100 (:mod:`auv_hinf.guidance.six_dof`) instead of the
+        3-DOF model; only for a REMUS 100 fleet, started on its slots, without ``plant``.
 
     Raises
     ------
@@ -465,6 +470,20 @@ def guidance_run(
     sim = cfg.simulation
     initial = None if sim.initial is None else np.asarray(sim.initial, dtype=float)
     fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
+    if six_dof:
+        if not cfg.vehicle.name.startswith("remus100") or plant is not None or initial is not None or sim.plant:
+            raise ConfigError(
+                "the 6-DOF model is the REMUS 100's (Prestero's coefficients): it runs a fleet of the "
+                "remus100 vehicle preset, started on its slots, without [simulation] plant or initial"
+            )
+        return simulate_guidance_6dof(
+            cfg.guidance,
+            cfg.vehicle,
+            cfg.actuators,
+            fleet,
+            sim.horizon if horizon is None else horizon,
+            sim.current if current is None else current,
+        )
     return simulate_guidance(
         cfg.guidance,
         sim.plant_params(cfg.vehicle) if plant is None else plant,

@@ -200,6 +200,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             raise BadInput(f"--current {','.join(f'{c:g}' for c in args.current)}: {exc}") from None
     if cfg.guidance is not None:
         return _simulate_guidance(args, cfg)
+    if args.six_dof:
+        raise BadInput("--six-dof runs the guidance cascade of a [guidance] fleet; this configuration has none")
     if args.design:
         cfg = replace(cfg, robust=args.design == "robust")
     try:
@@ -275,11 +277,11 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         raise BadInput("--save, --design and --start are for the fully actuated law; a [guidance] run takes none")
     print(
         f"{PROG}: note: the {cfg.guidance.kind.upper() if cfg.guidance else ''} guidance cascade has no certificate "
-        "in this version; this run measures it",
+        f"in this version; this run measures it{' on the 6-DOF REMUS 100' if args.six_dof else ''}",
         file=sys.stderr,
     )
     try:
-        run = guidance_run(cfg, horizon=args.horizon)
+        run = guidance_run(cfg, horizon=args.horizon, six_dof=args.six_dof)
     except KeyboardInterrupt:
         raise Stopped("interrupted after 0 of 1 runs; no run finished, nothing written") from None
     summary = run.report()

@@ -104,6 +104,11 @@ def build_parser() -> argparse.ArgumentParser:
                 action="store_true",
                 help="simulate even when no certificate covers the gains (the run is then reported as not covered)",
             )
+            c.add_argument(
+                "--six-dof",
+                action="store_true",
+                help="[guidance] fleets of REMUS 100: run the cascade on the 6-DOF model, depth held at 5 m",
+            )
         NUMERIC_OPTIONS.add("--actuators")
         c.add_argument(
             "--actuators",

@@ -36,6 +36,7 @@ REPORT_UNITS: dict[str, Any] = {
     "peak_sway_speed": "m/s",
     "min_separation": "m",
     "horizon": "s",
+    "vertical": {"depth": "m", "peak_roll": "rad", "peak_pitch": "rad"},
 }
 #: Relative tolerance on the limits below which a command counts as saturated (rounding only).
 SATURATION_RTOL = 1e-9
@@ -98,6 +99,15 @@ class GuidanceRun:
         k = int(np.argmin(d.min(axis=0)))
         return float(d[:, k].min()), (int(i[k]), int(j[k]))
 
+    def _vertical_report(self) -> dict[str, Any]:
+        """Depth range (m), peak roll and pitch (rad) of a 6-DOF run."""
+        v = self.vertical if self.vertical is not None else np.zeros((1, 1, 3))
+        return {
+            "depth": [float(v[..., 0].min()), float(v[..., 0].max())],
+            "peak_roll": float(np.abs(v[..., 1]).max()),
+            "peak_pitch": float(np.abs(v[..., 2]).max()),
+        }
+
     def report(self, settle: float = 0.5) -> dict[str, Any]:
         """The ``simulate --json`` figures of the run (SI units; vehicles 0-based).
 
@@ -134,6 +144,7 @@ class GuidanceRun:
             "closest_pair": list(pair),
             "horizon": float(self.t[-1]),
             "certificate_covers_run": False,
+            **({} if self.vertical is None else {"vertical": self._vertical_report()}),
         }
 
 
@@ -226,23 +237,55 @@ class GuidancePlant(Protocol):
         ...
 
     def start(self, horizontal: FloatArray) -> FloatArray:
-        """The full state of every vehicle from ``[x, y, psi, u, v, r]`` per vehicle ``(N, 6)``."""
+        """The full state of every vehicle from ``[x, y, psi, u, v, r]`` per vehicle ``(N, 6)``.
+
+        Parameters
+        ----------
+        horizontal : ndarray, shape (N, 6)
+            ``[x, y, psi, u, v, r]`` per vehicle.
+        """
         ...
 
     def horizontal(self, state: FloatArray) -> FloatArray:
-        """``[x, y, psi, u, v, r]`` per vehicle ``(N, 6)`` of the full state: what the cascade measures."""
+        """``[x, y, psi, u, v, r]`` per vehicle ``(N, 6)`` of the full state: what the cascade measures.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        """
         ...
 
     def ground(self, state: FloatArray) -> FloatArray:
-        """The ground velocity ``(N, 2)`` (m/s, inertial): what a DVL's bottom track measures."""
+        """The ground velocity ``(N, 2)`` (m/s, inertial): what a DVL's bottom track measures.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        """
         ...
 
     def derivative(self, state: FloatArray, cmd: Commands) -> FloatArray:
-        """The time derivative of the full state under the delivered thrust and rudder of ``cmd``."""
+        """The time derivative of the full state under the delivered thrust and rudder of ``cmd``.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        cmd : Commands
+            The cascade's commands; their delivered thrust and rudder act.
+        """
         ...
 
     def vertical(self, state: FloatArray) -> FloatArray | None:
-        """``[z, phi, theta]`` per vehicle ``(N, 3)``, or ``None`` for a plant in the plane."""
+        """``[z, phi, theta]`` per vehicle ``(N, 3)``, or ``None`` for a plant in the plane.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        """
         ...
 
 
@@ -265,28 +308,60 @@ class ThreeDofPlant:
     current: FloatArray
 
     def start(self, horizontal: FloatArray) -> FloatArray:
-        """``horizontal`` itself (see :class:`GuidancePlant`)."""
+        """``horizontal`` itself (see :class:`GuidancePlant`).
+
+        Parameters
+        ----------
+        horizontal : ndarray, shape (N, 6)
+            ``[x, y, psi, u, v, r]`` per vehicle.
+        """
         return np.array(horizontal, dtype=float)
 
     def horizontal(self, state: FloatArray) -> FloatArray:
-        """``state`` itself."""
+        """``state`` itself.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        """
         return state
 
     def ground(self, state: FloatArray) -> FloatArray:
-        """The body velocity turned to the earth, plus the current."""
+        """The body velocity turned to the earth, plus the current.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        """
         c = self.current
         cs, sn = np.cos(state[:, 2]), np.sin(state[:, 2])
         u, v = state[:, 3], state[:, 4]
         return np.stack([cs * u - sn * v + c[0], sn * u + cs * v + c[1]], axis=-1)
 
     def derivative(self, state: FloatArray, cmd: Commands) -> FloatArray:
-        """:func:`~auv_hinf.models.vehicle.rhs` with the forces of ``cmd``, and the current on the position."""
+        """:func:`~auv_hinf.models.vehicle.rhs` with the forces of ``cmd``, and the current on the position.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        cmd : Commands
+            The cascade's commands; their delivered thrust and rudder act.
+        """
         d = rhs(self.params, state, cmd.body_forces(self.act, state[:, 3]))
         d[:, 0:2] += self.current
         return d
 
     def vertical(self, state: FloatArray) -> FloatArray | None:
-        """``None``: the model is planar."""
+        """``None``: the model is planar.
+
+        Parameters
+        ----------
+        state : ndarray
+            The full states of the fleet, one row per vehicle.
+        """
         return None
 
 
@@ -300,10 +375,30 @@ def run_cascade(
     initial: FloatArray | None = None,
     step: float = STEP,
 ) -> GuidanceRun:
-    """Run the cascade at ``step`` on ``plant`` (see :func:`simulate_guidance` for the arguments).
+    """Run the cascade at ``step`` on ``plant``.
 
     The controller samples the plant's horizontal view every ``step`` s and holds its thrust and
     rudder over the step; the plant is integrated by RK4 at the same step.
+
+    Parameters
+    ----------
+    gcfg : GuidanceConfig
+        Guidance and autopilot gains.
+    model : VehicleParams
+        The controller's 3-DOF model of the vehicle.
+    act : RudderActuation
+        The controller's propeller and rudder figures (and the limits).
+    ref : FleetReference
+        The slots' desired motion.
+    horizon : float
+        Length of the run (s, > 0).
+    plant : GuidancePlant
+        The simulated vehicles (:class:`ThreeDofPlant`, or the 6-DOF plant of
+        :mod:`auv_hinf.guidance.six_dof`).
+    initial : ndarray, shape (N, 6), optional
+        Horizontal start states; default on the slots, heading into the plant's current.
+    step : float
+        Control and integration step (s).
 
     Raises
     ------
