@@ -34,6 +34,7 @@ from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError
+from auv_hinf.guidance.simulation import STEP as GUIDANCE_STEP
 from auv_hinf.guidance.simulation import GuidanceRun, simulate_guidance
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
@@ -445,6 +446,8 @@ def guidance_run(
 
     The plant is ``[simulation] plant`` applied to the vehicle, the current ``[simulation] current``,
     the start ``[simulation] initial`` (default: every vehicle on its slot, heading into the current).
+    The cascade runs at ``[implementation] sample_time`` (default: the 10 Hz of
+    :data:`~auv_hinf.guidance.simulation.STEP`).
 
     Parameters
     ----------
@@ -463,10 +466,18 @@ def guidance_run(
     Raises
     ------
     ConfigError
-        If the configuration has no ``[guidance]`` table.
+        If the configuration has no ``[guidance]`` table, or declares an ``[implementation]`` delay or
+        noise (not modelled for the cascade).
     """
     if cfg.guidance is None or not isinstance(cfg.actuators, RudderActuation):
         raise ConfigError("guidance_run: the configuration has no [guidance] table for a propeller-and-rudder vehicle")
+    impl = cfg.implementation
+    if impl.delay > 0.0 or not impl.noise.exact:
+        raise ConfigError(
+            "a [guidance] fleet is simulated with [implementation] sample_time only in this version: the "
+            "cascade's delay and measurement noise are not modelled; remove [implementation] delay and noise"
+        )
+    step = impl.sample_time if impl.sample_time > 0.0 else GUIDANCE_STEP
     sim = cfg.simulation
     initial = None if sim.initial is None else np.asarray(sim.initial, dtype=float)
     fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
@@ -483,6 +494,7 @@ def guidance_run(
             fleet,
             sim.horizon if horizon is None else horizon,
             sim.current if current is None else current,
+            step=step,
         )
     return simulate_guidance(
         cfg.guidance,
@@ -493,4 +505,5 @@ def guidance_run(
         sim.horizon if horizon is None else horizon,
         sim.current if current is None else current,
         initial,
+        step,
     )

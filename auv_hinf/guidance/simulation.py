@@ -11,6 +11,7 @@ autopilot runs it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -36,6 +37,7 @@ REPORT_UNITS: dict[str, Any] = {
     "peak_sway_speed": "m/s",
     "min_separation": "m",
     "horizon": "s",
+    "sample_time": "s",
     "vertical": {"depth": "m", "peak_roll": "rad", "peak_pitch": "rad"},
 }
 #: Relative tolerance on the limits below which a command counts as saturated (rounding only).
@@ -143,6 +145,7 @@ class GuidanceRun:
             "min_separation": sep,
             "closest_pair": list(pair),
             "horizon": float(self.t[-1]),
+            "sample_time": float(self.t[1] - self.t[0]) if self.t.size > 1 else None,
             "certificate_covers_run": False,
             **({} if self.vertical is None else {"vertical": self._vertical_report()}),
         }
@@ -377,8 +380,9 @@ def run_cascade(
 ) -> GuidanceRun:
     """Run the cascade at ``step`` on ``plant``.
 
-    The controller samples the plant's horizontal view every ``step`` s and holds its thrust and
-    rudder over the step; the plant is integrated by RK4 at the same step.
+    The controller samples the plant's horizontal view every ``step`` s (its control period) and
+    holds its thrust and rudder over the step; the plant is integrated by RK4 in substeps of at
+    most :data:`STEP`.
 
     Parameters
     ----------
@@ -409,6 +413,8 @@ def run_cascade(
         raise ParameterError(f"horizon and step must be > 0 s, got {horizon!r} and {step!r}")
     n_steps = int(np.ceil(horizon / step))
     t = np.arange(n_steps + 1) * step
+    substeps = max(1, math.ceil(step / STEP - 1e-9))  # the plant's RK4 step: at most STEP
+    h = step / substeps
     slots = slot_motion(ref, t)
 
     def at(k: int) -> SlotMotion:
@@ -436,13 +442,15 @@ def run_cascade(
             rec[key].append(np.array(val, dtype=float))
         if k == n_steps:
             break
-        # RK4 with the forces held over the step (the autopilot's zero-order hold); the ILOS state
-        # integrates its rate at the sample (Euler: it is the controller's own discrete integrator).
-        k1 = plant.derivative(x, cmd)
-        k2 = plant.derivative(x + 0.5 * step * k1, cmd)
-        k3 = plant.derivative(x + 0.5 * step * k2, cmd)
-        k4 = plant.derivative(x + step * k3, cmd)
-        x = x + step / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        # RK4 with the forces held over the step (the autopilot's zero-order hold), in substeps of
+        # at most STEP; the ILOS state integrates its rate at the sample (Euler: it is the
+        # controller's own discrete integrator).
+        for _ in range(substeps):
+            k1 = plant.derivative(x, cmd)
+            k2 = plant.derivative(x + 0.5 * h * k1, cmd)
+            k3 = plant.derivative(x + 0.5 * h * k2, cmd)
+            k4 = plant.derivative(x + h * k3, cmd)
+            x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         yi = yi + step * cmd.integral_rate
         if not np.all(np.isfinite(x)):
             raise ParameterError(f"the guidance run diverged at t = {t[k + 1]:.4g} s (a state is not finite)")

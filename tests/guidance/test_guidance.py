@@ -212,3 +212,18 @@ def test_commands_of_the_formation_law_refuse_a_guidance_fleet(command, tmp_path
     _, err = capsys.readouterr()
     assert code == 2 and "Traceback" not in err and ("[guidance]" in err or "a [guidance] one" in err)
     assert err.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_the_cascade_runs_at_the_declared_sample_time_and_refuses_delay_and_noise():
+    from auv_hinf.implementation.model import Implementation, MeasurementNoise
+
+    cfg = replace(preset_config("remus-survey-ilos"), simulation=SimulationConfig(horizon=60.0, current=(0.0, 0.2)))
+    runs = {h: guidance_run(replace(cfg, implementation=Implementation(h))) for h in (0.4, 0.2)}
+    base = guidance_run(cfg)  # 10 Hz
+    assert np.allclose(np.diff(runs[0.4].t), 0.4) and runs[0.4].report()["sample_time"] == pytest.approx(0.4)
+    gap = {h: np.abs(r.cross_track - base.cross_track[:: round(h / 0.1)]).max() for h, r in runs.items()}
+    assert 0.0 < gap[0.2] < gap[0.4]  # a slower hold moves the run further from the 10 Hz one
+    for impl in (Implementation(0.1, 0.05), Implementation(0.1, 0.0, False, MeasurementNoise(position=0.1))):
+        with pytest.raises(ConfigError, match="delay and noise"):
+            guidance_run(replace(cfg, implementation=impl))
