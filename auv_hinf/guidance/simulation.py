@@ -20,7 +20,7 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.exceptions import ParameterError
-from auv_hinf.guidance.law import Commands, GuidanceConfig, SlotMotion, commands
+from auv_hinf.guidance.law import Commands, GuidanceConfig, SlotMotion, commands, integral_start
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.models.vehicle import VehicleParams, rhs
 
@@ -426,7 +426,7 @@ def run_cascade(
     if start.shape != (n, 6) or not np.all(np.isfinite(start)):
         raise ParameterError(f"initial states must be finite with shape ({n}, 6), got {start.shape}")
     x = plant.start(start)
-    yi = np.zeros(n)
+    yi = integral_start(gcfg, plant.horizontal(x), slot0)
     keys = ("x", "yi", "tc", "rc", "th", "rd", "xe", "ye", "eh", "sl", "vt")
     rec: dict[str, list[FloatArray]] = {k: [] for k in keys}
     for k in range(n_steps + 1):

@@ -219,6 +219,10 @@ def test_the_cascade_runs_at_the_declared_sample_time_and_refuses_delay_and_nois
     from auv_hinf.implementation.model import Implementation, MeasurementNoise
 
     cfg = replace(preset_config("remus-survey-ilos"), simulation=SimulationConfig(horizon=60.0, current=(0.0, 0.2)))
+    start = guidance_run(replace(cfg, simulation=replace(cfg.simulation, horizon=0.1))).states[0].copy()
+    start[:, 1] += 5.0  # 5 m off the slots: a transient for the hold to shape
+    initial = tuple(tuple(map(float, row)) for row in start)
+    cfg = replace(cfg, simulation=replace(cfg.simulation, initial=initial))
     runs = {h: guidance_run(replace(cfg, implementation=Implementation(h))) for h in (0.4, 0.2)}
     base = guidance_run(cfg)  # 10 Hz
     assert np.allclose(np.diff(runs[0.4].t), 0.4) and runs[0.4].report()["sample_time"] == pytest.approx(0.4)
@@ -227,3 +231,18 @@ def test_the_cascade_runs_at_the_declared_sample_time_and_refuses_delay_and_nois
     for impl in (Implementation(0.1, 0.05), Implementation(0.1, 0.0, False, MeasurementNoise(position=0.1))):
         with pytest.raises(ConfigError, match="delay and noise"):
             guidance_run(replace(cfg, implementation=impl))
+
+
+def test_ilos_starts_in_the_crab_of_the_current_and_holds_the_line_from_the_start():
+    from auv_hinf.guidance.law import MAX_START_CRAB, SlotMotion, integral_start
+
+    g, run = steady("ilos", (0.0, 0.2), horizon=60.0)
+    assert np.abs(run.cross_track).max() < 1e-6 and np.abs(run.heading_error).max() < 1e-6
+    crab = np.arctan(0.2 / SPEED)  # the start heads into the current, its ground velocity the slot's
+    assert run.integral[0, 0] == pytest.approx(g.lookahead * np.tan(crab) / g.sigma, rel=1e-9)
+    slot = SlotMotion(p=np.zeros((3, 2)), v=np.array([[SPEED, 0.0]] * 3), a=np.zeros((3, 2)))
+    states = np.zeros((3, 6))
+    states[:, 2] = [0.1, MAX_START_CRAB + 0.01, -2.0]
+    yi = integral_start(g, states, slot)
+    assert yi[0] == pytest.approx(g.lookahead * np.tan(-0.1) / g.sigma) and yi[1] == yi[2] == 0.0
+    assert np.all(integral_start(GuidanceConfig(kind="los"), states, slot) == 0.0)

@@ -119,7 +119,10 @@ def test_the_cascade_designed_on_3dof_runs_the_6dof_remus_in_a_current(current):
     r6 = run.report()
     assert r6["final_errors"]["cross_track"] < 0.1  # ILOS on the richer model
     assert r6["saturation_fraction"] == 0.0 and r6["commanded_peak"]["rudder"] < act.rudder_max
-    assert r6["measured_errors"]["cross_track"] <= 1.5 * r3["measured_errors"]["cross_track"] + 0.05
+    # the 3-DOF run starts in its steady crab and stays on the line; the richer model adds its
+    # heave, roll and sway-yaw transients, a few centimetres at most
+    assert r3["measured_errors"]["cross_track"] < 1e-6
+    assert r6["measured_errors"]["cross_track"] < r3["measured_errors"]["cross_track"] + 0.2
     z, phi, theta = run.vertical[-1, 0]
     assert abs(z - DepthAutopilot().depth) < 0.05 and abs(phi) < 0.15 and abs(theta) < 0.1
 
