@@ -422,8 +422,11 @@ def _campaign_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
     from auv_hinf.campaign.guidance import run_guidance_campaign
     from auv_hinf.figures.guidance import save_guidance_campaign_figure
 
-    if args.scheduler or args.workers not in (None, 1):
-        raise BadInput("--workers and --scheduler are for the formation law's campaigns; a [guidance] one runs here")
+    if args.scheduler or args.workers not in (None, 1) or args.chunk is not None:
+        raise BadInput(
+            "--workers, --scheduler and --chunk are for the formation law's campaigns; a [guidance] one runs "
+            "here, one run after another"
+        )
     print(
         f"{PROG}: note: the guidance cascade has no certificate in this version; this campaign measures it",
         file=sys.stderr,

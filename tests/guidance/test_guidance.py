@@ -204,6 +204,7 @@ def test_the_python_control_export_is_the_cascade(rng):
     [
         ["fleet-sim", "--listen", "udpin:127.0.0.1:0"],
         ["campaign", "--runs", "2", "--out", "OUT", "--workers", "2"],
+        ["campaign", "--runs", "2", "--out", "OUT", "--chunk", "1"],
     ],
 )
 def test_commands_of_the_formation_law_refuse_a_guidance_fleet(command, tmp_path, capsys):
