@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
-from auv_hinf.campaign.starts import box_vertex, vertex_current, vertex_index
+from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.config.settings import FormationConfig
@@ -89,8 +89,7 @@ class GuidanceCampaign:
         cfg, t = self.config, self.table
         act = cfg.actuators
         limits = {"force_x": float(getattr(act, "tau_x", math.inf)), "rudder": float(getattr(act, "rudder_max", 0.0))}
-        box = box_multipliers(cfg)
-        vertices = 2 ** int(np.sum(box[:, 0] < box[:, 1]))
+        vertices = 2 ** len(declared_rows(box_multipliers(cfg)))
         saturated = int(np.sum(t["saturation_fraction"] > 0.0))
         close = int(np.sum(t["min_separation"] < cfg.min_separation))
         done = len(t)
@@ -162,19 +161,13 @@ def run_inputs(cfg: FormationConfig, seed: int, index: int) -> tuple[int, np.nda
     """
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(index,)))
     box = box_multipliers(cfg)
-    declared = tuple(k for k in range(box.shape[0]) if box[k, 0] < box[k, 1])
+    declared = declared_rows(box)
     speed = cfg.disturbance.current_speed
     corner = vertex_index(index, 2 ** len(declared)) if declared or speed else None
-    if corner is not None:
-        mult = box_vertex(box, declared, corner)
-    else:
-        lo, hi = box[:, 0], box[:, 1]
-        mult = lo + (hi - lo) * rng.random(lo.size)
+    mult, current = sample_plant_and_current(rng, box, declared, speed or 0.0, corner)
     if speed is None:  # no [disturbance] current: every run in the [simulation] current
-        return (-1 if corner is None else corner), mult, np.asarray(cfg.simulation.current, dtype=float)
-    if corner is not None:  # a vertex run takes the full speed; an interior one, uniform in the disc
-        return corner, mult, vertex_current(rng, speed)
-    return -1, mult, vertex_current(rng, speed * math.sqrt(rng.random()))
+        current = np.asarray(cfg.simulation.current, dtype=float)
+    return (-1 if corner is None else corner), mult, current
 
 
 def run_guidance_campaign(

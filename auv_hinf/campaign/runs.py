@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup, nominal_certificate, scaled_plant
-from auv_hinf.campaign.starts import vertex_current
+from auv_hinf.campaign.starts import sample_plant_and_current
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.implementation.sampled_loop import integrate_sampled
 from auv_hinf.models.vehicle import VehicleParams
@@ -79,13 +79,8 @@ def sample_run(setup: CampaignSetup, index: int) -> RunInputs:
     rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
     rob = setup.robust
     corner = None if rob is None else rob.vertex_index(index)
-    if rob is not None and corner is not None:
-        mult, current = rob.vertex(setup.box, corner), vertex_current(rng, setup.current_speed)
-    else:
-        lo, hi = setup.box[:, 0], setup.box[:, 1]
-        mult = lo + (hi - lo) * rng.random(lo.size)
-        c_mag = setup.current_speed * math.sqrt(rng.random())  # uniform in the disc
-        current = vertex_current(rng, c_mag)
+    declared = () if rob is None else rob.declared
+    mult, current = sample_plant_and_current(rng, setup.box, declared, setup.current_speed, corner)
     if rob is not None:
         return RunInputs(rob.sample_errors(rng, setup.n, current), mult, current)
     n, r = setup.n, setup.radii

@@ -242,8 +242,7 @@ def robust_start(
     if not summ.covers or c is None or c.bounds is None:
         why = "; ".join(summ.to_dict()["reasons"]) or "the robust certificate does not cover the declared box"
         return None, why
-    declared = tuple(k for k in range(box.shape[0]) if box[k, 0] < box[k, 1])
-    return RobustStart(c, declared), None
+    return RobustStart(c, declared_rows(box)), None
 
 
 def vertex_current(rng: np.random.Generator, speed: float) -> FloatArray:
@@ -288,6 +287,46 @@ def vertex_runs(runs: int, vertices: int) -> int:
     return min(vertices, (runs + CORNER_PERIOD - 1) // CORNER_PERIOD)
 
 
+def declared_rows(box: FloatArray) -> tuple[int, ...]:
+    """Rows of ``box`` (shape (p, 2), ``[lo, hi]`` multipliers) with a non-degenerate range: the vertex bits.
+
+    Parameters
+    ----------
+    box : ndarray, shape (p, 2)
+        ``[lo, hi]`` multipliers of the coefficients.
+    """
+    return tuple(k for k in range(box.shape[0]) if box[k, 0] < box[k, 1])
+
+
+def sample_plant_and_current(
+    rng: np.random.Generator, box: FloatArray, declared: tuple[int, ...], speed: float, corner: int | None
+) -> tuple[FloatArray, FloatArray]:
+    """Multipliers and current (m/s) of one run (see the module docstring).
+
+    A vertex run (``corner`` not ``None``) takes vertex ``corner`` of the box and a current of
+    exactly ``speed`` in a random direction; an interior run draws the multipliers uniformly in
+    the box and the current uniformly in the disc of radius ``speed``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The run's source of draws.
+    box : ndarray, shape (p, 2)
+        ``[lo, hi]`` multipliers.
+    declared : tuple of int
+        The box's vertex bits (:func:`declared_rows`).
+    speed : float
+        Bound of the current's speed (m/s).
+    corner : int or None
+        The vertex of a vertex run, ``None`` for an interior one.
+    """
+    if corner is not None:
+        return box_vertex(box, declared, corner), vertex_current(rng, speed)
+    lo, hi = box[:, 0], box[:, 1]
+    mult = lo + (hi - lo) * rng.random(lo.size)
+    return mult, vertex_current(rng, speed * math.sqrt(rng.random()))  # uniform in the disc
+
+
 def box_vertex(box: FloatArray, declared: tuple[int, ...], index: int) -> FloatArray:
     """Multipliers of vertex ``index`` of ``box``: bit ``b`` of ``index`` picks the upper end of ``declared[b]``.
 
@@ -312,7 +351,9 @@ __all__ = [
     "START_SHRINK",
     "RobustStart",
     "box_vertex",
+    "declared_rows",
     "robust_start",
+    "sample_plant_and_current",
     "vertex_current",
     "vertex_index",
     "vertex_runs",

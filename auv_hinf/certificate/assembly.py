@@ -19,7 +19,7 @@ from typing import Any
 import control as ct
 
 from auv_hinf.actuation.limits import RudderActuation
-from auv_hinf.certificate.design_point import design_point, formation_offsets, mission_reference
+from auv_hinf.certificate.design_point import design_point, raw_fleet
 from auv_hinf.certificate.document import read_certificate, record_from_document, save_certificate
 from auv_hinf.certificate.part import PartContext, Verdict, reasons_of
 from auv_hinf.certificate.parts.guidance import FORMATION_LAW_IDLE, FORMATION_LAW_PARTS
@@ -308,8 +308,7 @@ class Certificate:
         """
         cfg = self.config
         if cfg.guidance is not None and isinstance(cfg.actuators, RudderActuation):  # the cascade runs
-            fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
-            return guidance_controller(cfg.guidance, cfg.vehicle, cfg.actuators, fleet)
+            return guidance_controller(cfg.guidance, cfg.vehicle, cfg.actuators, self.mission_fleet())
         ref, impl = reference or self.mission_fleet(), self.config.implementation
         if impl.sampled:
             return sampled_formation_controller(self.law(), ref, self.config.n, impl.sample_time, impl.delay)
@@ -337,8 +336,7 @@ class Certificate:
 
     def mission_fleet(self) -> FleetReference:
         """Raw mission reference: formation offsets (in their frame) around the mission path, no shaping."""
-        cfg = self.config
-        return FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
+        return raw_fleet(self.config)
 
     def summary(self) -> str:
         """Readable table (:func:`~auv_hinf.certificate.text.certificate_text`)."""

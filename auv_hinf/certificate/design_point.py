@@ -172,6 +172,17 @@ def formation_offsets(cfg: FormationConfig) -> FloatArray:
     return positions_from_jacobi(np.vstack([rho, np.zeros((1, 2))]), cfg.jacobi)
 
 
+def raw_fleet(cfg: FormationConfig) -> FleetReference:
+    """The raw (unshaped) fleet reference of ``cfg``: the mission with the formation offsets in their frame.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``[reference]``, Jacobi shape and ``[formation] frame``).
+    """
+    return FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
+
+
 def initial_states(point: DesignPoint) -> FloatArray:
     """The configured initial states ``(N, 6)``; without ``[simulation] initial``, the fleet on its slots.
 
@@ -316,5 +327,6 @@ __all__ = [
     "formation_offsets",
     "initial_states",
     "mission_reference",
+    "raw_fleet",
     "slot_states",
 ]

@@ -19,13 +19,7 @@ import numpy as np
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNEL_UNITS, LIMIT_UNITS, RudderActuation
-from auv_hinf.certificate.design_point import (
-    DesignPoint,
-    design_point,
-    formation_offsets,
-    initial_states,
-    mission_reference,
-)
+from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states, raw_fleet
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
 from auv_hinf.certificate.parts.robust import RobustRunCheck
@@ -39,7 +33,6 @@ from auv_hinf.guidance.simulation import GuidanceRun, simulate_guidance
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
-from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.margins import ERROR_UNITS
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
@@ -480,7 +473,7 @@ def guidance_run(
     step = impl.sample_time if impl.sample_time > 0.0 else GUIDANCE_STEP
     sim = cfg.simulation
     initial = None if sim.initial is None else np.asarray(sim.initial, dtype=float)
-    fleet = FleetReference(mission_reference(cfg), formation_offsets(cfg), None, cfg.frame)
+    fleet = raw_fleet(cfg)
     if six_dof:
         if not cfg.vehicle.name.startswith("remus100") or plant is not None or initial is not None or sim.plant:
             raise ConfigError(

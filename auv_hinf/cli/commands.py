@@ -431,16 +431,20 @@ def _campaign_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         f"{PROG}: note: the guidance cascade has no certificate in this version; this campaign measures it",
         file=sys.stderr,
     )
+
+    def write(camp: Any) -> dict[str, Any]:  # the table, the summary and the figure, of any finished runs
+        summary = camp.write(args.out)
+        save_guidance_campaign_figure(camp, args.out)
+        return dict(summary)
+
     try:
         camp = run_guidance_campaign(cfg, args.runs, seed=args.seed, horizon=args.horizon, progress=True)
     except Interrupted as stop:
         if stop.partial is None:
             raise Stopped(f"interrupted after 0 of {args.runs} runs; no run finished, nothing written") from None
-        stop.partial.write(args.out)
-        save_guidance_campaign_figure(stop.partial, args.out)
+        write(stop.partial)
         raise Stopped(f"interrupted after {stop.done} of {args.runs} runs; results so far in {args.out}") from None
-    summary = camp.write(args.out)
-    save_guidance_campaign_figure(camp, args.out)
+    summary = write(camp)
     if args.json:
         print(_dump(summary))
     else:
