@@ -14,6 +14,7 @@ cascade is sampled and held at :data:`~auv_hinf.guidance.simulation.STEP`, as on
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -111,6 +112,11 @@ class SixDofPlant:
     current: FloatArray
     depth: DepthAutopilot = field(default_factory=DepthAutopilot)
 
+    @cached_property
+    def inverse_mass(self) -> FloatArray:
+        """``inv(mass_matrix(coefficients))``: computed once per plant, not at every derivative."""
+        return np.linalg.inv(six.mass_matrix(self.coefficients))
+
     def start(self, horizontal: FloatArray) -> FloatArray:
         """Level, at the commanded depth, with the horizontal states ``(N, 6)``.
 
@@ -157,7 +163,7 @@ class SixDofPlant:
         """
         body = state[:, : six.STATES]
         stern = self.depth.stern(self.coefficients, body, state[:, six.STATES])
-        d = six.derivative(self.coefficients, body, cmd.thrust, cmd.rudder, stern, self.current)
+        d = six.derivative(self.coefficients, body, cmd.thrust, cmd.rudder, stern, self.current, self.inverse_mass)
         return np.concatenate([d, (body[:, six.Z] - self.depth.depth)[:, None]], axis=1)
 
     def vertical(self, state: FloatArray) -> FloatArray | None:

@@ -127,7 +127,8 @@ class Remus6Dof:
             require_finite(f.name, getattr(self, f.name))
         for name in ("mass", "weight", "buoyancy", "i_xx", "i_yy", "i_zz", "x_prop"):
             require_positive(name, getattr(self, name))
-        if not np.linalg.eigvalsh(0.5 * (mass_matrix(self) + mass_matrix(self).T)).min() > 0.0:
+        mm = mass_matrix(self)
+        if not np.linalg.eigvalsh(0.5 * (mm + mm.T)).min() > 0.0:
             raise ParameterError("the mass matrix (rigid body plus added mass) must be positive definite")
 
 
