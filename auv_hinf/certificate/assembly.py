@@ -21,8 +21,7 @@ import control as ct
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.certificate.design_point import design_point, raw_fleet
 from auv_hinf.certificate.document import read_certificate, record_from_document, save_certificate
-from auv_hinf.certificate.part import PartContext, Verdict, reasons_of
-from auv_hinf.certificate.parts.guidance import FORMATION_LAW_IDLE, FORMATION_LAW_PARTS
+from auv_hinf.certificate.part import LAW_IDLE, PartContext, Verdict, control_law, part_laws, reasons_of
 from auv_hinf.certificate.parts.theorem1 import DEFAULT_JACOBI_SAMPLES, Theorem1Result
 from auv_hinf.certificate.reason import Reason
 from auv_hinf.certificate.registry import parts
@@ -403,9 +402,10 @@ def certify(
     point = design_point(config)
     options = {"jacobi_samples": jacobi_samples, "refine_jacobi": refine_jacobi}
     verdicts: dict[str, Verdict] = {}
+    law = control_law(config.guidance is not None)
     for part in parts():
-        if config.guidance is not None and part.name in FORMATION_LAW_PARTS:
-            verdict = Verdict(part.name, True, False, note=FORMATION_LAW_IDLE)  # that law does not run
+        if law not in part_laws(part):
+            verdict = Verdict(part.name, True, False, note=LAW_IDLE[law])  # the part's law does not run
         else:
             verdict = part.evaluate(PartContext(point, dict(verdicts), options))
         verdicts[part.name] = replace(verdict, part=part.name, key=part.key)

@@ -187,6 +187,42 @@ class PartContext:
 #: applicable ``certificate`` covers it and every applicable ``condition`` holds.
 RunRole = Literal["certificate", "condition"]
 
+#: The control laws a fleet can run: the paper's fully actuated formation law, or the
+#: line-of-sight guidance cascade of a ``[guidance]`` table (:mod:`auv_hinf.guidance`).
+ControlLaw = Literal["formation", "guidance"]
+#: The laws of a part that judges whatever the fleet runs (the default of a part that does not say).
+ALL_LAWS: tuple[ControlLaw, ...] = ("formation", "guidance")
+#: The laws of a part about the fully actuated formation law only.
+FORMATION_LAW: tuple[ControlLaw, ...] = ("formation",)
+#: The note of a part whose law does not run, by the law that runs instead.
+LAW_IDLE: dict[ControlLaw, str] = {
+    "guidance": "the fully actuated formation law does not run: [guidance] steers the fleet",
+    "formation": "the guidance cascade does not run: the fully actuated formation law steers the fleet",
+}
+
+
+def control_law(guided: bool) -> ControlLaw:
+    """The law a fleet runs: ``"guidance"`` with a ``[guidance]`` table, else ``"formation"``.
+
+    Parameters
+    ----------
+    guided : bool
+        The configuration has a ``[guidance]`` table.
+    """
+    return "guidance" if guided else "formation"
+
+
+def part_laws(part: object) -> tuple[ControlLaw, ...]:
+    """The laws ``part`` judges: its ``laws``, or :data:`ALL_LAWS` for a part that does not declare them.
+
+    Parameters
+    ----------
+    part : CertificatePart
+        A registered part (a plug-in written before ``laws`` existed judges every law).
+    """
+    laws: tuple[ControlLaw, ...] = getattr(part, "laws", ALL_LAWS)
+    return laws
+
 
 @dataclass(frozen=True)
 class RunContext:
@@ -283,6 +319,10 @@ class CertificatePart(Protocol):
         The registry name (the key of the ``parts`` object of ``certify --json``).
     key : str or None
         The JSON key of the part's figures (``None``: the figures are top-level keys).
+    laws : tuple of {"formation", "guidance"}
+        The control laws the part judges (:data:`ALL_LAWS` or :data:`FORMATION_LAW`); the assembly
+        does not evaluate a part whose law the fleet does not run, and marks it with
+        :data:`LAW_IDLE`. Optional: a part without it judges every law (:func:`part_laws`).
     """
 
     @property
@@ -340,14 +380,20 @@ def reasons_of(verdicts: Sequence[Verdict]) -> tuple[Reason, ...]:
 
 
 __all__ = [
+    "ALL_LAWS",
+    "FORMATION_LAW",
+    "LAW_IDLE",
     "CertificatePart",
+    "ControlLaw",
     "PartContext",
     "Peak",
     "RunCheck",
     "RunContext",
     "RunRole",
     "Verdict",
+    "control_law",
     "figures_in",
+    "part_laws",
     "reasons_of",
     "run_covered",
 ]

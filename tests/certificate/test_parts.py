@@ -4,14 +4,24 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 import pytest
 
 from auv_hinf.certificate.assembly import Certificate, certify
-from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import (
+    ALL_LAWS,
+    FORMATION_LAW,
+    LAW_IDLE,
+    ControlLaw,
+    PartContext,
+    RunCheck,
+    RunContext,
+    Verdict,
+    part_laws,
+)
 from auv_hinf.certificate.reason import REASON_KINDS, Reason, Setting
 from auv_hinf.certificate.registry import PARTS, parts, register_part, unregister_part
 from auv_hinf.cli.main import main
@@ -26,6 +36,7 @@ class SpacingPart:
     spacing: float
     name: str = "spacing"
     key: str | None = "spacing_check"
+    laws: tuple[ControlLaw, ...] = ALL_LAWS
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         off = ctx.point.offsets
@@ -117,3 +128,22 @@ def test_a_stored_part_that_is_not_registered_still_loads(tmp_path):
     loaded = Certificate.load(path)
     assert not loaded.certified and loaded.verdict("spacing") is not None
     assert "spacing" in loaded.summary() and "not registered" in loaded.summary()
+
+
+@pytest.mark.slow
+def test_a_part_is_evaluated_only_for_the_laws_it_declares():
+    """A part that declares the formation law only is not run on a [guidance] fleet; one without ``laws`` is."""
+    formation_only = replace(SpacingPart(1e6, name="formation_spacing", key="formation_spacing"), laws=FORMATION_LAW)
+    every_law = SpacingPart(1e6)
+    assert part_laws(every_law) == ALL_LAWS and part_laws(formation_only) == FORMATION_LAW
+    register_part(formation_only)
+    register_part(every_law)
+    try:
+        guided = certify(preset_config("remus-survey-ilos"))
+    finally:
+        unregister_part(formation_only.name)
+        unregister_part(every_law.name)
+    idle = guided.verdict("formation_spacing")
+    assert idle is not None and idle.ok and not idle.applies and idle.note == LAW_IDLE["guidance"]
+    ran = guided.verdict("spacing")
+    assert ran is not None and ran.applies and not ran.ok  # 1e6 m apart: evaluated, and refused

@@ -17,7 +17,7 @@ from typing import Any, cast
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNELS, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
-from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, reason_from
 from auv_hinf.closed_loop.actuator_fit import mission_thrust, within_actuators
 from auv_hinf.closed_loop.coverage import Coverage, StartMode, cover_start
@@ -301,6 +301,8 @@ class ClosedLoopPart:
 
     name: str = PART
     key: str | None = PART
+    #: The fully actuated formation law only (with ``[guidance]`` the assembly does not evaluate it).
+    laws: tuple[ControlLaw, ...] = FORMATION_LAW
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The closed-loop summary of ``ctx.point`` (see :func:`closed_loop_summary`)."""

@@ -23,11 +23,6 @@ from auv_hinf.certificate.reason import Reason
 PART = "guidance"
 #: The JSON key of its figures.
 KEY = "guidance"
-#: The parts about the fully actuated formation law: with ``[guidance]`` that law does not run, so
-#: the assembly does not evaluate them (they do not apply, and prove nothing about the cascade).
-FORMATION_LAW_PARTS = ("theorem1", "closed_loop", "robust", "implementation")
-#: The note those parts carry then.
-FORMATION_LAW_IDLE = "the fully actuated formation law does not run: [guidance] steers the fleet"
 
 
 def guidance_figures(ctx: PartContext) -> dict[str, Any] | None:
@@ -110,4 +105,4 @@ class GuidancePart:
         return None
 
 
-__all__ = ["FORMATION_LAW_IDLE", "FORMATION_LAW_PARTS", "KEY", "PART", "GuidancePart", "guidance_figures"]
+__all__ = ["KEY", "PART", "GuidancePart", "guidance_figures"]

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
-from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.closed_loop.coverage import initial_errors
@@ -347,6 +347,8 @@ class ImplementationPart:
 
     name: str = PART
     key: str | None = PART
+    #: The fully actuated formation law only (with ``[guidance]`` the assembly does not evaluate it).
+    laws: tuple[ControlLaw, ...] = FORMATION_LAW
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The implementation summary of ``ctx.point`` on the closed-loop part's certificate."""

@@ -18,7 +18,7 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
-from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
 from auv_hinf.certificate.reason import Reason, Setting, reason_from
 from auv_hinf.closed_loop.coverage import initial_errors
@@ -330,6 +330,8 @@ class RobustPart:
 
     name: str = PART
     key: str | None = PART
+    #: The fully actuated formation law only (with ``[guidance]`` the assembly does not evaluate it).
+    laws: tuple[ControlLaw, ...] = FORMATION_LAW
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The robust summary of ``ctx.point``, reusing the closed-loop part's certificate."""

@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.design.crosscheck import CrosscheckReport, crosscheck
 from auv_hinf.design.jacobi_sigma import jacobi_sigma_bounds
@@ -157,10 +157,13 @@ class Theorem1Part:
         The registry name.
     key : str or None
         The JSON key of the figures (``None``: they are top-level keys).
+    laws : tuple of str
+        The laws it judges: the fully actuated formation law only.
     """
 
     name: str = "theorem1"
     key: str | None = None
+    laws: tuple[ControlLaw, ...] = FORMATION_LAW
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         """Lambda, sigma, the three gains, the small-gain margin and the cross-checks of ``ctx.point``.
