@@ -443,6 +443,10 @@ SMOOTHSTEP_D1_MAX = poly_sup(SMOOTHSTEP.deriv())
 SMOOTHSTEP_D2_MAX = poly_sup(SMOOTHSTEP.deriv(2))
 
 
+#: ``max |b'''|`` on [0, 1] (``b'''`` is 0 at both ends, so the course is C^3 across the joins).
+SMOOTHSTEP_D3_MAX = poly_sup(SMOOTHSTEP.deriv(3))
+
+
 #: Smoothstep derivatives and the Gauss-Legendre rule, built once (paths are evaluated at
 #: every right-hand-side call).
 _SMOOTHSTEP_D1 = SMOOTHSTEP.deriv()
@@ -493,7 +497,9 @@ class LawnmowerReference(_Base):
     Bounds, with ``chi'max = s/R`` and ``chi''max = (pi/2) max|b''| / T90^2``:
     speed ``s`` (exact); ``|q''| = s |chi'| <= s^2/R`` (exact); ``|q'''| = s sqrt(chi''^2 +
     chi'^4) <= s sqrt(chi''max^2 + chi'max^4)``; ``chi'`` in ``[-s/R, s/R]`` (exact);
-    ``|chi''| <= chi''max`` (exact).
+    ``|chi''| <= chi''max`` (exact); ``q'''' = s ((chi''' - chi'^3) n - 3 chi' chi'' t`` (``t, n``
+    the unit tangent and normal), so ``|q''''| <= s (chi'''max + 3 chi'max chi''max + chi'max^3)``
+    with ``chi'''max = (pi/2) max|b'''| / T90^3``.
     """
 
     speed: float
@@ -603,6 +609,7 @@ class LawnmowerReference(_Base):
         s = self.speed
         w1 = s / self.turn_radius
         w2 = 0.5 * np.pi * SMOOTHSTEP_D2_MAX / self.t90**2
+        w3 = 0.5 * np.pi * SMOOTHSTEP_D3_MAX / self.t90**3
         return MissionBounds.widened(
             speed_min=s,
             speed_max=s,
@@ -611,6 +618,7 @@ class LawnmowerReference(_Base):
             turn_rate_min=-w1,
             turn_rate_max=w1,
             turn_accel_max=float(w2),
+            snap_max=float(s * (w3 + 3.0 * w1 * w2 + w1**3)),
         )
 
 
@@ -643,6 +651,7 @@ __all__ = [
     "SMOOTHSTEP",
     "SMOOTHSTEP_D1_MAX",
     "SMOOTHSTEP_D2_MAX",
+    "SMOOTHSTEP_D3_MAX",
     "CircleReference",
     "Derivatives",
     "LawnmowerReference",

@@ -25,6 +25,7 @@ from auv_hinf.mission.paths import (
     SMOOTHSTEP,
     SMOOTHSTEP_D1_MAX,
     SMOOTHSTEP_D2_MAX,
+    SMOOTHSTEP_D3_MAX,
     CircleReference,
     LawnmowerReference,
     LineReference,
@@ -160,6 +161,20 @@ def test_bounds_hold_on_random_times(name: str, rng: np.random.Generator) -> Non
     assert s["accel"].max() <= b.accel_max and s["jerk"].max() <= b.jerk_max
     assert b.turn_rate_min <= s["rate"].min() and s["rate"].max() <= b.turn_rate_max
     assert s["racc"].max() <= b.turn_accel_max
+    if np.isfinite(b.snap_max):
+        assert _norm(ref.snap(t)).max() <= b.snap_max
+
+
+def test_lawnmower_snap_bound_is_finite_and_close_to_the_turns_peak() -> None:
+    # the bound sums the normal and tangential parts' peaks, which sit at different times
+    lm = MISSIONS["lawnmower"]
+    assert isinstance(lm, LawnmowerReference)
+    b = lm.bounds()
+    t1 = lm.leg_length / lm.speed
+    t = np.linspace(t1, t1 + lm.t90, 200_001)
+    peak = float(_norm(lm.snap(t)).max())
+    assert np.isfinite(b.snap_max) and peak <= b.snap_max <= 2.0 * peak
+    assert 0 <= SMOOTHSTEP_D3_MAX - float(np.abs(SMOOTHSTEP.deriv(3)(np.linspace(0, 1, 100_001))).max()) < 1e-6
 
 
 def _maximise(f, lo: float, hi: float, n: int = 20_001) -> float:
