@@ -497,7 +497,7 @@ class LawnmowerReference(_Base):
     Bounds, with ``chi'max = s/R`` and ``chi''max = (pi/2) max|b''| / T90^2``:
     speed ``s`` (exact); ``|q''| = s |chi'| <= s^2/R`` (exact); ``|q'''| = s sqrt(chi''^2 +
     chi'^4) <= s sqrt(chi''max^2 + chi'max^4)``; ``chi'`` in ``[-s/R, s/R]`` (exact);
-    ``|chi''| <= chi''max`` (exact); ``q'''' = s ((chi''' - chi'^3) n - 3 chi' chi'' t`` (``t, n``
+    ``|chi''| <= chi''max`` (exact); ``q'''' = s ((chi''' - chi'^3) n - 3 chi' chi'' t)`` (``t, n``
     the unit tangent and normal), so ``|q''''| <= s (chi'''max + 3 chi'max chi''max + chi'max^3)``
     with ``chi'''max = (pi/2) max|b'''| / T90^3``.
     """
