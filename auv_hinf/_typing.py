@@ -28,8 +28,9 @@ RiccatiSolver = Literal["control", "scipy"]
 FormationFrame = Literal["inertial", "path"]
 FORMATION_FRAMES: tuple[FormationFrame, ...] = get_args(FormationFrame)
 
-#: Robust gain synthesis: the bandwidth family or LMI synthesis of the least-force gains.
-SynthesisKind = Literal["bandwidth", "lmi"]
+#: Robust gain synthesis: the bandwidth family, LMI synthesis of the least-force gains, or a search
+#: over the composed certificate of the deployed (sampled, delayed, noisy) loop.
+SynthesisKind = Literal["bandwidth", "lmi", "deployed"]
 
 
 __all__ = [

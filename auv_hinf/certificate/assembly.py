@@ -24,7 +24,7 @@ from auv_hinf.certificate.document import read_certificate, record_from_document
 from auv_hinf.certificate.part import LAW_IDLE, PartContext, Verdict, control_law, part_laws, reasons_of
 from auv_hinf.certificate.parts.theorem1 import DEFAULT_JACOBI_SAMPLES, Theorem1Result
 from auv_hinf.certificate.reason import Reason
-from auv_hinf.certificate.registry import parts
+from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, DesignError
@@ -404,14 +404,49 @@ def certify(
     verdicts: dict[str, Verdict] = {}
     law = control_law(config.guidance is not None)
     for part in parts():
+        by = superseded_by(part.name, verdicts)
         if law not in part_laws(part):
             verdict = Verdict(part.name, True, False, note=LAW_IDLE[law])  # the part's law does not run
+        elif by is not None:
+            verdict = Verdict(part.name, True, False, note=f"superseded: the {by} certificate covers the deployed loop")
         else:
             verdict = part.evaluate(PartContext(point, dict(verdicts), options))
         verdicts[part.name] = replace(verdict, part=part.name, key=part.key)
+        verdicts = waived(verdicts)  # before the later parts read the verdicts
     binding = next((v.binding for v in reversed(list(verdicts.values())) if v.binding is not None), None)
     design = {**point.summary(), "binding": binding}
     return Certificate(config, tuple(verdicts.values()), point.gains, point.source, design)
 
 
-__all__ = ["Certificate", "certificate_from_document", "certify", "load_certificate"]
+def waived(verdicts: Mapping[str, Verdict]) -> dict[str, Verdict]:
+    """The verdicts, with a failing superseding part waived when the parts it would supersede all hold.
+
+    Two routes certify a deployed loop: the superseding part, or the parts it supersedes
+    together. When the first fails and the second holds (every one of those parts holds, and one
+    of them applies), the fleet is certified by the second, and the first is marked as not
+    needed (it does not apply; its figures and the reasons it would give are kept in its figures).
+
+    Parameters
+    ----------
+    verdicts : mapping of str to Verdict
+        Every part's verdict, by name.
+    """
+    out = dict(verdicts)
+    for name, v in verdicts.items():
+        names = part_supersedes(name)
+        if not names or not all(a in verdicts for a in names):
+            continue  # not a superseding part, or the other route is not evaluated yet
+        alternatives = [verdicts[a] for a in names]
+        if v.applies and not v.ok and all(a.ok for a in alternatives) and any(a.applies for a in alternatives):
+            note = f"not needed: {', '.join(a.part for a in alternatives if a.applies)} certify the deployed loop"
+            out[name] = replace(v, ok=True, applies=False, reasons=(), note=note)
+    return out
+
+
+__all__ = [
+    "Certificate",
+    "certificate_from_document",
+    "certify",
+    "load_certificate",
+    "waived",
+]

@@ -23,7 +23,10 @@ from typing import Any, Literal
 import numpy as np
 
 from auv_hinf._typing import GAIN_METHODS, FloatArray
+from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.reason import Reason
+from auv_hinf.composed.synthesis import OBJECTIVE as DEPLOYED_OBJECTIVE
+from auv_hinf.composed.synthesis import DeployedDesign, synthesise_deployed
 from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION
 from auv_hinf.config.settings import FormationConfig, SimulationConfig
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
@@ -42,8 +45,11 @@ from auv_hinf.robust.box import ParameterBox
 from auv_hinf.robust.synthesis import OBJECTIVE as SYNTHESIS_OBJECTIVE
 from auv_hinf.robust.synthesis import synthesise_robust
 
+#: The gains a deployed problem is built with before the search replaces them (any valid gains).
+PLACEHOLDER_GAINS = Gains(1.0, 1.0, (1.0, 1.0))
+
 #: Where the gains that run come from.
-GainSource = Literal["theorem1", "robust"]
+GainSource = Literal["theorem1", "robust", "deployed"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +74,9 @@ class DesignPoint:
     source : {"theorem1", "robust"}
         Where ``gains`` come from.
     robust_design : RobustDesign or None
-        The robust design, when ``[design] robust = true``.
+        The robust design, when ``[design] robust = true`` with the bandwidth or LMI synthesis.
+    deployed_design : DeployedDesign or None
+        The search over the deployed loop's composed certificate, with ``synthesis = "deployed"``.
     reasons : tuple of Reason
         Why there are no gains (empty when there are): the Theorem 1 design's (part ``theorem1``)
         or the robust design's (part ``robust``).
@@ -97,6 +105,7 @@ class DesignPoint:
     tube: ReferenceTube
     offsets: FloatArray
     fit: ReferenceFit
+    deployed_design: DeployedDesign | None = None
 
     def require_gains(self) -> Gains:
         """The gains, or a :class:`~auv_hinf.exceptions.DesignError` saying why there are none."""
@@ -126,6 +135,9 @@ class DesignPoint:
             method = f"theorem1-{cfg.method}"
             objective = "Theorem 1: the H-infinity bound gamma of the velocity loop (s)"
             value: float | None = self.gamma
+        elif self.source == "deployed":
+            method, objective = "deployed", DEPLOYED_OBJECTIVE
+            value = None if self.deployed_design is None else self.deployed_design.value
         elif cfg.synthesis == "lmi":
             method, objective = "lmi", SYNTHESIS_OBJECTIVE
             value = None if self.robust_design is None else self.robust_design.bandwidth
@@ -140,7 +152,13 @@ class DesignPoint:
             + "k_psi (1/s^2, 1/s), the same for every vehicle",
             "objective": objective,
             "value": value,
-            "reason": None if self.robust_design is None else self.robust_design.reason,
+            "reason": (
+                self.deployed_design.binding
+                if self.deployed_design is not None
+                else None
+                if self.robust_design is None
+                else self.robust_design.reason
+            ),
             "gains": None if self.gains is None else self.gains.to_dict(),
         }
 
@@ -246,14 +264,14 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
 
 def _design_key(cfg: FormationConfig) -> FormationConfig:
     """``cfg`` without what the design does not depend on (name, start, plant, current of the run,
-    horizon, the implementation: the gains are designed for the continuous law and the
-    implementation certificate says whether they survive the declared one, and the required
-    separation, which only the separation part reads)."""
+    horizon, the implementation unless the gains are designed for it (``synthesis = "deployed"``;
+    otherwise they are designed for the continuous law and the certificates say whether they
+    survive the declared one), and the required separation, which only the separation part reads)."""
     return replace(
         cfg,
         name="design",
         simulation=SimulationConfig(),
-        implementation=Implementation(),
+        implementation=cfg.implementation if cfg.synthesis == "deployed" else Implementation(),
         min_separation=DEFAULT_MIN_SEPARATION,
     )
 
@@ -277,8 +295,14 @@ def _design(cfg: FormationConfig) -> DesignPoint:
     tube = path_frame_tube(mission, offsets) if cfg.frame == "path" else mission_tube(mission)
     gains: Gains | None = None
     robust: RobustDesign | None = None
-    source: GainSource = "robust" if cfg.robust else "theorem1"
-    if cfg.robust:
+    deployed: DeployedDesign | None = None
+    source: GainSource = ("deployed" if cfg.synthesis == "deployed" else "robust") if cfg.robust else "theorem1"
+    if cfg.robust and cfg.synthesis == "deployed":
+        limits = cfg.force_limits
+        problem = deployed_problem(cfg, mission, tube, offsets, PLACEHOLDER_GAINS)
+        deployed = synthesise_deployed(problem, None if limits is None else limits.admits)
+        gains = deployed.gains
+    elif cfg.robust:
         designer = synthesise_robust if cfg.synthesis == "lmi" else design_robust
         try:
             robust = designer(
@@ -317,6 +341,7 @@ def _design(cfg: FormationConfig) -> DesignPoint:
         tube=tube,
         offsets=offsets,
         fit=reference_fit(mission, offsets, cfg.frame, cfg.envelope),
+        deployed_design=deployed,
     )
 
 

@@ -3,15 +3,21 @@
 :data:`PARTS` lists the toolbox's parts; a part may read the verdicts of the parts before it
 (the robust part reuses the closed-loop certificate, the actuator part holds every earlier
 part's force bounds against the limits). Adding a part to the toolbox is one new module and
-one line here. :func:`register_part` adds a part at run time (a plug-in, or a test), and
+one line here. A part may *supersede* others (``supersedes``: the parts that certify idealisations
+of the loop it certifies as it runs): when it covers, they are not evaluated
+(:func:`superseded_by`). :func:`register_part` adds a part at run time (a plug-in, or a test), and
 :func:`unregister_part` removes it again.
 """
 
 from __future__ import annotations
 
-from auv_hinf.certificate.part import CertificatePart
+from collections.abc import Mapping
+from typing import Any
+
+from auv_hinf.certificate.part import CertificatePart, Verdict
 from auv_hinf.certificate.parts.actuators import ActuatorPart
 from auv_hinf.certificate.parts.closed_loop import ClosedLoopPart
+from auv_hinf.certificate.parts.composed import ComposedPart
 from auv_hinf.certificate.parts.guidance import GuidancePart
 from auv_hinf.certificate.parts.implementation import ImplementationPart
 from auv_hinf.certificate.parts.robust import RobustPart
@@ -22,6 +28,7 @@ from auv_hinf.exceptions import ParameterError
 #: The toolbox's parts, in evaluation order.
 PARTS: tuple[CertificatePart, ...] = (
     Theorem1Part(),
+    ComposedPart(),
     ClosedLoopPart(),
     RobustPart(),
     ActuatorPart(),
@@ -98,4 +105,36 @@ def unregister_part(name: str) -> None:
     _registered.remove(part)
 
 
-__all__ = ["PARTS", "part_named", "parts", "register_part", "unregister_part"]
+def part_supersedes(name: str) -> tuple[str, ...]:
+    """The parts that the part called ``name`` supersedes when it covers (its ``supersedes``; none by default).
+
+    Parameters
+    ----------
+    name : str
+        A registered part's name.
+    """
+    part = part_named(name)
+    return tuple(getattr(part, "supersedes", ())) if part is not None else ()
+
+
+def superseded_by(name: str, earlier: Mapping[str, Any]) -> str | None:
+    """The earlier part whose covering verdict (or run check) supersedes the part called ``name``, if any.
+
+    A part that certifies a loop *as it runs* (the composed certificate) makes the parts that
+    certify idealisations of it redundant when it covers: they are then not evaluated.
+
+    Parameters
+    ----------
+    name : str
+        The part about to be evaluated.
+    earlier : mapping of str to Verdict or RunCheck
+        The verdicts (or run checks) so far, by part name.
+    """
+    for other, v in earlier.items():
+        holds = v.ok if isinstance(v, Verdict) else v.covers
+        if v.applies and holds and name in part_supersedes(other):
+            return other
+    return None
+
+
+__all__ = ["PARTS", "part_named", "part_supersedes", "parts", "register_part", "superseded_by", "unregister_part"]

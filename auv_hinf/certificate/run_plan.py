@@ -23,7 +23,7 @@ from auv_hinf.certificate.design_point import DesignPoint, design_point, initial
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
 from auv_hinf.certificate.parts.robust import RobustRunCheck
-from auv_hinf.certificate.registry import parts
+from auv_hinf.certificate.registry import parts, superseded_by
 from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
@@ -149,6 +149,8 @@ def plan_run(
     span = float(horizon if horizon is not None else sim.horizon)
     checks: dict[str, RunCheck] = {}
     for part in parts():
+        if superseded_by(part.name, checks) is not None:
+            continue  # a covering certificate of the loop as it runs makes this part's check redundant
         check = part.check_run(RunContext(point, initial, mode, span, dict(checks)))
         if check is not None:
             checks[part.name] = check
@@ -237,14 +239,17 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
     The one place :func:`run_report` reads them from: today the nominal coverage's bounds, never
     below :data:`~auv_hinf.numerics.integrators.NUMERICAL_FLOOR` (the exact solution obeys the
     bounds; the simulated one to the integrator's accuracy). For a sampled, delayed or noisy
-    implementation they are the implementation certificate's bounds over the whole run.
-    ``None`` when no certificate bounds the run.
+    implementation they are the composed certificate's bounds when it covers the run, else the
+    implementation certificate's, over the whole run. ``None`` when no certificate bounds the run.
 
     Parameters
     ----------
     plan : RunPlan
         The planned run (its coverage and implementation summary).
     """
+    composed = next((c for c in plan.checks if c.part == "composed" and c.covers and c.bounds is not None), None)
+    if composed is not None and composed.bounds is not None:  # the deployed loop's own certificate
+        return {f"{k}_error": v for k, v in composed.bounds.items()}
     if plan.implementation is not None:
         c = plan.implementation.certificate
         if not plan.implementation.covers or c is None or c.bounds is None:

@@ -666,8 +666,10 @@ class DesignTable(_Table):
     )
     synthesis: SynthesisKind = _field(
         "bandwidth",
-        "how the robust design chooses its gains: bandwidth (one-parameter family, the baseline) or lmi "
-        "(LMI synthesis minimising the certified peak force for the box, the current and the actuators)",
+        "how the robust design chooses its gains: bandwidth (one-parameter family, the baseline), lmi "
+        "(LMI synthesis minimising the certified peak force for the box, the current and the actuators) or "
+        "deployed (the gains whose composed certificate of the sampled, delayed, noisy loop gives the "
+        "smallest position bound within the actuators; needs an [implementation] sample_time)",
     )
     heading_poles: NegativePair = _field(
         list(DEFAULT_HEADING_POLES),

@@ -12,7 +12,7 @@ The built-in presets live in :mod:`auv_hinf.config.presets`.
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, cast
@@ -254,9 +254,10 @@ class FormationConfig:
     robust : bool
         Use the robust design (:mod:`auv_hinf.robust.bandwidth`) instead of the Theorem 1 gain,
         ``k1`` and ``heading_poles``.
-    synthesis : {"bandwidth", "lmi"}
-        How the robust design chooses its gains: the bandwidth family or LMI synthesis
-        (:mod:`auv_hinf.robust.synthesis`).
+    synthesis : {"bandwidth", "lmi", "deployed"}
+        How the robust design chooses its gains: the bandwidth family, LMI synthesis
+        (:mod:`auv_hinf.robust.synthesis`) or a search over the composed certificate of the
+        deployed loop (:mod:`auv_hinf.composed.synthesis`; needs a sampled ``[implementation]``).
     integral : bool
         Integral action in the position loop (``[design] integral``; needs ``robust``): the
         robust design adds ``ki`` (:func:`~auv_hinf.law.gains.integral_gain`) to each candidate.
@@ -346,6 +347,11 @@ class FormationConfig:
             raise ConfigError(misfit)
         design = self._design_table()
         des = validate_table(DesignTable, plain_data({k: v for k, v in design.items() if v is not None}), ("design",))
+        if self.synthesis == "deployed" and not self.implementation.sampled:
+            raise ConfigError(
+                'design.synthesis: "deployed" designs the gains for the sampled law: declare [implementation] '
+                'sample_time (s), or choose synthesis = "lmi" or "bandwidth"'
+            )
         if self.integral and not self.implementation.continuous:
             raise ConfigError(
                 "design.integral: integral action runs with the continuous, exact implementation only in this "
@@ -560,6 +566,37 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
     )
 
 
+def with_settings(cfg: FormationConfig, settings: Iterable[tuple[str, str, Any]]) -> FormationConfig:
+    """``cfg`` with each ``(table, key, value)`` written into its TOML tables, validated again.
+
+    The advice of a certificate (``Reason.settings``) is in this form: a table such as
+    ``"uncertainty"`` or ``"implementation.noise"`` (dotted for a nested table), a key and the
+    value to write there. ``None`` removes the key.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    settings : iterable of (str, str, Any)
+        ``(table, key, value)`` triples.
+
+    Raises
+    ------
+    ConfigError
+        If the result is not a valid configuration.
+    """
+    doc = cfg.to_toml_dict()
+    for table, key, value in settings:
+        node = doc
+        for part in table.split("."):
+            node = node.setdefault(part, {})
+        if value is None:
+            node.pop(key, None)
+        else:
+            node[key] = value
+    return config_from_dict(doc, cfg.name)
+
+
 def load_config(path: str | Path) -> FormationConfig:
     """Read and validate a TOML configuration file (the name defaults to the file stem).
 
@@ -638,4 +675,5 @@ __all__ = [
     "config_from_dict",
     "load_config",
     "read_config",
+    "with_settings",
 ]

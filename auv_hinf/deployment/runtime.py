@@ -42,7 +42,7 @@ from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import ground_velocity
 
 #: Where the invariant set comes from, in the order :meth:`Assumptions.from_certificate` tries them.
-INVARIANT_SOURCES = ("implementation", "robust", "closed_loop")
+INVARIANT_SOURCES = ("composed", "implementation", "robust", "closed_loop")
 #: Largest gap between a vehicle's HEARTBEATs (s): ArduSub sends one a second and its own GCS
 #: failsafe waits 2.5 s for ours; three missed beats is a lost vehicle.
 HEARTBEAT_TIMEOUT = 3.0
@@ -143,9 +143,10 @@ class Assumptions:
     def from_certificate(cls, cert: Certificate) -> Assumptions:
         """The assumptions of ``cert`` (a fresh certificate or one read back from its file).
 
-        The invariant set is the implementation part's error bounds when an implementation is
-        declared, else the robust part's ultimate bounds when it applies and holds, else the
-        closed loop's region bounds.
+        The invariant set is the composed part's error bounds when it covers the declared
+        implementation, else the implementation part's when an implementation is declared, else
+        the robust part's ultimate bounds when it applies and holds, else the closed loop's region
+        bounds.
 
         Parameters
         ----------
@@ -166,7 +167,10 @@ class Assumptions:
 
         plain = ("position", "velocity", "heading", "yaw_rate")
         bounds, source = None, "implementation"
-        if not impl.continuous:
+        composed = cert.verdict("composed")
+        if not impl.continuous and composed is not None and composed.applies and composed.ok:
+            bounds, source = _bounds((figures("composed") or {}).get("error_bounds"), plain), "composed"
+        elif not impl.continuous:
             bounds = _bounds((figures("implementation") or {}).get("error_bounds"), plain)
         else:
             rob = cert.verdict("robust")

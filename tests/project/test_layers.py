@@ -30,6 +30,7 @@ LAYERS = (
     ("design",),
     ("closed_loop",),
     ("robust",),
+    ("composed",),
     ("config",),
     ("certificate",),
     ("deployment",),

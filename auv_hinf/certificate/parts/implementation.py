@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from auv_hinf.certificate.deployed import mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
@@ -21,7 +22,7 @@ from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.exceptions import AuvHinfError
-from auv_hinf.implementation.lag import ImplementationProblem, course_jerk_bound
+from auv_hinf.implementation.lag import ImplementationProblem
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.implementation.sampled_data import (
     ImplementationCertificate,
@@ -89,22 +90,14 @@ def implementation_problem(point: DesignPoint, cert: ClosedLoopCertificate) -> I
 def reference_jerks(point: DesignPoint) -> tuple[float, float]:
     """Bounds of every vehicle's ``|p_d'''|`` (m/s^3) and of ``|psi_d'''|`` (rad/s^3) along the raw mission.
 
-    ``psi_d`` is the course ``chi`` in both frames (:func:`course_jerk_bound`). In the path frame
-    ``p_i = q + R(chi) d_i`` adds ``|d_i| (|chi'''| + 3 |chi'| |chi''| + |chi'|^3)`` to the path's jerk.
+    See :func:`~auv_hinf.certificate.deployed.mission_jerks`.
 
     Parameters
     ----------
     point : DesignPoint
-        The design point (its mission bounds, frame and offsets).
+        The design point (its mission, frame and offsets).
     """
-    b = point.mission.bounds()
-    yaw_jerk = course_jerk_bound(b.speed_min, b.accel_max, b.jerk_max, b.snap_max)
-    jerk = b.jerk_max
-    if point.config.frame == "path":
-        d = float(np.hypot(point.offsets[:, 0], point.offsets[:, 1]).max())
-        rate = max(abs(b.turn_rate_min), abs(b.turn_rate_max))
-        jerk += d * (yaw_jerk + 3.0 * rate * b.turn_accel_max + rate**3)
-    return jerk, yaw_jerk
+    return mission_jerks(point.mission, point.offsets, point.config.frame)
 
 
 def start_errors(point: DesignPoint) -> ErrorBounds:

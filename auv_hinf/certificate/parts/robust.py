@@ -220,8 +220,16 @@ class RobustRunCheck:
         return {"covered": self.covered, "bounds": self.bounds, "reason": self.reason}
 
 
-def _in_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
-    """Why the simulated plant is outside the declared box, or ``None`` when it is inside."""
+def plant_outside_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
+    """Why the simulated plant is outside the declared box, or ``None`` when it is inside.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``[simulation] plant`` multipliers).
+    box : ParameterBox
+        The declared box.
+    """
     mult = dict(cfg.simulation.plant)
     for k, name in enumerate(PARAMETERS):
         m = float(mult.get(name, 1.0))
@@ -234,7 +242,7 @@ def _run_outside(point: DesignPoint) -> str | None:
     """Why the configured run's plant or current is outside what is declared (``None``: inside)."""
     cfg = point.config
     speed = float(np.hypot(*cfg.simulation.current))
-    why = _in_box(cfg, point.box)
+    why = plant_outside_box(cfg, point.box)
     if why is None and speed > point.current * (1 + BOX_RTOL):
         why = f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s"
     if why is None and cfg.disturbance.current_rate:
@@ -430,4 +438,12 @@ class RobustPart:
         )
 
 
-__all__ = ["BOX_RTOL", "RUN_TUBE_MAX_N", "RobustRunCheck", "RobustSummary", "check_robust_run", "robust_summary"]
+__all__ = [
+    "BOX_RTOL",
+    "RUN_TUBE_MAX_N",
+    "RobustRunCheck",
+    "RobustSummary",
+    "check_robust_run",
+    "plant_outside_box",
+    "robust_summary",
+]

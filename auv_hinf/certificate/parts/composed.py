@@ -1,0 +1,365 @@
+"""The composed part of a certificate: the fleet as deployed, every declared effect at once.
+
+With a sampled ``[implementation]`` (``sample_time > 0``) the law that runs is the held, delayed
+law on noisy measurements, on a plant anywhere in the ``[uncertainty]`` box, in the declared
+current. :func:`composed_summary` certifies exactly that loop for the design's gains
+(:func:`~auv_hinf.composed.certificate.certify_deployed`), from the configured start, and holds
+its force bound against the declared ``[actuators]`` (thruster set included).
+
+**One route among two.** When the composed certificate covers, it *supersedes* the parts that
+certify idealisations of the same loop (:attr:`ComposedPart.supersedes`: the continuous closed
+loop, the continuous robust certificate and the implementation certificate of the nominal
+plant): the assembly marks them as not applying, and the actuator and separation parts read the
+composed bounds. When it does not cover, those parts decide as before, and the composed verdict
+is waived if they all hold (the nominal implementation certificate may cover what the composed
+one does not); otherwise its reasons say what would certify: the largest value of each declared
+setting at which it covers (:mod:`auv_hinf.composed.advice`), each checked by a certificate.
+
+Without a sample time the part does not apply: the continuous law has its own certificates.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf.certificate.deployed import deployed_problem
+from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.implementation import start_errors
+from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
+from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.composed.advice import Advice, declared_knobs, largest_covered
+from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
+from auv_hinf.composed.loops import Errors
+from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
+from auv_hinf.robust.box import PARAMETERS
+
+#: The part's registry name and JSON key.
+PART = "composed"
+#: The parts a covering composed certificate supersedes (they certify idealisations of its loop).
+SUPERSEDES: tuple[str, ...] = ("closed_loop", "robust", "implementation")
+
+
+@dataclass(frozen=True)
+class ComposedSummary:
+    """What ``certify`` reports under ``composed``.
+
+    Attributes
+    ----------
+    applies : bool
+        A sample time is declared (the part judges the sampled law).
+    certificate : DeployedCertificate or None
+        The composed certificate (``None``: it does not apply, or could not be computed).
+    covers : bool
+        It covers, and its force bound fits the declared actuators.
+    reasons : tuple of str
+        Why not (empty when it covers).
+    advice : tuple of Advice
+        For each declared setting, a value at which it covers (searched when it does not).
+    start : Errors or None
+        The configured start's errors the certificate is computed from.
+    problem : DeployedProblem or None
+        The problem it certifies.
+    """
+
+    applies: bool
+    certificate: DeployedCertificate | None
+    covers: bool
+    reasons: tuple[str, ...]
+    advice: tuple[Advice, ...] = ()
+    start: Errors | None = None
+    problem: DeployedProblem | None = None
+
+    def covered_parts(self) -> list[str]:
+        """What the certificate covers at once: the declared effects, by name."""
+        p = self.problem
+        if p is None:
+            return []
+        impl = p.implementation
+        names = ["sample_time"]
+        names += ["delay"] if impl.delay > 0.0 else []
+        names += ["varying_delay"] if impl.varying_delay and impl.delay > 0.0 else []
+        names += [] if impl.noise.exact else ["noise"]
+        names += ["box"] if p.plant.box.declared else []
+        names += ["current"] if p.plant.current > 0.0 else []
+        names += ["current_rate"] if p.plant.current_rate > 0.0 else []
+        names += ["integral"] if p.integral else []
+        return names
+
+    def decay_rate(self) -> float | None:
+        """The nominal sampled loops' decay rate (1/s): ``-ln(rho)/h``, ``rho`` the slowest period map's radius."""
+        c, p = self.certificate, self.problem
+        if c is None or c.round is None or p is None:
+            return None
+        radius = max(g.radius for g in c.round.gains)
+        return -math.log(radius) / p.implementation.sample_time if 0.0 < radius < 1.0 else None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``composed`` object of ``certify --json`` (m, m/s, rad, rad/s, N, N m, 1/s)."""
+        c = self.certificate
+        errors = None
+        if c is not None and c.errors is not None:  # a simulated run meets them to the integrator's accuracy
+            errors = {k: max(v, NUMERICAL_FLOOR) for k, v in c.errors.to_dict().items()}
+        return {
+            "applies": self.applies,
+            "covers": self.covers if self.applies else None,
+            "parts": self.covered_parts(),
+            "governed_by": None if c is None else c.governed_by,
+            "reasons": list(self.reasons),
+            "decay_rate": self.decay_rate(),
+            "error_bounds": errors,
+            "certified_peak": None if c is None or c.force is None else c.force.to_dict(),
+            "operating_box": None if c is None or c.op is None else c.op.to_dict(),
+            "small_gain": None if c is None else c.small_gain,
+            "start": None if self.start is None else self.start.to_dict(),
+            "tightness": None,
+            "advice": [_advice_dict(a) for a in self.advice],
+        }
+
+
+def _advice_dict(a: Advice) -> dict[str, Any]:
+    cert = a.certificate
+    return {
+        "setting": a.knob,
+        "scale": a.scale,
+        "settings": [s.to_dict() for s in advice_settings(a)],
+        "position_bound": None if cert.errors is None else cert.errors.position,
+    }
+
+
+def advice_settings(a: Advice) -> tuple[Setting, ...]:
+    """The configuration values of one piece of advice (the TOML tables and keys a user edits).
+
+    Parameters
+    ----------
+    a : Advice
+        A covered value of one setting.
+    """
+    p = a.problem
+    impl, plant = p.implementation, p.plant
+    if len(a.scaled) > 1:
+        return tuple(s for k in a.scaled for s in advice_settings(replace(a, knob=k, scaled=(k,))))
+    if a.knob == "noise":
+        n = impl.noise
+        return tuple(
+            Setting("implementation.noise", k, v)
+            for k, v in (
+                ("position", n.position),
+                ("velocity", n.velocity),
+                ("heading", n.heading),
+                ("yaw_rate", n.yaw_rate),
+            )
+            if v > 0.0 or a.scale == 0.0
+        )
+    if a.knob == "delay":
+        return (Setting("implementation", "delay", impl.delay),)
+    if a.knob == "sample_time":
+        return (Setting("implementation", "sample_time", impl.sample_time),)
+    if a.knob == "current":
+        out = [Setting("disturbance", "current_speed", plant.current)]
+        if plant.current_rate > 0.0:
+            out.append(Setting("disturbance", "current_rate", plant.current_rate))
+        return tuple(out)
+    box = plant.box
+    declared = box if a.original is None else a.original.plant.box
+    return tuple(
+        Setting("uncertainty", name, [box.lo[k], box.hi[k]])
+        for k, name in enumerate(PARAMETERS)
+        if declared.lo[k] < 1.0 or declared.hi[k] > 1.0
+    )
+
+
+def composed_start(point: DesignPoint) -> Errors:
+    """The configured start's errors against the raw mission in still water (m, m/s, rad, rad/s).
+
+    The certificate adds the current's bound to the velocity error
+    (:attr:`~auv_hinf.composed.certificate.DeployedProblem.initial`).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured initial states, fleet, current bound).
+    """
+    b = start_errors(point)
+    return Errors(b.position, b.velocity, b.heading, b.yaw_rate)
+
+
+def _fitting(point: DesignPoint) -> Any:
+    """The certificate that also holds the force bound against the declared actuators."""
+    limits = point.config.force_limits
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        cert = certify_deployed(problem)
+        if not cert.covers or limits is None or cert.force is None or limits.admits(cert.force.as_tuple()):
+            return cert
+        channel, ratio = limits.binding(cert.force.as_tuple())
+        why = (
+            f"the certified force (|tau_x| <= {cert.force.force_x:.4g} N, |tau_y| <= {cert.force.force_y:.4g} N, "
+            f"|tau_psi| <= {cert.force.moment:.4g} N m) does not fit the actuators "
+            f"({channel} at {ratio:.3g} of its limit)"
+        )
+        return replace(cert, covers=False, governed_by="actuators", reasons=(why,))
+
+    return certify
+
+
+def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSummary:
+    """The composed certificate of ``point``'s deployed loop from its configured start (see the module docstring).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configuration, gains, mission, tube).
+    search : bool
+        When it does not cover, search each declared setting's covered value (a few certificates each).
+    """
+    cfg = point.config
+    if cfg.guidance is not None or not cfg.implementation.sampled:
+        return ComposedSummary(False, None, True, ())
+    if point.gains is None:
+        return ComposedSummary(True, None, False, ("the design gives no gains to certify",))
+    start = composed_start(point)
+    certify = _fitting(point)
+    try:
+        problem = deployed_problem(cfg, point.mission, point.tube, point.offsets, point.gains, start)
+        cert = certify(problem)
+        advice: tuple[Advice, ...] = ()
+        if not cert.covers and search:
+            found: list[Advice] = []
+            for knob in declared_knobs(problem):
+                if knob == "together" and found:
+                    break  # one setting alone certifies: no need to shrink them all
+                a = largest_covered(problem, knob, certify)
+                if a is not None:
+                    found.append(a)
+            advice = tuple(found)
+    except AuvHinfError as exc:
+        return ComposedSummary(True, None, False, (f"composed certificate not computed: {exc}",), start=start)
+    return ComposedSummary(True, cert, cert.covers, cert.reasons, advice, start, problem)
+
+
+@dataclass(frozen=True)
+class ComposedPart:
+    """The deployed loop: box, current, thrusters, sample time, delay and noise at once."""
+
+    name: str = PART
+    key: str | None = PART
+    #: The fully actuated formation law only (with ``[guidance]`` the assembly does not evaluate it).
+    laws: tuple[ControlLaw, ...] = FORMATION_LAW
+    #: The parts a covering composed certificate makes redundant (the assembly marks them).
+    supersedes: tuple[str, ...] = SUPERSEDES
+
+    def evaluate(self, ctx: PartContext) -> Verdict:
+        """The composed summary of ``ctx.point``: covers, or why not with what would certify."""
+        summary = composed_summary(ctx.point)
+        figures = summary.to_dict()
+        c = summary.certificate
+        if not summary.applies:
+            return Verdict(self.name, True, False, (), figures, detail=summary)
+        if summary.covers and c is not None and c.force is not None and c.errors is not None:
+            return Verdict(
+                self.name,
+                True,
+                True,
+                (),
+                figures,
+                peaks=(c.force.as_tuple(),),
+                detail=summary,
+                position_bound=float(c.errors.position),
+            )
+        settings = tuple(s for a in summary.advice for s in advice_settings(a))
+        hint = "; ".join(_advice_line(a) for a in summary.advice)
+        message = "composed certificate of the deployed loop does not cover: " + (
+            "; ".join(summary.reasons) or "not certified"
+        )
+        if hint:
+            message += f" (each alone certifies: {hint})"
+        elif summary.applies and summary.problem is not None:
+            message += " (" + _no_advice(ctx.point) + ")"
+        why = Reason(self.name, "not_covered", message, channel=None if c is None else c.governed_by, settings=settings)
+        return Verdict(self.name, False, True, (why,), figures, detail=summary)
+
+    def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
+        """The deployed loop's verdict, bounds and force, or why not and what would certify."""
+        f = figures
+        if f is None or not f.get("applies"):
+            return []
+        out = [f"  composed (as deployed)    covers: {', '.join(f['parts'])}"]
+        b, peak, op = f["error_bounds"], f["certified_peak"], f["operating_box"]
+        if b is not None:
+            out.append(
+                f"    errors (whole run)      |e| <= {b['position']:.3g} m, |e'| <= {b['velocity']:.3g} m/s, "
+                f"|e_psi| <= {b['heading']:.3g} rad, |e_r| <= {b['yaw_rate']:.3g} rad/s"
+            )
+        if peak is not None:
+            out.append(
+                f"    commanded force         |tau_x| <= {peak['force_x']:.4g} N, |tau_y| <= {peak['force_y']:.4g} N, "
+                f"|tau_psi| <= {peak['moment']:.4g} N m"
+            )
+        if op is not None:
+            out.append(
+                f"    envelope it needs       u in [{op['u_min']:.3g}, {op['u_max']:.3g}] m/s, "
+                f"|v| <= {op['v_max']:.3g} m/s, "
+                f"|r| <= {op['r_max']:.3g} rad/s"
+            )
+        if f["covers"]:
+            out.append("    composed covered        yes")
+            return out
+        out.append(f"    composed covered        NO: {'; '.join(f['reasons']) or 'not certified'}")
+        for a in f.get("advice") or []:
+            values = ", ".join(f"[{s['table']}] {s['key']} = {_value(s['value'])}" for s in a["settings"])
+            out.append(f"    certifies with          {values} (the {a['setting']} at {a['scale']:.3g} of the declared)")
+        return out
+
+    def check_run(self, ctx: RunContext) -> RunCheck | None:
+        """Does the composed certificate cover this run: plant in the box, current within the bound, start inside?"""
+        point = ctx.point
+        cfg = point.config
+        if cfg.guidance is not None or not cfg.implementation.sampled:
+            return None
+        summary = composed_summary(point, search=False)
+        c = summary.certificate
+        why = "; ".join(summary.reasons)
+        outside = plant_outside_box(cfg, point.box)
+        speed = float(np.hypot(*cfg.simulation.current))
+        if outside is None and speed > point.current * (1.0 + BOX_RTOL):
+            outside = f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s"
+        covers = summary.covers and outside is None
+        if outside is not None:
+            why = outside
+        bounds = None
+        if c is not None and c.errors is not None and summary.covers:
+            bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in c.errors.to_dict().items()}
+        notes = () if covers else (f"composed certificate: {why or 'not covered'}",)
+        return RunCheck(self.name, "certificate", True, covers, why or "covered", notes, bounds=bounds, detail=summary)
+
+
+def _no_advice(point: DesignPoint) -> str:
+    """What to try when no declared setting certifies, shrunk alone or together."""
+    if point.config.synthesis == "deployed":
+        return (
+            "no declared setting certifies when shrunk, even with no box, current, delay or noise: a faster "
+            "[implementation] sample_time or a slower mission is needed"
+        )
+    return (
+        'no declared setting certifies when shrunk: let the gains be designed for it, [design] synthesis = "deployed"'
+    )
+
+
+def _advice_line(a: Advice) -> str:
+    return ", ".join(f"[{s.table}] {s.key} = {_value(s.value)}" for s in advice_settings(a))
+
+
+def _value(v: Any) -> str:
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+__all__ = ["PART", "SUPERSEDES", "ComposedSummary", "advice_settings", "composed_start", "composed_summary"]

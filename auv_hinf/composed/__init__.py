@@ -1,0 +1,1 @@
+"""The composed certificate: one vehicle's deployed loop, every declared effect at once."""

@@ -1,0 +1,164 @@
+"""What would certify: the largest declared setting at which the composed certificate covers.
+
+When :func:`~auv_hinf.composed.certificate.certify_deployed` does not cover a problem, each
+*declared* setting that makes the problem harder (the noise bounds, the box, the current, the
+delay, the sample time) is shrunk alone, the others kept, by bisection on a scale ``s`` in
+``[0, 1]`` (:func:`largest_covered`). The value returned is one at which the certificate was
+computed and covers, so re-running with it certifies; coverage is not proven monotone in ``s``,
+so the bisection finds *a* covered value near the boundary, not necessarily the largest.
+
+A setting that is not declared (no noise, no box, no current, no delay) is never proposed, and
+neither is one whose shrinking to zero does not cover either. When no one setting certifies
+alone, the declared noise, delay, current and box are shrunk *together* by one scale.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Literal
+
+from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
+from auv_hinf.implementation.model import MeasurementNoise
+from auv_hinf.numerics.bisection import bisect
+
+#: The settings :func:`largest_covered` can shrink (``together``: the noise, the delay, the
+#: current and the box by one scale, for when no one of them alone certifies).
+Knob = Literal["noise", "box", "current", "delay", "sample_time", "together"]
+#: Their order in the advice: what a deployment changes most easily first.
+KNOBS: tuple[Knob, ...] = ("noise", "delay", "sample_time", "current", "box", "together")
+#: The settings ``together`` scales.
+TOGETHER: tuple[Knob, ...] = ("noise", "delay", "current", "box")
+#: Bisection steps per setting after the end check: the answer is within 1/16 of the declared
+#: value below the boundary the bisection found (five certificates per setting in all).
+ADVICE_STEPS = 4
+#: The sample time is shrunk down to this fraction of the declared one at most (a law 20 times
+#: faster than declared is not advice a deployment can follow).
+SAMPLE_TIME_FLOOR = 0.05
+
+
+@dataclass(frozen=True)
+class Advice:
+    """One setting's value at which the composed certificate covers.
+
+    Attributes
+    ----------
+    knob : str
+        One of :data:`KNOBS`.
+    scale : float
+        The fraction of the declared value (``0 < scale < 1``).
+    problem : DeployedProblem
+        The problem with that setting shrunk.
+    certificate : DeployedCertificate
+        Its certificate (it covers).
+    scaled : tuple of str
+        The settings it changed (``(knob,)``, or the declared ones of :data:`TOGETHER`).
+    original : DeployedProblem or None
+        The problem as declared.
+    """
+
+    knob: Knob
+    scale: float
+    problem: DeployedProblem
+    certificate: DeployedCertificate
+    scaled: tuple[Knob, ...] = ()
+    original: DeployedProblem | None = None
+
+
+def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:
+    """The settings of ``problem`` that are declared and can be shrunk, in :data:`KNOBS` order.
+
+    Parameters
+    ----------
+    problem : DeployedProblem
+        The problem.
+    """
+    impl = problem.implementation
+    present = {
+        "noise": not impl.noise.exact,
+        "box": problem.plant.box.declared,
+        "current": problem.plant.current > 0.0,
+        "delay": impl.delay > 0.0,
+        "sample_time": True,
+    }
+    present["together"] = sum(present[k] for k in TOGETHER) >= 2
+    return tuple(k for k in KNOBS if present[k])
+
+
+def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProblem:
+    """``problem`` with the setting ``knob`` at ``scale`` times its declared value.
+
+    Parameters
+    ----------
+    problem : DeployedProblem
+        The problem.
+    knob : str
+        One of :data:`KNOBS`.
+    scale : float
+        In ``[0, 1]`` (the sample time is kept above :data:`SAMPLE_TIME_FLOOR` of the declared).
+    """
+    impl, plant = problem.implementation, problem.plant
+    if knob == "together":
+        for k in TOGETHER:
+            problem = shrunk(problem, k, scale)
+        return problem
+    if knob == "noise":
+        n = impl.noise
+        noise = MeasurementNoise(n.position * scale, n.velocity * scale, n.heading * scale, n.yaw_rate * scale)
+        return replace(problem, implementation=replace(impl, noise=noise))
+    if knob == "delay":
+        return replace(problem, implementation=replace(impl, delay=impl.delay * scale))
+    if knob == "sample_time":
+        h = impl.sample_time * max(scale, SAMPLE_TIME_FLOOR)
+        return replace(problem, implementation=replace(impl, sample_time=h))
+    if knob == "current":
+        return replace(
+            problem, plant=replace(plant, current=plant.current * scale, current_rate=plant.current_rate * scale)
+        )
+    return replace(problem, plant=replace(plant, box=plant.box.scaled(scale)))
+
+
+def largest_covered(
+    problem: DeployedProblem, knob: Knob, certify: Callable[[DeployedProblem], DeployedCertificate] = certify_deployed
+) -> Advice | None:
+    """A covered value of one setting near the largest, by bisection (``None``: not even its smallest covers).
+
+    Parameters
+    ----------
+    problem : DeployedProblem
+        A problem the composed certificate does not cover.
+    knob : str
+        The setting to shrink (one of :func:`declared_knobs`).
+    certify : callable
+        The certificate (default :func:`~auv_hinf.composed.certificate.certify_deployed`).
+    """
+    floor = SAMPLE_TIME_FLOOR if knob == "sample_time" else 0.0
+    found: dict[float, DeployedCertificate] = {}
+
+    def covers(s: float) -> bool:
+        cert = certify(shrunk(problem, knob, s))
+        found[s] = cert
+        return cert.covers
+
+    if not covers(floor):
+        return None
+    lo, _ = bisect(covers, floor, 1.0, steps=ADVICE_STEPS)
+    cert = found.get(lo)
+    if cert is None or not cert.covers:  # bisect returns a point it evaluated as covered
+        return None
+    declared = declared_knobs(problem)
+    scaled = tuple(k for k in TOGETHER if k in declared) if knob == "together" else (knob,)
+    return Advice(knob, lo, shrunk(problem, knob, lo), cert, scaled, problem)
+
+
+__all__ = [
+    "ADVICE_STEPS",
+    "KNOBS",
+    "SAMPLE_TIME_FLOOR",
+    "TOGETHER",
+    "Advice",
+    "Knob",
+    "declared_knobs",
+    "largest_covered",
+    "shrunk",
+]

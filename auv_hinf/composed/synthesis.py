@@ -1,0 +1,155 @@
+"""Gains designed for the deployed loop: a search over a verified certificate.
+
+The composed certificate is not convex in the gains, so the synthesis is an outer search
+(:func:`synthesise_deployed`): every candidate of a fixed grid (:data:`POSITION_GRID`,
+:data:`HEADING_GRID`) is certified with :func:`~auv_hinf.composed.certificate.certify_deployed`
+for the declared box, current, sample time, delay and noise, and the candidate kept is the one
+with the smallest certified position bound whose certified force the actuators can deliver
+(without limits: the smallest position bound). The grid does not depend on the configuration,
+so the same inputs always give the same gains, and a setting shrunk by the advice
+(:mod:`auv_hinf.composed.advice`) is searched over the same candidates.
+
+The search is in two stages, as the loops are weakly coupled: the heading gains with the middle
+position gains first, then the position gains with the heading gains found. It states its
+objective and what binds (:class:`DeployedDesign`).
+
+The grid spans gentle gains that tolerate 0.1-0.2 s of lag (velocity gain 1.5 1/s, heading
+natural frequency 1 rad/s) to the bandwidth the sampled loops of a 10 Hz law still follow.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
+from auv_hinf.law.gains import Gains
+
+#: Candidate ``(alpha (1/s), k1 (1/s^2))`` of the position loops: critically damped
+#: (``k1 = alpha^2/4``) and overdamped (``k1 = alpha^2/8``) at three velocity gains.
+POSITION_GRID: tuple[tuple[float, float], ...] = tuple((a, a * a * f) for a in (1.5, 2.5, 4.0) for f in (0.125, 0.25))
+#: Candidate heading gains ``(k1_psi (1/s^2), k2_psi (1/s))``: natural frequency ``w`` (rad/s),
+#: damping ratio 0.75.
+HEADING_GRID: tuple[tuple[float, float], ...] = tuple((w * w, 1.5 * w) for w in (1.0, 1.5, 2.0))
+#: The position gains the heading stage is searched with (the middle of :data:`POSITION_GRID`).
+HEADING_STAGE_POSITION: tuple[float, float] = (2.5, 2.5 * 2.5 * 0.25)
+#: What the search minimises.
+OBJECTIVE = "the certified position bound (m) of the deployed loop, within the actuator limits"
+
+
+@dataclass(frozen=True)
+class DeployedDesign:
+    """The chosen gains, their certificate, and why.
+
+    Attributes
+    ----------
+    gains : Gains
+        The chosen gains: the best covering candidate, or the middle one when none covers.
+    certificate : DeployedCertificate
+        Their composed certificate.
+    value : float or None
+        The objective at the chosen gains: the certified position bound (m); ``None`` when no
+        candidate covers.
+    binding : str
+        What decides the choice, one line.
+    tried : int
+        Candidates certified.
+    covered : int
+        Candidates whose certificate covers.
+    """
+
+    gains: Gains
+    certificate: DeployedCertificate
+    value: float | None
+    binding: str
+    tried: int
+    covered: int
+
+
+def _score(cert: DeployedCertificate, fits: Callable[[tuple[float, float, float]], bool]) -> tuple[int, float]:
+    """``(0, |e|)`` for a covering certificate whose force fits, ``(1, |e|)`` for one that does not fit."""
+    assert cert.errors is not None and cert.force is not None
+    return (0 if fits(cert.force.as_tuple()) else 1, cert.errors.position)
+
+
+def synthesise_deployed(
+    problem: DeployedProblem,
+    fits: Callable[[tuple[float, float, float]], bool] | None = None,
+    *,
+    integral: float = 0.0,
+    certify: Callable[[DeployedProblem], DeployedCertificate] = certify_deployed,
+    position_grid: Sequence[tuple[float, float]] = POSITION_GRID,
+    heading_grid: Sequence[tuple[float, float]] = HEADING_GRID,
+) -> DeployedDesign:
+    """The grid's best gains for ``problem`` (see the module docstring).
+
+    Parameters
+    ----------
+    problem : DeployedProblem
+        The deployed problem; its ``gains`` are replaced by each candidate's.
+    fits : callable, optional
+        ``fits(peak)`` is true when the actuators can deliver every force of the box
+        ``|tau| <= peak`` (N, N, N m); ``None``: no limits.
+    integral : float
+        The integral gain's ratio ``ki / (alpha k1)`` (0: no integral action).
+    certify : callable
+        The certificate (default :func:`~auv_hinf.composed.certificate.certify_deployed`).
+    position_grid, heading_grid : sequence of (float, float)
+        The candidates (default the module's grids).
+    """
+    accept = fits or (lambda _peak: True)
+    tried = covered = 0
+
+    def gains(position: tuple[float, float], heading: tuple[float, float]) -> Gains:
+        a, k1 = position
+        return Gains(a, k1, heading, integral * a * k1)
+
+    def run(g: Gains) -> DeployedCertificate:
+        nonlocal tried, covered
+        cert = certify(replace(problem, gains=g))
+        tried += 1
+        covered += int(cert.covers)
+        return cert
+
+    middle = (
+        HEADING_STAGE_POSITION if HEADING_STAGE_POSITION in position_grid else position_grid[len(position_grid) // 2]
+    )
+    heading_certs = [(h, run(gains(middle, h))) for h in heading_grid]
+    good = [(h, c) for h, c in heading_certs if c.covers]
+    if not good:  # no heading candidate covers with the middle position gains: try them with each position pair
+        heading = heading_grid[0]
+    else:
+        heading = min(good, key=lambda hc: _score(hc[1], accept))[0]
+    best: tuple[Gains, DeployedCertificate] | None = None
+    for position in position_grid:
+        g = gains(position, heading)
+        cert = next((c for h, c in heading_certs if h == heading and position == middle), None) or run(g)
+        if cert.covers and (best is None or _score(cert, accept) < _score(best[1], accept)):
+            best = (g, cert)
+    if best is None:  # the middle candidate runs, and the composed certificate says what would certify it
+        g = gains(middle, heading)
+        cert = next((c for h, c in heading_certs if h == heading), None) or run(g)
+        why = (
+            f"none of the {tried} candidate gains is certified for the deployed loop: the middle candidate runs "
+            "(the composed certificate says which setting would certify it)"
+        )
+        return DeployedDesign(g, cert, None, why, tried, covered)
+    g, cert = best
+    assert cert.errors is not None and cert.force is not None
+    fit = accept(cert.force.as_tuple())
+    binding = (
+        f"the smallest certified position bound, {cert.errors.position:.3g} m, of {covered} covering candidates"
+        if fit
+        else "no covering candidate's certified force fits the actuators: the gains with the smallest position bound"
+    )
+    return DeployedDesign(g, cert, cert.errors.position, binding, tried, covered)
+
+
+__all__ = [
+    "HEADING_GRID",
+    "HEADING_STAGE_POSITION",
+    "OBJECTIVE",
+    "POSITION_GRID",
+    "DeployedDesign",
+    "synthesise_deployed",
+]

@@ -1,0 +1,675 @@
+"""Peak-to-peak gains of a sampled-data loop: a continuous plant under a held, delayed, discrete law.
+
+The loop (one axis of a vehicle's error loop, with its nominal plant):
+
+    x' = A x + B_u u(t) + B_w w(t),                        (continuous plant)
+    y_k = C_y x(t_k - d) + D_n n_k,                         (measured d seconds before the sample)
+    xi_{k+1} = A_c xi_k + B_c y_k,   u_k = C_c xi_k + D_c y_k,   u(t) = u_k on [t_k, t_k + h),
+
+with ``t_k = k h``, continuous disturbances ``w`` and discrete measurement errors ``n``. The
+*peak-to-peak gain* of an output ``z`` (a linear function of the plant state, the held command
+and the measurement it was computed from) from an input is ``sup_t int |g(t, s)| ds`` (continuous
+input) or ``sup_t sum_k |g(t, k)|`` (discrete input), ``g`` the loop's kernel: the smallest
+number ``N`` with ``sup |z| <= N sup |w|`` for *every* bounded input, started from rest
+(Dahleh & Diaz-Bobillo, *Control of Uncertain Systems: A Linear Programming Approach*, 1995). For
+a loop with several inputs the bound is ``sum_i N_i W_i``; with perturbation channels
+``|v_j(t)| <= delta_j |z_j(t)|`` closed around it, the small-gain theorem in the peak norm
+(:func:`small_gain`) bounds every output.
+
+:func:`peak_gains` computes upper bounds of these gains, rigorously:
+
+* the period ``[0, h)`` is cut into fine steps at ``h / FINE_STEPS`` and at the measurement's
+  phase; each step is the exact zero-order-hold map of python-control's ``sample_system``;
+* a continuous input over a step of length ``delta`` reaches the state as ``int_0^delta
+  e^{A s} B_w w(t - s) ds``; its kernel is bounded by its value at the step's end plus the
+  variation ``||e^{A s} - I|| <= e^{||A|| s} - 1``, which adds ``|l| ||B_w|| (e^{a delta} - 1 -
+  a delta)/a`` per step (:func:`_variation`);
+* the sum over the infinite past is exact for ``K`` periods and bounded beyond by a geometric
+  tail from a verified discrete Lyapunov contraction of the period map (:func:`_contraction`);
+* outputs are evaluated at the fine steps' ends; between them an output moves by at most the
+  step length times a bound of its derivative, which :func:`small_gain` adds (``intersample``).
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+from scipy.linalg import solve_discrete_lyapunov
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.exceptions import DesignError
+
+#: Fine steps per sample period: the intersample and within-step terms are O(h / FINE_STEPS).
+FINE_STEPS = 8
+#: Periods summed exactly before the geometric tail bound takes over (at least).
+MIN_PERIODS = 64
+#: The exact sum stops once the remaining tail bound is below this fraction of the gain so far.
+TAIL_RTOL = 1e-4
+#: Largest number of periods summed exactly (a loop this slow gets a larger tail bound).
+MAX_PERIODS = 20000
+#: Spectral radius of the period map above which the loop counts as unstable.
+UNSTABLE_RADIUS = 1.0 - 1e-9
+
+
+def _frozen(a: FloatArray) -> FloatArray:
+    arr = np.array(a, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise DesignError(f"loop matrices must be finite, got {arr!r}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class SampledLoop:
+    """A continuous plant under a held, delayed, discrete law (see the module docstring).
+
+    Attributes
+    ----------
+    a, b_u, b_w : ndarray
+        Plant ``(n, n)``, command input ``(n, nu)`` and continuous inputs ``(n, nw)``.
+    c_y : ndarray, shape (ny, n)
+        What the law measures.
+    d_n : ndarray, shape (ny, nn)
+        How the discrete inputs enter the measurement (measurement errors).
+    b_cn : ndarray, shape (nc, nn)
+        How the discrete inputs enter the law's state at its update (zero rows without a state).
+    a_c, b_c, c_c, d_c : ndarray
+        The discrete law ``(nc, nc)``, ``(nc, ny)``, ``(nu, nc)``, ``(nu, ny)`` (``nc`` may be 0).
+    sample_time, delay : float
+        ``h > 0`` and ``d >= 0`` (s).
+    outputs : ndarray, shape (no, n + nc + nu + ny)
+        Each output as a row on ``(x(t), xi(t), u(t), y_used(t))``: the plant state, the law's
+        state, the held command and the measurement it was computed from.
+    names : tuple of str
+        The outputs' names.
+    """
+
+    a: FloatArray
+    b_u: FloatArray
+    b_w: FloatArray
+    c_y: FloatArray
+    d_n: FloatArray
+    b_cn: FloatArray
+    a_c: FloatArray
+    b_c: FloatArray
+    c_c: FloatArray
+    d_c: FloatArray
+    sample_time: float
+    delay: float
+    outputs: FloatArray
+    names: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        for name in ("a", "b_u", "b_w", "c_y", "d_n", "b_cn", "a_c", "b_c", "c_c", "d_c", "outputs"):
+            object.__setattr__(self, name, _frozen(np.atleast_2d(getattr(self, name))))
+        n, nu, ny, nc = self.sizes
+        if self.outputs.shape[1] != n + nc + nu + ny:
+            raise DesignError(f"outputs must have {n + nc + nu + ny} columns, got {self.outputs.shape}")
+        if not (self.sample_time > 0.0 and math.isfinite(self.sample_time)):
+            raise DesignError(f"sample_time must be > 0 (s), got {self.sample_time!r}")
+        if not (self.delay >= 0.0 and math.isfinite(self.delay)):
+            raise DesignError(f"delay must be >= 0 (s), got {self.delay!r}")
+
+    @property
+    def sizes(self) -> tuple[int, int, int, int]:
+        """``(n, nu, ny, nc)``."""
+        nc = self.a_c.shape[0] if self.a_c.size else 0
+        return self.a.shape[0], self.b_u.shape[1], self.c_y.shape[0], nc
+
+
+@dataclass(frozen=True)
+class PeakGains:
+    """Upper bounds of a loop's peak-to-peak gains, at the fine steps' ends.
+
+    Attributes
+    ----------
+    continuous : ndarray, shape (no, nw)
+        From each continuous input to each output.
+    discrete : ndarray, shape (no, nn)
+        From each discrete measurement error to each output.
+    radius : float
+        Spectral radius of the period map (< 1: the loop is stable).
+    step : float
+        The longest fine step (s): outputs between step ends move by at most ``step`` times their
+        derivative's bound.
+    derivative : ndarray, shape (no, n + nu + nw)
+        ``|d output/dt| <= derivative @ (|x|_sup, |u|_sup, |w|_sup)``: rows ``|c_x A|, |c_x B_u|,
+        |c_x B_w|`` (the held command and the used measurement are constant between samples).
+    """
+
+    continuous: FloatArray
+    discrete: FloatArray
+    radius: float
+    step: float
+    derivative: FloatArray
+
+
+def _zoh(a: FloatArray, b: FloatArray, t: float) -> tuple[FloatArray, FloatArray]:
+    """Exact zero-order-hold maps ``(e^{A t}, int_0^t e^{A s} ds B)`` by python-control."""
+    n = a.shape[0]
+    if t <= 0.0:
+        return np.eye(n), np.zeros_like(b)
+    sys = ct.ss(a, b, np.eye(n), np.zeros((n, b.shape[1])))
+    d = ct.sample_system(sys, t, method="zoh")
+    return np.asarray(d.A), np.asarray(d.B)
+
+
+def _growth(norm_a: float, t: float) -> float:
+    """``int_0^t e^{a s} ds = (e^{a t} - 1)/a`` (``t`` at ``a = 0``): Gronwall's factor for a step of length ``t``."""
+    x = norm_a * t
+    return t * (1.0 + 0.5 * x) if x < 1e-8 else math.expm1(x) / norm_a
+
+
+def _third(norm_a: float, t: float) -> float:
+    """``int_0^t s^2 e^{a s} / 2 ds <= e^{a t} t^3 / 6``: the second-order remainder of ``e^{A s} - I - A s``.
+
+    ``||e^{A s} - I - A s|| <= ||A||^2 s^2 e^{||A|| s} / 2``, integrated over a step of length ``t``.
+    """
+    return math.exp(norm_a * t) * t**3 / 6.0
+
+
+@dataclass(frozen=True)
+class _Period:
+    """The augmented state's maps over one period, step by step."""
+
+    steps: list[tuple[FloatArray, float]]  # (map of the augmented state over the step, step length)
+    events: list[FloatArray | None]  # map applied at the step's start (measurement / update), or None
+    noise: list[FloatArray | None]  # how the measurement errors enter at that event, or None
+    size: int
+    plant: slice
+
+
+@functools.lru_cache(maxsize=32)
+def _period(loop: SampledLoop) -> _Period:
+    """Break the period at the fine steps and at the measurement's phase; build every map.
+
+    Augmented state ``Z = (x, xi, u, y_used, buffer)``: the buffer holds the measurements taken
+    but not used yet, oldest first (``m + 1`` of them, ``d = m h + f``). At the measurement's
+    phase the newest is appended; at phase 0 the oldest is used (after a measurement at the same
+    instant, when ``f = 0``) and the buffer shifts.
+    """
+    n, nu, ny, nc = loop.sizes
+    h, d = loop.sample_time, loop.delay
+    m = math.floor(d / h + 1e-12)
+    f = d - m * h
+    if f < 1e-12 * h:
+        f = 0.0
+    phase = (h - f) % h  # the measurement's phase within the period
+    slots = m + 1
+    size = n + nc + nu + ny + slots * ny
+    ix = slice(0, n)
+    ixi = slice(n, n + nc)
+    iu = slice(n + nc, n + nc + nu)
+    iy = slice(n + nc + nu, n + nc + nu + ny)
+
+    def slot(j: int) -> slice:
+        start = n + nc + nu + ny + j * ny
+        return slice(start, start + ny)
+
+    # the measurement appends: when measured at phase 0 the buffer was just shifted, else it has
+    # 'slots - 1' entries after the last use: the newest goes to the last slot in both cases
+    nd = loop.d_n.shape[1]
+
+    def measure() -> tuple[FloatArray, FloatArray]:
+        mp = np.eye(size)
+        mp[slot(slots - 1), :] = 0.0
+        mp[slot(slots - 1), ix] = loop.c_y
+        nz = np.zeros((size, nd))
+        nz[slot(slots - 1), :] = loop.d_n
+        return mp, nz
+
+    def state_input() -> FloatArray:
+        """The discrete inputs' entry into the law's state at its update."""
+        nz = np.zeros((size, nd))
+        if nc:
+            nz[ixi, :] = loop.b_cn
+        return nz
+
+    def update() -> FloatArray:
+        up = np.eye(size)
+        # use the oldest: xi+ = A_c xi + B_c y, u = C_c xi + D_c y, y_used = y
+        y0 = slot(0)
+        up[ixi, :] = 0.0
+        if nc:
+            up[ixi, ixi] = loop.a_c
+            up[ixi, y0] = loop.b_c
+        up[iu, :] = 0.0
+        if nc:
+            up[iu, ixi] = loop.c_c
+        up[iu, y0] = loop.d_c
+        up[iy, :] = 0.0
+        up[iy, y0] = np.eye(ny)
+        # shift the buffer: slot j <- slot j + 1, the last slot cleared
+        sh = np.eye(size)
+        for j in range(slots):
+            sh[slot(j), :] = 0.0
+            if j + 1 < slots:
+                sh[slot(j), slot(j + 1)] = np.eye(ny)
+        out: FloatArray = sh @ up
+        return out
+
+    cuts = sorted({round(k * h / FINE_STEPS, 15) for k in range(FINE_STEPS)} | {phase})
+    cuts = [c for c in cuts if c < h - 1e-15 * h]
+    bounds = [*cuts, h]
+    flows: dict[float, tuple[FloatArray, FloatArray]] = {}  # the fine steps mostly share one length
+    steps: list[tuple[FloatArray, float]] = []
+    events: list[FloatArray | None] = []
+    noise: list[FloatArray | None] = []
+    for start, end in itertools.pairwise(bounds):
+        ev: FloatArray | None = None
+        nz: FloatArray | None = None
+        if abs(start - phase) < 1e-12 * h and start == 0.0:  # measure, then use (f = 0)
+            mp, nm = measure()
+            ev = update() @ mp
+            nz = update() @ nm + state_input()
+        elif start == 0.0:
+            ev = update()
+            nz = state_input()
+        elif abs(start - phase) < 1e-12 * h:
+            ev, nz = measure()
+        length = round(end - start, 15)
+        if length not in flows:
+            flows[length] = _zoh(loop.a, loop.b_u, end - start)
+        ad, bd = flows[length]
+        st = np.eye(size)
+        st[ix, ix] = ad
+        st[ix, iu] = bd
+        steps.append((st, end - start))
+        events.append(ev)
+        noise.append(nz)
+    return _Period(steps, events, noise, size, ix)
+
+
+def _contraction(phi: FloatArray) -> tuple[FloatArray, float] | None:
+    """A verified ``(P, rho)``: ``Phi^T P Phi <= rho^2 P``, ``P > 0``, ``rho < 1`` (``None`` when unstable).
+
+    ``P`` solves the discrete Lyapunov equation of ``Phi / sqrt(r)``; ``rho`` is then measured by a
+    generalised eigenvalue problem and inflated by a relative 1e-9 for round-off.
+    """
+    radius = float(np.abs(np.linalg.eigvals(phi)).max())
+    if radius >= UNSTABLE_RADIUS:
+        return None
+    r = 0.5 * (1.0 + radius)
+    scaled = phi / math.sqrt(r)
+    try:
+        p = solve_discrete_lyapunov(scaled.T, np.eye(phi.shape[0]))
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    p = 0.5 * (p + p.T)
+    w, v = np.linalg.eigh(p)
+    if w.min() <= 0.0:
+        return None
+    root = v @ np.diag(np.sqrt(w)) @ v.T
+    inv_root = v @ np.diag(1.0 / np.sqrt(w)) @ v.T
+    rho = float(np.linalg.norm(root @ phi @ inv_root, 2)) * (1.0 + 1e-9)
+    if rho >= 1.0:
+        return None
+    return p, rho
+
+
+@functools.lru_cache(maxsize=32)
+def _maps(loop: SampledLoop) -> tuple[_Period, list[FloatArray], FloatArray, FloatArray]:
+    """The period's step maps (event, then flow), the period map from phase 0 and the outputs' rows."""
+    n, nu, ny, nc = loop.sizes
+    per = _period(loop)
+    maps = [st if ev is None else st @ ev for (st, _), ev in zip(per.steps, per.events, strict=True)]
+    phi = np.eye(per.size)
+    for mp in maps:
+        phi = mp @ phi
+    out = loop.outputs @ np.eye(n + nc + nu + ny, per.size)  # (x, xi, u, y_used) lead the augmented state
+    return per, maps, phi, out
+
+
+def peak_gains(loop: SampledLoop) -> PeakGains | None:
+    """Upper bounds of the peak-to-peak gains of ``loop`` (see the module docstring), or ``None`` when unstable.
+
+    By periodicity, the gain at an output phase ``q`` sums, over the injection steps ``j`` of one
+    period, the responses at phase ``q`` of every later period to an injection at step ``j``. All
+    injections are carried to the next period's start and propagated together by the period map.
+
+    Parameters
+    ----------
+    loop : SampledLoop
+        The loop.
+    """
+    n = loop.sizes[0]
+    per, maps, phi, out = _maps(loop)
+    size, steps, no = per.size, len(maps), out.shape[0]
+    nw, nn = loop.b_w.shape[1], loop.d_n.shape[1]
+    contraction = _contraction(phi)
+    if contraction is None:
+        return None
+    p, rho = contraction
+    radius = float(np.abs(np.linalg.eigvals(phi)).max())
+    # the outputs at the end of every step q, on the state at the period's start
+    rows = []
+    partial = np.eye(size)
+    for mp in maps:
+        partial = mp @ partial
+        rows.append(out @ partial)
+    stack = np.vstack(rows)  # (steps * no, size)
+    # per injection step j: the continuous inputs over the step (their kernel's value at its end,
+    # times its length), the discrete inputs at its event, the first-order term of the continuous
+    # kernel over the step, and unit plant states (for the second-order remainder)
+    k = nw + nn + nw
+    cols = k + n
+    acc = np.zeros((steps, no, steps, k))  # output step q, output, injection step j, input
+    rem = np.zeros((steps, no, steps))
+    carried = np.zeros((size, steps, cols))
+    for j in range(steps):
+        length = per.steps[j][1]
+        inj = np.zeros((size, cols))
+        inj[per.plant, :nw] = loop.b_w * length
+        entry = per.noise[j]
+        if entry is not None:
+            inj[:, nw : nw + nn] = per.steps[j][0] @ entry
+        inj[per.plant, nw + nn : k] = loop.a @ loop.b_w * (0.5 * length * length)
+        inj[per.plant, k:] = np.eye(n)
+        state = inj
+        for q in range(j, steps):  # the rest of this period
+            if q > j:
+                state = maps[q] @ state
+            resp = out @ state
+            acc[q, :, j] += np.abs(resp[:, :k])
+            rem[q, :, j] += np.linalg.norm(resp[:, k:], axis=1)
+        carried[:, j, :] = state
+    state = carried.reshape(size, steps * cols)
+    periods = 0
+    while True:
+        chunk = []
+        for _ in range(MIN_PERIODS):
+            chunk.append(state)
+            state = phi @ state
+        block = (stack @ np.hstack(chunk)).reshape(steps, no, MIN_PERIODS, steps, cols)
+        acc += np.abs(block[..., :k]).sum(axis=2)
+        rem += np.linalg.norm(block[..., k:], axis=4).sum(axis=2)
+        periods += MIN_PERIODS
+        tails = _tails(rows, state, p, rho).reshape(steps, no, steps, cols)
+        so_far = np.maximum(acc[..., : nw + nn].sum(axis=2).max(axis=0), 1e-300)
+        if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= MAX_PERIODS:
+            acc += tails[..., :k]
+            rem += np.linalg.norm(tails[..., k:], axis=3)
+            break
+    # int_0^delta |l e^{A s} B_w| ds <= delta |l B_w| + delta^2/2 |l A B_w| + |l| ||A||^2 ||B_w|| int s^2 e^{a s}/2 ds
+    norm_a = float(np.linalg.norm(loop.a, 2))
+    norm_bw = np.linalg.norm(loop.b_w, axis=0)
+    third = np.array([norm_a * norm_a * _third(norm_a, per.steps[j][1]) for j in range(steps)])
+    cont = acc[..., :nw] + acc[..., nw + nn : k] + (rem * third[None, None, :])[..., None] * norm_bw
+    worst_c = cont.sum(axis=2).max(axis=0)
+    worst_d = acc[..., nw : nw + nn].sum(axis=2).max(axis=0)
+    c_x = loop.outputs[:, :n]
+    deriv = np.hstack([np.abs(c_x) @ np.abs(loop.a), np.abs(c_x) @ np.abs(loop.b_u), np.abs(c_x) @ np.abs(loop.b_w)])
+    return PeakGains(
+        continuous=worst_c,
+        discrete=worst_d,
+        radius=radius,
+        step=max(s[1] for s in per.steps),
+        derivative=deriv,
+    )
+
+
+@dataclass(frozen=True)
+class StepBounds:
+    """Bounds of the loop's responses to constant continuous inputs, by output and input.
+
+    For an input ``w`` with ``|w| <= W`` and ``|w'| <= R`` (a slowly varying input), ``z = w(0)
+    S(t) + int_0^t S(t - s) w'(s) ds`` with ``S`` the step response, so an output whose step
+    response decays to zero has ``|z| <= peak W + area R``.
+
+    Attributes
+    ----------
+    peak : ndarray, shape (no, nw)
+        ``sup_t |S(t)|``.
+    area : ndarray, shape (no, nw)
+        ``int_0^inf |S(t)| dt``; ``inf`` where the step response does not decay to zero.
+    """
+
+    peak: FloatArray
+    area: FloatArray
+
+    def bound(self, output: int, channel: int, size: float, rate: float) -> float:
+        """``peak W + area R`` (``inf`` where the output's step response does not decay).
+
+        Parameters
+        ----------
+        output, channel : int
+            The output and the continuous input.
+        size, rate : float
+            ``W`` and ``R`` of the input.
+        """
+        area = float(self.area[output, channel])
+        if not math.isfinite(area):
+            return math.inf
+        return float(self.peak[output, channel]) * size + area * rate
+
+
+def _sweep(loop: SampledLoop, start: FloatArray, unit_input: bool) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+    """Peak and area of every output along responses of the loop, and which outputs decay.
+
+    Each column of ``start`` (an augmented state) is a response from that state, with the unit
+    continuous input of its column held on when ``unit_input`` (``start`` then has one column
+    per input), none otherwise. The response is propagated exactly to the end of every fine step;
+    within a step the command and the input are constant, so ``x'' = A x'`` and ``c_x (x(t_q +
+    s) - x(t_q)) = s c_x x' + s^2/2 c_x A x' + R`` with ``|R| <= |c_x| ||A||^2 |x'| s^3 e^{a s}/6``
+    and ``x'`` known exactly at the step's start. A constant input takes the loop to an
+    equilibrium ``(I - Phi)^-1 f`` (the held command is then constant): an output *decays* when it
+    is zero there; beyond ``K`` periods a response's deviation from it is bounded through the
+    period map's contraction ``|Phi^k d|_P <= rho^k |d|_P``.
+
+    Returns ``(peak, area, decaying)``, each ``(no, columns)`` (``area`` is ``inf`` where the output
+    does not decay), or ``None`` when the loop is unstable.
+    """
+    n, nu, _, nc = loop.sizes
+    per, maps, phi, out = _maps(loop)
+    size, no, cols = per.size, out.shape[0], start.shape[1]
+    contraction = _contraction(phi)
+    if contraction is None:
+        return None
+    p, rho = contraction
+    norm_a = float(np.linalg.norm(loop.a, 2))
+    c_x = np.abs(loop.outputs[:, :n])
+    iu = slice(n + nc, n + nc + nu)
+    drive = loop.b_w if unit_input else np.zeros((n, cols))
+    forced = []  # the inputs' effect over each step, in the augmented state
+    for _, length in per.steps:
+        f = np.zeros((size, cols))
+        if unit_input:
+            f[per.plant, :] = _zoh(loop.a, loop.b_w, length)[1]
+        forced.append(f)
+    period_input = np.zeros((size, cols))
+    for mp, f in zip(maps, forced, strict=True):
+        period_input = mp @ period_input + f
+    steady = np.linalg.solve(np.eye(size) - phi, period_input)  # the equilibrium at phase 0
+    steady_out = np.abs(out @ steady)
+    decaying = steady_out <= 1e-12 * np.maximum(np.abs(out).sum(axis=1, keepdims=True), 1e-300)
+    # the tail: every output at every step end and the plant state and the command, on a deviation
+    # from the equilibrium, in the contraction's norm (|l d| <= |l|_{P^-1} |d|_P)
+    w_p, v_p = np.linalg.eigh(p)
+    inv = v_p @ np.diag(1.0 / w_p) @ v_p.T
+    rows = []
+    partial = np.eye(size)
+    for mp in maps:
+        partial = mp @ partial
+        rows.append(out @ partial)
+    row_norm = np.max(np.stack([np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", r, inv, r), 0.0)) for r in rows]), axis=0)
+    plant_norm = float(np.sqrt(max(float(np.max(np.linalg.eigvalsh(inv[per.plant, per.plant]))), 0.0)))
+    u_norm = float(np.sqrt(max(float(np.max(np.linalg.eigvalsh(inv[iu, iu]))), 0.0))) if nu else 0.0
+    # within a step a deviation (homogeneous: the input is balanced at the equilibrium) moves by at
+    # most |d'| (e^{a s} - 1)/a with |d'| <= ||A|| |d_x| + ||B_u|| |d_u|
+    move_tail = np.linalg.norm(c_x, axis=1) * (
+        (norm_a * plant_norm + float(np.linalg.norm(loop.b_u, 2)) * u_norm)
+        * _growth(norm_a, max(st[1] for st in per.steps))
+    )
+    # within the period the augmented state is affine in the state at its start: before step q's
+    # flow it is E_q S + e_q (E_q the events and flows so far, e_q the inputs' effect so far)
+    lead, offset = [], []
+    partial, acc = np.eye(size), np.zeros((size, cols))
+    for ev, (flow, _), f in zip(per.events, per.steps, forced, strict=True):
+        if ev is not None:
+            partial, acc = ev @ partial, ev @ acc
+        lead.append(partial)
+        offset.append(acc)
+        partial, acc = flow @ partial, flow @ acc + f
+    lead_all = np.stack(lead)  # (steps, size, size)
+    offset_all = np.stack(offset)  # (steps, size, cols)
+    lengths = np.array([st[1] for st in per.steps])[:, None, None, None]  # (steps, 1, 1, 1)
+    c_full = loop.outputs[:, :n]
+    cx_norm = np.linalg.norm(c_x, axis=1)
+    third = (norm_a**2 * np.exp(norm_a * lengths)) / 6.0
+    peak = np.zeros((no, cols))
+    area = np.zeros((no, cols))
+    state = np.array(start, dtype=float)
+    periods = 0
+    while True:
+        batch = []
+        for _ in range(MIN_PERIODS):
+            batch.append(state)
+            state = phi @ state + period_input
+        starts = np.stack(batch, axis=1)  # (size, K, cols)
+        begun = np.einsum("qij,jkc->qikc", lead_all, starts) + offset_all[:, :, None, :]  # (steps, size, K, cols)
+        bx = begun[:, per.plant]
+        xdot = np.einsum("ij,qjkc->qikc", loop.a, bx) + drive[None, :, None, :]
+        if nu:
+            xdot = xdot + np.einsum("ij,qjkc->qikc", loop.b_u, begun[:, iu])
+        z0 = np.abs(np.einsum("oi,qikc->qokc", out, begun))
+        d1 = np.abs(np.einsum("oi,qikc->qokc", c_full, xdot))
+        d2 = np.abs(np.einsum("oi,qikc->qokc", c_full @ loop.a, xdot))
+        r3 = cx_norm[None, :, None, None] * np.linalg.norm(xdot, axis=1)[:, None, :, :] * third
+        top = z0 + lengths * d1 + 0.5 * lengths**2 * d2 + r3 * lengths**3
+        peak = np.maximum(peak, top.max(axis=(0, 2)))
+        area += (lengths * z0 + 0.5 * lengths**2 * d1 + lengths**3 / 6.0 * d2 + r3 * lengths**4 / 4.0).sum(axis=(0, 2))
+        periods += MIN_PERIODS
+        dev = state - steady
+        dev_p = np.sqrt(np.maximum(np.einsum("ji,jk,ki->i", dev, p, dev), 0.0))  # |d|_P per column
+        env = (row_norm + move_tail)[:, None] * dev_p[None, :]  # a tail deviation's sup, times rho^k
+        small = np.where(decaying, env <= TAIL_RTOL * np.maximum(peak, 1e-300), True)
+        if np.all(small) or periods >= MAX_PERIODS:
+            peak = np.maximum(peak, steady_out + env)
+            area = np.where(decaying, area + env * loop.sample_time / (1.0 - rho), np.inf)
+            return peak, area, decaying
+
+
+def step_bounds(loop: SampledLoop) -> StepBounds | None:
+    """Rigorous :class:`StepBounds` of ``loop``'s continuous inputs (``None`` when unstable).
+
+    The response to each unit constant input from rest (:func:`_sweep`).
+
+    Parameters
+    ----------
+    loop : SampledLoop
+        The loop.
+    """
+    size = _period(loop).size
+    swept = _sweep(loop, np.zeros((size, loop.b_w.shape[1])), True)
+    if swept is None:
+        return None
+    return StepBounds(peak=swept[0], area=swept[1])
+
+
+def free_peaks(loop: SampledLoop) -> FloatArray | None:
+    """Bounds of ``sup_t |z(t)|`` per unit initial plant state, shape ``(no, n)`` (``None`` when unstable).
+
+    The loop starts at rest but for its plant state ``x(0) = e_i``; measurements before ``t = 0``
+    are of ``x(0)`` (the convention of :mod:`auv_hinf.implementation.model`), so the buffer starts
+    full of ``C_y e_i`` (:func:`_sweep`).
+
+    Parameters
+    ----------
+    loop : SampledLoop
+        The loop.
+    """
+    n, nu, ny, nc = loop.sizes
+    size = _period(loop).size
+    state = np.zeros((size, n))
+    state[:n, :] = np.eye(n)
+    slots = (size - (n + nc + nu + ny)) // ny
+    for j in range(slots):
+        begin = n + nc + nu + ny + j * ny
+        state[begin : begin + ny, :] = loop.c_y
+    swept = _sweep(loop, state, False)
+    return None if swept is None else swept[0]
+
+
+def _tails(offsets: Sequence[FloatArray], state: FloatArray, p: FloatArray, rho: float) -> FloatArray:
+    """Bounds of ``sum_{k >= 0} |O_o Phi^k v|`` for every offset's output map ``O_o`` and column ``v`` of ``state``.
+
+    With ``|Phi^k v|_P <= rho^k |v|_P`` and ``|l v| <= |l|_{P^-1} |v|_P``: ``|l|_{P^-1} |v|_P / (1 - rho)``.
+    """
+    w, v = np.linalg.eigh(p)
+    inv = v @ np.diag(1.0 / w) @ v.T
+    cols = np.sqrt(np.maximum(np.einsum("ji,jk,ki->i", state, p, state), 0.0))
+    out = []
+    for o in offsets:
+        rows = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", o, inv, o), 0.0))
+        out.append(np.outer(rows, cols) / (1.0 - rho))
+    return np.stack(out)
+
+
+def small_gain(direct: FloatArray, loop_gain: FloatArray) -> FloatArray | None:
+    """The least solution of ``z <= direct + loop_gain z`` (componentwise, nonnegative), or ``None``.
+
+    With ``z`` the peaks, ``direct`` what the bounded inputs cause and ``loop_gain`` the
+    perturbation channels (``|v_j| <= sum_i D_ji |z_i|``) closed through the loops' gains, the
+    peaks satisfy ``z <= (I - loop_gain)^-1 direct`` when the nonnegative ``loop_gain`` has
+    spectral radius below 1: the Neumann series converges and every term is nonnegative (the
+    small-gain theorem in the peak norm). ``None`` when the radius is not below 1.
+
+    Parameters
+    ----------
+    direct : ndarray, shape (k,)
+        Nonnegative.
+    loop_gain : ndarray, shape (k, k)
+        Nonnegative.
+    """
+    k = direct.shape[0]
+    if loop_gain.shape != (k, k):
+        raise DesignError(f"small_gain: a ({k}, {k}) gain matrix is needed, got {loop_gain.shape}")
+    if np.any(loop_gain < 0) or np.any(direct < 0):
+        raise DesignError("small_gain: the gains and the direct terms must be nonnegative")
+    radius = float(np.abs(np.linalg.eigvals(loop_gain)).max()) if k else 0.0
+    if radius >= SMALL_GAIN_LIMIT:
+        return None
+    system = np.eye(k) - loop_gain
+    if np.linalg.cond(system) * np.finfo(float).eps > SOLVE_RTOL:
+        return None
+    sol = np.linalg.solve(system, direct)
+    if not np.all(np.isfinite(sol)):
+        return None
+    # the exact solution is nonnegative and the computed one is within cond * eps of it (relative):
+    # inflating by SOLVE_RTOL covers it; the inequality's right-hand side is checked at the result
+    sol = np.maximum(sol, 0.0) * (1.0 + SOLVE_RTOL)
+    if np.any(direct + loop_gain @ sol > sol * (1.0 + 1e-12)):
+        return None
+    out: FloatArray = sol
+    return out
+
+
+#: Relative inflation of the small-gain solution for the linear solve's round-off (the system's
+#: condition number times machine epsilon must stay below it).
+SOLVE_RTOL = 1e-9
+
+
+#: The small-gain matrix's spectral radius must stay below this (1 less a margin far above round-off).
+SMALL_GAIN_LIMIT = 1.0 - 1e-6
+
+
+__all__ = [
+    "FINE_STEPS",
+    "MAX_PERIODS",
+    "MIN_PERIODS",
+    "SMALL_GAIN_LIMIT",
+    "TAIL_RTOL",
+    "PeakGains",
+    "SampledLoop",
+    "StepBounds",
+    "free_peaks",
+    "peak_gains",
+    "small_gain",
+    "step_bounds",
+]

@@ -1,0 +1,146 @@
+"""The composed certificate of the deployed loop: sound against simulation, wired into certify, advice that re-runs.
+
+A BlueROV2 Heavy line at 0.4 m/s, run at 10 Hz with a 0.1 s delay and small DVL-like noise:
+the composed certificate covers it with gains designed for it, supersedes the continuous and
+nominal implementation certificates, and the toolbox's own sampled simulation (noise at its
+bound, delay at its bound) stays inside its bounds. With a box and a current it does not cover,
+and its advice, written back into the configuration, certifies.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from auv_hinf.certificate.assembly import certify, waived
+from auv_hinf.certificate.part import Verdict
+from auv_hinf.certificate.run_plan import plan_run, run_report
+from auv_hinf.composed.certificate import DeployedProblem
+from auv_hinf.composed.loops import Errors
+from auv_hinf.config.settings import config_from_dict, with_settings
+from auv_hinf.exceptions import DesignError
+from auv_hinf.implementation.model import Implementation
+from auv_hinf.simulation.engine import simulate
+
+#: The deployed fleet: four BlueROV2 Heavy on a line, 10 Hz, 0.1 s delay, small noise.
+DEPLOYED = {
+    "vehicle": {"preset": "bluerov2-heavy"},
+    "formation": {"n": 4, "offsets": [[0.0, -6.0], [0.0, -2.0], [0.0, 2.0], [0.0, 6.0]], "min_separation": 2.0},
+    "envelope": {"u": [-0.5, 1.0], "v": [-0.5, 0.5], "r": [-0.5, 0.5]},
+    "design": {"robust": True, "synthesis": "deployed"},
+    "reference": {"kind": "line", "speed": 0.4, "heading": 0.0},
+    "simulation": {"horizon": 40.0},
+    "actuators": {"preset": "bluerov2-heavy"},
+    "implementation": {
+        "sample_time": 0.1,
+        "delay": 0.1,
+        "noise": {"position": 0.01, "velocity": 0.002, "heading": 0.002, "yaw_rate": 0.001},
+    },
+}
+
+
+@pytest.fixture(scope="module")
+def deployed():
+    cfg = config_from_dict(DEPLOYED, "deployed")
+    return cfg, certify(cfg)
+
+
+@pytest.mark.slow
+def test_the_deployed_fleet_is_covered_and_supersedes_the_idealised_certificates(deployed):
+    _, cert = deployed
+    d = cert.to_dict()
+    c = d["composed"]
+    assert cert.certified and c["covers"]
+    assert {"sample_time", "delay", "noise"} <= set(c["parts"])
+    assert set(c["error_bounds"]) == {"position", "velocity", "heading", "yaw_rate"}
+    assert c["decay_rate"] is not None and c["decay_rate"] > 0.0
+    assert d["design"]["method"] == "deployed" and d["design"]["value"] == pytest.approx(c["error_bounds"]["position"])
+    for name in ("closed_loop", "robust", "implementation"):
+        part = d["parts"][name]
+        assert not part["applies"] and part["ok"] and "superseded" in part["note"]
+    # the actuator part holds the composed force bound, and the separation part reads its position bound
+    assert d["actuators"]["certified_peak"] == pytest.approx(c["certified_peak"])
+    assert d["actuators"]["certified"]
+    assert d["formation"]["min_separation_certified"] >= 4.0 - 2.0 * c["error_bounds"]["position"] - 1e-9
+
+
+@pytest.mark.slow
+def test_a_simulated_deployed_run_stays_inside_the_composed_bounds(deployed):
+    """The toolbox's sampled loop (uniform noise at its bound, the delay at its bound) against the certificate."""
+    cfg, cert = deployed
+    bounds = cert.to_dict()["composed"]
+    plan = plan_run(cfg)
+    assert plan.covered
+    report = run_report(plan, simulate(plan.scenario))
+    measured, certified = report["measured_errors"], report["certified_errors"]
+    assert certified == pytest.approx({f"{k}_error": v for k, v in bounds["error_bounds"].items()})
+    for k, v in measured.items():
+        assert v <= certified[k], (k, v, certified[k])
+    peak = report["commanded_peak"]
+    for k in ("force_x", "force_y", "moment"):
+        assert peak[k] <= bounds["certified_peak"][k]
+    # not vacuous: the run's force is within 20 % of the certified peak (the drag at 0.4 m/s dominates it)
+    assert peak["force_x"] >= 0.8 * bounds["certified_peak"]["force_x"]
+
+
+def test_the_composed_certificate_is_about_a_sampled_law():
+    from auv_hinf.composed.loops import MissionBounds, Plant
+    from auv_hinf.law.gains import Gains
+    from auv_hinf.models.envelope import Envelope
+    from auv_hinf.models.vehicle import bluerov2_heavy
+    from auv_hinf.robust.box import ParameterBox
+
+    mdl = bluerov2_heavy()
+    with pytest.raises(DesignError, match="sample_time"):
+        DeployedProblem(
+            Plant(mdl, ParameterBox.from_ranges(mdl, ())),
+            MissionBounds((0.4, 0.4), 0.0, 0.0, 0.0, 0.0, 0.0),
+            Envelope((-0.5, 1.0), (-0.5, 0.5), (-0.5, 0.5)),
+            Implementation(delay=0.1),
+            Gains(2.0, 1.0, (1.0, 1.5)),
+            Errors(0.0, 0.0, 0.0, 0.0),
+        )
+
+
+@pytest.mark.slow
+def test_advice_written_back_into_the_configuration_certifies():
+    """With a box and a current the deployed BlueROV2 line is refused; the advice, re-run, certifies."""
+    data = {
+        **DEPLOYED,
+        "uncertainty": {"m11": [0.9, 1.1], "d11_quad": [0.8, 1.2], "d22_quad": [0.8, 1.2]},
+        "disturbance": {"current_speed": 0.1},
+    }
+    cfg = config_from_dict(data, "boxed")
+    cert = certify(cfg)
+    assert not cert.certified
+    reason = next(r for r in cert.findings if r.part == "composed")
+    assert reason.settings, reason.message
+    # every setting names a table and key that exist, and nothing that is not declared
+    tables = {s.table for s in reason.settings}
+    assert tables <= {"implementation", "implementation.noise", "disturbance", "uncertainty"}
+    again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in reason.settings]))
+    assert again.verdict("composed").ok and again.to_dict()["composed"]["covers"]
+
+
+def test_a_failing_superseding_part_is_waived_when_the_parts_it_supersedes_hold():
+    verdicts = {
+        "composed": Verdict("composed", False, True),
+        "closed_loop": Verdict("closed_loop", True, True),
+        "robust": Verdict("robust", True, False),
+        "implementation": Verdict("implementation", True, True),
+    }
+    out = waived(verdicts)
+    assert out["composed"].ok and not out["composed"].applies and "not needed" in out["composed"].note
+    verdicts["implementation"] = Verdict("implementation", False, True)
+    assert not waived(verdicts)["composed"].ok
+    del verdicts["implementation"]  # the other route not evaluated yet: nothing is waived
+    assert not waived(verdicts)["composed"].ok
+
+
+def test_settings_are_written_into_nested_tables_and_validated():
+    cfg = config_from_dict(DEPLOYED, "deployed")
+    out = with_settings(cfg, [("implementation.noise", "position", 0.5), ("disturbance", "current_speed", 0.05)])
+    assert out.implementation.noise.position == 0.5 and out.disturbance.current_speed == 0.05
+    assert np.isclose(out.implementation.delay, 0.1)
+    with pytest.raises(Exception, match="sample_time"):
+        with_settings(cfg, [("implementation", "sample_time", -1.0)])

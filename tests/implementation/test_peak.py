@@ -1,0 +1,220 @@
+"""Peak-to-peak gains of a sampled-data loop against an independent simulation and closed forms.
+
+The loop is one axis of the error dynamics, ``e' = v``, ``v' = a0 v + u + w``, under the law
+``u_k = -k1 y_e + (c0 - alpha) y_v`` on a measurement taken ``d`` before the sample and held
+for ``h``. The reference simulation here is written apart from :mod:`auv_hinf.implementation.peak`:
+an exact zero-order-hold step of the plant on a fine grid (``scipy.linalg.expm``) with a history
+buffer for the delay. Every input it tries, however chosen, must stay under the bound, and the
+input built from the kernel's signs must come close to it (the bound is nearly tight).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from auv_hinf.exceptions import DesignError
+from auv_hinf.implementation.peak import (
+    SampledLoop,
+    free_peaks,
+    peak_gains,
+    small_gain,
+    step_bounds,
+)
+
+#: Fine steps per sample period of the reference simulation (the bound's own grid is coarser).
+SUB = 40
+#: Relative slack of "stays under the bound": the reference integrates the exact flow on a grid
+#: 40 times finer per period than the outputs are checked at, so only round-off separates them.
+UNDER = 1e-9
+
+
+def axis(a0: float, c0: float, k1: float, alpha: float, h: float, d: float) -> SampledLoop:
+    """The loop of the module docstring; outputs (e, v, u, y_v)."""
+    return SampledLoop(
+        a=np.array([[0.0, 1.0], [0.0, a0]]),
+        b_u=np.array([[0.0], [1.0]]),
+        b_w=np.array([[0.0], [1.0]]),
+        c_y=np.eye(2),
+        d_n=np.eye(2),
+        b_cn=np.zeros((0, 2)),
+        a_c=np.zeros((0, 0)),
+        b_c=np.zeros((0, 2)),
+        c_c=np.zeros((1, 0)),
+        d_c=np.array([[-k1, c0 - alpha]]),
+        sample_time=h,
+        delay=d,
+        outputs=np.array([[1.0, 0, 0, 0, 0], [0, 1.0, 0, 0, 0], [0, 0, 1.0, 0, 0], [0, 0, 0, 0, 1.0]]),
+        names=("e", "v", "u", "y_v"),
+    )
+
+
+def simulate(params, w, noise, periods: int, x0=(0.0, 0.0)) -> np.ndarray:
+    """Outputs ``|e|, |v|, |u|, |y_v|`` at every fine step; ``w`` per fine step, ``noise`` (2,) per sample."""
+    a0, c0, k1, alpha, h, d = params
+    dt = h / SUB
+    a = np.array([[0.0, 1.0], [0.0, a0]])
+    m = np.zeros((4, 4))
+    m[:2, :2] = a
+    m[1, 2] = 1.0  # u
+    m[1, 3] = 1.0  # w
+    flow = expm(m * dt)
+    lag = round(d / dt)
+    assert abs(lag * dt - d) < 1e-12, "the reference needs the delay on its grid"
+    x = np.array(x0, dtype=float)
+    history = [x.copy()] * (lag + 1)
+    u, y_v = 0.0, 0.0
+    out = []
+    for k in range(periods):
+        y = history[-1 - lag] + noise[k]
+        u = -k1 * y[0] + (c0 - alpha) * y[1]
+        y_v = y[1]
+        for j in range(SUB):
+            z = flow @ np.array([x[0], x[1], u, w[k * SUB + j]])
+            x = z[:2]
+            history.append(x.copy())
+            out.append([abs(x[0]), abs(x[1]), abs(u), abs(y_v)])
+        history = history[-(lag + 2) :]
+    return np.array(out)
+
+
+#: (a0, c0, k1, alpha, h, d): a damped surge-like axis, an undamped sway-like axis, a long delay.
+CASES = [
+    (-6.37, 2.84, 2.0, 2.0, 0.1, 0.1),
+    (0.0, 0.0, 1.0, 2.0, 0.1, 0.1),
+    (-1.4, 0.0, 2.0, 2.8, 0.1, 0.25),
+]
+
+
+@pytest.mark.parametrize("params", CASES)
+def test_noise_gains_bound_every_pattern_and_the_worst_one_nearly_reaches_them(params):
+    """Bang-bang, random and kernel-sign noise stay under the discrete gains; the kernel's signs reach 0.9 of them."""
+    h = params[4]
+    gains = peak_gains(axis(*params))
+    assert gains is not None
+    periods = 300
+    zero_w = np.zeros(periods * SUB)
+    rng = np.random.default_rng(1)
+    for channel in (0, 1):
+        bound = gains.discrete[:, channel]
+        worst = np.zeros(4)
+        patterns = [
+            np.array([(-1.0) ** k for k in range(periods)]),
+            rng.choice([-1.0, 1.0], periods),
+            np.sign(np.sin(np.arange(periods) * h * 2 * math.pi / 3.0)),
+        ]
+        for pattern in patterns:
+            noise = np.zeros((periods, 2))
+            noise[:, channel] = pattern
+            worst = np.maximum(worst, simulate(params, zero_w, noise, periods).max(axis=0))
+        # the kernel's own signs: the response at the end of period K to a unit error at sample j
+        impulse = np.zeros((periods, 2))
+        impulse[0, channel] = 1.0
+        resp = simulate(params, zero_w, impulse, periods)
+        for o in range(4):
+            step_ends = resp[SUB - 1 :: SUB, o]  # |response| at each period's last fine step
+            signed = simulate(params, zero_w, _signed(impulse, channel, periods, o, params), periods)
+            worst[o] = max(worst[o], signed[:, o].max())
+            assert step_ends.max() <= bound[o] * (1 + UNDER)
+        assert np.all(worst <= bound * (1 + UNDER)), (worst, bound)
+        assert np.all(worst >= 0.9 * bound), worst / bound
+
+
+def _signed(impulse, channel, periods, output, params):
+    """Noise with the signs of the output's impulse response read backwards: the worst at the last sample."""
+    resp = simulate(params, np.zeros(periods * SUB), impulse, periods)
+    # the response at fine step q of period K to a unit error at sample j is resp at step (K - j) SUB + q (signed)
+    signed_resp = simulate_signed(params, impulse, periods)[:, output]
+    q = int(np.argmax(np.abs(signed_resp[: SUB * 40]))) % SUB  # a phase near the worst
+    end = (periods - 1) * SUB + q
+    noise = np.zeros((periods, 2))
+    for j in range(periods):
+        idx = end - j * SUB
+        if idx >= 0:
+            noise[j, channel] = np.sign(signed_resp[idx]) or 1.0
+    del resp
+    return noise
+
+
+def simulate_signed(params, noise, periods):
+    """As :func:`simulate` but the signed outputs (e, v, u, y_v)."""
+    a0, c0, k1, alpha, h, d = params
+    dt = h / SUB
+    m = np.zeros((4, 4))
+    m[:2, :2] = [[0.0, 1.0], [0.0, a0]]
+    m[1, 2] = 1.0
+    flow = expm(m * dt)
+    lag = round(d / dt)
+    x = np.zeros(2)
+    history = [x.copy()] * (lag + 1)
+    out = []
+    for k in range(periods):
+        y = history[-1 - lag] + noise[k]
+        u = -k1 * y[0] + (c0 - alpha) * y[1]
+        for _ in range(SUB):
+            x = (flow @ np.array([x[0], x[1], u, 0.0]))[:2]
+            history.append(x.copy())
+            out.append([x[0], x[1], u, y[1]])
+        history = history[-(lag + 2) :]
+    return np.array(out)
+
+
+@pytest.mark.parametrize("params", CASES)
+def test_disturbance_gains_bound_steps_and_switching_inputs(params):
+    """A step and randomly switching unit disturbances stay under the continuous gains."""
+    gains = peak_gains(axis(*params))
+    assert gains is not None
+    periods = 300
+    rng = np.random.default_rng(2)
+    switches = np.repeat(rng.choice([-1.0, 1.0], periods * SUB // 37 + 1), 37)[: periods * SUB]
+    for w in (np.ones(periods * SUB), switches):
+        peaks = simulate(params, w, np.zeros((periods, 2)), periods).max(axis=0)
+        assert np.all(peaks <= gains.continuous[:, 0] * (1 + UNDER)), (peaks, gains.continuous[:, 0])
+
+
+def test_position_gain_of_a_fast_nonoscillating_loop_is_the_dc_gain():
+    """With a short period and no delay, an overdamped loop's impulse response keeps its sign: gain 1/k1."""
+    k1 = 1.0
+    gains = peak_gains(axis(0.0, 0.0, k1, 3.0, 0.005, 0.0))
+    assert gains is not None
+    assert 1.0 / k1 <= gains.continuous[0, 0] <= 1.02 / k1
+
+
+def test_step_bounds_reach_the_equilibrium_and_the_velocity_area_is_the_offset():
+    """A unit step settles at e = 1/k1 (its peak at least that) and the velocity's area is that offset."""
+    k1 = 2.0
+    steps = step_bounds(axis(-1.4, 0.0, k1, 2.8, 0.1, 0.1))
+    assert steps is not None
+    assert steps.peak[0, 0] >= 1.0 / k1
+    assert not math.isfinite(steps.area[0, 0])  # the position does not decay to zero
+    assert 1.0 / k1 <= steps.area[1, 0] <= 1.05 / k1  # int |v| >= int v = 1/k1, equal when v keeps its sign
+
+
+def test_free_response_bounds_a_start_off_the_slot():
+    """The free response from e(0) = 1 (the measurement buffer full of it) stays under its bound."""
+    params = (-1.4, 0.0, 2.0, 2.8, 0.1, 0.1)
+    free = free_peaks(axis(*params))
+    assert free is not None
+    periods = 200
+    peaks = simulate(params, np.zeros(periods * SUB), np.zeros((periods, 2)), periods, x0=(1.0, 0.0)).max(axis=0)
+    assert peaks[0] >= 0.999 and np.all(peaks[:2] <= free[:2, 0] * (1 + UNDER))  # the first stored step is after t = 0
+
+
+def test_an_unstable_loop_has_no_gains():
+    """Too much delay for the gains: the period map is unstable, and every routine says so with None."""
+    loop = axis(0.0, 0.0, 4.0, 6.0, 0.2, 0.4)
+    assert peak_gains(loop) is None and step_bounds(loop) is None and free_peaks(loop) is None
+
+
+def test_small_gain_solves_the_least_fixed_point_and_refuses_at_radius_one():
+    m = np.array([[0.0, 0.5], [0.4, 0.0]])
+    c = np.array([1.0, 2.0])
+    s = small_gain(c, m)
+    assert s is not None and np.allclose(s, np.linalg.solve(np.eye(2) - m, c), rtol=1e-8)
+    assert np.all(c + m @ s <= s * (1 + 1e-12))
+    assert small_gain(c, np.array([[0.0, 1.0], [1.0, 0.0]])) is None
+    with pytest.raises(DesignError):
+        small_gain(c, -m)
