@@ -24,7 +24,7 @@ from auv_hinf.certificate.document import read_certificate, record_from_document
 from auv_hinf.certificate.part import LAW_IDLE, PartContext, Verdict, control_law, part_laws, reasons_of
 from auv_hinf.certificate.parts.theorem1 import DEFAULT_JACOBI_SAMPLES, Theorem1Result
 from auv_hinf.certificate.reason import Reason
-from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by
+from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by, superseded_figures
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, DesignError
@@ -408,7 +408,9 @@ def certify(
         if law not in part_laws(part):
             verdict = Verdict(part.name, True, False, note=LAW_IDLE[law])  # the part's law does not run
         elif by is not None:
-            verdict = Verdict(part.name, True, False, note=f"superseded: the {by} certificate covers the deployed loop")
+            figures = superseded_figures(by, part.name, verdicts[by].figures)
+            note = f"superseded: the {by} certificate covers the deployed loop"
+            verdict = Verdict(part.name, True, False, figures=figures, note=note)
         else:
             verdict = part.evaluate(PartContext(point, dict(verdicts), options))
         verdicts[part.name] = replace(verdict, part=part.name, key=part.key)

@@ -137,4 +137,34 @@ def superseded_by(name: str, earlier: Mapping[str, Any]) -> str | None:
     return None
 
 
-__all__ = ["PARTS", "part_named", "part_supersedes", "parts", "register_part", "superseded_by", "unregister_part"]
+def superseded_figures(by: str, name: str, figures: Any) -> Any:
+    """The figures the superseding part ``by`` reports for the part ``name`` it supersedes (``None``: none).
+
+    A superseding part may keep a superseded part's JSON object alive with what it proves in that
+    part's terms (its ``superseded_figures(name, figures)``), so readers of that object find the
+    verdict there too.
+
+    Parameters
+    ----------
+    by : str
+        The superseding part's name.
+    name : str
+        The superseded part's name.
+    figures : Any
+        The superseding part's own figures.
+    """
+    part = part_named(by)
+    make = getattr(part, "superseded_figures", None)
+    return None if make is None else make(name, figures)
+
+
+__all__ = [
+    "PARTS",
+    "part_named",
+    "part_supersedes",
+    "parts",
+    "register_part",
+    "superseded_by",
+    "superseded_figures",
+    "unregister_part",
+]

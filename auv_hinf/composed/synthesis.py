@@ -10,7 +10,8 @@ so the same inputs always give the same gains, and a setting shrunk by the advic
 (:mod:`auv_hinf.composed.advice`) is searched over the same candidates.
 
 The search is in two stages, as the loops are weakly coupled: the heading gains with the middle
-position gains first, then the position gains with the heading gains found. It states its
+position gains first (with the other position gains in turn when none covers), then the position
+gains with the heading gains found. It states its
 objective and what binds (:class:`DeployedDesign`).
 
 The grid spans gentle gains that tolerate 0.1-0.2 s of lag (velocity gain 1.5 1/s, heading
@@ -114,21 +115,28 @@ def synthesise_deployed(
     middle = (
         HEADING_STAGE_POSITION if HEADING_STAGE_POSITION in position_grid else position_grid[len(position_grid) // 2]
     )
-    heading_certs = [(h, run(gains(middle, h))) for h in heading_grid]
-    good = [(h, c) for h, c in heading_certs if c.covers]
-    if not good:  # no heading candidate covers with the middle position gains: try them with each position pair
-        heading = heading_grid[0]
-    else:
-        heading = min(good, key=lambda hc: _score(hc[1], accept))[0]
+    done: dict[tuple[tuple[float, float], tuple[float, float]], DeployedCertificate] = {}
+
+    def cert_of(position: tuple[float, float], heading: tuple[float, float]) -> DeployedCertificate:
+        if (position, heading) not in done:
+            done[(position, heading)] = run(gains(position, heading))
+        return done[(position, heading)]
+
+    # stage 1: the heading gains, with the middle position gains, then (when none covers) with the others
+    heading = heading_grid[0]
+    for position in (middle, *(p for p in position_grid if p != middle)):
+        good = [(h, c) for h in heading_grid if (c := cert_of(position, h)).covers]
+        if good:
+            heading = min(good, key=lambda hc: _score(hc[1], accept))[0]
+            break
+    # stage 2: the position gains with those heading gains
     best: tuple[Gains, DeployedCertificate] | None = None
     for position in position_grid:
-        g = gains(position, heading)
-        cert = next((c for h, c in heading_certs if h == heading and position == middle), None) or run(g)
+        cert = cert_of(position, heading)
         if cert.covers and (best is None or _score(cert, accept) < _score(best[1], accept)):
-            best = (g, cert)
+            best = (gains(position, heading), cert)
     if best is None:  # the middle candidate runs, and the composed certificate says what would certify it
-        g = gains(middle, heading)
-        cert = next((c for h, c in heading_certs if h == heading), None) or run(g)
+        g, cert = gains(middle, heading), cert_of(middle, heading)
         why = (
             f"none of the {tried} candidate gains is certified for the deployed loop: the middle candidate runs "
             "(the composed certificate says which setting would certify it)"

@@ -58,6 +58,10 @@ def test_the_deployed_fleet_is_covered_and_supersedes_the_idealised_certificates
     for name in ("closed_loop", "robust", "implementation"):
         part = d["parts"][name]
         assert not part["applies"] and part["ok"] and "superseded" in part["note"]
+    # the implementation object still says the declared implementation is covered, and by what
+    impl = d["implementation"]
+    assert impl["covers"] and impl["covered_by"] == "composed" and impl["error_bounds"] == c["error_bounds"]
+    assert impl["sample_time"] == 0.1 and impl["delay"] == 0.1
     # the actuator part holds the composed force bound, and the separation part reads its position bound
     assert d["actuators"]["certified_peak"] == pytest.approx(c["certified_peak"])
     assert d["actuators"]["certified"]

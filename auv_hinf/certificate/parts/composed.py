@@ -30,13 +30,14 @@ import numpy as np
 from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.parts.implementation import start_errors
+from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.composed.advice import Advice, declared_knobs, largest_covered
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.box import PARAMETERS
 
@@ -63,7 +64,8 @@ class ComposedSummary:
     advice : tuple of Advice
         For each declared setting, a value at which it covers (searched when it does not).
     start : Errors or None
-        The configured start's errors the certificate is computed from.
+        The configured start's errors in still water (the certificate adds the current's bound to
+        the velocity error: ``problem.initial``, reported as ``start``).
     problem : DeployedProblem or None
         The problem it certifies.
     """
@@ -117,8 +119,9 @@ class ComposedSummary:
             "certified_peak": None if c is None or c.force is None else c.force.to_dict(),
             "operating_box": None if c is None or c.op is None else c.op.to_dict(),
             "small_gain": None if c is None else c.small_gain,
-            "start": None if self.start is None else self.start.to_dict(),
+            "start": None if self.problem is None else self.problem.initial.to_dict(),
             "tightness": None,
+            "implementation": None if self.problem is None else self.problem.implementation.to_dict(),
             "advice": [_advice_dict(a) for a in self.advice],
         }
 
@@ -260,6 +263,8 @@ class ComposedPart:
         summary = composed_summary(ctx.point)
         figures = summary.to_dict()
         c = summary.certificate
+        design = ctx.point.deployed_design
+        binding = None if design is None else f"deployed design: {design.binding}"
         if not summary.applies:
             return Verdict(self.name, True, False, (), figures, detail=summary)
         if summary.covers and c is not None and c.force is not None and c.errors is not None:
@@ -270,6 +275,7 @@ class ComposedPart:
                 (),
                 figures,
                 peaks=(c.force.as_tuple(),),
+                binding=binding,
                 detail=summary,
                 position_bound=float(c.errors.position),
             )
@@ -283,7 +289,24 @@ class ComposedPart:
         elif summary.applies and summary.problem is not None:
             message += " (" + _no_advice(ctx.point) + ")"
         why = Reason(self.name, "not_covered", message, channel=None if c is None else c.governed_by, settings=settings)
-        return Verdict(self.name, False, True, (why,), figures, detail=summary)
+        return Verdict(self.name, False, True, (why,), figures, binding=binding, detail=summary)
+
+    def superseded_figures(self, name: str, figures: Any) -> Any:
+        """The ``implementation`` object when the composed certificate covers: the declared implementation, covered.
+
+        Its error bounds are the composed ones (``covered_by: "composed"``); the limits of the
+        implementation certificate of the nominal plant are not computed (``null``).
+        """
+        if name != "implementation" or figures is None:
+            return None
+        declared = figures.get("implementation")
+        if declared is None:
+            return None
+        noise = MeasurementNoise(**declared["noise"])
+        impl = Implementation(declared["sample_time"], declared["delay"], declared["varying_delay"], noise)
+        out = ImplementationSummary(impl, None, True, ()).to_dict()
+        out.update({"error_bounds": figures["error_bounds"], "covered_by": PART})
+        return out
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
         """The deployed loop's verdict, bounds and force, or why not and what would certify."""

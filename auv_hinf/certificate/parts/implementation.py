@@ -446,7 +446,8 @@ def _covered_line(f: Mapping[str, Any]) -> str | None:
 def _verdict_line(f: Mapping[str, Any]) -> str:
     """The one verdict of a declared implementation: yes, or NO with what governs it and why."""
     if f["covers"]:
-        return "  implementation covered    yes"
+        by = f.get("covered_by")
+        return "  implementation covered    yes" + (f" (by the {by} certificate)" if by else "")
     first = (f["reasons"] or ["not certified"])[0]
     governor = GOVERNOR_WORDS.get(f.get("governed_by") or "")
     if governor is None:  # a record written before the verdicts named what governs them
