@@ -466,6 +466,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         # perturbations into eta': the plant's deviation, the other axis's turn and Coriolis
         # terms, the heading's change since measured turning the drift compensation
         q = ix(f"{j}:q")
+        c[q] += rnd.axes[j].residual or 0.0  # the drag's residual about the nominal slope (da is 0 then)
         m[q, ix(f"{j}:v")] += da
         m[q, ix(f"{j}:v_m")] += dc
         m[q, ix(f"{j}:F")] += dl
@@ -507,6 +508,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
             c[row] += step * der[3] * dist.heading
             m[row, ix("h:q")] += step * der[4]
     q = ix("h:q")
+    c[q] += rnd.axes[2].residual or 0.0
     m[q, ix("h:v")] += da
     m[q, ix("h:v_m")] += dc
     m[q, ix("h:F")] += dl

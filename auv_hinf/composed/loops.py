@@ -427,12 +427,17 @@ class AxisRanges:
         Sub-ranges of ``a`` that cover it: a constant plant (box, current, straight mission) keeps
         its trim ``-(d_lin + 2 d_quad |x_d|)/m`` for ever, so it lies in one cell for ever (the
         time-varying part is in every cell); each cell gets its own nominal loop.
+    residual : float or None
+        When set, the axis's drag is not a slope perturbation but a residual: the one cell is the
+        nominal slope itself, and ``residual`` bounds ``|f(y + eta) - f(y) - a0 eta|``
+        (:func:`drag_residual`; m/s^2 or rad/s^2), a direct term of the perturbation channel.
     """
 
     damping: tuple[float, float]
     compensation: tuple[float, float]
     gain: tuple[float, float]
     cells: tuple[tuple[float, float], ...] = ()
+    residual: float | None = None
 
     @property
     def parts(self) -> tuple[tuple[float, float], ...]:
@@ -457,6 +462,94 @@ class AxisRanges:
         lc = max(abs(g * c - g0 * c0) for g in self.gain for c in self.compensation)
         da = max(0.5 * (hi - lo) for lo, hi in self.parts)
         return da, lc, 0.5 * (self.gain[1] - self.gain[0])
+
+
+#: Points of the grid of the velocity error on which :func:`drag_residual` evaluates the residual;
+#: between them it moves by at most its Lipschitz constant times half the spacing, which is added.
+RESIDUAL_GRID = 2001
+#: Iterations of the golden-section search of the nominal slope (the residual is convex in it).
+RESIDUAL_SEARCH = 48
+
+
+def drag_residual(plant: Plant, axis: str, desired: tuple[float, float], width: float, a0: float) -> float:
+    """``sup |f(y + eta) - f(y) - a0 eta|`` over the box, ``y`` in ``desired``, ``|eta| <= width`` (m/s^2 or rad/s^2).
+
+    ``f(x) = -(d_lin x + d_quad |x| x)/m`` is the plant's drag acceleration on the axis; the
+    residual is what the loop with the constant slope ``a0`` leaves out. The function is
+    multilinear in ``(d_lin, d_quad, 1/m)``, so its extremes over the box are at the vertices. For
+    fixed ``eta`` and signs of ``y`` and ``y + eta`` it is affine in ``y`` (same signs) or a
+    quadratic with its vertex at ``y = -eta/2`` (opposite signs): its supremum over ``y`` is at
+    ``y`` in ``{lo, hi, 0, -eta, -eta/2}`` (clipped). Over ``eta`` it is evaluated on a grid of
+    :data:`RESIDUAL_GRID` points, plus the Lipschitz bound of the step between them.
+
+    Parameters
+    ----------
+    plant : Plant
+        Model and box.
+    axis : {"22", "33", "11"}
+        The axis (sway, yaw or surge).
+    desired : tuple of float
+        ``[min, max]`` of ``y``, the desired water-relative speed (m/s or rad/s).
+    width : float
+        Bound of ``|eta|`` (m/s or rad/s).
+    a0 : float
+        The nominal loop's slope (1/s).
+    """
+    lins, quads, masses = plant.interval(f"d{axis}_lin"), plant.interval(f"d{axis}_quad"), plant.interval(f"m{axis}")
+    lo, hi = desired
+    eta = np.linspace(-width, width, RESIDUAL_GRID)
+    cands = np.stack([np.full_like(eta, lo), np.full_like(eta, hi), np.zeros_like(eta), -eta, -0.5 * eta])
+    ys = np.clip(cands, lo, hi)
+    x = ys + eta
+    sq = np.abs(x) * x - np.abs(ys) * ys  # |x| x - |y| y
+    worst = 0.0
+    for dl, dq, m in itertools.product(lins, quads, masses):
+        g = -(dl * eta + dq * sq) / m - a0 * eta
+        worst = max(worst, float(np.abs(g).max()))
+    # between grid points: |dg/deta| <= (d_lin + 2 d_quad (|y| + width))/m + |a0|
+    top = max(abs(lo), abs(hi))
+    lipschitz = (lins[1] + 2.0 * quads[1] * (top + width)) / masses[0] + abs(a0)
+    step = 2.0 * width / (RESIDUAL_GRID - 1)
+    return worst + 0.5 * lipschitz * step
+
+
+def residual_nominal(
+    plant: Plant, axis: str, desired: tuple[float, float], width: float, slopes: tuple[float, float]
+) -> tuple[float, float]:
+    """The nominal slope in ``slopes`` with the least :func:`drag_residual`, and that residual.
+
+    The residual is a supremum of absolute values of affine functions of ``a0``, so convex: a
+    golden-section search over :data:`RESIDUAL_SEARCH` steps finds its least value; the residual
+    returned is the one evaluated at the slope returned.
+
+    Parameters
+    ----------
+    plant : Plant
+        Model and box.
+    axis : str
+        The axis.
+    desired : tuple of float
+        ``[min, max]`` of the desired speed.
+    width : float
+        Bound of the velocity error.
+    slopes : tuple of float
+        The range of the mean-value slope, which brackets the best nominal slope.
+    """
+    a, b = slopes
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    c, d = b - ratio * (b - a), a + ratio * (b - a)
+    fc, fd = drag_residual(plant, axis, desired, width, c), drag_residual(plant, axis, desired, width, d)
+    for _ in range(RESIDUAL_SEARCH):
+        if fc <= fd:
+            b, d, fd = d, c, fc
+            c = b - ratio * (b - a)
+            fc = drag_residual(plant, axis, desired, width, c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + ratio * (b - a)
+            fd = drag_residual(plant, axis, desired, width, d)
+    best = c if fc <= fd else d
+    return best, min(fc, fd)
 
 
 def _quotient_range(nums: list[float], masses: tuple[float, float]) -> tuple[float, float]:
@@ -533,10 +626,32 @@ def position_axes(
     gains = plant.input_gains()
     for axis, desired, width, p_range, slope_hat, k in axes:
         _, slope = _slope_ranges(desired, width)
-        whole, cells = _damping(plant, axis, desired, width, straight)
         law_side = [slope_hat * a * b for a in slope for b in p_range]
-        out.append(AxisRanges(whole, (min(law_side), max(law_side)), gains[k], cells))
+        out.append(_axis(plant, axis, desired, width, (min(law_side), max(law_side)), gains[k], straight))
     return out[0], out[1]
+
+
+def _axis(
+    plant: Plant,
+    axis: str,
+    desired: tuple[float, float],
+    width: float,
+    compensation: tuple[float, float],
+    gain: tuple[float, float],
+    straight: bool,
+) -> AxisRanges:
+    """An axis's ranges: trim cells when its speed keeps one sign, else a drag residual about the best slope.
+
+    When the speed may cross zero (``desired`` widened by ``width`` contains 0) the mean-value
+    slope's range spans everything from no drag to twice the largest, and a symmetric slope
+    perturbation of half that range over-counts the drag's increment by about 3x (the increment is
+    ``-k |eta| eta`` about zero speed); the residual of :func:`residual_nominal` is exact instead.
+    """
+    whole, cells = _damping(plant, axis, desired, width, straight)
+    if desired[0] - width <= 0.0 <= desired[1] + width and width > 0.0:
+        a0, residual = residual_nominal(plant, axis, desired, width, whole)
+        return AxisRanges(whole, compensation, gain, ((a0, a0),), residual)
+    return AxisRanges(whole, compensation, gain, cells)
 
 
 def heading_axis(plant: Plant, op: OperatingBox, mission: MissionBounds, straight: bool = False) -> AxisRanges:
@@ -556,10 +671,9 @@ def heading_axis(plant: Plant, op: OperatingBox, mission: MissionBounds, straigh
     desired = (-mission.yaw_rate, mission.yaw_rate)
     width = op.r - mission.yaw_rate
     _, slope = _slope_ranges(desired, width)
-    whole, cells = _damping(plant, "33", desired, width, straight)
     comp = plant.model.d33_quad * mission.yaw_rate / plant.model.m33
     law_side = [comp * a * b for a in slope for b in (-1.0, 1.0)]
-    return AxisRanges(whole, (min(law_side), max(law_side)), plant.heading_gains(), cells)
+    return _axis(plant, "33", desired, width, (min(law_side), max(law_side)), plant.heading_gains(), straight)
 
 
 #: The outputs of a position axis's loop, in order: the position and velocity errors, the held
