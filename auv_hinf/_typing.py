@@ -28,6 +28,14 @@ RiccatiSolver = Literal["control", "scipy"]
 FormationFrame = Literal["inertial", "path"]
 FORMATION_FRAMES: tuple[FormationFrame, ...] = get_args(FormationFrame)
 
+#: How a sampled run's measurement errors are drawn within their bounds
+#: (:mod:`auv_hinf.implementation.draws`): at random, or at the bound in a pattern chosen to hurt.
+NoisePattern = Literal["uniform", "bang-bang", "bias", "slow", "against-error"]
+NOISE_PATTERNS: tuple[NoisePattern, ...] = get_args(NoisePattern)
+#: The ``[simulation] noise_pattern`` setting: a pattern, or ``mixed`` (run ``i`` of a campaign gets
+#: ``NOISE_PATTERNS[i mod 5]``; a single run the first).
+NoisePatternSetting = Literal["uniform", "bang-bang", "bias", "slow", "against-error", "mixed"]
+
 #: Robust gain synthesis: the bandwidth family, LMI synthesis of the least-force gains, or a search
 #: over the composed certificate of the deployed (sampled, delayed, noisy) loop.
 SynthesisKind = Literal["bandwidth", "lmi", "deployed"]
@@ -37,10 +45,13 @@ __all__ = [
     "FORMATION_FRAMES",
     "GAIN_METHODS",
     "JACOBI_KINDS",
+    "NOISE_PATTERNS",
     "FloatArray",
     "FormationFrame",
     "GainMethod",
     "JacobiKind",
+    "NoisePattern",
+    "NoisePatternSetting",
     "OrientationLaw",
     "RiccatiSolver",
     "SynthesisKind",

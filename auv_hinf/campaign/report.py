@@ -140,6 +140,7 @@ def summarize(camp: Campaign) -> dict[str, Any]:
             "draws": "per run, seeded by runs.parquet's implementation_seed (from the campaign seed and the run index)"
             if not s.implementation.continuous
             else None,
+            "noise_pattern": s.noise_pattern,
         },
         "counts": {
             "runs": k,

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from auv_hinf._typing import FloatArray
 from auv_hinf.campaign.setup import COEFFICIENTS, CampaignSetup, nominal_certificate, scaled_plant
 from auv_hinf.campaign.starts import sample_plant_and_current
+from auv_hinf.certificate.run_plan import run_pattern
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.implementation.sampled_loop import integrate_sampled
 from auv_hinf.models.vehicle import VehicleParams
@@ -158,6 +159,7 @@ def run_scenario(setup: CampaignSetup, index: int, inputs: RunInputs) -> Scenari
         name=f"{setup.name}[{index}]",
         implementation=setup.implementation,
         seed=implementation_seed(setup.seed, index),
+        noise_pattern=run_pattern(setup.noise_pattern, index),
     )
 
 
@@ -227,6 +229,7 @@ def _sampled_rows(
     exits = [None if math.isnan(e) else float(e) for e in ends]
     table = _rows(setup, lo, inputs, batch, met, exits, sol.n_steps)
     table["implementation_seed"] = [s.seed for s in batch.scenarios]
+    table["noise_pattern"] = [s.noise_pattern for s in batch.scenarios]
     table["diverged_at"] = sol.diverged
     return table
 

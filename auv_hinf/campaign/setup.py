@@ -86,6 +86,9 @@ class CampaignSetup:
     implementation : Implementation
         How the controller runs in every run; a sampled one draws its noise and delays per run
         from :func:`implementation_seed`.
+    noise_pattern : str
+        The ``[simulation] noise_pattern`` setting: run ``i``'s pattern is
+        :func:`~auv_hinf.certificate.run_plan.run_pattern` of it.
     """
 
     name: str
@@ -107,6 +110,7 @@ class CampaignSetup:
     robust: RobustStart | None = None
     robust_reason: str | None = None
     implementation: Implementation = field(default_factory=Implementation)
+    noise_pattern: str = "uniform"
 
     @property
     def n(self) -> int:
@@ -179,6 +183,7 @@ def prepare(
         robust=rob,
         robust_reason=why,
         implementation=cfg.implementation,
+        noise_pattern=cfg.simulation.noise_pattern,
     )
     return setup, cert
 

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
-from auv_hinf._typing import FloatArray
+from auv_hinf._typing import NOISE_PATTERNS, FloatArray, NoisePattern
 from auv_hinf.actuation.limits import CHANNEL_UNITS, LIMIT_UNITS, RudderActuation
 from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states, raw_fleet
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
@@ -169,6 +169,7 @@ def plan_run(
         frame=cfg.frame,
         implementation=cfg.implementation,
         seed=sim.seed,
+        noise_pattern=run_pattern(sim.noise_pattern, 0),
     )
     nominal = checks.get("closed_loop")
     cert, cov = (None, None) if nominal is None else nominal.detail
@@ -186,6 +187,24 @@ def plan_run(
         implementation=None if impl is None else impl.detail,
         checks=tuple(checks.values()),
     )
+
+
+def run_pattern(setting: str, index: int) -> NoisePattern:
+    """The noise pattern of run ``index`` under the ``[simulation] noise_pattern`` setting.
+
+    ``mixed`` gives run ``i`` the pattern ``NOISE_PATTERNS[i mod 5]`` (a single run: the first,
+    ``uniform``); any other setting is every run's pattern.
+
+    Parameters
+    ----------
+    setting : str
+        The configured pattern, or ``mixed``.
+    index : int
+        The run's index (0 for a single run).
+    """
+    if setting == "mixed":
+        return NOISE_PATTERNS[index % len(NOISE_PATTERNS)]
+    return cast(NoisePattern, setting)
 
 
 def measured_decay_rate(result: SimulationResult, cert: ClosedLoopCertificate) -> float | None:
@@ -279,6 +298,7 @@ def implementation_report(scn: Scenario) -> dict[str, Any]:
     return {
         **impl.to_dict(),
         "seed": scn.seed,
+        "noise_pattern": scn.noise_pattern,
         "control_period": None if impl.continuous else control_period(impl, scn.horizon),
         "description": impl.describe(),
     }

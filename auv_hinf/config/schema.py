@@ -21,7 +21,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
+from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, NoisePatternSetting, SynthesisKind
 from auv_hinf.actuation.limits import MAX_RUDDER, ActuationKind
 from auv_hinf.guidance import law as guidance_law
 from auv_hinf.law.gains import DEFAULT_K1
@@ -720,6 +720,13 @@ class SimulationTable(_Table):
         gt=0.0,
     )
     seed: int = _field(0, "seed of the noise and delay draws of a sampled implementation", ge=0)
+    noise_pattern: NoisePatternSetting = _field(
+        "uniform",
+        "how a sampled run's measurement errors are drawn within the [implementation.noise] bounds: uniform "
+        "(at random), or at the bound: bang-bang (the sign flipped every sample), bias (constant), slow (a "
+        "square wave of 10 s period), against-error (opposing each measured error, so the law under-reacts); "
+        "mixed: campaign run i takes the i-th of these five in turn (a single run: uniform)",
+    )
     plant: PlantTable = Field(
         default_factory=PlantTable,
         description="true plant as multipliers of the parameters",
@@ -785,6 +792,7 @@ DEFAULT_START: StartKind = schema_default(SimulationTable, "start")
 
 
 DEFAULT_SEED: int = schema_default(SimulationTable, "seed")
+DEFAULT_NOISE_PATTERN: NoisePatternSetting = schema_default(SimulationTable, "noise_pattern")
 
 
 class ConfigFile(_Table):
@@ -900,6 +908,7 @@ __all__ = [
     "DEFAULT_INTEGRAL",
     "DEFAULT_METHOD",
     "DEFAULT_MIN_SEPARATION",
+    "DEFAULT_NOISE_PATTERN",
     "DEFAULT_POLES",
     "DEFAULT_POLYGON_RADIUS",
     "DEFAULT_SEED",

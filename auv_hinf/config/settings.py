@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, cast
 
-from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, SynthesisKind
+from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, NoisePatternSetting, SynthesisKind
 from auv_hinf.actuation.limits import VEHICLE_ACTUATORS, Actuation, Actuators, RudderActuation, vehicle_actuators
 from auv_hinf.config.messages import as_dict, parse_config, plain_data, set_fields, validate_table
 from auv_hinf.config.schema import (
@@ -26,6 +26,7 @@ from auv_hinf.config.schema import (
     DEFAULT_INTEGRAL,
     DEFAULT_METHOD,
     DEFAULT_MIN_SEPARATION,
+    DEFAULT_NOISE_PATTERN,
     DEFAULT_POLES,
     DEFAULT_SEED,
     DEFAULT_START,
@@ -106,6 +107,10 @@ class SimulationConfig:
         True plant as multipliers (> 0) of the controller's parameters; a dict is accepted.
     seed : int
         Seed of the noise and delay draws of a sampled implementation (>= 0).
+    noise_pattern : {"uniform", "bang-bang", "bias", "slow", "against-error", "mixed"}
+        How a sampled run's measurement errors are drawn within their bounds
+        (:mod:`auv_hinf.implementation.draws`); ``mixed``: campaign run ``i`` takes the ``i``-th
+        pattern in turn.
     """
 
     horizon: float = DEFAULT_HORIZON
@@ -115,6 +120,7 @@ class SimulationConfig:
     blend_time: float | None = None
     plant: tuple[tuple[str, float], ...] = ()
     seed: int = DEFAULT_SEED
+    noise_pattern: NoisePatternSetting = DEFAULT_NOISE_PATTERN
 
     def __post_init__(self) -> None:
         raw = {
@@ -123,6 +129,7 @@ class SimulationConfig:
             "current": self.current,
             "plant": as_dict(self.plant, "simulation.plant"),
             "seed": self.seed,
+            "noise_pattern": self.noise_pattern,
         }
         raw.update({k: getattr(self, k) for k in ("initial", "blend_time") if getattr(self, k) is not None})
         t = validate_table(SimulationTable, plain_data(raw), ("simulation",))
@@ -136,6 +143,7 @@ class SimulationConfig:
             blend_time=t.blend_time,
             plant=tuple((k, v) for k, v in t.plant.model_dump().items() if v is not None),
             seed=t.seed,
+            noise_pattern=t.noise_pattern,
         )
 
     def plant_params(self, nominal: VehicleParams) -> VehicleParams:
@@ -162,6 +170,7 @@ class SimulationConfig:
             "blend_time": self.blend_time,
             "plant": dict(self.plant),
             "seed": self.seed,
+            "noise_pattern": self.noise_pattern,
         }
 
 
@@ -555,6 +564,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
             blend_time=sim.blend_time,
             plant=tuple((k, v) for k, v in sim.plant.model_dump().items() if v is not None),
             seed=sim.seed,
+            noise_pattern=sim.noise_pattern,
         ),
         uncertainty=UncertaintyConfig(tuple((k, (v[0], v[1])) for k, v in cf.uncertainty.model_dump().items() if v)),
         disturbance=DisturbanceConfig(cf.disturbance.current_speed, cf.disturbance.current_rate),

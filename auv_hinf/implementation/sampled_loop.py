@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,6 +41,7 @@ from auv_hinf.exceptions import ParameterError
 from auv_hinf.implementation.draws import ImplementationDraws
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw, saturate
+from auv_hinf.mission.fleet import wrap_angle
 from auv_hinf.models.envelope import Envelope, envelope_bound, envelope_event, envelope_margin
 from auv_hinf.models.vehicle import PlantBatch, VehicleParams, ground_velocity, plant_derivative
 from auv_hinf.numerics.integrators import ATOL, RTOL, BatchSolution, SampleSink, dopri5
@@ -122,12 +123,17 @@ class HeldRun(Protocol):
         """Seed of the noise and delay draws."""
         ...
 
+    @property
+    def noise_pattern(self) -> str:
+        """How the noise is drawn within its bounds (:mod:`auv_hinf.implementation.draws`)."""
+        ...
+
 
 class HeldBatch(Protocol):
     """What the sampled loop reads of a batch of runs (a :class:`~auv_hinf.simulation.scenario.ScenarioBatch`).
 
     The runs share their law, envelope, implementation, horizon and output times; their plants,
-    starts, currents and seeds differ.
+    starts, currents, seeds and noise patterns differ.
     """
 
     @property
@@ -238,7 +244,9 @@ class SampledLoop:
         self.k_count = max(1, math.ceil((first.horizon - SNAP) / self.h))
         self.grid = np.append(np.arange(self.k_count) * self.h, first.horizon)
         self.window = math.floor((impl.delay + SNAP) / self.h) + 1  # pending measurements
-        self.draws = ImplementationDraws(impl, [s.seed for s in batch.scenarios], self.n)
+        patterns = [s.noise_pattern for s in batch.scenarios]
+        self.draws = ImplementationDraws(impl, [s.seed for s in batch.scenarios], self.n, patterns)
+        self.against = bool(self.draws.against_rows.any())
         self.y = np.array(batch.initial, dtype=float)
         self.now = np.zeros(self.s)
         self.forces: FloatArray = np.zeros((self.s, self.n, 3))
@@ -396,10 +404,13 @@ class SampledLoop:
         """
         slot = k % self.buf.shape[0]
         noise = self.draws.noise(k)
+        motion = self.ref.motion(self.buf_at[slot])
+        if self.against:  # the errors that oppose what the law is about to measure
+            noise = noise + self.draws.against(self.errors(self.buf[slot], motion))
         meas = self.buf[slot] + noise
         cs = (np.cos(meas[..., 2]), np.sin(meas[..., 2]))
         p_dot = ground_velocity(meas, self.current, cs)
-        tau = self.law.unsaturated(meas, p_dot, self.ref.motion(self.buf_at[slot]), cs)
+        tau = self.law.unsaturated(meas, p_dot, motion, cs)
         self.forces, active = saturate(tau, self.law.actuators, meas[..., 3])
         self.peak = np.maximum(self.peak, np.abs(tau).max(axis=1))
         self.saturated += active.any(axis=1)
@@ -407,6 +418,32 @@ class SampledLoop:
             self.cmd_out[self.out_hold == k] = tau
         if self.trace is not None:
             self.trace.append((self.buf_at[slot].copy(), noise, tau, self.forces))
+
+    def errors(self, state: FloatArray, motion: Any) -> FloatArray:
+        """The true errors ``[ex, ey, epsi, eu, ev, er]`` of ``state`` against ``motion`` (body-frame velocity error).
+
+        Parameters
+        ----------
+        state : ndarray, shape (S, N, 6)
+            The states at the measurement.
+        motion : Any
+            The desired motion at the measurement (``p``, ``v``, ``psi``, ``r``).
+        """
+        psi = state[..., 2]
+        cs = (np.cos(psi), np.sin(psi))
+        de = ground_velocity(state, self.current, cs) - motion.v
+        c, s = cs
+        return np.stack(
+            [
+                state[..., 0] - motion.p[..., 0],
+                state[..., 1] - motion.p[..., 1],
+                wrap_angle(psi - motion.psi),
+                c * de[..., 0] + s * de[..., 1],
+                -s * de[..., 0] + c * de[..., 1],
+                state[..., 5] - motion.r,
+            ],
+            axis=-1,
+        )
 
     def interval(self, k: int) -> None:
         """Sample ``k``, then integrate to ``t_{k+1}``, stopping on measurements and outputs.

@@ -12,7 +12,7 @@ from typing import cast
 
 import numpy as np
 
-from auv_hinf._typing import FORMATION_FRAMES, FloatArray, FormationFrame, JacobiKind
+from auv_hinf._typing import FORMATION_FRAMES, NOISE_PATTERNS, FloatArray, FormationFrame, JacobiKind, NoisePattern
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
@@ -59,6 +59,8 @@ class Scenario:
         exact law; any other runs in :mod:`auv_hinf.implementation.sampled_loop`.
     seed : int
         Seed of the run's noise and delay draws (:mod:`auv_hinf.implementation.draws`, >= 0).
+    noise_pattern : {"uniform", "bang-bang", "bias", "slow", "against-error"}
+        How the run's measurement errors are drawn within their bounds.
     """
 
     law: VehicleLaw
@@ -75,6 +77,7 @@ class Scenario:
     frame: FormationFrame | None = None
     implementation: Implementation = field(default_factory=Implementation)
     seed: int = 0
+    noise_pattern: NoisePattern = "uniform"
 
     def __post_init__(self) -> None:
         init = np.asarray(self.initial, dtype=float)
@@ -93,6 +96,8 @@ class Scenario:
             raise ParameterError(f"implementation must be an Implementation, got {self.implementation!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise ParameterError(f"seed must be an integer >= 0, got {self.seed!r}")
+        if self.noise_pattern not in NOISE_PATTERNS:
+            raise ParameterError(f"noise_pattern must be one of {NOISE_PATTERNS}, got {self.noise_pattern!r}")
         object.__setattr__(self, "initial", init)
         object.__setattr__(self, "current", cur)
         if self.frame is None:

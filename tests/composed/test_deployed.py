@@ -87,6 +87,21 @@ def test_a_simulated_deployed_run_stays_inside_the_composed_bounds(deployed):
     assert peak["force_x"] >= 0.8 * bounds["certified_peak"]["force_x"]
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("pattern", ["against-error", "slow"])
+def test_noise_chosen_against_the_loop_stays_inside_and_comes_closer(deployed, pattern):
+    """Errors at their bounds, opposing the measured error or switching slowly: inside the bounds, and
+    above 0.3 of the position bound (random noise stays near a seventh of it)."""
+    cfg, cert = deployed
+    bounds = cert.to_dict()["composed"]["error_bounds"]
+    plan = plan_run(with_settings(cfg, [("simulation", "noise_pattern", pattern)]))
+    report = run_report(plan, simulate(plan.scenario))
+    assert report["implementation"]["noise_pattern"] == pattern
+    for k, v in report["measured_errors"].items():
+        assert v <= report["certified_errors"][k], (k, v)
+    assert report["measured_errors"]["position_error"] >= 0.3 * bounds["position"]
+
+
 def test_the_composed_certificate_is_about_a_sampled_law():
     from auv_hinf.composed.loops import MissionBounds, Plant
     from auv_hinf.law.gains import Gains
