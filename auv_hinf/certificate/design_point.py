@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -33,7 +33,7 @@ from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.design.theorem1 import GainDesign, design_alpha
 from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.implementation.model import Implementation
-from auv_hinf.law.gains import Gains, heading_gains
+from auv_hinf.law.gains import Gains, GainSource, heading_gains
 from auv_hinf.mission.fit import ReferenceFit, reference_fit
 from auv_hinf.mission.fleet import FleetReference, ReferenceTube, reference_from_dict
 from auv_hinf.mission.paths import MissionReference
@@ -49,7 +49,6 @@ from auv_hinf.robust.synthesis import synthesise_robust
 PLACEHOLDER_GAINS = Gains(1.0, 1.0, (1.0, 1.0))
 
 #: Where the gains that run come from.
-GainSource = Literal["theorem1", "robust", "deployed"]
 
 
 @dataclass(frozen=True, eq=False)

@@ -49,7 +49,7 @@ from auv_hinf._version import __version__
 from auv_hinf.certificate.reason import REASON_KINDS, ReasonKind
 from auv_hinf.config.settings import FormationConfig, config_from_dict, read_document
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.law.gains import heading_gains
+from auv_hinf.law.gains import GainSource, heading_gains
 
 #: Value of the ``format`` key of a certificate file.
 FORMAT = "auv-hinf-certificate"
@@ -135,7 +135,7 @@ class GainsRecord(_Strict):
     k1: float = Field(description="position gain (1/s^2)")
     k_psi: list[float] = Field(min_length=2, max_length=2, description="heading gains (1/s^2, 1/s)")
     ki: float | None = Field(default=None, description="integral gain (1/s^3), with integral action")
-    source: Literal["theorem1", "robust"]
+    source: GainSource
 
 
 class CertificateRecord(BaseModel):

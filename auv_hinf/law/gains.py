@@ -16,13 +16,17 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Literal
 
 import control as ct
 import numpy as np
 
 from auv_hinf.exceptions import DesignError, require_finite
 from auv_hinf.models.vehicle import VehicleParams
+
+#: Where a design's gains come from: Theorem 1, the robust (box) design, or the deployed
+#: (composed) design. The certificate file's ``gains.source`` takes the same names.
+GainSource = Literal["theorem1", "robust", "deployed"]
 
 #: The Theorem 2 position gain of the paper's examples (1/s^2): the default of ``[design] k1``.
 DEFAULT_K1 = 0.5
@@ -187,4 +191,12 @@ def heading_gains(params: VehicleParams, poles: tuple[float, float]) -> tuple[fl
     return float(k[0]), float(k[1])
 
 
-__all__ = ["DEFAULT_K1", "INTEGRAL_POLE_SHARE", "Gains", "heading_gains", "integral_gain", "with_integral"]
+__all__ = [
+    "DEFAULT_K1",
+    "INTEGRAL_POLE_SHARE",
+    "GainSource",
+    "Gains",
+    "heading_gains",
+    "integral_gain",
+    "with_integral",
+]
