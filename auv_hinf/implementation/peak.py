@@ -326,6 +326,17 @@ def _maps(loop: SampledLoop) -> tuple[_Period, list[FloatArray], FloatArray, Flo
     return per, maps, phi, out
 
 
+def period_radius(loop: SampledLoop) -> float:
+    """Spectral radius of ``loop``'s period map: below 1 exactly when the sampled loop is stable.
+
+    Parameters
+    ----------
+    loop : SampledLoop
+        The loop.
+    """
+    return float(np.abs(np.linalg.eigvals(_maps(loop)[2])).max())
+
+
 def _row_norms(m: FloatArray) -> FloatArray:
     """The Euclidean norm of every row of ``m`` (``np.linalg.norm(m, axis=1)``, without its overhead)."""
     out: FloatArray = np.sqrt(np.einsum("ij,ij->i", m, m))
@@ -679,6 +690,7 @@ __all__ = [
     "StepBounds",
     "free_peaks",
     "peak_gains",
+    "period_radius",
     "small_gain",
     "step_bounds",
 ]

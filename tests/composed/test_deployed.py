@@ -62,6 +62,10 @@ def test_the_deployed_fleet_is_covered_and_supersedes_the_idealised_certificates
     impl = d["implementation"]
     assert impl["covers"] and impl["covered_by"] == "composed" and impl["error_bounds"] == c["error_bounds"]
     assert impl["sample_time"] == 0.1 and impl["delay"] == 0.1
+    # its timing: the certified (declared) values, within the exact nominal limits, and their ratio
+    assert impl["max_sample_time"] == 0.1 and impl["max_delay"] == 0.1
+    assert 0.1 < impl["exact_max_sample_time"] and 0.1 < c["timing"]["exact_max_delay"]
+    assert impl["tightness"] == pytest.approx(0.1 / impl["exact_max_sample_time"]) == c["tightness"]
     # the actuator part holds the composed force bound, and the separation part reads its position bound
     assert d["actuators"]["certified_peak"] == pytest.approx(c["certified_peak"])
     assert d["actuators"]["certified"]

@@ -36,6 +36,7 @@ from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.composed.advice import Advice, declared_knobs, largest_covered
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
+from auv_hinf.composed.reach import Reach, reach
 from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
@@ -68,6 +69,9 @@ class ComposedSummary:
         the velocity error: ``problem.initial``, reported as ``start``).
     problem : DeployedProblem or None
         The problem it certifies.
+    reach : Reach or None
+        When it covers: the exact nominal limits of the sample time and delay at the design's
+        gains (:mod:`auv_hinf.composed.reach`).
     """
 
     applies: bool
@@ -77,6 +81,7 @@ class ComposedSummary:
     advice: tuple[Advice, ...] = ()
     start: Errors | None = None
     problem: DeployedProblem | None = None
+    reach: Reach | None = None
 
     def covered_parts(self) -> list[str]:
         """What the certificate covers at once: the declared effects, by name."""
@@ -120,7 +125,8 @@ class ComposedSummary:
             "operating_box": None if c is None or c.op is None else c.op.to_dict(),
             "small_gain": None if c is None else c.small_gain,
             "start": None if self.problem is None else self.problem.initial.to_dict(),
-            "tightness": None,
+            "tightness": None if self.reach is None else self.reach.tightness,
+            "timing": None if self.reach is None else self.reach.to_dict(),
             "implementation": None if self.problem is None else self.problem.implementation.to_dict(),
             "advice": [_advice_dict(a) for a in self.advice],
         }
@@ -244,7 +250,9 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
             advice = tuple(found)
     except AuvHinfError as exc:
         return ComposedSummary(True, None, False, (f"composed certificate not computed: {exc}",), start=start)
-    return ComposedSummary(True, cert, cert.covers, cert.reasons, advice, start, problem)
+    return ComposedSummary(
+        True, cert, cert.covers, cert.reasons, advice, start, problem, reach(problem) if cert.covers else None
+    )
 
 
 @dataclass(frozen=True)
@@ -294,8 +302,10 @@ class ComposedPart:
     def superseded_figures(self, name: str, figures: Any) -> Any:
         """The ``implementation`` object when the composed certificate covers: the declared implementation, covered.
 
-        Its error bounds are the composed ones (``covered_by: "composed"``); the limits of the
-        implementation certificate of the nominal plant are not computed (``null``).
+        Its error bounds are the composed ones (``covered_by: "composed"``), and its timing figures
+        those of the composed certificate (:mod:`auv_hinf.composed.reach`): the certified sample
+        time and delay (the declared ones: ``searched_sample_time`` false) and the exact nominal
+        limits beside them.
         """
         if name != "implementation" or figures is None:
             return None
@@ -306,6 +316,11 @@ class ComposedPart:
         impl = Implementation(declared["sample_time"], declared["delay"], declared["varying_delay"], noise)
         out = ImplementationSummary(impl, None, True, ()).to_dict()
         out.update({"error_bounds": figures["error_bounds"], "covered_by": PART})
+        timing = figures.get("timing")
+        if timing is not None:
+            keys = ("max_sample_time", "max_delay", "exact_max_sample_time", "tightness")
+            out.update({k: timing[k] for k in keys})
+            out["decay_rate"] = figures.get("decay_rate")
         return out
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
@@ -330,6 +345,13 @@ class ComposedPart:
                 f"    envelope it needs       u in [{op['u_min']:.3g}, {op['u_max']:.3g}] m/s, "
                 f"|v| <= {op['v_max']:.3g} m/s, "
                 f"|r| <= {op['r_max']:.3g} rad/s"
+            )
+        t = f.get("timing")
+        if t is not None:
+            out.append(
+                f"    timing                  certified at h = {t['max_sample_time']:.4g} s, "
+                f"d = {t['max_delay']:.4g} s; exact nominal limits h < {_seconds(t['exact_max_sample_time'])}, "
+                f"d < {_seconds(t['exact_max_delay'])}"
             )
         if f["covers"]:
             out.append("    composed covered        yes")
@@ -377,6 +399,10 @@ def _no_advice(point: DesignPoint) -> str:
 
 def _advice_line(a: Advice) -> str:
     return ", ".join(f"[{s.table}] {s.key} = {_value(s.value)}" for s in advice_settings(a))
+
+
+def _seconds(x: float | None) -> str:
+    return "none found" if x is None else f"{x:.4g} s"
 
 
 def _value(v: Any) -> str:
