@@ -37,8 +37,9 @@ from tests.helpers import BLUEROV_10HZ
 
 #: Every test of this file ends within this many seconds (SIGALRM).
 TEST_BOUND = 150
-#: How long a fleet may take to print its endpoints (s): importing the package takes a few seconds.
-START_BOUND = 30.0
+#: How long a fleet may take to print its endpoints (s): importing the package takes a few seconds
+#: on an idle machine, and over 30 s on two cores shared with a parallel test run.
+START_BOUND = 60.0
 #: The fleet's faults in the fault tests: vehicle 1 loses 80 % of its navigation, vehicle 2 has an
 #: 80 ms one-way latency (its measurements arrive about 90 ms old, above the certified 50 ms).
 FAULTS = ("--loss", "0,0.8,0,0", "--latency", "0,0,0.08,0")
