@@ -58,6 +58,23 @@ BLUEROV_10HZ = {
 }
 
 
+#: The deployed fleet: four BlueROV2 Heavy on a line, 10 Hz, 0.1 s delay, small noise.
+DEPLOYED = {
+    "vehicle": {"preset": "bluerov2-heavy"},
+    "formation": {"n": 4, "offsets": [[0.0, -6.0], [0.0, -2.0], [0.0, 2.0], [0.0, 6.0]], "min_separation": 2.0},
+    "envelope": {"u": [-0.5, 1.0], "v": [-0.5, 0.5], "r": [-0.5, 0.5]},
+    "design": {"robust": True, "synthesis": "deployed"},
+    "reference": {"kind": "line", "speed": 0.4, "heading": 0.0},
+    "simulation": {"horizon": 40.0},
+    "actuators": {"preset": "bluerov2-heavy"},
+    "implementation": {
+        "sample_time": 0.1,
+        "delay": 0.1,
+        "noise": {"position": 0.01, "velocity": 0.002, "heading": 0.002, "yaw_rate": 0.001},
+    },
+}
+
+
 def starts_from_errors(fleet: FleetReference, errors: np.ndarray) -> np.ndarray:
     """Initial states ``(..., n, 6)`` whose errors against ``fleet`` at ``t = 0`` are ``errors``."""
     m = fleet.motion(0.0)

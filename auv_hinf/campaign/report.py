@@ -55,19 +55,40 @@ ROBUST_NOTE = (
 )
 
 
+#: Note added to the summary when a sampled implementation's runs are covered by no certificate.
+SAMPLED_NOTE = (
+    "the runs of the sampled implementation have inside_bounds = NA: the continuous certificates do not cover "
+    "a sampled, delayed, noisy law, and the composed certificate does not cover it"
+)
+
+
 def _composition(s: Any, k: int) -> str:
     """The campaign's sample composition, in words."""
-    if s.robust is None:
+    checked = s.checked
+    if checked is None:
         return (
             f"{k} runs from starts uniform in the certified start region; plants uniform in the declared box; "
             "currents uniform in the declared disc"
         )
-    corners = s.robust.vertex_runs(k)
+    corners = checked.vertex_runs(k)
+    starts = (
+        "starts uniform in the robust invariant sets"
+        if checked.kind == "robust"
+        else f"starts uniform in the composed certificate's start set ({checked.scale:.3g} of the nominal region)"
+    )
     return (
         f"{k} runs: {corners} at box vertices (every other run, current at the declared speed, random direction; "
-        f"{s.robust.vertices} vertices in all), {k - corners} uniform in the box with currents uniform in the disc; "
-        "starts uniform in the robust invariant sets"
+        f"{checked.vertices} vertices in all), {k - corners} uniform in the box with currents uniform in the disc; "
+        + starts
     )
+
+
+def _start_region(s: Any) -> Any:
+    """The summary's ``start_region``: the radii the starts are drawn in, or the robust sets' name."""
+    checked = s.checked
+    if checked is None:
+        return nominal_certificate(s).region.region.to_dict()
+    return checked.region() if checked.kind == "composed" else "robust invariant ellipsoids"
 
 
 def passed(table: pd.DataFrame) -> pd.Series:
@@ -109,7 +130,8 @@ def summarize(camp: Campaign) -> dict[str, Any]:
     rates = t.loc[applicable & t["nominal"], "measured_decay_rate"].dropna()
     notes = []
     if n_app < k:
-        notes.append(ROBUST_NOTE + (f" ({s.robust_reason})" if s.robust_reason else ""))
+        note = ROBUST_NOTE if s.covers_sampled_runs else SAMPLED_NOTE
+        notes.append(note + (f" ({s.robust_reason})" if s.robust_reason else ""))
     if not s.certificate_applies:
         notes.append("the certified thrust exceeds the configured thrust limit: the certificate covers no run")
     forces = force_summary(camp)
@@ -125,12 +147,10 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "horizon": s.horizon,
         "chunk": camp.chunk,
         "executor": camp.executor,
-        "certificate": "nominal" if s.robust is None else "robust",
-        "start_region": nominal_certificate(s).region.region.to_dict()
-        if s.robust is None
-        else "robust invariant ellipsoids",
+        "certificate": "nominal" if s.checked is None else s.checked.kind,
+        "start_region": _start_region(s),
         "region_error_bounds": certified_bounds(camp),
-        "box_vertex_runs": 0 if s.robust is None else s.robust.vertex_runs(k),
+        "box_vertex_runs": 0 if s.checked is None else s.checked.vertex_runs(k),
         "composition": _composition(s, k),
         "uncertainty_box": {c: list(b) for c, b in zip(COEFFICIENTS, s.box.tolist()) if b != [1.0, 1.0]},
         "current_speed": s.current_speed,
@@ -157,7 +177,7 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "worst_ratio": worst,
         "worst_tail_position_ratio": float(t.loc[applicable, "ratio_tail_position_error"].max()) if n_app else None,
         "forces": forces,
-        "certified_decay_rate": nominal_certificate(s).rate if s.robust is None else s.robust.decay_rate,
+        "certified_decay_rate": nominal_certificate(s).rate if s.checked is None else s.checked.decay_rate,
         "min_measured_decay_rate": float(rates.min()) if len(rates) else None,
         "throughput": {
             "runs_per_second": k / wall if wall > 0 else None,
@@ -171,16 +191,16 @@ def summarize(camp: Campaign) -> dict[str, Any]:
 
 
 def certified_thrust(camp: Campaign) -> dict[str, float]:
-    """Thrust bound the runs are checked against (N, N, N m): the robust certificate's, else the nominal one's.
+    """Thrust bound the runs are checked against (N, N, N m): the composed or robust one's, else the nominal one's.
 
     Parameters
     ----------
     camp : Campaign
         The finished campaign (its setup and run table).
     """
-    rob = camp.setup.robust
-    if rob is not None:
-        return {c: float(b) for c, b in zip(CHANNELS, rob.thrust)}
+    checked = camp.setup.checked
+    if checked is not None:
+        return {c: float(b) for c, b in zip(CHANNELS, checked.thrust)}
     return dict(nominal_certificate(camp.setup).thrust.to_dict())
 
 
@@ -219,16 +239,16 @@ def force_summary(camp: Campaign) -> dict[str, Any]:
 
 
 def certified_bounds(camp: Campaign) -> dict[str, float]:
-    """Bounds over every start the campaign draws: the robust certificate's, else the nominal region's.
+    """Bounds over every start the campaign draws: the composed or robust certificate's, else the nominal region's.
 
     Parameters
     ----------
     camp : Campaign
         The finished campaign (its setup and run table).
     """
-    rob = camp.setup.robust
-    if rob is not None:
-        return {kind: float(b) for kind, b in zip(ERROR_KINDS, rob.bounds)}
+    checked = camp.setup.checked
+    if checked is not None:
+        return {kind: float(b) for kind, b in zip(ERROR_KINDS, checked.bounds)}
     return dict(nominal_certificate(camp.setup).region.bounds.to_dict())
 
 
@@ -273,7 +293,7 @@ def save_histograms(camp: Campaign, out: Path) -> list[Path]:
         ax.set_xlabel(f"{kind.replace('_', ' ')}: measured / certified")
         ax.set_ylabel("runs")
     axes[0].legend(fontsize=7)
-    which = "nominal" if camp.setup.robust is None else "robust"
+    which = "nominal" if camp.setup.checked is None else camp.setup.checked.kind
     fig.suptitle(f"{camp.setup.name}: {len(app)} runs covered by the {which} certificate")
     paths.append(out / "bound_ratios.png")
     fig.savefig(paths[-1], dpi=110)
@@ -300,6 +320,7 @@ def write_outputs(camp: Campaign, out: Path) -> dict[str, Any]:
 
 __all__ = [
     "ROBUST_NOTE",
+    "SAMPLED_NOTE",
     "SUMMARY_UNITS",
     "UNITS",
     "certified_bounds",

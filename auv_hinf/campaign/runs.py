@@ -78,7 +78,7 @@ def sample_run(setup: CampaignSetup, index: int) -> RunInputs:
         Run index within the campaign.
     """
     rng = np.random.default_rng(np.random.SeedSequence(setup.seed, spawn_key=(index,)))
-    rob = setup.robust
+    rob = setup.checked
     corner = None if rob is None else rob.vertex_index(index)
     declared = () if rob is None else rob.declared
     mult, current = sample_plant_and_current(rng, setup.box, declared, setup.current_speed, corner)
@@ -248,12 +248,13 @@ def _rows(
     measured = met.max_errors  # (S, N, 4)
     mult = np.array([x.multipliers for x in inputs])
     nominal = np.all(mult == 1.0, axis=1) & ~np.any(batch.current != 0.0, axis=1)
-    if setup.robust is not None:
-        bound = np.broadcast_to(setup.robust.bounds, measured.shape)
+    checked = setup.checked
+    if checked is not None:
+        bound = np.broadcast_to(checked.bounds, measured.shape)
         applies = np.ones(len(inputs), dtype=bool)
-    else:
+    else:  # the nominal certificate's region; it is about the continuous law only
         bound = start_bounds(setup.p2, setup.q, *e0)  # (S, N, 4)
-        applies = nominal & setup.certificate_applies
+        applies = nominal & setup.certificate_applies & setup.covers_sampled_runs
     stayed = np.array([e is None for e in exits])
     starts = (np.linalg.norm(e0[0], axis=-1), np.linalg.norm(e0[1], axis=-1), np.abs(e0[2]), np.abs(e0[3]))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -261,7 +262,7 @@ def _rows(
         tail = np.where(bound[..., 0] > 0, met.tail_position / bound[..., 0], math.inf)
     tol = BOUND_SLACK * max(RTOL, ATOL)
     inside = np.all(measured <= bound * (1.0 + tol) + tol, axis=(1, 2)) & stayed
-    thrust = setup.robust.thrust if setup.robust is not None else np.array(nominal_certificate(setup).thrust.as_tuple())
+    thrust = checked.thrust if checked is not None else np.array(nominal_certificate(setup).thrust.as_tuple())
     peak = met.commanded_peak  # (S, 3)
     within = np.all(peak <= thrust * (1.0 + tol) + tol, axis=1)
     cols: dict[str, Any] = {"run": np.arange(lo, lo + len(inputs)), "seed": setup.seed}

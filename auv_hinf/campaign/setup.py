@@ -13,10 +13,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.campaign.starts import RobustStart, robust_start
+from auv_hinf.campaign.composed_start import ComposedStart, composed_start
+from auv_hinf.campaign.starts import RobustStart, declared_rows, robust_start
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
+from auv_hinf.composed.loops import Errors
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import DesignError, ParameterError
 from auv_hinf.implementation.model import Implementation
@@ -82,7 +84,13 @@ class CampaignSetup:
         and it covers them (:mod:`auv_hinf.campaign.starts`); then every run is checked
         against it.
     robust_reason : str or None
-        Why a declared box or current is not checked (the robust certificate does not cover).
+        Why a declared box or current is not checked (the robust certificate does not cover),
+        or, with a sampled implementation, why no run is covered (the composed certificate does
+        not cover the deployed loop).
+    composed : ComposedStart or None
+        With a sampled implementation: the start set and bounds of the composed certificate when
+        it covers the deployed loop (:mod:`auv_hinf.campaign.composed_start`); then every run is
+        checked against it. The continuous certificates do not cover sampled runs.
     implementation : Implementation
         How the controller runs in every run; a sampled one draws its noise and delays per run
         from :func:`implementation_seed`.
@@ -111,11 +119,26 @@ class CampaignSetup:
     robust_reason: str | None = None
     implementation: Implementation = field(default_factory=Implementation)
     noise_pattern: str = "uniform"
+    composed: ComposedStart | None = None
 
     @property
     def n(self) -> int:
         """Number of vehicles."""
         return int(self.start.shape[0])
+
+    @property
+    def checked(self) -> ComposedStart | RobustStart | None:
+        """The certificate every run is drawn from and checked against, when not the nominal one.
+
+        The composed one for a sampled implementation, else the robust one when a box or a
+        current is declared and it covers them; ``None``: the nominal certificate's region.
+        """
+        return self.composed if self.composed is not None else self.robust
+
+    @property
+    def covers_sampled_runs(self) -> bool:
+        """A continuous law, or a sampled one that the composed certificate covers."""
+        return self.implementation.continuous or self.composed is not None
 
 
 def prepare(
@@ -152,8 +175,17 @@ def prepare(
     m0 = ref.motion(0.0)
     start = np.stack([m0.p, m0.v, np.column_stack([m0.psi, m0.r])], axis=1)
     box = box_multipliers(cfg)
-    rob, why = robust_start(point, box, cert)
-    if cert is not None:
+    composed: ComposedStart | None = None
+    if cfg.implementation.sampled:  # the sampled runs: the composed certificate or none
+        reference = None if cert is None else Errors(*(float(x) for x in cert.region.region.as_array()))
+        composed, why = composed_start(point, declared_rows(box), reference)
+        rob = None
+    else:
+        rob, why = robust_start(point, box, cert)
+    # the thrust the actuators must admit for a certificate to apply (the composed one fits them by construction)
+    if composed is not None:
+        thrust = (float(composed.thrust[0]), float(composed.thrust[1]), float(composed.thrust[2]))
+    elif cert is not None:
         thrust = cert.thrust.as_tuple()
     elif rob is not None:
         thrust = (float(rob.thrust[0]), float(rob.thrust[1]), float(rob.thrust[2]))
@@ -184,6 +216,7 @@ def prepare(
         robust_reason=why,
         implementation=cfg.implementation,
         noise_pattern=cfg.simulation.noise_pattern,
+        composed=composed,
     )
     return setup, cert
 

@@ -44,8 +44,55 @@ CORNER_PERIOD = 2
 START_SHRINK = 1e-9
 
 
+class BoxVertices:
+    """The box-vertex schedule of a campaign that checks a certificate covering a box (see the module docstring).
+
+    A subclass holds ``declared``: the indices of the box parameters with a non-degenerate range
+    (the vertex bits).
+    """
+
+    declared: tuple[int, ...]
+
+    @property
+    def vertices(self) -> int:
+        """Number of box vertices."""
+        return int(2 ** len(self.declared))
+
+    def vertex_index(self, run: int) -> int | None:
+        """The box vertex run ``run`` samples, or ``None`` for an interior run (see the module docstring).
+
+        Parameters
+        ----------
+        run : int
+            Run index within the campaign.
+        """
+        return vertex_index(run, self.vertices)
+
+    def vertex_runs(self, runs: int) -> int:
+        """How many of the first ``runs`` runs are box vertices.
+
+        Parameters
+        ----------
+        runs : int
+            Number of runs.
+        """
+        return vertex_runs(runs, self.vertices)
+
+    def vertex(self, box: FloatArray, index: int) -> FloatArray:
+        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)); see :func:`box_vertex`.
+
+        Parameters
+        ----------
+        box : ndarray, shape (9, 2)
+            ``[lo, hi]`` multipliers of the nine coefficients.
+        index : int
+            Vertex index; its bit ``k`` refers to the ``k``-th declared parameter.
+        """
+        return box_vertex(box, self.declared, index)
+
+
 @dataclass(frozen=True)
-class RobustStart:
+class RobustStart(BoxVertices):
     """A covering robust certificate as a campaign samples from it and checks against it.
 
     Attributes
@@ -58,6 +105,9 @@ class RobustStart:
 
     certificate: RobustCertificate
     declared: tuple[int, ...]
+
+    #: What the campaign's summary calls the certificate.
+    kind = "robust"
 
     def _sets(self) -> tuple[Ellipsoid, Ellipsoid, float, float]:
         c = self.certificate
@@ -107,31 +157,6 @@ class RobustStart:
         """Certified decay rate of the robust Lyapunov functions towards the invariant sets (1/s)."""
         return float(self.certificate.decay_rate or 0.0)
 
-    @property
-    def vertices(self) -> int:
-        """Number of box vertices."""
-        return int(2 ** len(self.declared))
-
-    def vertex_index(self, run: int) -> int | None:
-        """The box vertex run ``run`` samples, or ``None`` for an interior run (see the module docstring).
-
-        Parameters
-        ----------
-        run : int
-            Run index within the campaign.
-        """
-        return vertex_index(run, self.vertices)
-
-    def vertex_runs(self, runs: int) -> int:
-        """How many of the first ``runs`` runs are box vertices.
-
-        Parameters
-        ----------
-        runs : int
-            Number of runs.
-        """
-        return vertex_runs(runs, self.vertices)
-
     def sample_errors(
         self, rng: np.random.Generator, n: int, current: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -156,12 +181,12 @@ class RobustStart:
         if p.shape[0] == 3:  # integral action: the slice z~ = -z* of the (z~, e, e') ellipsoid
             p, centre, radius = _integrator_slice(p, -shift, d)
             shift = np.zeros(2)  # the position error's equilibrium is zero
-        w = _ball(rng, n, 4) * (radius * scale)  # (n, 4): [x-axis pair, y-axis pair]
+        w = uniform_ball(rng, n, 4) * (radius * scale)  # (n, 4): [x-axis pair, y-axis pair]
         li = np.linalg.inv(np.linalg.cholesky(p).T)  # z = L^-T w gives z^T P z = |w|^2
         xa, ya = w[:, :2] @ li.T + centre[0], w[:, 2:] @ li.T + centre[1]
         e = np.column_stack([xa[:, 0], ya[:, 0]]) + shift
         de = np.column_stack([xa[:, 1], ya[:, 1]])
-        hv = _ball(rng, n, 2) * (h * scale) @ np.linalg.inv(np.linalg.cholesky(head.matrix).T).T
+        hv = uniform_ball(rng, n, 2) * (h * scale) @ np.linalg.inv(np.linalg.cholesky(head.matrix).T).T
         return e, de, hv[:, 0], hv[:, 1]
 
     def inside(self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: FloatArray) -> bool:
@@ -182,18 +207,6 @@ class RobustStart:
         """
         return self.certificate.start_inside(e, de, epsi, depsi, current)
 
-    def vertex(self, box: FloatArray, index: int) -> FloatArray:
-        """Multipliers of vertex ``index`` of ``box`` (shape (9, 2)); see :func:`box_vertex`.
-
-        Parameters
-        ----------
-        box : ndarray, shape (9, 2)
-            ``[lo, hi]`` multipliers of the nine coefficients.
-        index : int
-            Vertex index; its bit ``k`` refers to the ``k``-th declared parameter.
-        """
-        return box_vertex(box, self.declared, index)
-
 
 def _integrator_slice(p: FloatArray, z: FloatArray, level: float) -> tuple[FloatArray, FloatArray, float]:
     """The ``(e, e')`` ellipse of ``{sum_axes x_a^T P x_a <= level^2}`` at fixed integrator states ``z (2,)``.
@@ -210,8 +223,18 @@ def _integrator_slice(p: FloatArray, z: FloatArray, level: float) -> tuple[Float
     return pyy, centre, math.sqrt(max(level * level - s * float(z @ z), 0.0))
 
 
-def _ball(rng: np.random.Generator, n: int, dim: int) -> FloatArray:
-    """``n`` points uniform in the unit ball of ``R^dim``."""
+def uniform_ball(rng: np.random.Generator, n: int, dim: int) -> FloatArray:
+    """``n`` points uniform in the unit ball of ``R^dim``, shape ``(n, dim)``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the draws.
+    n : int
+        Number of points.
+    dim : int
+        Dimension of the ball.
+    """
     g = rng.standard_normal((n, dim))
     g /= np.linalg.norm(g, axis=1, keepdims=True)
     return g * rng.random(n)[:, None] ** (1.0 / dim)
@@ -349,11 +372,13 @@ def box_vertex(box: FloatArray, declared: tuple[int, ...], index: int) -> FloatA
 __all__ = [
     "CORNER_PERIOD",
     "START_SHRINK",
+    "BoxVertices",
     "RobustStart",
     "box_vertex",
     "declared_rows",
     "robust_start",
     "sample_plant_and_current",
+    "uniform_ball",
     "vertex_current",
     "vertex_index",
     "vertex_runs",

@@ -21,22 +21,7 @@ from auv_hinf.config.settings import config_from_dict, with_settings
 from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.simulation.engine import simulate
-
-#: The deployed fleet: four BlueROV2 Heavy on a line, 10 Hz, 0.1 s delay, small noise.
-DEPLOYED = {
-    "vehicle": {"preset": "bluerov2-heavy"},
-    "formation": {"n": 4, "offsets": [[0.0, -6.0], [0.0, -2.0], [0.0, 2.0], [0.0, 6.0]], "min_separation": 2.0},
-    "envelope": {"u": [-0.5, 1.0], "v": [-0.5, 0.5], "r": [-0.5, 0.5]},
-    "design": {"robust": True, "synthesis": "deployed"},
-    "reference": {"kind": "line", "speed": 0.4, "heading": 0.0},
-    "simulation": {"horizon": 40.0},
-    "actuators": {"preset": "bluerov2-heavy"},
-    "implementation": {
-        "sample_time": 0.1,
-        "delay": 0.1,
-        "noise": {"position": 0.01, "velocity": 0.002, "heading": 0.002, "yaw_rate": 0.001},
-    },
-}
+from tests.helpers import DEPLOYED
 
 
 @pytest.fixture(scope="module")

@@ -21,7 +21,7 @@ Without a sample time the part does not apply: the continuous law has its own ce
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -199,8 +199,14 @@ def composed_start(point: DesignPoint) -> Errors:
     return Errors(b.position, b.velocity, b.heading, b.yaw_rate)
 
 
-def _fitting(point: DesignPoint) -> Any:
-    """The certificate that also holds the force bound against the declared actuators."""
+def within_actuators(point: DesignPoint) -> Callable[[DeployedProblem], DeployedCertificate]:
+    """The composed certificate that also holds its force bound against ``point``'s declared actuators.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its configuration's actuators).
+    """
     limits = point.config.force_limits
 
     def certify(problem: DeployedProblem) -> DeployedCertificate:
@@ -234,7 +240,7 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
     if point.gains is None:
         return ComposedSummary(True, None, False, ("the design gives no gains to certify",))
     start = composed_start(point)
-    certify = _fitting(point)
+    certify = within_actuators(point)
     try:
         problem = deployed_problem(cfg, point.mission, point.tube, point.offsets, point.gains, start)
         cert = certify(problem)
@@ -411,4 +417,12 @@ def _value(v: Any) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
-__all__ = ["PART", "SUPERSEDES", "ComposedSummary", "advice_settings", "composed_start", "composed_summary"]
+__all__ = [
+    "PART",
+    "SUPERSEDES",
+    "ComposedSummary",
+    "advice_settings",
+    "composed_start",
+    "composed_summary",
+    "within_actuators",
+]
