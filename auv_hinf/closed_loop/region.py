@@ -33,7 +33,7 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.closed_loop.lyapunov import LyapunovResult, lmi_heading_region, lmi_position_region
 from auv_hinf.design.sigma import vehicle_sigma
-from auv_hinf.exceptions import DesignError
+from auv_hinf.exceptions import DesignError, SolverError
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import ReferenceTube
 from auv_hinf.mission.margins import (
@@ -51,6 +51,9 @@ from auv_hinf.numerics.quadratic_forms import ellipsoid_extent
 
 #: Relative width at which the bisections on a region scale stop.
 REGION_RTOL = 1e-5
+#: Absolute width (m, m/s, rad or rad/s) at which a start radius search stops: a radius below it is
+#: no start region (it keeps a search from bisecting towards zero when no size certifies).
+REGION_ATOL = 1e-12
 #: Absolute width (rad) at which the bisection on the heading budget stops.
 ANGLE_ATOL = 1e-12
 #: Doublings allowed while bracketing a single-axis radius (2^60 times the initial 1 unit).
@@ -206,8 +209,16 @@ class _RegionProblem:
         return bisect(uv_ok, 0.0, MAX_HEADING_ERROR, atol=ANGLE_ATOL)[0]
 
     def trial(self, region: Region) -> _Trial:
-        """Certify ``region``: solve for P2 and Q, then check the exact margins."""
-        ep, ev, p2 = self.position(region.position, region.velocity)
+        """Certify ``region``: solve for P2 and Q, then check the exact margins.
+
+        A solve that fails (the solver's status, or the strict ``eigvalsh`` re-check of what it
+        returns) certifies nothing: the region is not certified, and the bisection that asked
+        goes on with smaller ones, each checked the same way. A solver symptom is never the answer.
+        """
+        try:
+            ep, ev, p2 = self.position(region.position, region.velocity)
+        except SolverError:
+            return _Trial(False, ErrorBounds(math.inf, math.inf, math.inf, math.inf), None, None, None)
         rh, rr = region.heading, region.yaw_rate
         q: FloatArray | None = None
         eh = er = 0.0
@@ -217,7 +228,11 @@ class _RegionProblem:
             if b_psi <= 0.0 or b_r <= 0.0:
                 return fail
             n = max(rh, rr)
-            q = lmi_heading_region(self.k1psi, self.c_range, rh / n, rr / n, ((b_psi / n) ** 2, (b_r / n) ** 2)).matrix
+            try:
+                budgets = ((b_psi / n) ** 2, (b_r / n) ** 2)
+                q = lmi_heading_region(self.k1psi, self.c_range, rh / n, rr / n, budgets).matrix
+            except SolverError:
+                return fail
             eh, er = ellipsoid_extent(q, rh, rr)
             if eh >= MAX_HEADING_ERROR:
                 return fail
@@ -285,9 +300,13 @@ def certify_region(
             hi *= 2.0
         else:
             raise DesignError(f"single-axis radius along {axis} is unbounded: the margins never bind")
-        single.append(largest_holding(partial(_axis_ok, prob, axis), hi, check_lo=False, rtol=REGION_RTOL))
+        single.append(
+            largest_holding(partial(_axis_ok, prob, axis), hi, check_lo=False, rtol=REGION_RTOL, atol=REGION_ATOL)
+        )
     single_axis = Region(*single)
-    kappa = largest_holding(lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0, check_lo=False, rtol=REGION_RTOL)
+    kappa = largest_holding(
+        lambda k: prob.trial(single_axis.scaled(k)).ok, 1.0, check_lo=False, rtol=REGION_RTOL, atol=REGION_ATOL
+    )
     region = single_axis.scaled(kappa)
     final = prob.trial(region)
     if not final.ok or final.margins is None:  # the bisection keeps only certified scales
@@ -305,4 +324,4 @@ def certify_region(
     )
 
 
-__all__ = ["ANGLE_ATOL", "REGION_RTOL", "Region", "RegionCertificate", "certify_region"]
+__all__ = ["ANGLE_ATOL", "REGION_ATOL", "REGION_RTOL", "Region", "RegionCertificate", "certify_region"]

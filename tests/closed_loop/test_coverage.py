@@ -317,3 +317,25 @@ def test_search_of_an_uncovered_start_reports_the_full_search_best_candidate(tri
     x = far_start(tri, np.random.default_rng(1), dist=150.0)
     assert not tri.cover(x, start="shaped").covered
     assert_same_search(tri, x)
+
+
+def test_a_failing_region_solve_certifies_nothing_and_the_search_goes_on(monkeypatch):
+    """A heading SDP whose solve fails above some start size is not the answer: the region search
+    keeps the sizes whose solves succeed and verify (here: nothing of the heading, when every solve fails)."""
+    from auv_hinf.certificate.design_point import design_point
+    from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+    from auv_hinf.closed_loop import region as region_module
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.exceptions import SolverError
+
+    point = design_point(preset_config("paper-triangle"))
+    assert closed_loop_for(point).region.region.heading > 0.0  # the honest solve certifies a heading start
+
+    def failing(*args, **kwargs):
+        raise SolverError("heading-region SDP: the returned Q fails the strict eigvalsh re-check")
+
+    monkeypatch.setattr(region_module, "lmi_heading_region", failing)
+    cert = closed_loop_for(point)
+    reg = cert.region.region
+    assert reg.heading == 0.0 and reg.yaw_rate == 0.0 and cert.region.q is None
+    assert reg.position > 0.0 and reg.velocity > 0.0 and cert.region.margins.ok
