@@ -28,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from auv_hinf.certificate.deployed import deployed_problem
-from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.design_point import DesignPoint, design_point
+from auv_hinf.certificate.mission_advice import mission_advice
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
@@ -37,6 +38,7 @@ from auv_hinf.composed.advice import Advice, declared_knobs, largest_covered
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.composed.reach import Reach, reach
+from auv_hinf.config.settings import FormationConfig, with_settings
 from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
@@ -301,7 +303,8 @@ class ComposedPart:
         if hint:
             message += f" (each alone certifies: {hint})"
         elif summary.applies and summary.problem is not None:
-            message += " (" + _no_advice(ctx.point) + ")"
+            text, settings = _no_advice(ctx.point)
+            message += f" ({text})"
         why = Reason(self.name, "not_covered", message, channel=None if c is None else c.governed_by, settings=settings)
         return Verdict(self.name, False, True, (why,), figures, binding=binding, detail=summary)
 
@@ -391,15 +394,45 @@ class ComposedPart:
         return RunCheck(self.name, "certificate", True, covers, why or "covered", notes, bounds=bounds, detail=summary)
 
 
-def _no_advice(point: DesignPoint) -> str:
-    """What to try when no declared setting certifies, shrunk alone or together."""
-    if point.config.synthesis == "deployed":
+def covered_position_bound(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
+    """The composed position bound (m) of ``cfg`` rewritten with ``settings``, or ``None`` when it does not cover.
+
+    The configuration is rewritten (:func:`~auv_hinf.config.settings.with_settings`), designed and
+    certified from its configured start, as a re-run with those settings is.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    settings : tuple of Setting
+        The values to write into it.
+    """
+    try:
+        point = design_point(with_settings(cfg, [(s.table, s.key, s.value) for s in settings]))
+        summary = composed_summary(point, search=False)
+    except AuvHinfError:  # an invalid combination, or a design that fails: not an answer
+        return None
+    c = summary.certificate
+    if not summary.covers or c is None or c.errors is None:
+        return None
+    return float(c.errors.position)
+
+
+def _no_advice(point: DesignPoint) -> tuple[str, tuple[Setting, ...]]:
+    """What certifies when no declared setting does, shrunk alone or together: the design or the mission."""
+    found = mission_advice(point, covered_position_bound)
+    if found:
+        a = found[0]
+        kind = {"design": "gains designed for the deployed loop", "turns": "wider turns", "speed": "a slower mission"}
         return (
-            "no declared setting certifies when shrunk, even with no box, current, delay or noise: a faster "
-            "[implementation] sample_time or a slower mission is needed"
+            f"no declared setting certifies when shrunk, even all together; {kind[a.what]} certify: {a.line()}",
+            a.settings,
         )
     return (
-        'no declared setting certifies when shrunk: let the gains be designed for it, [design] synthesis = "deployed"'
+        "no declared setting certifies when shrunk, even all together, and neither do gains designed for the "
+        "deployed loop, turns up to 8 times wider or half and quarter the mission speed: a faster "
+        "[implementation] sample_time is needed",
+        (),
     )
 
 
@@ -424,5 +457,6 @@ __all__ = [
     "advice_settings",
     "composed_start",
     "composed_summary",
+    "covered_position_bound",
     "within_actuators",
 ]

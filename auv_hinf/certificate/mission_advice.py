@@ -1,0 +1,121 @@
+"""What certifies the deployed loop when no declared effect, shrunk, does: the design or the mission.
+
+The composed part's advice (:mod:`auv_hinf.composed.advice`) shrinks the declared noise, delay,
+sample time, current and box, the gains kept. When none of them certifies, even all together,
+what binds is the design or the mission itself: the turns' rates and the speeds' drag leave the
+sampled loops too little room. :func:`mission_advice` then tries, in this order, each change as
+a user would make it and as a re-run computes it (the configuration rewritten with
+:func:`~auv_hinf.config.settings.with_settings`, its gains designed again, its composed
+certificate computed from its configured start):
+
+1. gains designed for the deployed loop (``[design] robust = true, synthesis = "deployed"``),
+   when the design is another;
+2. wider turns: the lawn-mower's ``turn_radius`` and ``spacing`` (or the circle's ``radius``)
+   times :data:`TURN_FACTORS` in turn;
+3. a slower mission: ``[reference] speed`` times :data:`SPEED_FACTORS` in turn.
+
+Each answer is one at which the certificate was computed and covers, with its position bound, so
+re-running with it certifies the composed part. Coverage is not proven monotone in these
+settings: the first covered value of each ladder is reported, not the least change.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from tqdm.auto import tqdm
+
+from auv_hinf.certificate.design_point import DesignPoint
+from auv_hinf.certificate.reason import Setting
+from auv_hinf.config.settings import FormationConfig
+
+#: Multipliers of the turn radius (and of the legs' spacing, which must hold two turns) tried in
+#: turn: the turn rate falls as 1/radius, and the path frame's slot speeds spread as well.
+TURN_FACTORS = (2.0, 4.0, 8.0)
+#: Multipliers of the mission speed tried in turn (the drag, the Munk moment and the turn rates
+#: fall with it).
+SPEED_FACTORS = (0.5, 0.25)
+
+
+@dataclass(frozen=True)
+class MissionAdvice:
+    """One change of the design or the mission at which the composed certificate covers.
+
+    Attributes
+    ----------
+    what : str
+        ``"design"``, ``"turns"`` or ``"speed"``.
+    settings : tuple of Setting
+        The TOML values to write.
+    position_bound : float
+        The certified position bound at them (m).
+    """
+
+    what: str
+    settings: tuple[Setting, ...]
+    position_bound: float
+
+    def line(self) -> str:
+        """The change, as the TOML values to write, and what it certifies."""
+        values = ", ".join(f"[{s.table}] {s.key} = {_toml(s.value)}" for s in self.settings)
+        return f"{values} (certified |e| <= {self.position_bound:.3g} m)"
+
+
+def _toml(v: object) -> str:
+    return f'"{v}"' if isinstance(v, str) else "true" if v is True else f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _candidates(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
+    """The changes to try, in order (see the module docstring)."""
+    design: tuple[Setting, ...] = ()
+    out: list[tuple[str, tuple[Setting, ...]]] = []
+    if cfg.synthesis != "deployed" or not cfg.robust:
+        design = (Setting("design", "robust", True), Setting("design", "synthesis", "deployed"))
+        out.append(("design", design))
+    ref = cfg.reference.kwargs()
+    for f in TURN_FACTORS:
+        turn: tuple[Setting, ...]
+        if cfg.reference.kind == "lawnmower":
+            turn = (
+                Setting("reference", "turn_radius", ref["turn_radius"] * f),
+                Setting("reference", "spacing", ref["spacing"] * f),
+            )
+        elif cfg.reference.kind == "circle":
+            turn = (Setting("reference", "radius", ref["radius"] * f),)
+        else:
+            break
+        out.append(("turns", design + turn))
+    out += [("speed", (*design, Setting("reference", "speed", ref["speed"] * f))) for f in SPEED_FACTORS]
+    return out
+
+
+def mission_advice(
+    point: DesignPoint, bound: Callable[[FormationConfig, tuple[Setting, ...]], float | None]
+) -> tuple[MissionAdvice, ...]:
+    """The first covering change of each kind (design, turns, speed), in that order.
+
+    Stops at the first kind that covers: a design change is proposed alone when it certifies,
+    and the turns before the speed.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point whose composed certificate does not cover, with no declared setting.
+    bound : callable
+        The covered position bound (m) of the configuration rewritten with some settings, or
+        ``None`` when it does not cover (the composed part designs it and computes its composed
+        certificate, as a re-run does).
+    """
+    cfg = point.config
+    candidates = _candidates(cfg)
+    with tqdm(total=len(candidates), unit="design", desc="mission advice", leave=False) as bar:
+        for what, settings in candidates:
+            b = bound(cfg, settings)
+            bar.update(1)
+            if b is not None:
+                return (MissionAdvice(what, settings, b),)
+    return ()
+
+
+__all__ = ["SPEED_FACTORS", "TURN_FACTORS", "MissionAdvice", "mission_advice"]
