@@ -230,6 +230,32 @@ def _bluerov2_deployed() -> FormationConfig:
     )
 
 
+#: ``bluerov2-survey``: four BlueROV2 Heavy in a 3 m square, in the path frame (m; x along the
+#: track, y across it).
+BLUEROV_SQUARE = ((1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5))
+#: Its lawn-mower: 0.2 m/s, 100 m legs, 30 m turns and the 120 m between legs two such turns
+#: need. Narrower turns are refused at 10 Hz (the composed certificate's advice for 10 m turns at
+#: 0.35 m/s is 80 m; docs/vehicles.md).
+BLUEROV_SURVEY_PATH = (("speed", 0.2), ("leg_length", 100.0), ("spacing", 120.0), ("turn_radius", 30.0))
+#: Simulated time of ``bluerov2-survey`` (s): the first leg, the first turn and part of the second leg.
+BLUEROV_SURVEY_HORIZON = 900.0
+
+
+def _bluerov2_survey() -> FormationConfig:
+    deployed = _bluerov2_deployed()
+    t = JacobiTransform(4, "paper")
+    shape = tuple((float(a), float(b)) for a, b in shape_from_offsets(np.asarray(BLUEROV_SQUARE), t))
+    return replace(
+        deployed,
+        name="bluerov2-survey",
+        shape=shape,
+        frame="path",
+        min_separation=1.0,
+        reference=ReferenceConfig("lawnmower", BLUEROV_SURVEY_PATH),
+        simulation=SimulationConfig(horizon=BLUEROV_SURVEY_HORIZON),
+    )
+
+
 #: ``remus-survey``: five REMUS 100 in a V facing forward, in the path frame (m; x along the track,
 #: y across it on the body y axis): the lead ahead, each arm 10 m across and 5 m back per vehicle.
 SURVEY_V = ((0.0, 0.0), (-5.0, 10.0), (-5.0, -10.0), (-10.0, 20.0), (-10.0, -20.0))
@@ -291,6 +317,7 @@ PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "remus-line": _remus_line,
     "bluerov2-line": _bluerov2_line,
     "bluerov2-deployed": _bluerov2_deployed,
+    "bluerov2-survey": _bluerov2_survey,
     "remus-survey": _remus_survey,
     "remus-survey-ilos": _remus_survey_ilos,
 }
@@ -467,6 +494,9 @@ __all__ = [
     "BLUEROV_ENVELOPE",
     "BLUEROV_OFFSETS",
     "BLUEROV_SPEED",
+    "BLUEROV_SQUARE",
+    "BLUEROV_SURVEY_HORIZON",
+    "BLUEROV_SURVEY_PATH",
     "DEMO_ENVELOPE",
     "HEXAGON_ENVELOPE",
     "HEXAGON_RADIUS",

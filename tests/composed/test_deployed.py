@@ -152,3 +152,24 @@ def test_settings_are_written_into_nested_tables_and_validated():
     assert np.isclose(out.implementation.delay, 0.1)
     with pytest.raises(Exception, match="sample_time"):
         with_settings(cfg, [("implementation", "sample_time", -1.0)])
+
+
+@pytest.mark.slow
+def test_the_bluerov2_survey_preset_certifies_as_deployed_and_its_turn_stays_inside():
+    """The lawn-mower preset: certified by the composed certificate; a run through its first turn,
+    the noise opposing the error, stays inside every bound without saturating."""
+    from auv_hinf.config.presets import preset_config
+
+    cfg = preset_config("bluerov2-survey")
+    cert = certify(cfg)
+    assert cert.certified, cert.reasons
+    c = cert.to_dict()["composed"]
+    assert c["covers"] and cert.to_dict()["formation"]["min_separation_certified"] >= cfg.min_separation
+    run = with_settings(cfg, [("simulation", "horizon", 600.0), ("simulation", "noise_pattern", "against-error")])
+    plan = plan_run(run)
+    report = run_report(plan, simulate(plan.scenario))
+    assert report["certificate_covers_run"] and report["saturation_fraction"] == 0.0
+    for k, v in report["measured_errors"].items():
+        assert v <= report["certified_errors"][k], (k, v)
+    for k in ("force_x", "force_y", "moment"):
+        assert report["commanded_peak"][k] <= c["certified_peak"][k]
