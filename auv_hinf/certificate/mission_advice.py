@@ -90,6 +90,26 @@ def _candidates(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
     return out
 
 
+#: How each kind of change is named in a refusal that lists what was tried.
+TRIED = {
+    "design": "gains designed for the deployed loop",
+    "turns": f"turns up to {TURN_FACTORS[-1]:g} times wider",
+    "speed": "half and a quarter of the mission speed",
+}
+
+
+def tried(cfg: FormationConfig) -> str:
+    """The kinds of change :func:`mission_advice` tries on ``cfg``, in words (for a refusal when none covers).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    """
+    kinds = list(dict.fromkeys(what for what, _ in _candidates(cfg)))
+    return ", ".join(TRIED[k] for k in kinds)
+
+
 def mission_advice(
     point: DesignPoint, bound: Callable[[FormationConfig, tuple[Setting, ...]], float | None]
 ) -> tuple[MissionAdvice, ...]:
@@ -118,4 +138,4 @@ def mission_advice(
     return ()
 
 
-__all__ = ["SPEED_FACTORS", "TURN_FACTORS", "MissionAdvice", "mission_advice"]
+__all__ = ["SPEED_FACTORS", "TRIED", "TURN_FACTORS", "MissionAdvice", "mission_advice", "tried"]

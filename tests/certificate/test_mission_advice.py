@@ -70,3 +70,12 @@ def test_the_lawnmower_survey_is_refused_with_a_mission_change_that_certifies_wh
     again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in reason.settings]))
     assert again.certified, again.reasons
     assert again.to_dict()["composed"]["covers"]
+
+
+def test_a_refusal_lists_only_the_changes_that_were_tried():
+    from auv_hinf.certificate.mission_advice import tried
+
+    line = config_from_dict({**SURVEY, "reference": {"kind": "line", "speed": 0.4}, "formation": DEPLOYED["formation"]})
+    assert "turns" not in tried(line) and "speed" in tried(line) and "gains designed" not in tried(line)
+    survey = config_from_dict({**SURVEY, "design": {"robust": True, "synthesis": "lmi"}})
+    assert tried(survey).startswith("gains designed for the deployed loop, turns up to 8 times wider")

@@ -29,7 +29,7 @@ import numpy as np
 
 from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint, design_point
-from auv_hinf.certificate.mission_advice import mission_advice
+from auv_hinf.certificate.mission_advice import mission_advice, tried
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
@@ -429,9 +429,8 @@ def _no_advice(point: DesignPoint) -> tuple[str, tuple[Setting, ...]]:
             a.settings,
         )
     return (
-        "no declared setting certifies when shrunk, even all together, and neither do gains designed for the "
-        "deployed loop, turns up to 8 times wider or half and quarter the mission speed: a faster "
-        "[implementation] sample_time is needed",
+        f"no declared setting certifies when shrunk, even all together, and neither do {tried(point.config)}: "
+        "a faster [implementation] sample_time with a shorter delay is needed",
         (),
     )
 
