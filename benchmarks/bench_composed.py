@@ -39,8 +39,10 @@ from auv_hinf.implementation.sampled_data import certify_implementation
 from auv_hinf.simulation.engine import simulate
 
 REPEATS = 3
-#: Simulation seeds whose worst run the bound is measured against.
+#: Simulation seeds whose worst run the bound is measured against (uniform noise; one for the others).
 SEEDS = (1, 2, 3)
+#: Noise patterns simulated (``[simulation] noise_pattern``).
+PATTERNS = ("uniform", "bang-bang", "bias", "slow", "against-error")
 #: The deployed fleet (the one of ``tests/composed/test_deployed.py``).
 DEPLOYED: dict[str, Any] = {
     "name": "bluerov2-deployed",
@@ -97,14 +99,20 @@ def composed_cost() -> str:
     impl = certify_implementation(iprob, cfg.implementation, start)
     t_cli = _cli_seconds(DEPLOYED)
     t_cli_old = _cli_seconds({**DEPLOYED, "design": {"robust": True, "synthesis": "bandwidth"}})
-    worst_e, worst_f = 0.0, 0.0
-    for seed in SEEDS:
-        run_cfg = config_from_dict({**DEPLOYED, "simulation": {"horizon": 60.0, "seed": seed}})
-        plan = plan_run(run_cfg)
-        rep = run_report(plan, simulate(plan.scenario))
-        worst_e = max(worst_e, rep["measured_errors"]["position_error"])
-        worst_f = max(worst_f, rep["commanded_peak"]["force_x"])
-    assert cert.errors is not None and cert.force is not None
+    worst: dict[str, tuple[float, float]] = {}
+    for pattern in PATTERNS:
+        for seed in SEEDS if pattern == "uniform" else SEEDS[:1]:
+            sim = {"horizon": 60.0, "seed": seed, "noise_pattern": pattern}
+            plan = plan_run(config_from_dict({**DEPLOYED, "simulation": sim}))
+            rep = run_report(plan, simulate(plan.scenario))
+            e, f = rep["measured_errors"]["position_error"], rep["commanded_peak"]["force_x"]
+            old_e, old_f = worst.get(pattern, (0.0, 0.0))
+            worst[pattern] = (max(old_e, e), max(old_f, f))
+    worst_e = max(e for e, _ in worst.values())
+    worst_f = max(f for _, f in worst.values())
+    reach = composed_summary(point, search=False).reach
+    assert cert.errors is not None and cert.force is not None and reach is not None
+    by_pattern = ", ".join(f"{k} {cert.errors.position / e:.1f}" for k, (e, _) in worst.items())
     rows = [
         ["composed certificate (cold caches)", f"{t_comp:.2f}", "yes" if cert.covers else "no"],
         ["continuous closed-loop certificate (peer)", f"{t_cont:.2f}", "-"],
@@ -120,11 +128,14 @@ def composed_cost() -> str:
     note = (
         f"Medians of {REPEATS} runs, BLAS pinned to one thread. Four BlueROV2 Heavy on a 0.4 m/s line, 10 Hz, "
         "0.1 s delay, noise <= 0.01 m, 0.002 m/s, 0.002 rad, 0.001 rad/s, gains searched by the composed "
-        f"certificate ({cert.errors.position:.3g} m bound). Conservatism against the worst of {len(SEEDS)} "
-        f"simulated 60 s runs (uniform noise at its bound): position {cert.errors.position:.3g} m certified / "
-        f"{worst_e:.3g} m simulated = {cert.errors.position / worst_e:.1f}; surge force {cert.force.force_x:.3g} N / "
-        f"{worst_f:.3g} N = {cert.force.force_x / worst_f:.2f}. Uniform noise is not the worst noise: the loops' "
-        "peak gains are reached to within 10 % by the kernel's sign pattern (tests/implementation/test_peak.py)."
+        f"certificate ({cert.errors.position:.3g} m bound). Conservatism against the worst simulated 60 s run "
+        f"(noise at its bound, the patterns of `[simulation] noise_pattern`, uniform with {len(SEEDS)} seeds): "
+        f"position {cert.errors.position:.3g} m certified / {worst_e:.3g} m simulated = "
+        f"{cert.errors.position / worst_e:.1f} (certified / worst by pattern: {by_pattern}); surge force "
+        f"{cert.force.force_x:.3g} N / {worst_f:.3g} N = {cert.force.force_x / worst_f:.2f}. Timing: certified at "
+        f"0.1 s, exact nominal limit {reach.exact_max_sample_time:.3g} s (tightness {reach.tightness:.2f}). "
+        "The noise chosen against the loop by an independent review (time-reversed impulse responses, box "
+        "corners) comes closer: docs/derivations/composed.md."
     )
     return "\n".join([TITLE, "", line, sep, *body, "", note, ""])
 
