@@ -51,6 +51,10 @@ def test_the_deployed_fleet_is_covered_and_supersedes_the_idealised_certificates
     assert impl["max_sample_time"] == 0.1 and impl["max_delay"] == 0.1
     assert 0.1 < impl["exact_max_sample_time"] and 0.1 < c["timing"]["exact_max_delay"]
     assert impl["tightness"] == pytest.approx(0.1 / impl["exact_max_sample_time"]) == c["tightness"]
+    # the robust object: covered by the composed certificate (nothing declared here), its thrust the composed one
+    rob = d["robust"]
+    assert rob["covers"] and rob["covered_by"] == "composed" and not rob["declared"]
+    assert rob["thrust"] == c["certified_peak"] and rob["ultimate_bounds"] == c["error_bounds"]
     # the actuator part holds the composed force bound, and the separation part reads its position bound
     assert d["actuators"]["certified_peak"] == pytest.approx(c["certified_peak"])
     assert d["actuators"]["certified"]
@@ -126,6 +130,10 @@ def test_advice_written_back_into_the_configuration_certifies():
     # every setting names a table and key that exist, and nothing that is not declared
     tables = {s.table for s in reason.settings}
     assert tables <= {"implementation", "implementation.noise", "disturbance", "uncertainty"}
+    # advice that needs several settings at once says so (not "each alone")
+    advice = cert.to_dict()["composed"]["advice"]
+    if any(a["setting"] == "together" for a in advice):
+        assert "together do" in reason.message and "each alone" not in reason.message
     again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in reason.settings]))
     assert again.verdict("composed").ok and again.to_dict()["composed"]["covers"]
 

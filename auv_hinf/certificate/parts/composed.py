@@ -127,6 +127,7 @@ class ComposedSummary:
             "operating_box": None if c is None or c.op is None else c.op.to_dict(),
             "small_gain": None if c is None else c.small_gain,
             "start": None if self.problem is None else self.problem.initial.to_dict(),
+            "current_speed": None if self.problem is None else self.problem.plant.current,
             "tightness": None if self.reach is None else self.reach.tightness,
             "timing": None if self.reach is None else self.reach.to_dict(),
             "implementation": None if self.problem is None else self.problem.implementation.to_dict(),
@@ -138,6 +139,7 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
     cert = a.certificate
     return {
         "setting": a.knob,
+        "scaled": list(a.scaled),
         "scale": a.scale,
         "settings": [s.to_dict() for s in advice_settings(a)],
         "position_bound": None if cert.errors is None else cert.errors.position,
@@ -301,7 +303,9 @@ class ComposedPart:
             "; ".join(summary.reasons) or "not certified"
         )
         if hint:
-            message += f" (each alone certifies: {hint})"
+            together = any(a.knob == "together" for a in summary.advice)
+            lead = "no one setting alone certifies; all of these together do" if together else "each alone certifies"
+            message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
             text, settings = _no_advice(ctx.point)
             message += f" ({text})"
@@ -309,14 +313,20 @@ class ComposedPart:
         return Verdict(self.name, False, True, (why,), figures, binding=binding, detail=summary)
 
     def superseded_figures(self, name: str, figures: Any) -> Any:
-        """The ``implementation`` object when the composed certificate covers: the declared implementation, covered.
+        """The ``implementation`` and ``robust`` objects when the composed certificate covers them.
 
-        Its error bounds are the composed ones (``covered_by: "composed"``), and its timing figures
+        The ``robust`` object says the declared box and current are covered by it
+        (:func:`_robust_covered`). The ``implementation`` object is the declared implementation,
+        covered: its error bounds are the composed ones (``covered_by: "composed"``), and its timing figures
         those of the composed certificate (:mod:`auv_hinf.composed.reach`): the certified sample
         time and delay (the declared ones: ``searched_sample_time`` false) and the exact nominal
         limits beside them.
         """
-        if name != "implementation" or figures is None:
+        if figures is None:
+            return None
+        if name == "robust":
+            return _robust_covered(figures)
+        if name != "implementation":
             return None
         declared = figures.get("implementation")
         if declared is None:
@@ -368,7 +378,10 @@ class ComposedPart:
         out.append(f"    composed covered        NO: {'; '.join(f['reasons']) or 'not certified'}")
         for a in f.get("advice") or []:
             values = ", ".join(f"[{s['table']}] {s['key']} = {_value(s['value'])}" for s in a["settings"])
-            out.append(f"    certifies with          {values} (the {a['setting']} at {a['scale']:.3g} of the declared)")
+            what = a["setting"]
+            if what == "together":
+                what = ", ".join(a.get("scaled") or []) + " together"
+            out.append(f"    certifies with          {values} (the {what} at {a['scale']:.3g} of the declared)")
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
@@ -392,6 +405,33 @@ class ComposedPart:
             bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in c.errors.to_dict().items()}
         notes = () if covers else (f"composed certificate: {why or 'not covered'}",)
         return RunCheck(self.name, "certificate", True, covers, why or "covered", notes, bounds=bounds, detail=summary)
+
+
+def _robust_covered(figures: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``robust`` object when the composed certificate covers: the declared box and current, covered by it.
+
+    Its bounds are the composed whole-run bounds (which also bound the errors' ultimate values) and
+    its thrust the composed force bound; the continuous law's invariant sets are not computed.
+    """
+    covered = figures.get("parts") or []
+    return {
+        "declared": any(k in covered for k in ("box", "current", "current_rate", "integral")),
+        "stable": True,
+        "covers": True,
+        "covered_by": PART,
+        "decay_rate": figures.get("decay_rate"),
+        "ultimate_bounds": figures.get("error_bounds"),
+        "error_bounds": figures.get("error_bounds"),
+        "margin": None,
+        "worst_vertex": None,
+        "gains": None,
+        "design": None,
+        "details": None,
+        "reasons": [],
+        "box_declared": "box" in covered,
+        "current_speed": figures.get("current_speed"),
+        "thrust": figures.get("certified_peak"),
+    }
 
 
 def covered_position_bound(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
