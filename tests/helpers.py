@@ -75,6 +75,21 @@ DEPLOYED = {
 }
 
 
+#: Four BlueROV2 Heavy on a 0.4 m/s line at 10 Hz with a 0.1 s delay, in a 0.005 m/s current,
+#: surge mass and drag known to 1 % and 2 %, noise a quarter of bluerov2-deployed's.
+DEPLOYED_BOXED = {
+    **DEPLOYED,
+    "simulation": {"horizon": 20.0, "noise_pattern": "mixed"},
+    "uncertainty": {"m11": [0.99, 1.01], "d11_quad": [0.98, 1.02]},
+    "disturbance": {"current_speed": 0.005},
+    "implementation": {
+        "sample_time": 0.1,
+        "delay": 0.1,
+        "noise": {"position": 0.0125, "velocity": 0.001, "heading": 0.001, "yaw_rate": 0.0005},
+    },
+}
+
+
 def starts_from_errors(fleet: FleetReference, errors: np.ndarray) -> np.ndarray:
     """Initial states ``(..., n, 6)`` whose errors against ``fleet`` at ``t = 0`` are ``errors``."""
     m = fleet.motion(0.0)

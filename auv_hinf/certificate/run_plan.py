@@ -175,6 +175,16 @@ def plan_run(
     cert, cov = (None, None) if nominal is None else nominal.detail
     robust = checks.get("robust")
     impl = checks.get("implementation")
+    robust_detail = None if robust is None else robust.detail
+    composed = checks.get("composed")
+    if robust_detail is None and composed is not None and point.declared:
+        # the declared box and current are judged, for this sampled run, by the composed certificate
+        robust_detail = RobustRunCheck(
+            composed.covers,
+            composed.bounds if composed.covers else None,
+            "covered by the composed certificate of the deployed loop" if composed.covers else composed.reason,
+            composed.detail.covers,
+        )
     return RunPlan(
         design=point,
         certificate=cert,
@@ -183,7 +193,7 @@ def plan_run(
         scenario=scn,
         notes=tuple(n for c in checks.values() for n in c.notes),
         start=mode,
-        robust=None if robust is None else robust.detail,
+        robust=robust_detail,
         implementation=None if impl is None else impl.detail,
         checks=tuple(checks.values()),
     )

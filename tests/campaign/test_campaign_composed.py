@@ -23,21 +23,7 @@ from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import composed_summary
 from auv_hinf.composed.certificate import certify_deployed
 from auv_hinf.config.settings import config_from_dict
-from tests.helpers import DEPLOYED
-
-#: Four BlueROV2 Heavy on a 0.4 m/s line at 10 Hz with a 0.1 s delay, in a 0.005 m/s current,
-#: surge mass and drag known to 1 % and 2 %, noise a quarter of bluerov2-deployed's.
-COVERED = {
-    **DEPLOYED,
-    "simulation": {"horizon": 20.0, "noise_pattern": "mixed"},
-    "uncertainty": {"m11": [0.99, 1.01], "d11_quad": [0.98, 1.02]},
-    "disturbance": {"current_speed": 0.005},
-    "implementation": {
-        "sample_time": 0.1,
-        "delay": 0.1,
-        "noise": {"position": 0.0125, "velocity": 0.001, "heading": 0.001, "yaw_rate": 0.0005},
-    },
-}
+from tests.helpers import DEPLOYED_BOXED as COVERED
 
 
 @pytest.mark.slow

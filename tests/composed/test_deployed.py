@@ -21,7 +21,7 @@ from auv_hinf.config.settings import config_from_dict, with_settings
 from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.simulation.engine import simulate
-from tests.helpers import DEPLOYED
+from tests.helpers import DEPLOYED, DEPLOYED_BOXED
 
 
 @pytest.fixture(scope="module")
@@ -181,3 +181,14 @@ def test_the_bluerov2_survey_preset_certifies_as_deployed_and_its_turn_stays_ins
         assert v <= report["certified_errors"][k], (k, v)
     for k in ("force_x", "force_y", "moment"):
         assert report["commanded_peak"][k] <= c["certified_peak"][k]
+
+
+@pytest.mark.slow
+def test_a_run_with_a_declared_box_and_current_is_judged_by_the_composed_certificate():
+    """simulate's robust_covers_run, for a sampled run of a declared box and current: the composed verdict."""
+    cfg = config_from_dict(DEPLOYED_BOXED, "boxed")
+    plan = plan_run(with_settings(cfg, [("simulation", "horizon", 10.0)]))
+    report = run_report(plan, simulate(plan.scenario))
+    assert report["certificate_covers_run"] and report["robust_covers_run"] is True
+    assert report["robust_bounds"] == {k.removesuffix("_error"): v for k, v in report["certified_errors"].items()}
+    assert "composed" in report["robust_reason"]
