@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -49,11 +48,8 @@ from auv_hinf.composed.loops import (
     MissionBounds,
     OperatingBox,
     Plant,
-    axis_loop,
     disturbances,
-    heading_axis,
-    heading_loop,
-    position_axes,
+    nominal_loops,
 )
 from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.model import Implementation
@@ -305,21 +301,12 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
     op : OperatingBox
         The operating box.
     """
-    plant = problem.plant
     h, d = problem.timing
-    straight = problem.mission.straight
-    surge, sway = position_axes(plant, op, problem.implementation.noise.heading, straight)
-    head = heading_axis(plant, op, problem.mission, straight)
-    builders: tuple[tuple[str, AxisRanges, Callable[[int], SampledLoop]], ...] = (
-        ("surge", surge, lambda k: axis_loop(problem.gains, surge, h, d, k)),
-        ("sway", sway, lambda k: axis_loop(problem.gains, sway, h, d, k)),
-        ("heading", head, lambda k: heading_loop(problem.gains, head, h, d, k)),
-    )
+    axes = nominal_loops(problem.plant, op, problem.mission, problem.implementation.noise.heading, problem.gains, h, d)
     loops, gains, steps, free = [], [], [], []
     start = problem.initial
     has_start = any(x > 0 for x in (start.position, start.velocity, start.heading, start.yaw_rate))
-    for name, ranges, build in builders:
-        cell_loops = [build(k) for k in range(len(ranges.parts))]
+    for name, _, cell_loops in axes:
         analysed = [_analyse(loop, has_start) for loop in cell_loops]
         if any(a is None for a in analysed):
             return name
@@ -338,7 +325,7 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
             free.append(np.max(np.stack([a[2] for a in done if a[2] is not None]), axis=0))
     return Round(
         op,
-        (surge, sway, head),
+        (axes[0][1], axes[1][1], axes[2][1]),
         (loops[0], loops[1], loops[2]),
         (gains[0], gains[1], gains[2]),
         (steps[0], steps[1], steps[2]),

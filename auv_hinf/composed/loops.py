@@ -798,6 +798,42 @@ def heading_loop(gains: Gains, ranges: AxisRanges, sample_time: float, delay: fl
     )
 
 
+def nominal_loops(
+    plant: Plant,
+    op: OperatingBox,
+    mission: MissionBounds,
+    heading_noise: float,
+    gains: Gains,
+    sample_time: float,
+    delay: float,
+) -> tuple[tuple[str, AxisRanges, list[SampledLoop]], ...]:
+    """The surge, sway and heading axes' ranges on ``op`` and their nominal sampled loops, one per cell.
+
+    Parameters
+    ----------
+    plant : Plant
+        Model, box and current.
+    op : OperatingBox
+        The operating box.
+    mission : MissionBounds
+        The desired motion (a straight one gets trim cells).
+    heading_noise : float
+        Bound of the heading measurement's error (rad).
+    gains : Gains
+        The law's gains.
+    sample_time, delay : float
+        ``h > 0`` and ``d >= 0`` (s).
+    """
+    straight = mission.straight
+    surge, sway = position_axes(plant, op, heading_noise, straight)
+    head = heading_axis(plant, op, mission, straight)
+    return (
+        ("surge", surge, [axis_loop(gains, surge, sample_time, delay, k) for k in range(len(surge.parts))]),
+        ("sway", sway, [axis_loop(gains, sway, sample_time, delay, k) for k in range(len(sway.parts))]),
+        ("heading", head, [heading_loop(gains, head, sample_time, delay, k) for k in range(len(head.parts))]),
+    )
+
+
 @dataclass(frozen=True)
 class Disturbances:
     """Bounds of what drives the loops beyond their channels (see the module docstring).
@@ -1009,5 +1045,6 @@ __all__ = [
     "disturbances",
     "heading_axis",
     "heading_loop",
+    "nominal_loops",
     "position_axes",
 ]

@@ -28,8 +28,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from auv_hinf.composed.certificate import DeployedProblem
-from auv_hinf.composed.loops import Errors, OperatingBox, axis_loop, heading_axis, position_axes
-from auv_hinf.composed.loops import heading_loop as build_heading_loop
+from auv_hinf.composed.loops import Errors, OperatingBox, nominal_loops
 from auv_hinf.implementation.peak import SampledLoop, period_radius
 from auv_hinf.numerics.bisection import bisect
 from auv_hinf.robust.box import ParameterBox
@@ -86,7 +85,7 @@ def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def nominal_loops(problem: DeployedProblem, sample_time: float, delay: float) -> list[SampledLoop]:
+def model_loops(problem: DeployedProblem, sample_time: float, delay: float) -> list[SampledLoop]:
     """The controller's own model's sampled loops on the slots, one per trim cell (see the module docstring).
 
     Parameters
@@ -96,16 +95,10 @@ def nominal_loops(problem: DeployedProblem, sample_time: float, delay: float) ->
     sample_time, delay : float
         ``h > 0`` and ``d >= 0`` (s).
     """
-    model = problem.plant.model
-    plant = replace(problem.plant, box=ParameterBox.from_ranges(model, ()), current=0.0, current_rate=0.0)
-    mission = problem.mission
-    op = OperatingBox.of(mission, 0.0, Errors(0.0, 0.0, 0.0, 0.0))
-    surge, sway = position_axes(plant, op, 0.0, mission.straight)
-    head = heading_axis(plant, op, mission, mission.straight)
-    g = problem.gains
-    loops = [axis_loop(g, ax, sample_time, delay, k) for ax in (surge, sway) for k in range(len(ax.parts))]
-    loops += [build_heading_loop(g, head, sample_time, delay, k) for k in range(len(head.parts))]
-    return loops
+    plant = replace(problem.plant, box=ParameterBox.from_ranges(problem.plant.model, ()), current=0.0, current_rate=0.0)
+    op = OperatingBox.of(problem.mission, 0.0, Errors(0.0, 0.0, 0.0, 0.0))
+    axes = nominal_loops(plant, op, problem.mission, 0.0, problem.gains, sample_time, delay)
+    return [loop for _, _, cells in axes for loop in cells]
 
 
 def _first_unstable(stable: Callable[[float], bool], start: float) -> float:
@@ -132,7 +125,7 @@ def reach(problem: DeployedProblem) -> Reach:
     h, d = problem.timing
 
     def stable(sample_time: float, delay: float) -> bool:
-        return all(period_radius(loop) < 1.0 for loop in nominal_loops(problem, sample_time, delay))
+        return all(period_radius(loop) < 1.0 for loop in model_loops(problem, sample_time, delay))
 
     if not stable(h, d):  # the certificate covers only stable nominal loops; kept as a guard
         return Reach(h, d, h, d)
@@ -141,4 +134,4 @@ def reach(problem: DeployedProblem) -> Reach:
     return Reach(h, d, exact_h, exact_d)
 
 
-__all__ = ["DELAY_FLOOR", "LIMIT_RTOL", "SCAN_FACTOR", "SCAN_SPAN", "Reach", "nominal_loops", "reach"]
+__all__ = ["DELAY_FLOOR", "LIMIT_RTOL", "SCAN_FACTOR", "SCAN_SPAN", "Reach", "model_loops", "reach"]

@@ -17,7 +17,7 @@ import pytest
 
 from auv_hinf.composed.certificate import DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors, MissionBounds, OperatingBox, Plant, position_axes
-from auv_hinf.composed.reach import LIMIT_RTOL, nominal_loops, reach
+from auv_hinf.composed.reach import LIMIT_RTOL, model_loops, reach
 from auv_hinf.implementation.limits import exact_limit
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.implementation.peak import period_radius
@@ -53,7 +53,7 @@ def test_the_surge_limit_is_the_closed_form_of_the_held_delayed_double_integrato
     surge, _ = position_axes(p.plant, op, 0.0, True)
     a0, c0, lam0 = surge.nominal()
     assert lam0 == pytest.approx(1.0)
-    # the surge axis's limit alone: scan the first loop of nominal_loops (the surge loop) the same way
+    # the surge axis's limit alone: scan the first loop of model_loops (the surge loop) the same way
     r = reach(p)
     closed = exact_limit(a0, gains.k1, gains.alpha - c0, d)
     surge_limit = _first_unstable_of_surge(p, d)
@@ -65,12 +65,12 @@ def test_the_surge_limit_is_the_closed_form_of_the_held_delayed_double_integrato
 
 def _first_unstable_of_surge(p: DeployedProblem, d: float) -> float:
     h = p.implementation.sample_time
-    while period_radius(nominal_loops(p, h, d)[0]) < 1.0:
+    while period_radius(model_loops(p, h, d)[0]) < 1.0:
         h *= 1.1
     lo, hi = h / 1.1, h
     while hi / lo > 1 + LIMIT_RTOL:
         mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if period_radius(nominal_loops(p, mid, d)[0]) < 1.0 else (lo, mid)
+        lo, hi = (mid, hi) if period_radius(model_loops(p, mid, d)[0]) < 1.0 else (lo, mid)
     return hi
 
 
@@ -84,4 +84,4 @@ def test_beyond_the_exact_limits_the_composed_certificate_never_covers():
     for impl in (late, slow):
         assert not certify_deployed(replace(p, implementation=impl)).covers
         h, d = impl.sample_time, impl.delay
-        assert any(period_radius(loop) >= 1.0 for loop in nominal_loops(p, h, d))
+        assert any(period_radius(loop) >= 1.0 for loop in model_loops(p, h, d))
