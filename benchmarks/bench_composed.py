@@ -18,14 +18,9 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import statistics
-import subprocess
-import sys
-import tempfile
-import time
-from collections.abc import Callable
-from pathlib import Path
 from typing import Any
+
+from common import REPEATS, cli_certify_seconds, median_seconds, table
 
 import auv_hinf.composed.certificate as composed
 from auv_hinf.certificate.design_point import design_point
@@ -33,12 +28,10 @@ from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.certificate.parts.composed import composed_summary
 from auv_hinf.certificate.parts.implementation import implementation_problem, start_errors
 from auv_hinf.certificate.run_plan import plan_run, run_report
-from auv_hinf.config.presets import annotated_toml
 from auv_hinf.config.settings import config_from_dict
 from auv_hinf.implementation.sampled_data import certify_implementation
 from auv_hinf.simulation.engine import simulate
 
-REPEATS = 3
 #: Simulation seeds whose worst run the bound is measured against (uniform noise; one for the others).
 SEEDS = (1, 2, 3)
 #: Noise patterns simulated (``[simulation] noise_pattern``).
@@ -61,28 +54,11 @@ DEPLOYED: dict[str, Any] = {
 }
 
 
-def _median(fn: Callable[[], object]) -> float:
-    times = []
-    for _ in range(REPEATS):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
-
-
 def _cold_composed(problem: composed.DeployedProblem) -> composed.DeployedCertificate:
     """The composed certificate with its caches emptied (a first call)."""
     composed._certified.cache_clear()
     composed._ANALYSED.clear()
     return composed.certify_deployed(problem)
-
-
-def _cli_seconds(doc: dict[str, Any]) -> float:
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "case.toml"
-        path.write_text(annotated_toml(config_from_dict(doc)), encoding="utf-8")
-        cmd = [sys.executable, "-m", "auv_hinf.cli.main", "certify", "--config", str(path), "--json"]
-        return _median(lambda: subprocess.run(cmd, capture_output=True, check=False))
 
 
 def composed_cost() -> str:
@@ -91,14 +67,14 @@ def composed_cost() -> str:
     problem = composed_summary(point, search=False).problem
     assert problem is not None
     cert = _cold_composed(problem)
-    t_comp = _median(lambda: _cold_composed(problem))
-    t_cont = _median(lambda: closed_loop_for(point))
+    t_comp = median_seconds(lambda: _cold_composed(problem))
+    t_cont = median_seconds(lambda: closed_loop_for(point))
     nominal = closed_loop_for(point)
     iprob, start = implementation_problem(point, nominal), start_errors(point)
-    t_impl = _median(lambda: certify_implementation(iprob, cfg.implementation, start))
+    t_impl = median_seconds(lambda: certify_implementation(iprob, cfg.implementation, start))
     impl = certify_implementation(iprob, cfg.implementation, start)
-    t_cli = _cli_seconds(DEPLOYED)
-    t_cli_old = _cli_seconds({**DEPLOYED, "design": {"robust": True, "synthesis": "bandwidth"}})
+    t_cli = cli_certify_seconds(DEPLOYED)
+    t_cli_old = cli_certify_seconds({**DEPLOYED, "design": {"robust": True, "synthesis": "bandwidth"}})
     worst: dict[str, tuple[float, float]] = {}
     for pattern in PATTERNS:
         for seed in SEEDS if pattern == "uniform" else SEEDS[:1]:
@@ -121,10 +97,6 @@ def composed_cost() -> str:
         ['CLI `certify --json`, synthesis = "bandwidth" (separate certificates)', f"{t_cli_old:.1f}", "no"],
     ]
     header = ["what is timed", "seconds", "covers 10 Hz + 0.1 s"]
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
-    line = "| " + " | ".join(h.ljust(w) for h, w in zip(header, widths)) + " |"
-    sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
-    body = ["| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |" for r in rows]
     note = (
         f"Medians of {REPEATS} runs, BLAS pinned to one thread. Four BlueROV2 Heavy on a 0.4 m/s line, 10 Hz, "
         "0.1 s delay, noise <= 0.01 m, 0.002 m/s, 0.002 rad, 0.001 rad/s, gains searched by the composed "
@@ -137,10 +109,10 @@ def composed_cost() -> str:
         "The noise chosen against the loop by an independent review (time-reversed impulse responses, box "
         "corners) comes closer: docs/derivations/composed.md."
     )
-    return "\n".join([TITLE, "", line, sep, *body, "", note, ""])
+    return table(TITLE, header, rows, note)
 
 
-TITLE = f"### 10. The composed certificate of the deployed loop: cost and conservatism (medians of {REPEATS})"
+TITLE = f"10. The composed certificate of the deployed loop: cost and conservatism (medians of {REPEATS})"
 
 
 if __name__ == "__main__":

@@ -16,24 +16,19 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import statistics
-import subprocess
-import sys
-import tempfile
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from common import REPEATS, cli_certify_seconds, median_seconds, table
 
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.certificate.parts.implementation import implementation_problem, start_errors
-from auv_hinf.config.presets import annotated_toml, preset_config
+from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import FormationConfig, config_from_dict
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.implementation.sampled_data import certify_implementation, lag_limits
 
-REPEATS = 3
 #: A BlueROV2 Heavy line with gentle Theorem 1 gains: covered at 100 Hz with small noise.
 BLUEROV_SLOW: dict[str, Any] = {
     "name": "bluerov2-slow",
@@ -58,23 +53,6 @@ CASES = (
 )
 
 
-def _median(fn: Callable[[], object]) -> float:
-    times = []
-    for _ in range(REPEATS):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
-
-
-def _cli_seconds(doc: dict[str, Any]) -> float:
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "case.toml"
-        path.write_text(annotated_toml(config_from_dict(doc)), encoding="utf-8")
-        cmd = [sys.executable, "-m", "auv_hinf.cli.main", "certify", "--config", str(path), "--json"]
-        return _median(lambda: subprocess.run(cmd, capture_output=True, check=False))
-
-
 def implementation_cost() -> str:
     rows = []
     for name, make, impl in CASES:
@@ -83,12 +61,12 @@ def implementation_cost() -> str:
         point = design_point(cfg)
         nominal = closed_loop_for(point)
         prob, start = implementation_problem(point, nominal), start_errors(point)
-        t_cont = _median(lambda point=point: closed_loop_for(point))
-        t_exact = _median(lambda prob=prob, impl=impl: lag_limits(prob.loops, prob.nominal_dampings, impl.delay))
-        t_impl = _median(lambda prob=prob, impl=impl, start=start: certify_implementation(prob, impl, start))
+        t_cont = median_seconds(lambda point=point: closed_loop_for(point))
+        t_exact = median_seconds(lambda prob=prob, impl=impl: lag_limits(prob.loops, prob.nominal_dampings, impl.delay))
+        t_impl = median_seconds(lambda prob=prob, impl=impl, start=start: certify_implementation(prob, impl, start))
         cert = certify_implementation(prob, impl, start)
-        t_cli0 = _cli_seconds(doc)
-        t_cli1 = _cli_seconds({**doc, "implementation": impl.to_dict()})
+        t_cli0 = cli_certify_seconds(doc)
+        t_cli1 = cli_certify_seconds({**doc, "implementation": impl.to_dict()})
         rows.append(
             [
                 f"`{name}`",
@@ -117,10 +95,6 @@ def _table(rows: list[list[str]]) -> str:
         "max / exact sample time [s]",
         "covers",
     ]
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
-    line = "| " + " | ".join(h.ljust(w) for h, w in zip(header, widths)) + " |"
-    sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
-    body = ["| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |" for r in rows]
     note = (
         "Medians of 3 runs, BLAS pinned to one thread. The implementation certificate includes the LMI "
         "limits (bisection on the Lyapunov-Krasovskii LMI), the exact nominal limit (closed-form scan, "
@@ -128,10 +102,10 @@ def _table(rows: list[list[str]]) -> str:
         "the continuous certificate of the same design is the peer. The CLI column is the whole "
         "`certify` command; with an uncovered implementation it also searches the largest covered sample time."
     )
-    return "\n".join([TITLE, "", line, sep, *body, "", note, ""])
+    return table(TITLE, header, rows, note)
 
 
-TITLE = f"### 9. The implementation certificate: cost against the continuous certificate (medians of {REPEATS})"
+TITLE = f"9. The implementation certificate: cost against the continuous certificate (medians of {REPEATS})"
 
 
 def _rewrite_results(section: str) -> None:

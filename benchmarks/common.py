@@ -7,9 +7,13 @@ numpy is first imported).
 from __future__ import annotations
 
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -18,7 +22,7 @@ from scipy.integrate import solve_ivp
 import auv_hinf.simulation.engine as simulation
 from auv_hinf.campaign.runs import initial_state, sample_run
 from auv_hinf.campaign.setup import CampaignSetup, prepare
-from auv_hinf.config.presets import preset_config
+from auv_hinf.config.presets import annotated_toml, preset_config
 from auv_hinf.config.settings import FormationConfig, config_from_dict
 from auv_hinf.law.formation_law import FormationController
 from auv_hinf.mission.fleet import FleetReference
@@ -46,6 +50,20 @@ def timed(fn: Callable[[], Any], repeat: int = REPEATS) -> tuple[float, Any]:
         out = fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times), out
+
+
+def median_seconds(fn: Callable[[], Any], repeat: int = REPEATS) -> float:
+    """Median wall time (s) of ``repeat`` calls of ``fn`` (:func:`timed` without the result)."""
+    return timed(fn, repeat)[0]
+
+
+def cli_certify_seconds(doc: dict[str, Any], repeat: int = REPEATS) -> float:
+    """Median wall time (s) of ``auv-hinf certify --config FILE --json`` on ``doc`` as TOML, in fresh processes."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "case.toml"
+        path.write_text(annotated_toml(config_from_dict(doc)), encoding="utf-8")
+        cmd = [sys.executable, "-m", "auv_hinf.cli.main", "certify", "--config", str(path), "--json"]
+        return median_seconds(lambda: subprocess.run(cmd, capture_output=True, check=False), repeat)
 
 
 def table(title: str, header: list[str], rows: list[list[str]], note: str = "") -> str:
