@@ -86,7 +86,7 @@ def composed_cost() -> str:
             worst[pattern] = (max(old_e, e), max(old_f, f))
     worst_e = max(e for e, _ in worst.values())
     worst_f = max(f for _, f in worst.values())
-    reach = composed_summary(point, search=False).reach
+    reach = composed_summary(point, search=False).timing
     assert cert.errors is not None and cert.force is not None and reach is not None
     by_pattern = ", ".join(f"{k} {cert.errors.position / e:.1f}" for k, (e, _) in worst.items())
     rows = [

@@ -20,6 +20,7 @@ Without a sample time the part does not apply: the continuous law has its own ce
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
@@ -71,9 +72,6 @@ class ComposedSummary:
         the velocity error: ``problem.initial``, reported as ``start``).
     problem : DeployedProblem or None
         The problem it certifies.
-    reach : Reach or None
-        When it covers: the exact nominal limits of the sample time and delay at the design's
-        gains (:mod:`auv_hinf.composed.reach`).
     """
 
     applies: bool
@@ -83,7 +81,15 @@ class ComposedSummary:
     advice: tuple[Advice, ...] = ()
     start: Errors | None = None
     problem: DeployedProblem | None = None
-    reach: Reach | None = None
+
+    @functools.cached_property
+    def timing(self) -> Reach | None:
+        """When it covers: the exact nominal limits of the sample time and delay at the design's gains.
+
+        Computed on first use (:mod:`auv_hinf.composed.reach`, about half a second): the run
+        checks, campaigns and advice probes that build a summary do not need it.
+        """
+        return reach(self.problem) if self.covers and self.problem is not None else None
 
     def covered_parts(self) -> list[str]:
         """What the certificate covers at once: the declared effects, by name."""
@@ -128,8 +134,8 @@ class ComposedSummary:
             "small_gain": None if c is None else c.small_gain,
             "start": None if self.problem is None else self.problem.initial.to_dict(),
             "current_speed": None if self.problem is None else self.problem.plant.current,
-            "tightness": None if self.reach is None else self.reach.tightness,
-            "timing": None if self.reach is None else self.reach.to_dict(),
+            "tightness": None if self.timing is None else self.timing.tightness,
+            "timing": None if self.timing is None else self.timing.to_dict(),
             "implementation": None if self.problem is None else self.problem.implementation.to_dict(),
             "advice": [_advice_dict(a) for a in self.advice],
         }
@@ -260,9 +266,7 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
             advice = tuple(found)
     except AuvHinfError as exc:
         return ComposedSummary(True, None, False, (f"composed certificate not computed: {exc}",), start=start)
-    return ComposedSummary(
-        True, cert, cert.covers, cert.reasons, advice, start, problem, reach(problem) if cert.covers else None
-    )
+    return ComposedSummary(True, cert, cert.covers, cert.reasons, advice, start, problem)
 
 
 @dataclass(frozen=True)
