@@ -351,6 +351,10 @@ def actuator_shortfall(actuators: Actuators, peak: tuple[float, float, float]) -
 #: ``bluerov2-heavy``: four vectored T200 thrusters, about 86 N surge, 86 N sway and 23 N m yaw
 #: one channel at a time, with von Benzon et al.'s (2022) thruster curve (30.6 N a thruster);
 #: the allocation polytope is checked too, since the thrusters cannot give all three at once.
+#: ``nps-auv2``: a propeller (192.1 N at its 1500 rpm limit, at every speed in Healey & Lienard's
+#: model) and a rudder of +-20 deg with ``Y_uu_delta = 379.2 kg/(m rad)``,
+#: ``N_uu_delta = -967.7 kg/rad`` (the model's ``Y_dr``, ``N_dr`` scaled by ``rho L^2/2``,
+#: ``rho L^3/2``): underactuated.
 VEHICLE_ACTUATORS: dict[str, Actuation] = {
     "remus100": RudderActuation(
         67.0,
@@ -363,6 +367,14 @@ VEHICLE_ACTUATORS: dict[str, Actuation] = {
     "bluerov2-heavy": Actuators(
         86.0, 86.0, 23.0, "bluerov2-heavy", bluerov2_heavy_thrusters(BENZON2022_THRUST, BENZON2022_THRUST)
     ),
+    "nps-auv2": RudderActuation(
+        192.1,
+        math.radians(20.0),
+        379.2,
+        -967.7,
+        source="nps-auv2",
+        note="the NPS AUV II has a propeller and a rudder, no sway thruster",
+    ),
 }
 
 
@@ -372,7 +384,7 @@ def vehicle_actuators(name: str) -> Actuation:
     Parameters
     ----------
     name : str
-        A key of :data:`VEHICLE_ACTUATORS` (``"remus100"``, ``"bluerov2-heavy"``).
+        A key of :data:`VEHICLE_ACTUATORS` (``"remus100"``, ``"bluerov2-heavy"``, ``"nps-auv2"``).
 
     Raises
     ------

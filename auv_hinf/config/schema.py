@@ -50,10 +50,10 @@ PARAMETERS: dict[str, tuple[str, str]] = {
 }
 
 
-VehiclePreset = Literal["paper2011", "remus100", "bluerov2-heavy"]
+VehiclePreset = Literal["paper2011", "remus100", "bluerov2-heavy", "nps-auv2"]
 
 
-ActuatorPreset = Literal["remus100", "bluerov2-heavy"]
+ActuatorPreset = Literal["remus100", "bluerov2-heavy", "nps-auv2"]
 
 
 ReferenceKind = Literal["sine", "line", "circle", "lawnmower"]

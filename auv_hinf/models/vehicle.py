@@ -147,6 +147,14 @@ def paper2011() -> VehicleParams:
     return VehicleParams(200.0, 250.0, 80.0, 70.0, 100.0, 100.0, 200.0, 50.0, 100.0, name="paper2011")
 
 
+def _design_speed(value: float) -> float:
+    """``value`` as a design surge speed (m/s): finite and > 0, else :class:`ParameterError`."""
+    u0 = require_finite("design_speed", value)
+    if u0 <= 0:
+        raise ParameterError(f"design_speed must be > 0 m/s, got {u0!r}")
+    return u0
+
+
 def remus100(design_speed: float = 1.5) -> VehicleParams:
     """REMUS 100 torpedo AUV reduced to the paper's diagonal 3-DOF structure.
 
@@ -177,9 +185,7 @@ def remus100(design_speed: float = 1.5) -> VehicleParams:
     design_speed : float
         Surge speed ``u0`` in m/s at which the lift terms are linearised (> 0).
     """
-    u0 = require_finite("design_speed", design_speed)
-    if u0 <= 0:
-        raise ParameterError(f"design_speed must be > 0 m/s, got {u0!r}")
+    u0 = _design_speed(design_speed)
     m, izz = 30.48, 3.45
     return VehicleParams(
         m11=m + 0.93,
@@ -222,10 +228,58 @@ def bluerov2_heavy() -> VehicleParams:
     )
 
 
+#: Length (m) of the NPS AUV II, the scale of its nondimensional derivatives.
+NPS_AUV2_LENGTH = 5.3
+#: Water density (kg/m^3) of the NPS AUV II's model (Fossen's ``npsauv.m``).
+NPS_AUV2_DENSITY = 1000.0
+
+
+def nps_auv2(design_speed: float = 1.5) -> VehicleParams:
+    """NPS AUV II (Naval Postgraduate School, 5.3 m torpedo AUV) reduced to the paper's diagonal 3-DOF structure.
+
+    Source: A. J. Healey and D. Lienard, *Multivariable sliding mode control for autonomous diving
+    and steering of unmanned underwater vehicles*, IEEE J. Oceanic Eng. 18(3) (1993) 327-339, as
+    coded in Fossen's Marine Systems Simulator (``VESSELS/npsauv.m``): ``L = 5.3 m``,
+    ``rho = 1000 kg/m^3``, ``m = 5454.54 kg``, ``I_z = 13587 kg m^2`` and the nondimensional
+    derivatives ``X_udot = -7.6e-3``, ``Y_vdot = -5.5e-2``, ``N_rdot = -3.4e-3``, ``Y_v = -0.1``,
+    ``N_r = -1.6e-2``, ``C_d0 = 0.00385``, scaled by ``rho L^k / 2`` (``k = 3, 3, 5, 2, 4, 2``).
+
+    As for :func:`remus100`, the lift terms ``Y_v u v`` and ``N_r u r`` become linear damping at
+    the design surge speed ``u0`` and the off-diagonal terms (``Y_r``, ``N_v``) are dropped. The
+    surge drag is the model's ``rho L^2 C_d0 u^2 / 2``; the sway and yaw cross-flow drag are the
+    model's 11-station sums at ``r = 0`` and ``v = 0``: ``rho/2 sum 0.3 dx`` and
+    ``rho/2 sum 0.3 |x|^3 dx`` (``dx = L/10``).
+
+    Parameters
+    ----------
+    design_speed : float
+        Surge speed ``u0`` in m/s at which the lift terms are linearised (> 0).
+    """
+    u0 = _design_speed(design_speed)
+    length, rho = NPS_AUV2_LENGTH, NPS_AUV2_DENSITY
+    r2, r3, r4, r5 = (0.5 * rho * length**k for k in (2, 3, 4, 5))
+    m, izz = 5454.54, 13587.0
+    dx = length / 10.0
+    stations = [-0.5 * length + k * dx for k in range(11)]
+    return VehicleParams(
+        m11=m + 7.6e-3 * r3,
+        m22=m + 5.5e-2 * r3,
+        m33=izz + 3.4e-3 * r5,
+        d11_lin=0.0,
+        d11_quad=0.00385 * r2,
+        d22_lin=0.1 * r2 * u0,
+        d22_quad=0.5 * rho * sum(0.3 * dx for _ in stations),
+        d33_lin=1.6e-2 * r4 * u0,
+        d33_quad=0.5 * rho * sum(0.3 * abs(x) ** 3 * dx for x in stations),
+        name=f"nps-auv2 (u0={u0:g} m/s)",
+    )
+
+
 PRESETS: dict[str, Callable[[], VehicleParams]] = {
     "paper2011": paper2011,
     "remus100": remus100,
     "bluerov2-heavy": bluerov2_heavy,
+    "nps-auv2": nps_auv2,
 }
 
 
@@ -544,6 +598,8 @@ class _Coefficients:
 
 
 __all__ = [
+    "NPS_AUV2_DENSITY",
+    "NPS_AUV2_LENGTH",
     "PRESETS",
     "PlantBatch",
     "VehicleParams",
@@ -553,6 +609,7 @@ __all__ = [
     "ground_velocity",
     "inertial_block",
     "input_matrix",
+    "nps_auv2",
     "paper2011",
     "plant_derivative",
     "preset",

@@ -87,12 +87,17 @@ def test_every_model_parameter_on_the_page_is_the_presets(name):
     assert wrong == {}, f"{name}: page vs code {wrong}"
 
 
-def test_the_remus100_propeller_and_rudder_on_the_page_are_the_presets():
-    text = section("remus100")
-    preset = VEHICLE_ACTUATORS["remus100"]
+#: The vehicle presets whose actuation is a propeller and a rudder.
+RUDDER_PRESETS = [name for name, a in VEHICLE_ACTUATORS.items() if isinstance(a, RudderActuation)]
+
+
+@pytest.mark.parametrize("name", RUDDER_PRESETS)
+def test_every_propeller_and_rudder_on_the_page_is_the_presets(name):
+    text = section(name)
+    preset = VEHICLE_ACTUATORS[name]
     assert isinstance(preset, RudderActuation)
     bold = {
-        m.group(1): m.group(2) for m in re.finditer(rf"\*\*`(\w+)(?: = \w+)?`(?: limit)?\*\* \| \*\*({NUMBER})", text)
+        m.group(1): m.group(2) for m in re.finditer(rf"\*\*`(\w+)(?: = [^`]+)?`(?: limit)?\*\* \| \*\*({NUMBER})", text)
     }
     code = {
         "tau_x": preset.tau_x,
@@ -103,11 +108,17 @@ def test_the_remus100_propeller_and_rudder_on_the_page_are_the_presets():
     assert set(bold) == set(code), f"the page's bold figures: {sorted(bold)}"
     wrong = {k: (v, code[k]) for k, v in bold.items() if not agrees(v, code[k])}
     assert wrong == {}, f"page vs code {wrong}"
-    assert math.isclose(math.degrees(preset.rudder_max), 13.6, rel_tol=1e-12)
     (row,) = [r for r in rows(text) if r[0].startswith("rudder authority")]
     printed = [float(x) for x in re.findall(NUMBER, row[1])]
-    assert agrees(f"{printed[0]:.1f}", preset.authority(printed[2])[0]), row
-    assert agrees(f"{printed[1]:.1f}", preset.authority(printed[3])[0]), row
+    forces, speeds = printed[: len(printed) // 2], printed[len(printed) // 2 :]
+    assert forces and all(agrees(f"{f:.1f}", preset.authority(u)[0]) for f, u in zip(forces, speeds, strict=True)), row
+    (arm,) = [r for r in rows(text) if r[0].startswith("rudder lever arm")]
+    assert agrees(re.match(NUMBER, arm[1]).group(), preset.lever_arm)  # type: ignore[union-attr]
+
+
+def test_the_rudder_limits_are_the_published_degrees():
+    assert math.isclose(math.degrees(VEHICLE_ACTUATORS["remus100"].rudder_max), 13.6, rel_tol=1e-12)
+    assert math.isclose(math.degrees(VEHICLE_ACTUATORS["nps-auv2"].rudder_max), 20.0, rel_tol=1e-12)
 
 
 def _channel_row(text: str, label: str) -> list[str]:
