@@ -280,6 +280,9 @@ class RunCheck:
     refuses_gains : str or None
         Why no certificate covers the gains themselves (``simulate`` refuses them without
         ``--uncertified``), whatever this run's start.
+    certifies_gains : bool
+        The part's certificate covers the gains themselves, whatever this run (its plant, current
+        or start): the parts it supersedes then cannot refuse them.
     detail : Any
         The part's typed result on the run.
     """
@@ -294,6 +297,7 @@ class RunCheck:
     thrust: Any = None
     reference: Any = None
     refuses_gains: str | None = None
+    certifies_gains: bool = False
     detail: Any = field(default=None, compare=False)
 
 

@@ -23,7 +23,7 @@ from auv_hinf.certificate.design_point import DesignPoint, design_point, initial
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
 from auv_hinf.certificate.parts.robust import RobustRunCheck
-from auv_hinf.certificate.registry import parts, superseded_by
+from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by
 from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
@@ -86,9 +86,14 @@ class RunPlan:
 
         A run may still be uncovered with certified gains (e.g. a start outside the certified
         set); this is about the gains: no nominal closed-loop certificate (small gain, envelope,
-        actuators), or a declared box and current the robust certificate does not cover.
+        actuators), or a declared box and current the robust certificate does not cover. A part
+        whose certificate covers the gains (the composed certificate of the loop as deployed)
+        waives the refusals of the parts it supersedes.
         """
-        return next((c.refuses_gains for c in self.checks if c.refuses_gains is not None), None)
+        certified = {c.part for c in self.checks if c.certifies_gains}
+        waived = {name for part in certified for name in part_supersedes(part)}
+        refusals = (c.refuses_gains for c in self.checks if c.refuses_gains is not None and c.part not in waived)
+        return next(refusals, None)
 
 
 #: Stored output samples of a run of few vehicles (one every 0.1 s over the paper's 300 s).
@@ -262,6 +267,21 @@ def measured_errors(result: SimulationResult, start: int = 0) -> dict[str, float
     }
 
 
+def certified_errors_source(plan: RunPlan) -> str | None:
+    """The part whose bounds :func:`certified_errors` reports (``None`` when it reports none).
+
+    Parameters
+    ----------
+    plan : RunPlan
+        The planned run.
+    """
+    if certified_errors(plan) is None:
+        return None
+    if any(c.part == "composed" and c.covers and c.bounds is not None for c in plan.checks):
+        return "composed"
+    return "implementation" if plan.implementation is not None else "closed_loop"
+
+
 def certified_errors(plan: RunPlan) -> dict[str, float] | None:
     """The per-vehicle error bounds (m, m/s, rad, rad/s) the run's measured errors are compared with.
 
@@ -341,6 +361,8 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "measured_errors": measured,
             "measured_tail_errors": measured_errors(result, result.t.size // 2),
             "certified_errors": certified,
+            "certified_errors_source": certified_errors_source(plan),
+            "covered_by": [c.part for c in plan.checks if c.role == "certificate" and c.applies and c.covers],
             "numerical_floor": NUMERICAL_FLOOR,
             "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
             "robust_covers_run": None if plan.robust is None else plan.robust.covered,
@@ -367,6 +389,9 @@ DEFINITIONS = {
     "implementation": "how the controller ran: sample time and delay (s), noise bounds, seed of the draws, "
     "the law's period (s; null: continuous)",
     "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
+    "certified_errors_source": "the part whose bounds certified_errors are (composed, implementation or "
+    "closed_loop); a run covered by another part (covered_by) is bounded by that part's bounds, e.g. robust_bounds",
+    "covered_by": "the parts whose certificates cover this run",
     "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
     "shape_errors": "error of each Jacobi shape vector against the mission, in the formation's frame (along and "
     "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "
@@ -422,6 +447,7 @@ _NULL_REASONS = {
     "measured_decay_rate": "no vehicle starts with an error large enough to measure a decay (or no certificate)",
     "certified_decay_rate": "no closed-loop certificate",
     "certified_errors": "no certificate covers the run's start",
+    "certified_errors_source": "no certified_errors",
     "certified_thrust": "no certificate bounds the run's force",
     "robust_covers_run": "no [uncertainty] box or [disturbance] current declared",
     "robust_bounds": "no robust bound for this run (none declared, or not covered)",

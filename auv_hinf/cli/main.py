@@ -12,6 +12,7 @@ unless ``--debug`` is given, which re-raises.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import sys
@@ -313,6 +314,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         else:
             _report(kind, exc)
+        if code == EXIT_NEGATIVE and "--json" in args_list:
+            # a negative answer is still an answer: a reader of --json gets one JSON object
+            # (bad input, exit 2, stays one line on stderr only)
+            message = [line for line in str(exc).splitlines() if line.strip()] or [type(exc).__name__]
+            print(json.dumps({"ok": False, "error": kind, "message": "; ".join(message), "exit_code": code}))
         return code
 
 

@@ -18,7 +18,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Literal
 
-from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
+from auv_hinf.composed.certificate import (
+    MAX_DELAY_SAMPLES,
+    DeployedCertificate,
+    DeployedProblem,
+    certify_deployed,
+)
 from auv_hinf.implementation.model import MeasurementNoise
 from auv_hinf.numerics.bisection import bisect
 
@@ -95,7 +100,8 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProble
     knob : str
         One of :data:`KNOBS`.
     scale : float
-        In ``[0, 1]`` (the sample time is kept above :data:`SAMPLE_TIME_FLOOR` of the declared).
+        In ``[0, 1]`` (the sample time is kept above :data:`SAMPLE_TIME_FLOOR` of the declared, and
+        at most :data:`~auv_hinf.composed.certificate.MAX_DELAY_SAMPLES` samples within the delay).
     """
     impl, plant = problem.implementation, problem.plant
     if knob == "together":
@@ -108,8 +114,9 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProble
         return replace(problem, implementation=replace(impl, noise=noise))
     if knob == "delay":
         return replace(problem, implementation=replace(impl, delay=impl.delay * scale))
-    if knob == "sample_time":
+    if knob == "sample_time":  # not below the floor, nor (when the declared one is within it) the delay's
         h = impl.sample_time * max(scale, SAMPLE_TIME_FLOOR)
+        h = max(h, min(impl.sample_time, impl.delay / MAX_DELAY_SAMPLES))
         return replace(problem, implementation=replace(impl, sample_time=h))
     if knob == "current":
         return replace(

@@ -586,9 +586,12 @@ def _damping(
     top = -lins[0] / masses[1]  # the least damped slope: -d_lin,min / m_max
     cells = []
     for t_lo, t_hi in itertools.pairwise(edges):
-        # the smallest |x_d| a plant of this cell can have
-        least = max(0.0, min((-t_hi * m - dl) / (2.0 * dq) for dl in lins for dq in quads for m in masses if dq > 0.0))
-        same_sign = least > width if quads[1] > 0.0 else True
+        # the smallest |x_d| a plant of this cell can have (without quadratic drag the slope is
+        # the trim at every speed, so the sign does not matter)
+        same_sign = True
+        if quads[1] > 0.0:
+            least = min((-t_hi * m - dl) / (2.0 * dq) for dl in lins for dq in quads for m in masses if dq > 0.0)
+            same_sign = max(0.0, least) > width
         upper = float(t_hi) + wobble if same_sign else max(float(t_hi) + wobble, top)
         cells.append((max(float(t_lo) - wobble, whole[0]), min(upper, whole[1])))
     return whole, tuple(cells)

@@ -247,13 +247,15 @@ def position_ellipsoid(
     s1 = sigma**2 * _unit(n, n - 1) @ _unit(n, n - 1).T
     c = np.asarray(c2, dtype=float).reshape(1, n)
     s2 = delta**2 * (c.T @ c)
-    par["a0"].value, par["s1"].value, par["s2"].value = a0, s1, 0.5 * (s2 + s2.T)
-    par["rate"].value, par["weight"].value = rate, weight
-    if start_cap is not None:
-        par["cap"].value = start_cap
     try:
+        par["a0"].value, par["s1"].value, par["s2"].value = a0, s1, 0.5 * (s2 + s2.T)
+        par["rate"].value, par["weight"].value = rate, weight
+        if start_cap is not None:
+            par["cap"].value = start_cap
         solve(prob, "robust position-loop ellipsoid LMI")
-    except SolverError:
+    except (SolverError, ValueError):
+        # a failed solve, or data cvxpy refuses (a rank-one weight whose round-off fails its PSD
+        # check when the gains are huge, e.g. a vehicle with a vanishing inertia): not certified
         return None
     pv = np.asarray(p.value, dtype=float)
     pv = 0.5 * (pv + pv.T)

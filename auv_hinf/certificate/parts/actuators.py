@@ -249,14 +249,22 @@ class ActuatorPart:
             return Verdict(self.name, False, True, (why,), act.to_dict(), detail=act)
         limits = act.limits.limits()
         k = CHANNELS.index(act.binding) if act.binding in CHANNELS else None
+        settings = advice(act.largest_certifiable)
+        text = f"actuators: {act.reason}"
+        composed = ctx.verdicts.get("composed")
+        if settings and composed is not None and composed.applies and not composed.ok:
+            # the box and current that fit the thrusters under the continuous law do not make the
+            # deployed loop's certificate cover: its own answer (which holds the thrusters too) is the one
+            settings = ()
+            text += " (for the continuous law; the composed part's answer covers the deployed loop and its actuators)"
         why = Reason(
             self.name,
             "thrust" if peak is not None else "not_covered",
-            f"actuators: {act.reason}",
+            text,
             channel=act.binding,
             value=None if peak is None else (act.binding_ratio if k is None else peak[k]),
             limit=None if peak is None else (1.0 if k is None else limits[k]),
-            settings=advice(act.largest_certifiable),
+            settings=settings,
         )
         return Verdict(self.name, False, True, (why,), act.to_dict(), binding=binding, detail=act)
 
@@ -298,9 +306,12 @@ class ActuatorPart:
                 )
             else:
                 box = "n/a" if best.get("box_scale") is None else f"{best['box_scale']:.4g}"
+                composed = record.get("composed") or {}
+                deployed = composed.get("applies") and composed.get("covers") is False
+                use = "for the continuous law only: see composed" if deployed else "re-run with these"
                 out.append(
                     f"    largest certifiable within the limits: box scale {box} with current "
-                    f"{best['current_speed']:.4g} m/s (re-run with these)"
+                    f"{best['current_speed']:.4g} m/s ({use})"
                 )
         return out
 

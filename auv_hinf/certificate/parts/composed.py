@@ -35,7 +35,7 @@ from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, Ru
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
 from auv_hinf.certificate.reason import Reason, Setting
-from auv_hinf.composed.advice import Advice, declared_knobs, largest_covered
+from auv_hinf.composed.advice import TOGETHER, Advice, declared_knobs, largest_covered, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.composed.reach import Reach, reach
@@ -263,7 +263,7 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
                 a = largest_covered(problem, knob, certify)
                 if a is not None:
                     found.append(a)
-            advice = tuple(found)
+            advice = confirmed(cfg, problem, tuple(found))
     except AuvHinfError as exc:
         return ComposedSummary(True, None, False, (f"composed certificate not computed: {exc}",), start=start)
     return ComposedSummary(True, cert, cert.covers, cert.reasons, advice, start, problem)
@@ -311,7 +311,7 @@ class ComposedPart:
             lead = "no one setting alone certifies; all of these together do" if together else "each alone certifies"
             message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
-            text, settings = _no_advice(ctx.point)
+            text, settings = _no_advice(ctx.point, summary.problem)
             message += f" ({text})"
         why = Reason(self.name, "not_covered", message, channel=None if c is None else c.governed_by, settings=settings)
         return Verdict(self.name, False, True, (why,), figures, binding=binding, detail=summary)
@@ -408,7 +408,17 @@ class ComposedPart:
         if c is not None and c.errors is not None and summary.covers:
             bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in c.errors.to_dict().items()}
         notes = () if covers else (f"composed certificate: {why or 'not covered'}",)
-        return RunCheck(self.name, "certificate", True, covers, why or "covered", notes, bounds=bounds, detail=summary)
+        return RunCheck(
+            self.name,
+            "certificate",
+            True,
+            covers,
+            why or "covered",
+            notes,
+            bounds=bounds,
+            certifies_gains=summary.covers,
+            detail=summary,
+        )
 
 
 def _robust_covered(figures: Mapping[str, Any]) -> dict[str, Any]:
@@ -438,11 +448,12 @@ def _robust_covered(figures: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
-def covered_position_bound(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
-    """The composed position bound (m) of ``cfg`` rewritten with ``settings``, or ``None`` when it does not cover.
+def rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> ComposedSummary | None:
+    """The covering composed summary of ``cfg`` rewritten with ``settings``, or ``None`` when it does not cover.
 
     The configuration is rewritten (:func:`~auv_hinf.config.settings.with_settings`), designed and
-    certified from its configured start, as a re-run with those settings is.
+    certified from its configured start, as a re-run with those settings is: a robust or deployed
+    design chooses its gains again for the new settings.
 
     Parameters
     ----------
@@ -457,13 +468,106 @@ def covered_position_bound(cfg: FormationConfig, settings: tuple[Setting, ...]) 
     except AuvHinfError:  # an invalid combination, or a design that fails: not an answer
         return None
     c = summary.certificate
-    if not summary.covers or c is None or c.errors is None:
+    if not summary.covers or c is None or c.errors is None or summary.problem is None:
         return None
-    return float(c.errors.position)
+    return summary
 
 
-def _no_advice(point: DesignPoint) -> tuple[str, tuple[Setting, ...]]:
-    """What certifies when no declared setting does, shrunk alone or together: the design or the mission."""
+def covered_position_bound(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
+    """The composed position bound (m) of ``cfg`` re-run with ``settings`` (:func:`rerun`), or ``None``.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration as declared.
+    settings : tuple of Setting
+        The values a re-run writes into it (``[table] key = value``).
+    """
+    summary = rerun(cfg, settings)
+    if summary is None or summary.certificate is None or summary.certificate.errors is None:
+        return None
+    return float(summary.certificate.errors.position)
+
+
+#: Fractions of an advised scale tried, each as a re-run computes it, when a re-run at the advised
+#: scale itself does not cover (its design chose other gains than the ones the advice was found
+#: with); 0 is the setting's smallest value.
+CONFIRM_FRACTIONS = (0.5, 0.25, 0.0)
+#: Scales of the declared noise, delay, current and box tried together, each as a re-run computes
+#: it, when none covers at the design's gains (the re-run's design may cover where they do not).
+RERUN_TOGETHER = (0.5, 0.25, 0.125, 0.0625, 0.0)
+
+
+def _as_rerun(cfg: FormationConfig, a: Advice) -> Advice | None:
+    """``a`` with the re-run's problem and certificate, when a re-run with its settings covers."""
+    summary = rerun(cfg, advice_settings(a))
+    if summary is None or summary.problem is None or summary.certificate is None:
+        return None
+    return replace(a, problem=summary.problem, certificate=summary.certificate)
+
+
+def confirmed(cfg: FormationConfig, problem: DeployedProblem, advice: tuple[Advice, ...]) -> tuple[Advice, ...]:
+    """The advice that re-running certifies: each piece checked as a re-run computes it.
+
+    The advice is found with the design's gains; a re-run designs its gains again for the new
+    settings (a robust or deployed design), so each piece is re-run: kept when it covers, else
+    shrunk further (:data:`CONFIRM_FRACTIONS` of its scale) until a re-run covers, else dropped.
+    Every piece returned carries the re-run's problem and certificate (its gains and bounds).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration as declared.
+    problem : DeployedProblem
+        Its composed problem (the design's gains), which does not cover.
+    advice : tuple of Advice
+        The advice found at the design's gains.
+    """
+    out: list[Advice] = []
+    for a in advice:
+        original = a.original or problem
+        for scale in dict.fromkeys((a.scale, *(a.scale * f for f in CONFIRM_FRACTIONS))):
+            cand = a if scale == a.scale else replace(a, scale=scale, problem=shrunk(original, a.knob, scale))
+            got = _as_rerun(cfg, cand)
+            if got is not None:
+                out.append(got)
+                break
+    return tuple(out)
+
+
+def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None:
+    """The declared noise, delay, current and box shrunk together as far as a re-run certifies, or ``None``.
+
+    For when nothing covers at the design's gains: a re-run designs its gains again, and may cover
+    where they do not. The scales :data:`RERUN_TOGETHER` are tried in turn; the first that covers
+    is returned, with the re-run's problem and certificate.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration as declared.
+    problem : DeployedProblem
+        Its composed problem, which does not cover.
+    """
+    knobs = declared_knobs(problem)
+    scaled = tuple(k for k in TOGETHER if k in knobs)
+    if not scaled:
+        return None
+    untried = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
+    for scale in RERUN_TOGETHER:
+        got = _as_rerun(cfg, Advice("together", scale, shrunk(problem, "together", scale), untried, scaled, problem))
+        if got is not None:
+            return got
+    return None
+
+
+def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...]]:
+    """What certifies when no declared setting does at the design's gains: the design, the mission, or a re-run.
+
+    The design or mission changes of :func:`~auv_hinf.certificate.mission_advice.mission_advice`
+    come first; when none covers, the declared settings shrunk together with the gains a re-run
+    designs (:func:`rerun_together`).
+    """
     found = mission_advice(point, covered_position_bound)
     if found:
         a = found[0]
@@ -472,9 +576,19 @@ def _no_advice(point: DesignPoint) -> tuple[str, tuple[Setting, ...]]:
             f"no declared setting certifies when shrunk, even all together; {kind[a.what]} certify: {a.line()}",
             a.settings,
         )
+    together = rerun_together(point.config, problem)
+    if together is not None and together.certificate.errors is not None:
+        bound = together.certificate.errors.position
+        return (
+            f"no declared setting certifies when shrunk at the design's gains, and neither do {tried(point.config)}; "
+            f"with the gains a re-run designs, {', '.join(together.scaled)} together at {together.scale:.4g} of the "
+            f"declared certify: {_advice_line(together)} (certified |e| <= {bound:.3g} m)",
+            advice_settings(together),
+        )
     return (
         f"no declared setting certifies when shrunk, even all together, and neither do {tried(point.config)}: "
-        "a faster [implementation] sample_time with a shorter delay is needed",
+        "nothing tried certifies this loop (a faster [implementation] sample_time with a shorter delay, or other "
+        "gains, may; none was found)",
         (),
     )
 
@@ -500,6 +614,9 @@ __all__ = [
     "advice_settings",
     "composed_start",
     "composed_summary",
+    "confirmed",
     "covered_position_bound",
+    "rerun",
+    "rerun_together",
     "within_actuators",
 ]

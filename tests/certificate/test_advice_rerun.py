@@ -1,0 +1,142 @@
+"""The composed part's advice is checked as a re-run computes it: re-running with it certifies.
+
+The advice is searched with the design's gains, but a robust or deployed design chooses its
+gains again for the new settings. Each piece of advice is therefore re-run (the configuration
+rewritten, designed, certified); a piece a re-run does not confirm is shrunk further, and when
+nothing covers at the design's gains the settings are shrunk together and re-run.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+import auv_hinf.certificate.parts.composed as composed_part
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.deployed import deployed_problem
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.composed import (
+    CONFIRM_FRACTIONS,
+    RERUN_TOGETHER,
+    advice_settings,
+    composed_start,
+    confirmed,
+    rerun_together,
+)
+from auv_hinf.composed.advice import Advice, shrunk
+from auv_hinf.composed.certificate import DeployedCertificate
+from auv_hinf.config.settings import config_from_dict, with_settings
+from tests.helpers import DEPLOYED, DEPLOYED_BOXED
+
+
+@pytest.fixture(scope="module")
+def boxed():
+    cfg = config_from_dict(DEPLOYED_BOXED, "boxed")
+    point = design_point(cfg)
+    problem = deployed_problem(cfg, point.mission, point.tube, point.offsets, point.gains, composed_start(point))
+    return cfg, problem
+
+
+def _fake_rerun(covers, problem_of):
+    """A re-run that covers when ``covers(settings)`` holds, its problem ``problem_of(settings)``."""
+    calls = []
+
+    def rerun(cfg, settings):
+        values = {(s.table, s.key): s.value for s in settings}
+        calls.append(values)
+        if not covers(values):
+            return None
+        return SimpleNamespace(problem=problem_of(values), certificate=DeployedCertificate(True, None, ()))
+
+    return rerun, calls
+
+
+def test_advice_a_rerun_does_not_confirm_is_shrunk_until_one_does(boxed, monkeypatch):
+    cfg, problem = boxed
+    declared = problem.implementation.noise.position
+    # the re-run's own gains cover only below a third of the declared noise
+    key = ("implementation.noise", "position")
+    rerun, calls = _fake_rerun(
+        lambda s: s[key] <= declared / 3.0, lambda s: shrunk(problem, "noise", s[key] / declared)
+    )
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    found = Advice(
+        "noise", 0.8, shrunk(problem, "noise", 0.8), DeployedCertificate(True, None, ()), ("noise",), problem
+    )
+    (got,) = confirmed(cfg, problem, (found,))
+    first_covering = next(f for f in CONFIRM_FRACTIONS if 0.8 * f <= 1.0 / 3.0)
+    assert got.scale == pytest.approx(0.8 * first_covering)
+    assert calls[0][key] == pytest.approx(0.8 * declared)  # the advised value is re-run first
+    # the answer carries the re-run's problem: its settings are the values that certified
+    assert got.problem.implementation.noise.position == pytest.approx(calls[-1][key])
+
+
+def test_advice_no_rerun_confirms_is_dropped(boxed, monkeypatch):
+    cfg, problem = boxed
+    rerun, calls = _fake_rerun(lambda s: False, lambda s: problem)
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    found = Advice(
+        "noise", 0.5, shrunk(problem, "noise", 0.5), DeployedCertificate(True, None, ()), ("noise",), problem
+    )
+    # nothing confirms: the piece is dropped after its advised scale and every fraction of it
+    assert confirmed(cfg, problem, (found,)) == ()
+    assert len(calls) == len(set(CONFIRM_FRACTIONS) | {1.0})
+
+
+def test_when_nothing_covers_at_the_designs_gains_the_settings_are_shrunk_together_and_rerun(boxed, monkeypatch):
+    cfg, problem = boxed
+    current = problem.plant.current
+    key = ("disturbance", "current_speed")
+    rerun, _ = _fake_rerun(lambda s: s[key] <= 0.2 * current, lambda s: shrunk(problem, "together", s[key] / current))
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    got = rerun_together(cfg, problem)
+    assert got is not None and got.knob == "together" and got.scale == max(x for x in RERUN_TOGETHER if x <= 0.2)
+    keys = {(s.table, s.key) for s in advice_settings(got)}
+    assert ("disturbance", "current_speed") in keys and ("implementation", "delay") in keys
+    assert ("uncertainty", "m11") in keys and ("implementation.noise", "position") in keys
+
+
+#: A BlueROV2-like vehicle nobody declared as a preset, gains from the robust bandwidth design
+#: (which chooses other gains when the current or noise change), a 0.15 m/s current, 10 Hz,
+#: a 0.1 s delay and coarse navigation: the advice found with the design's gains does not certify
+#: on a re-run unless it is checked as one (an independent review's fleet F07).
+REDESIGNED = {
+    **DEPLOYED,
+    "vehicle": {
+        "m11": 18.7821,
+        "m22": 17.8957,
+        "m33": 0.6448,
+        "d11_lin": 11.4066,
+        "d11_quad": 146.8017,
+        "d22_lin": 0.0,
+        "d22_quad": 179.2636,
+        "d33_lin": 0.0,
+        "d33_quad": 1.2253,
+    },
+    "formation": {"n": 4, "shape": [[0.0, -4.0], [0.0, -6.0], [0.0, -8.0]], "min_separation": 2.0},
+    "design": {"robust": True, "synthesis": "bandwidth"},
+    "reference": {"kind": "line", "speed": 0.3, "heading": 0.7},
+    "simulation": {"horizon": 30.0, "current": [0.0, -0.15]},
+    "disturbance": {"current_speed": 0.15},
+    "actuators": {"tau_x": 75.0, "tau_y": 75.0, "tau_psi": 20.0},
+    "implementation": {
+        "sample_time": 0.1,
+        "delay": 0.1,
+        "noise": {"position": 0.1, "velocity": 0.02, "heading": 0.02, "yaw_rate": 0.01},
+    },
+}
+
+
+@pytest.mark.slow
+def test_the_first_advice_of_a_redesigned_fleet_certifies_when_rerun():
+    cfg = config_from_dict(REDESIGNED, "redesigned")
+    cert = certify(cfg)
+    assert not cert.certified
+    advice = cert.to_dict()["composed"]["advice"]
+    assert advice, cert.reasons
+    first = advice[0]
+    again = certify(with_settings(cfg, [(s["table"], s["key"], s["value"]) for s in first["settings"]]))
+    assert again.certified, again.reasons
+    composed = again.to_dict()["composed"]
+    assert composed["covers"] and composed["error_bounds"]["position"] == pytest.approx(first["position_bound"])
