@@ -140,3 +140,21 @@ def test_the_first_advice_of_a_redesigned_fleet_certifies_when_rerun():
     assert again.certified, again.reasons
     composed = again.to_dict()["composed"]
     assert composed["covers"] and composed["error_bounds"]["position"] == pytest.approx(first["position_bound"])
+
+
+def test_settings_shrunk_together_are_rerun_at_larger_scales_first(boxed, monkeypatch):
+    cfg, problem = boxed
+    current = problem.plant.current
+    key = ("disturbance", "current_speed")
+    rerun, calls = _fake_rerun(
+        lambda s: s[key] <= 0.3 * current, lambda s: shrunk(problem, "together", s[key] / current)
+    )
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    scaled = ("noise", "delay", "current", "box")
+    found = Advice(
+        "together", 0.0625, shrunk(problem, "together", 0.0625), DeployedCertificate(True, None, ()), scaled, problem
+    )
+    (got,) = confirmed(cfg, problem, (found,))
+    # the largest scale of the ladder a re-run covers, not the one found at the design's gains
+    assert got.scale == max(x for x in RERUN_TOGETHER if x <= 0.3)
+    assert [c[key] / current for c in calls] == pytest.approx([x for x in RERUN_TOGETHER if x > 0.0625][: len(calls)])

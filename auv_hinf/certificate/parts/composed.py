@@ -512,7 +512,9 @@ def confirmed(cfg: FormationConfig, problem: DeployedProblem, advice: tuple[Advi
     The advice is found with the design's gains; a re-run designs its gains again for the new
     settings (a robust or deployed design), so each piece is re-run: kept when it covers, else
     shrunk further (:data:`CONFIRM_FRACTIONS` of its scale) until a re-run covers, else dropped.
-    Every piece returned carries the re-run's problem and certificate (its gains and bounds).
+    The settings shrunk together are first re-run at the larger scales of :data:`RERUN_TOGETHER`,
+    largest first (the re-run's gains may cover more than the design's). Every piece returned
+    carries the re-run's problem and certificate (its gains and bounds).
 
     Parameters
     ----------
@@ -526,13 +528,23 @@ def confirmed(cfg: FormationConfig, problem: DeployedProblem, advice: tuple[Advi
     out: list[Advice] = []
     for a in advice:
         original = a.original or problem
+        if a.knob == "together":  # larger scales first: the re-run's own gains may cover more
+            larger = [x for x in RERUN_TOGETHER if x > a.scale]
+            above = next(filter(None, (_as_rerun(cfg, _scaled(a, original, x)) for x in larger)), None)
+            if above is not None:
+                out.append(above)
+                continue
         for scale in dict.fromkeys((a.scale, *(a.scale * f for f in CONFIRM_FRACTIONS))):
-            cand = a if scale == a.scale else replace(a, scale=scale, problem=shrunk(original, a.knob, scale))
-            got = _as_rerun(cfg, cand)
+            got = _as_rerun(cfg, a if scale == a.scale else _scaled(a, original, scale))
             if got is not None:
                 out.append(got)
                 break
     return tuple(out)
+
+
+def _scaled(a: Advice, original: DeployedProblem, scale: float) -> Advice:
+    """``a`` at another ``scale`` of the declared ``original`` (its certificate left as found)."""
+    return replace(a, scale=scale, problem=shrunk(original, a.knob, scale))
 
 
 def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None:
