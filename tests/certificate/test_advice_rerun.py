@@ -18,6 +18,7 @@ from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import (
     CONFIRM_FRACTIONS,
+    RERUN_SAMPLE_TIME,
     RERUN_TOGETHER,
     advice_settings,
     composed_start,
@@ -158,3 +159,19 @@ def test_settings_shrunk_together_are_rerun_at_larger_scales_first(boxed, monkey
     # the largest scale of the ladder a re-run covers, not the one found at the design's gains
     assert got.scale == max(x for x in RERUN_TOGETHER if x <= 0.3)
     assert [c[key] / current for c in calls] == pytest.approx([x for x in RERUN_TOGETHER if x > 0.0625][: len(calls)])
+
+
+def test_with_everything_else_gone_a_faster_law_is_rerun(boxed, monkeypatch):
+    cfg, problem = boxed
+    h = problem.implementation.sample_time
+    key = ("implementation", "sample_time")
+    rerun, _ = _fake_rerun(
+        lambda s: s.get(key, h) <= 0.3 * h and s[("disturbance", "current_speed")] == 0.0,
+        lambda s: shrunk(shrunk(problem, "together", 0.0), "sample_time", s[key] / h),
+    )
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    got = rerun_together(cfg, problem)
+    assert got is not None and "sample_time" in got.scaled
+    values = {(s.table, s.key): s.value for s in advice_settings(got)}
+    assert values[key] == pytest.approx(max(f for f in RERUN_SAMPLE_TIME if f <= 0.3) * h)
+    assert values[("disturbance", "current_speed")] == 0.0 and values[("implementation", "delay")] == 0.0
