@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint, design_point
@@ -529,19 +530,21 @@ def confirmed(cfg: FormationConfig, problem: DeployedProblem, advice: tuple[Advi
         The advice found at the design's gains.
     """
     out: list[Advice] = []
-    for a in advice:
-        original = a.original or problem
-        if a.knob == "together":  # larger scales first: the re-run's own gains may cover more
-            larger = [x for x in RERUN_TOGETHER if x > a.scale]
-            above = next(filter(None, (_as_rerun(cfg, _scaled(a, original, x)) for x in larger)), None)
-            if above is not None:
-                out.append(above)
-                continue
-        for scale in dict.fromkeys((a.scale, *(a.scale * f for f in CONFIRM_FRACTIONS))):
-            got = _as_rerun(cfg, a if scale == a.scale else _scaled(a, original, scale))
-            if got is not None:
-                out.append(got)
-                break
+    with tqdm(total=len(advice), unit="answer", desc="advice re-runs", leave=False) as bar:
+        for a in advice:
+            bar.update(1)
+            original = a.original or problem
+            if a.knob == "together":  # larger scales first: the re-run's own gains may cover more
+                larger = [x for x in RERUN_TOGETHER if x > a.scale]
+                above = next(filter(None, (_as_rerun(cfg, _scaled(a, original, x)) for x in larger)), None)
+                if above is not None:
+                    out.append(above)
+                    continue
+            for scale in dict.fromkeys((a.scale, *(a.scale * f for f in CONFIRM_FRACTIONS))):
+                got = _as_rerun(cfg, a if scale == a.scale else _scaled(a, original, scale))
+                if got is not None:
+                    out.append(got)
+                    break
     return tuple(out)
 
 
@@ -569,16 +572,21 @@ def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | N
     if not scaled:
         return None
     untried = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
-    for scale in RERUN_TOGETHER:
-        got = _as_rerun(cfg, Advice("together", scale, shrunk(problem, "together", scale), untried, scaled, problem))
-        if got is not None:
-            return got
+    candidates = [
+        Advice("together", x, shrunk(problem, "together", x), untried, scaled, problem) for x in RERUN_TOGETHER
+    ]
     # with all of them gone the sample time binds: a faster law with them at nothing
-    for fraction in RERUN_SAMPLE_TIME:
-        faster = shrunk(shrunk(problem, "together", 0.0), "sample_time", fraction)
-        got = _as_rerun(cfg, Advice("together", 0.0, faster, untried, (*scaled, "sample_time"), problem))
-        if got is not None:
-            return got
+    nothing = shrunk(problem, "together", 0.0)
+    candidates += [
+        Advice("together", 0.0, shrunk(nothing, "sample_time", f), untried, (*scaled, "sample_time"), problem)
+        for f in RERUN_SAMPLE_TIME
+    ]
+    with tqdm(total=len(candidates), unit="re-run", desc="advice re-runs", leave=False) as bar:
+        for cand in candidates:
+            bar.update(1)
+            got = _as_rerun(cfg, cand)
+            if got is not None:
+                return got
     return None
 
 
