@@ -58,6 +58,7 @@ from auv_hinf.implementation.peak import (
     SampledLoop,
     StepBounds,
     free_peaks,
+    in_flight,
     peak_gains,
     small_gain,
     step_bounds,
@@ -616,17 +617,6 @@ CERTIFICATE_CACHE = 256
 
 
 @functools.lru_cache(maxsize=CERTIFICATE_CACHE)
-def in_flight(sample_time: float, delay: float) -> int:
-    """The measurements in flight of a law sampled every ``sample_time`` s on ``delay`` s old measurements.
-
-    Parameters
-    ----------
-    sample_time, delay : float
-        ``h > 0`` and ``d >= 0`` (s).
-    """
-    return math.floor(delay / sample_time + 1e-12)
-
-
 def _certified(problem: DeployedProblem) -> DeployedCertificate:
     plant, mission = problem.plant, problem.mission
     h, d = problem.timing
@@ -790,7 +780,6 @@ __all__ = [
     "Round",
     "certify_deployed",
     "force_bound",
-    "in_flight",
     "make_round",
     "summary",
 ]

@@ -196,7 +196,7 @@ def _period(loop: SampledLoop) -> _Period:
     """
     n, nu, ny, nc = loop.sizes
     h, d = loop.sample_time, loop.delay
-    m = math.floor(d / h + 1e-12)
+    m = in_flight(h, d)
     f = d - m * h
     if f < 1e-12 * h:
         f = 0.0
@@ -284,6 +284,19 @@ def _period(loop: SampledLoop) -> _Period:
         events.append(ev)
         noise.append(nz)
     return _Period(steps, events, noise, size, ix)
+
+
+def in_flight(sample_time: float, delay: float) -> int:
+    """The measurements in flight of a law sampled every ``sample_time`` s on ``delay`` s old measurements.
+
+    They are the buffer the sampled loop's period map carries as states (``d = m h + f``, ``m`` of them).
+
+    Parameters
+    ----------
+    sample_time, delay : float
+        ``h > 0`` and ``d >= 0`` (s).
+    """
+    return math.floor(delay / sample_time + 1e-12)
 
 
 def _contraction(phi: FloatArray) -> tuple[FloatArray, float] | None:
@@ -689,6 +702,7 @@ __all__ = [
     "SampledLoop",
     "StepBounds",
     "free_peaks",
+    "in_flight",
     "peak_gains",
     "period_radius",
     "small_gain",

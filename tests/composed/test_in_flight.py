@@ -17,8 +17,9 @@ from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import composed_start
 from auv_hinf.composed.advice import shrunk
-from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES, certify_deployed, in_flight
+from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES, certify_deployed
 from auv_hinf.config.settings import config_from_dict
+from auv_hinf.implementation.peak import in_flight
 from tests.helpers import DEPLOYED
 
 
