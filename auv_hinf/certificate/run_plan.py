@@ -267,21 +267,6 @@ def measured_errors(result: SimulationResult, start: int = 0) -> dict[str, float
     }
 
 
-def certified_errors_source(plan: RunPlan) -> str | None:
-    """The part whose bounds :func:`certified_errors` reports (``None`` when it reports none).
-
-    Parameters
-    ----------
-    plan : RunPlan
-        The planned run.
-    """
-    if certified_errors(plan) is None:
-        return None
-    if any(c.part == "composed" and c.covers and c.bounds is not None for c in plan.checks):
-        return "composed"
-    return "implementation" if plan.implementation is not None else "closed_loop"
-
-
 def certified_errors(plan: RunPlan) -> dict[str, float] | None:
     """The per-vehicle error bounds (m, m/s, rad, rad/s) the run's measured errors are compared with.
 
@@ -296,24 +281,37 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
     plan : RunPlan
         The planned run (its coverage and implementation summary).
     """
+    return certified_errors_of(plan)[0]
+
+
+def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | None]:
+    """:func:`certified_errors` and the part whose bounds they are (``"composed"``, ``"implementation"``
+    or ``"closed_loop"``; ``None`` with no bounds).
+
+    Parameters
+    ----------
+    plan : RunPlan
+        The planned run.
+    """
     composed = next((c for c in plan.checks if c.part == "composed" and c.covers and c.bounds is not None), None)
     if composed is not None and composed.bounds is not None:  # the deployed loop's own certificate
-        return {f"{k}_error": v for k, v in composed.bounds.items()}
+        return {f"{k}_error": v for k, v in composed.bounds.items()}, "composed"
     if plan.implementation is not None:
         c = plan.implementation.certificate
         if not plan.implementation.covers or c is None or c.bounds is None:
-            return None
-        b = c.bounds
+            return None, None
+        b, source = c.bounds, "implementation"
     elif plan.coverage is None:
-        return None
+        return None, None
     else:
-        b = plan.coverage.bounds
-    return {
+        b, source = plan.coverage.bounds, "closed_loop"
+    bounds = {
         "position_error": max(b.position, NUMERICAL_FLOOR),
         "velocity_error": max(b.velocity, NUMERICAL_FLOOR),
         "heading_error": max(b.heading, NUMERICAL_FLOOR),
         "yaw_rate_error": max(b.yaw_rate, NUMERICAL_FLOOR),
     }
+    return bounds, source
 
 
 def implementation_report(scn: Scenario) -> dict[str, Any]:
@@ -347,7 +345,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
     out = result.summary()
     measured = measured_errors(result)
     cov = plan.coverage
-    certified = certified_errors(plan)
+    certified, source = certified_errors_of(plan)
     cert = plan.certificate
     out.update(
         {
@@ -361,7 +359,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "measured_errors": measured,
             "measured_tail_errors": measured_errors(result, result.t.size // 2),
             "certified_errors": certified,
-            "certified_errors_source": certified_errors_source(plan),
+            "certified_errors_source": source,
             "covered_by": [c.part for c in plan.checks if c.role == "certificate" and c.applies and c.covers],
             "numerical_floor": NUMERICAL_FLOOR,
             "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
@@ -478,6 +476,7 @@ __all__ = [
     "SAMPLE_BUDGET",
     "RunPlan",
     "certified_errors",
+    "certified_errors_of",
     "guidance_run",
     "implementation_report",
     "measured_decay_rate",
