@@ -285,8 +285,9 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
 
 
 def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | None]:
-    """:func:`certified_errors` and the part whose bounds they are (``"composed"``, ``"implementation"``
-    or ``"closed_loop"``; ``None`` with no bounds).
+    """:func:`certified_errors` and the part whose bounds they are (``None`` with no bounds).
+
+    The part is ``"composed"``, ``"implementation"`` or ``"closed_loop"``.
 
     Parameters
     ----------
