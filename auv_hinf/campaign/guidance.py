@@ -1,9 +1,9 @@
 """Campaigns of the guidance cascade: the fleet on sampled plants of the box and in sampled currents.
 
-No certificate covers the line-of-sight cascade in this version, so a campaign measures it
-rather than checking it against bounds: every run reports its worst along-track, cross-track
-and heading errors, its commanded thrust and rudder against the limits, how long it saturated
-and how close two vehicles came, and the summary takes the worst of each over the runs.
+Every run reports its worst along-track, cross-track and heading errors, its commanded thrust
+and rudder against the limits, how long it saturated and how close two vehicles came, and
+whether the guidance certificate (:mod:`auv_hinf.certificate.parts.guidance`) covers it and it
+stayed within the certified bounds; the summary takes the worst of each over the runs.
 
 Sampling follows the formation law's campaigns (:mod:`auv_hinf.campaign.starts`): every
 :data:`~auv_hinf.campaign.starts.CORNER_PERIOD`-th run is a vertex of the ``[uncertainty]`` box
@@ -29,6 +29,7 @@ import pandas as pd
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
 from auv_hinf.certificate.document import json_safe
+from auv_hinf.certificate.parts.guidance import guidance_summary, run_coverage
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, Interrupted, ParameterError
@@ -46,6 +47,8 @@ COLUMN_UNITS: dict[str, str] = {
     "saturation_fraction": "1",
     "min_separation": "m",
     "peak_sway_speed": "m/s",
+    "covered": "bool",
+    "within_bounds": "bool",
 }
 #: Units of the summary's figures (the text of ``campaign``).
 SUMMARY_UNITS: dict[str, Any] = {
@@ -56,6 +59,7 @@ SUMMARY_UNITS: dict[str, Any] = {
     "required_min_separation": "m",
     "horizon": "s",
     "current_speed": "m/s",
+    "certified_errors": {"along_track": "m", "cross_track": "m", "heading": "rad"},
 }
 
 
@@ -93,6 +97,10 @@ class GuidanceCampaign:
         saturated = int(np.sum(t["saturation_fraction"] > 0.0))
         close = int(np.sum(t["min_separation"] < cfg.min_separation))
         done = len(t)
+        cert = guidance_summary(cfg).certificate
+        certified = cert is not None and cert.holds
+        covered = int(np.sum(t["covered"])) if done else 0
+        outside = int(np.sum(~t["within_bounds"])) if done else 0
         return {
             "config": cfg.name,
             "law": "guidance",
@@ -116,12 +124,16 @@ class GuidanceCampaign:
             "min_separation": float(t["min_separation"].min()) if done else None,
             "required_min_separation": cfg.min_separation,
             "runs_below_min_separation": close,
-            "certified": False,
-            "certificate_covers_runs": False,
-            "ok": done > 0 and saturated == 0 and close == 0,
+            "certified": certified,
+            "certified_errors": None if not certified or cert is None else cert.error_bounds,
+            "covered_runs": covered,
+            "certificate_covers_runs": done > 0 and covered == done,
+            "runs_outside_bounds": outside,
+            "ok": done > 0 and saturated == 0 and close == 0 and outside == 0,
             "notes": [
-                "the guidance cascade has no certificate in this version: the campaign measures it, "
-                "it does not check it against bounds",
+                "every run is checked against the guidance certificate when it covers the run (plant in the box, "
+                "current within the bound, certified start); runs_outside_bounds counts covered runs whose measured "
+                "errors or commands exceeded their certified bounds (a soundness failure: it must be 0)",
                 "the rudder coefficients are exact; the box scales the nine hull coefficients",
             ],
         }
@@ -221,7 +233,9 @@ def run_guidance_campaign(
 def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dict[str, Any]:
     corner, mult, current = run_inputs(cfg, seed, index)
     plant = scaled_plant(cfg.vehicle, mult)
-    rep = guidance_run(cfg, horizon, plant=plant, current=(float(current[0]), float(current[1]))).report()
+    flow = (float(current[0]), float(current[1]))
+    rep = guidance_run(cfg, horizon, plant=plant, current=flow).report()
+    coverage = run_coverage(cfg, rep, np.asarray(mult, dtype=float), flow, cfg.simulation.initial)
     errors, final, peak = rep["measured_errors"], rep["final_errors"], rep["commanded_peak"]
     return {
         "run": index,
@@ -238,6 +252,8 @@ def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dic
         "saturation_fraction": rep["saturation_fraction"],
         "min_separation": rep["min_separation"],
         "peak_sway_speed": rep["peak_sway_speed"],
+        "covered": bool(coverage["certificate_covers_run"]),
+        "within_bounds": coverage["within_certified_bounds"] is not False,
     }
 
 

@@ -31,10 +31,10 @@ PARTS: tuple[CertificatePart, ...] = (
     ComposedPart(),
     ClosedLoopPart(),
     RobustPart(),
+    GuidancePart(),
     ActuatorPart(),
     ImplementationPart(),
     SeparationPart(),
-    GuidancePart(),
 )
 
 _registered: list[CertificatePart] = list(PARTS)

@@ -146,7 +146,6 @@ class GuidanceRun:
             "closest_pair": list(pair),
             "horizon": float(self.t[-1]),
             "sample_time": float(self.t[1] - self.t[0]) if self.t.size > 1 else None,
-            "certificate_covers_run": False,
             **({} if self.vertical is None else {"vertical": self._vertical_report()}),
         }
 

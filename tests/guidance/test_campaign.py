@@ -71,7 +71,9 @@ def test_rows_are_the_runs_and_the_summary_is_their_worst():
     assert s["worst_commanded_peak"]["force_x"] == t["force_x"].max()
     assert s["min_separation"] == t["min_separation"].min() and s["vertex_runs"] == 2
     assert s["certified"] is False and s["certificate_covers_runs"] is False
-    assert s["ok"] == (s["saturated_runs"] == 0 and s["runs_below_min_separation"] == 0)
+    assert s["ok"] == (
+        s["saturated_runs"] == 0 and s["runs_below_min_separation"] == 0 and s["runs_outside_bounds"] == 0
+    )
 
 
 def test_bad_inputs_are_refused():
@@ -110,7 +112,7 @@ def test_cli_campaign_of_a_guidance_fleet(tmp_path, capsys):
     code = main([*args, "--out", str(out)])
     text, err = capsys.readouterr()
     summary = json.loads(text)
-    assert code == 1 and "no certificate" in err and "Traceback" not in err
+    assert code == 1 and "not certified" in err and "Traceback" not in err
     assert summary == json.loads((out / "summary.json").read_text())
     assert summary["runs"] == 2 and set(summary["worst_errors"]) >= {"along_track", "cross_track", "heading"}
     assert summary["limits"]["rudder"] == pytest.approx(preset_config("remus-survey-ilos").actuators.rudder_max)

@@ -124,7 +124,7 @@ def test_guidance_needs_a_rudder_vehicle_and_round_trips():
 
 
 @pytest.mark.slow
-def test_a_guidance_fleet_is_never_certified_and_its_formation_law_is_not_evaluated():
+def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
     cfg = replace(preset_config("remus-survey-ilos"), simulation=SimulationConfig(horizon=30.0))
     data = certify(cfg).to_dict()
     assert data["certified"] is False
@@ -147,7 +147,7 @@ def test_cli_simulate_and_certify_of_a_guidance_file(tmp_path, capsys):
     capsys.readouterr()
     code = main(["simulate", "--config", str(path), "--json", "--out", str(tmp_path / "out")])
     out, err = capsys.readouterr()
-    assert code == 1 and "Traceback" not in err and "no certificate" in err
+    assert code == 1 and "Traceback" not in err and "not certified" in err
     rep = json.loads(out)
     assert set(rep["commanded_peak"]) == {"force_x", "rudder"}
     assert set(rep["measured_errors"]) == {"along_track", "cross_track", "heading"}

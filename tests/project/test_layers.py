@@ -2,8 +2,8 @@
 
 The order is the data flow of a command (docs/modules.md): numerical building blocks, the
 physical world, the mission, the law, actuation, the controller as it runs, simulation,
-design, the certificates, configuration, the assembled certificate, deployment on vehicles,
-campaigns, figures, CLI.
+design, the certificates (the formation law's, then the guidance cascade's), configuration,
+the assembled certificate, deployment on vehicles, campaigns, figures, CLI.
 An import inside a function counts as much as one at the top of a module.
 """
 
@@ -31,6 +31,7 @@ LAYERS = (
     ("closed_loop",),
     ("robust",),
     ("composed",),
+    ("cascade",),
     ("config",),
     ("certificate",),
     ("deployment",),

@@ -77,6 +77,8 @@ class ActuatorCheck:
     rudder_authority : dict or None
         For a rudder: the largest sway force (N) and yaw moment (N m) it gives at the envelope's top
         surge speed (m/s), ``{speed, force_y, moment}``, and its lever arm (m).
+    guided_peak : dict or None
+        With ``[guidance]``: the guidance certificate's thrust and rudder ``{force_x, rudder}`` (N, rad).
     """
 
     limits: Actuation | None
@@ -87,11 +89,14 @@ class ActuatorCheck:
     reason: str
     largest_certifiable: dict[str, Any] | None = None
     rudder_authority: dict[str, float] | None = None
+    guided_peak: dict[str, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The ``actuators`` object of ``auv-hinf certify --json``."""
         peak: dict[str, Any] | None = None if self.certified_peak is None else dict(zip(CHANNELS, self.certified_peak))
-        if peak is None and isinstance(self.limits, RudderActuation):
+        if self.guided_peak is not None:
+            peak = dict(self.guided_peak)  # the guidance cascade's thrust (N) and rudder (rad)
+        elif peak is None and isinstance(self.limits, RudderActuation):
             peak = {"force_x": None, "rudder": None}  # nothing is certified for the propeller or the rudder
         elif peak is not None and isinstance(self.limits, RudderActuation):
             peak["rudder"] = None  # the fully actuated law has no rudder command: nothing is certified for it
@@ -125,7 +130,9 @@ def peak_of(bounds: list[Peak]) -> Peak | None:
     return (max(b[0] for b in bounds), max(b[1] for b in bounds), max(b[2] for b in bounds))
 
 
-def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = True) -> ActuatorCheck:
+def check_actuators(
+    point: DesignPoint, peaks: list[Peak], *, answers: bool = True, guided: Mapping[str, float] | None = None
+) -> ActuatorCheck:
     """The actuator verdict of a design whose certificates bound the thrust by ``peaks``.
 
     Parameters
@@ -136,6 +143,8 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
         The certified thrust bounds (N, N, N m); their elementwise largest is checked.
     answers : bool
         Compute :func:`largest_certifiable` when the limits bind.
+    guided : mapping or None
+        With ``[guidance]``: the guidance certificate's ``{force_x, rudder}`` (N, rad), if any.
     """
     act = point.config.actuators
     peak = peak_of(peaks)
@@ -143,7 +152,7 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
         why = "no actuator limits declared ([actuators]): the certificate assumes unlimited thrust"
         return ActuatorCheck(None, peak, None, None, False, why)
     if isinstance(act, RudderActuation):
-        return rudder_check(point, act, peak)
+        return rudder_check(point, act, peak, guided)
     if peak is None:
         return ActuatorCheck(act, None, None, None, False, "no certificate bounds the commanded force")
     channel, ratio = act.binding(peak)
@@ -171,7 +180,42 @@ def check_actuators(point: DesignPoint, peaks: list[Peak], *, answers: bool = Tr
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)
 
 
-def rudder_check(point: DesignPoint, act: RudderActuation, peak: Peak | None) -> ActuatorCheck:
+def guided_check(
+    act: RudderActuation, guided: Mapping[str, float] | None, authority: dict[str, float]
+) -> ActuatorCheck:
+    """The actuator verdict of the guidance cascade: its certified thrust and rudder against the limits.
+
+    Parameters
+    ----------
+    act : RudderActuation
+        The propeller and rudder.
+    guided : mapping or None
+        The guidance certificate's ``{force_x, rudder}`` (N, rad); ``None`` when it proves none.
+    authority : dict
+        The rudder's authority at the envelope's top speed.
+    """
+    if guided is None:
+        why = (
+            "the guidance cascade commands the propeller and the rudder (no sway force); "
+            "its certificate bounds neither (see guidance)"
+        )
+        return ActuatorCheck(act, None, None, None, False, why, rudder_authority=authority)
+    ratios = {"force_x": guided["force_x"] / act.tau_x, "rudder": guided["rudder"] / act.rudder_max}
+    channel = max(ratios, key=lambda k: ratios[k])
+    ok = all(r <= 1.0 for r in ratios.values())
+    why = (
+        f"the guidance cascade's certified thrust {guided['force_x']:.4g} N and rudder {guided['rudder']:.4g} rad "
+        f"{'fit' if ok else 'exceed'} the limits {act.tau_x:.4g} N and {act.rudder_max:.4g} rad "
+        f"(binding: {channel}, {ratios[channel]:.3g} of its limit)"
+    )
+    return ActuatorCheck(
+        act, None, channel, ratios[channel], ok, why, rudder_authority=authority, guided_peak=dict(guided)
+    )
+
+
+def rudder_check(
+    point: DesignPoint, act: RudderActuation, peak: Peak | None, guided: Mapping[str, float] | None = None
+) -> ActuatorCheck:
     """The refusal of the fully actuated law on a vehicle with a propeller and a rudder, with the figures.
 
     Parameters
@@ -182,16 +226,14 @@ def rudder_check(point: DesignPoint, act: RudderActuation, peak: Peak | None) ->
         The vehicle's propeller and rudder.
     peak : Peak or None
         The certified peak ``(|tau_x|, |tau_y|, |tau_psi|)`` the law would command (N, N, N m).
+    guided : mapping or None
+        With ``[guidance]``: the guidance certificate's ``{force_x, rudder}`` (N, rad), if any.
     """
     speed = float(point.config.envelope.u[1])
     sway, moment = act.authority(speed)
     authority = {"speed": speed, "force_y": sway, "moment": moment, "lever_arm": act.lever_arm}
-    if point.config.guidance is not None:  # the guidance cascade runs: the guidance part decides
-        why = (
-            "the guidance cascade commands the propeller and the rudder (no sway force); no bound of its thrust or "
-            "rudder is certified in this version (see guidance)"
-        )
-        return ActuatorCheck(act, None, None, None, False, why, rudder_authority=authority)
+    if point.config.guidance is not None:  # the guidance cascade runs: its certificate bounds thrust and rudder
+        return guided_check(act, guided, authority)
     need = "" if peak is None else f" (it needs |tau_y| <= {peak[1]:.4g} N with |tau_psi| <= {peak[2]:.4g} N m)"
     why = (
         f"the formation law is fully actuated: it commands sway force and yaw moment independently{need}, and "
@@ -226,7 +268,9 @@ class ActuatorPart:
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The actuator check of the peaks the earlier parts prove."""
         point = ctx.point
-        act = check_actuators(point, ctx.peaks())
+        guidance = ctx.verdicts.get("guidance")
+        guided = None if guidance is None or not guidance.figures else guidance.figures.get("certified_peak")
+        act = check_actuators(point, ctx.peaks(), guided=guided)
         if act.limits is None:
             return Verdict(self.name, True, False, (), act.to_dict(), detail=act)
         binding = None

@@ -1,57 +1,254 @@
-"""The guidance part: the line-of-sight cascade of a propeller-and-rudder fleet, and what is proved of it.
+"""The guidance part: the certificate of the line-of-sight cascade of a propeller-and-rudder fleet.
 
 A configuration with a ``[guidance]`` table steers every vehicle with the cascade of
-:mod:`auv_hinf.guidance.law` (ILOS or LOS on its slot path, along-track speed coordination,
-surge and heading autopilots on the propeller and the rudder), not with the fully actuated
-formation law. This version proves no bound for that cascade: the part applies, does not hold,
-and says so, so that a fleet that runs it is never called certified. Its figures are the
-``guidance`` object of ``certify --json``: the kind, the lookahead, the gains, ``certified``
-(false) and ``error_bounds`` (``null``: none is claimed). ``auv-hinf simulate`` runs the cascade
-and reports the measured along-track, cross-track and heading errors, the rudder and the thrust.
+:mod:`auv_hinf.guidance.law` (ILOS on its slot path, along-track speed coordination, surge and
+heading autopilots on the propeller and the rudder), not with the fully actuated formation law.
+This part builds the cascade's certificate problem from the configuration
+(:func:`cascade_problem`: the ``[uncertainty]`` box, the ``[disturbance]`` current, the
+propeller and rudder limits, every slot's speed, acceleration and jerk along the mission, the
+sample time, the configured start) and proves it with
+:func:`~auv_hinf.cascade.certificate.certify_cascade`: bounds of every vehicle's along-track,
+cross-track and heading errors, of the sway speed, and of the commanded thrust and rudder, which
+must fit the limits. Its figures are the ``guidance`` object of ``certify --json``.
+
+When it does not hold, the part answers with the largest current and the largest scale of the
+box that certify (each with the other as declared; a bisection on certificates, so the answer
+itself is certified), as ``settings`` to re-run with.
+
+The certificate covers what ``simulate`` runs: the cascade sampled every ``[implementation]
+sample_time`` (10 Hz by default), without delay or measurement noise, ILOS guidance. A declared
+delay or noise, or plain LOS, is answered "not evaluated", with the reason.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
+from auv_hinf.actuation.limits import RudderActuation
+from auv_hinf.cascade.certificate import (
+    STATES,
+    CascadeCertificate,
+    CascadeProblem,
+    certify_cascade,
+    into_current_start,
+    start_states,
+)
+from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
+from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.reason import Reason
+from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.composed.loops import Plant
+from auv_hinf.config.settings import FormationConfig
+from auv_hinf.guidance.law import SlotMotion
+from auv_hinf.guidance.simulation import STEP, slot_motion
+from auv_hinf.numerics.bisection import largest_holding
+from auv_hinf.robust.box import PARAMETERS
 
 #: The part's registry name.
 PART = "guidance"
 #: The JSON key of its figures.
 KEY = "guidance"
+#: Bisection steps of the advised current and box scale (each halves the bracket: 2^-10 of it).
+ADVICE_STEPS = 10
 
 
-def guidance_figures(ctx: PartContext) -> dict[str, Any] | None:
-    """The ``guidance`` object of ``certify --json`` (``None`` without ``[guidance]``).
+def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem | str:
+    """The cascade's certificate problem of ``cfg``, or why it is not evaluated.
 
     Parameters
     ----------
-    ctx : PartContext
-        The design point (its configuration's ``[guidance]`` table).
+    cfg : FormationConfig
+        A configuration with ``[guidance]`` and an underactuated ``[actuators]``.
+    point : DesignPoint
+        Its design point (the mission, its tube and the offsets).
     """
-    g = ctx.point.config.guidance
-    if g is None:
-        return None
+    g, act, impl = cfg.guidance, cfg.actuators, cfg.implementation
+    if g is None or not isinstance(act, RudderActuation):
+        return "[guidance] needs an underactuated [actuators] table: a propeller and a rudder"
+    if g.sigma <= 0.0:
+        return (
+            "plain LOS has no certificate in this version (its offset in a current is in closed form): "
+            'use kind = "ilos"'
+        )
+    if impl.delay > 0.0 or not impl.noise.exact:
+        return (
+            "the cascade is certified at [implementation] sample_time without delay or noise in this version: "
+            "remove [implementation] delay and [implementation.noise]"
+        )
+    tube = point.tube
+    speed_lo = tube.speed[:, 0]
+    if float(speed_lo.min()) <= 0.0:
+        return "a slot stops on the mission: line-of-sight guidance needs a moving slot"
+    jerk, _ = mission_jerks(point.mission, point.offsets, cfg.frame)
+    turn = float((tube.accel / speed_lo).max())
+    turn_accel = float((jerk / speed_lo + 2.0 * tube.accel**2 / speed_lo**2).max())
+    problem = CascadeProblem(
+        guidance=g,
+        plant=deployed_plant(cfg),
+        act=act,
+        speed=(float(speed_lo.min()), float(tube.speed[:, 1].max())),
+        accel=float(tube.accel.max()),
+        turn_rate=turn,
+        turn_accel=turn_accel,
+        jerk=float(jerk),
+        sample_time=impl.sample_time if impl.sample_time > 0.0 else STEP,
+    )
+    return replace(problem, start=tuple(float(x) for x in configured_start(cfg, problem)))
+
+
+def _slots_at_start(cfg: FormationConfig) -> SlotMotion:
+    """Every slot at ``t = 0``."""
+    s = slot_motion(raw_fleet(cfg), np.array([0.0]))
+    return SlotMotion(p=s.p[0], v=s.v[0], a=s.a[0])
+
+
+def configured_start(cfg: FormationConfig, problem: CascadeProblem) -> np.ndarray:
+    """Bounds of the cascade's states at ``t = 0`` for the configured start, in any current up to the bound.
+
+    Without ``[simulation] initial`` every vehicle starts on its slot heading into the current it
+    runs in (as ``simulate`` and ``campaign`` start it); with it, the declared states in any
+    current up to the bound.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    problem : CascadeProblem
+        Its cascade problem (start not used).
+    """
+    slot = _slots_at_start(cfg)
+    if cfg.simulation.initial is None:
+        return into_current_start(problem, slot)
+    return start_states(problem, np.asarray(cfg.simulation.initial, dtype=float), slot, None)
+
+
+@dataclass(frozen=True)
+class GuidanceSummary:
+    """The guidance part's result for one configuration.
+
+    Attributes
+    ----------
+    problem : CascadeProblem or None
+        The certificate problem (``None``: not evaluated).
+    certificate : CascadeCertificate or None
+        Its certificate.
+    reason : str
+        Why it is not evaluated or does not hold (empty when it holds).
+    current_speed, box_scale : float or None
+        When it does not hold: the largest current (m/s, with the declared box) and the largest
+        scale of the declared box (with the declared current) that certify; ``None``: none found.
+    """
+
+    problem: CascadeProblem | None
+    certificate: CascadeCertificate | None
+    reason: str
+    current_speed: float | None = None
+    box_scale: float | None = None
+
+    @property
+    def holds(self) -> bool:
+        """The cascade is certified."""
+        return self.certificate is not None and self.certificate.holds
+
+
+def _with(problem: CascadeProblem, *, current: float | None = None, scale: float | None = None) -> CascadeProblem:
+    """``problem`` with another current bound (m/s) or its box scaled."""
+    pl = problem.plant
+    box = pl.box if scale is None else pl.box.scaled(scale)
+    return replace(problem, plant=Plant(pl.model, box, pl.current if current is None else current, pl.current_rate))
+
+
+@functools.lru_cache(maxsize=32)
+def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
+    """The cascade's certificate of ``cfg`` and, when it does not hold, what would certify.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (with ``[guidance]``).
+    """
+    problem = cascade_problem(cfg, design_point(cfg))
+    if isinstance(problem, str):
+        return GuidanceSummary(None, None, problem)
+    cert = certify_cascade(problem)
+    if cert.holds:
+        return GuidanceSummary(problem, cert, "")
+    current = None
+    if problem.plant.current > 0.0:
+        current = largest_holding(
+            lambda c: certify_cascade(_with(problem, current=c)).holds, problem.plant.current, steps=ADVICE_STEPS
+        )
+    scale = None
+    if problem.plant.box.declared:
+        top = min(1.0, problem.plant.box.max_scale)
+        scale = largest_holding(lambda s: certify_cascade(_with(problem, scale=s)).holds, top, steps=ADVICE_STEPS)
+    return GuidanceSummary(problem, cert, cert.reason, current, scale)
+
+
+def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
+    """The settings to re-run with, and their sentence (empty when none certifies)."""
+    problem = summary.problem
+    if problem is None:
+        return (), ""
+    if summary.current_speed is not None and summary.current_speed > 0.0:
+        c = summary.current_speed
+        return (Setting("disturbance", "current_speed", round(c, 4)),), f"a current up to {c:.4g} m/s certifies"
+    if summary.box_scale is not None and summary.box_scale > 0.0:
+        scaled = problem.plant.box.scaled(summary.box_scale)
+        declared = {name for name, _ in cfg.uncertainty.box}
+        settings = tuple(
+            Setting("uncertainty", name, [round(scaled.lo[k], 4), round(scaled.hi[k], 4)])
+            for k, name in enumerate(PARAMETERS)
+            if name in declared
+        )
+        return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies"
+    return (), ""
+
+
+def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str, Any]:
+    """The ``guidance`` object of ``certify --json`` (SI units).
+
+    Keys: the ``[guidance]`` gains, ``certified``, ``error_bounds{along_track, cross_track,
+    heading}`` (m, m, rad), ``certified_peak{force_x, rudder}`` (N, rad), ``limits``, ``states``
+    (the whole certified box), ``sample_time`` (s), ``start`` (the certified start's bounds),
+    ``largest_certifiable{current_speed, box_scale}`` and ``reason``.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (its ``[guidance]`` table).
+    summary : GuidanceSummary
+        The part's result.
+    """
+    assert cfg.guidance is not None
+    cert, problem = summary.certificate, summary.problem
+    body = {} if cert is None else cert.to_dict()
+    act = cfg.actuators
     return {
-        **g.to_dict(),
-        "certified": False,
-        "error_bounds": None,
-        "certified_peak": None,
-        "reason": (
-            f"no certificate of the {g.kind.upper()} guidance cascade in this version: no bound of its "
-            "along-track, cross-track or heading errors, rudder or thrust is claimed; `auv-hinf simulate` "
-            "runs it on the 3-DOF model and reports what it measures"
-        ),
+        **cfg.guidance.to_dict(),
+        "certified": summary.holds,
+        "error_bounds": body.get("error_bounds"),
+        "certified_peak": body.get("certified_peak"),
+        "limits": act.to_dict() if isinstance(act, RudderActuation) else None,
+        "states": body.get("states"),
+        "sway_speed": body.get("sway_speed"),
+        "surge_speed": body.get("surge_speed"),
+        "sample_time": None if problem is None else problem.sample_time,
+        "start": None if problem is None else dict(zip(STATES, problem.start, strict=True)),
+        "largest_certifiable": {"current_speed": summary.current_speed, "box_scale": summary.box_scale},
+        "reason": summary.reason,
     }
 
 
 @dataclass(frozen=True)
 class GuidancePart:
-    """The guidance cascade's verdict: it applies with ``[guidance]`` and, in this version, never holds.
+    """The guidance cascade's certificate: it applies with ``[guidance]``.
 
     Attributes
     ----------
@@ -65,21 +262,36 @@ class GuidancePart:
     key: str | None = KEY
 
     def evaluate(self, ctx: PartContext) -> Verdict:
-        """Not certified with ``[guidance]`` (see the module docstring); does not apply without it.
+        """The cascade's certificate (see the module docstring); does not apply without ``[guidance]``.
 
         Parameters
         ----------
         ctx : PartContext
             The design point and the earlier verdicts.
         """
-        figures = guidance_figures(ctx)
-        if figures is None:
+        cfg = ctx.point.config
+        if cfg.guidance is None:
             return Verdict(self.name, True, False)
-        why = Reason(self.name, "unsupported", f"guidance: {figures['reason']}", channel="guidance")
-        return Verdict(self.name, False, True, (why,), figures)
+        summary = guidance_summary(cfg)
+        figures = guidance_figures(cfg, summary)
+        cert = summary.certificate
+        if summary.holds and cert is not None:
+            return Verdict(self.name, True, True, (), figures, detail=summary, position_bound=cert.position_bound)
+        settings, advice = _advice(cfg, summary)
+        text = f"guidance: {summary.reason}" + (f"; {advice} (re-run with it)" if advice else "")
+        actuation = None if cert is None else cert.actuation
+        channel, value, limit = "guidance", None, None
+        if actuation is not None and isinstance(cfg.actuators, RudderActuation):
+            if actuation.rudder > cfg.actuators.rudder_max:
+                channel, value, limit = "rudder", actuation.rudder, cfg.actuators.rudder_max
+            elif actuation.thrust > cfg.actuators.tau_x:
+                channel, value, limit = "force_x", actuation.thrust, cfg.actuators.tau_x
+        kind = "unsupported" if summary.problem is None else "thrust" if channel != "guidance" else "not_covered"
+        why = Reason(self.name, kind, text, channel=channel, value=value, limit=limit, settings=settings)
+        return Verdict(self.name, False, True, (why,), figures, detail=summary)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
-        """The guidance kind, its lookahead and gain, and that no bound is certified.
+        """The guidance kind, its lookahead, and its certified bounds or why there are none.
 
         Parameters
         ----------
@@ -92,10 +304,24 @@ class GuidancePart:
         if f is None:
             return []
         gain = f" sigma {f['integral_gain']:.4g} m/s," if f["kind"] == "ilos" else ""
-        return [f"  guidance ({f['kind']})           lookahead {f['lookahead']:.4g} m,{gain} not certified: no bound"]
+        head = f"  guidance ({f['kind']})           lookahead {f['lookahead']:.4g} m,{gain}"
+        b, pk, lim = f.get("error_bounds"), f.get("certified_peak"), f.get("limits")
+        if not f.get("certified") or b is None or pk is None:
+            return [f"{head} not certified: {f.get('reason', '')}"]
+        out = [
+            f"{head} certified at h = {f['sample_time']:.4g} s",
+            f"    errors <= along-track {b['along_track']:.4g} m, cross-track {b['cross_track']:.4g} m, "
+            f"heading {b['heading']:.4g} rad; sway <= {f['sway_speed']:.4g} m/s",
+        ]
+        if lim is not None:
+            out.append(
+                f"    commands <= thrust {pk['force_x']:.4g} N of {lim['force_x']:.4g} N, "
+                f"rudder {pk['rudder']:.4g} rad of {lim['rudder']:.4g} rad"
+            )
+        return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
-        """Nothing to say about a run of the fully actuated law (a guidance run is simulated on its own).
+        """Nothing to say about a run of the fully actuated law (a guidance run is checked by :func:`covers_run`).
 
         Parameters
         ----------
@@ -105,4 +331,133 @@ class GuidancePart:
         return None
 
 
-__all__ = ["KEY", "PART", "GuidancePart", "guidance_figures"]
+def covers_run(
+    cfg: FormationConfig,
+    summary: GuidanceSummary,
+    multipliers: np.ndarray | None,
+    current: tuple[float, float],
+    initial: np.ndarray | None,
+) -> tuple[bool, str]:
+    """Whether the cascade's certificate covers one run, and why (one line).
+
+    The run is covered when the certificate holds, its plant is in the box (``multipliers``:
+    the nine parameter multipliers, ``None`` for the nominal plant), its current within the bound,
+    and its start within the certified start's bounds (``initial``: ``None`` for the default start,
+    on the slots heading into the current).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    summary : GuidanceSummary
+        Its guidance result.
+    multipliers : ndarray or None
+        The run's plant, as multipliers of the nominal parameters.
+    current : tuple of float
+        The run's current (m/s, inertial).
+    initial : ndarray, shape (N, 6), or None
+        The run's start.
+    """
+    problem, cert = summary.problem, summary.certificate
+    if problem is None or cert is None or not cert.holds:
+        return False, "the guidance cascade is not certified" + (f": {summary.reason}" if summary.reason else "")
+    box = problem.plant.box
+    if multipliers is not None:
+        m = np.asarray(multipliers, dtype=float)
+        if np.any(m < np.asarray(box.lo) * (1.0 - 1e-12)) or np.any(m > np.asarray(box.hi) * (1.0 + 1e-12)):
+            return False, "the run's plant is outside the [uncertainty] box"
+    speed = math.hypot(*current)
+    if speed > problem.plant.current * (1.0 + 1e-12):
+        return (
+            False,
+            f"the run's current ({speed:.4g} m/s) exceeds [disturbance] current_speed "
+            f"({problem.plant.current:.4g} m/s)",
+        )
+    if initial is not None:
+        start = start_states(problem, np.asarray(initial, dtype=float), _slots_at_start(cfg), np.asarray(current))
+        if np.any(start > np.asarray(problem.start) * (1.0 + 1e-9) + 1e-12):
+            return False, "the run's start is outside the certified start"
+    return True, "the guidance certificate covers the run (plant in the box, current within the bound, certified start)"
+
+
+def run_coverage(
+    cfg: FormationConfig,
+    report: Mapping[str, Any],
+    multipliers: np.ndarray | None,
+    current: tuple[float, float],
+    initial: Any,
+    six_dof: bool = False,
+) -> dict[str, Any]:
+    """The certificate's keys of a guidance run's report: coverage, the certified bounds, and whether the run kept them.
+
+    ``certificate_covers_run`` (the certificate holds and covers the run's plant, current and
+    start; a 6-DOF run is outside the 3-DOF model it covers), ``certified_errors``
+    ``{along_track, cross_track, heading}`` (m, m, rad), ``certified_peak{force_x, rudder}``
+    (N, rad), ``within_certified_bounds`` (every measured error and commanded peak at most its
+    bound; ``None`` when the run is not covered) and ``coverage_reason``.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    report : mapping
+        The run's report (:meth:`~auv_hinf.guidance.simulation.GuidanceRun.report`).
+    multipliers : ndarray or None
+        The run's plant as multipliers of the nine coefficients (``None``: the nominal plant).
+    current : tuple of float
+        The run's current (m/s, inertial).
+    initial : array_like or None
+        The run's start, shape (N, 6) (``None``: on the slots heading into the current).
+    six_dof : bool
+        The run is on the 6-DOF model.
+    """
+    summary = guidance_summary(cfg)
+    covered, why = covers_run(cfg, summary, multipliers, current, initial)
+    if six_dof:
+        covered, why = False, f"this run is on the 6-DOF REMUS 100; the certificate is of the 3-DOF model ({why})"
+    cert = summary.certificate
+    bounds = None if cert is None or not cert.holds else cert.error_bounds
+    peak = (
+        None
+        if cert is None or not cert.holds or cert.actuation is None
+        else {"force_x": cert.actuation.thrust, "rudder": cert.actuation.rudder}
+    )
+    within = None
+    if covered and bounds is not None and peak is not None:
+        measured, commanded = report["measured_errors"], report["commanded_peak"]
+        within = all(measured[k] <= bounds[k] for k in bounds) and all(commanded[k] <= peak[k] for k in peak)
+    return {
+        "certificate_covers_run": covered,
+        "certified_errors": bounds,
+        "certified_peak": peak,
+        "within_certified_bounds": within,
+        "coverage_reason": why,
+    }
+
+
+def plant_multipliers(cfg: FormationConfig) -> np.ndarray:
+    """The ``[simulation] plant`` multipliers in :data:`~auv_hinf.robust.box.PARAMETERS` order (1 where not given).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    """
+    given = dict(cfg.simulation.plant)
+    return np.array([float(given.get(name, 1.0)) for name in PARAMETERS])
+
+
+__all__ = [
+    "ADVICE_STEPS",
+    "KEY",
+    "PART",
+    "GuidancePart",
+    "GuidanceSummary",
+    "cascade_problem",
+    "configured_start",
+    "covers_run",
+    "guidance_figures",
+    "guidance_summary",
+    "plant_multipliers",
+    "run_coverage",
+]

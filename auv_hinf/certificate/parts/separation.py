@@ -45,7 +45,7 @@ PART = "separation"
 #: The JSON key of its figures.
 KEY = "formation"
 #: The parts that bound the tracking errors: each one that applies must prove a position bound.
-BOUNDING_PARTS = ("composed", "closed_loop", "robust", "implementation")
+BOUNDING_PARTS = ("composed", "closed_loop", "robust", "implementation", "guidance")
 #: Largest fleet for which a refusal suggests the scaled ``[formation] offsets`` themselves.
 OFFSETS_ADVICE_MAX_N = 12
 #: Relative margin on the advised spread, above the rounding of the advised values to 4 digits.

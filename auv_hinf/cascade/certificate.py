@@ -1,0 +1,796 @@
+"""A certificate of the ILOS guidance cascade: bounds of every vehicle's along-track, cross-track and heading errors.
+
+Each vehicle of a ``[guidance]`` fleet runs the cascade of :mod:`auv_hinf.guidance.law` on its
+own slot, sampled every ``h`` seconds (its thrust and rudder held), on a plant anywhere in the
+``[uncertainty]`` box, in a current ``|c| <= C`` (constant, or with ``|c'|`` bounded). This
+module proves, for every such plant and current and every mission time, bounds of the errors,
+of the commanded thrust and rudder, and of the sway speed. The derivation is in
+``docs/derivations/guidance.md``; in short:
+
+* **Coordinates.** In the slot's path-tangential frame (course ``gamma``, rate ``omega``,
+  speed ``U``) the state of one vehicle is ``x = (x_e, v_x, y_e, p, e, e_r, v)``: the along-track
+  error (m), the along-track ground speed less ``U`` (m/s), the cross-track error (m),
+  ``p = (U - c_t) sin(theta) - c_n`` (m/s; ``theta = atan((y_e + sigma y_i)/Delta)`` the line-of-sight
+  angle, ``c_t`` and ``c_n`` the current along and across the track), the heading error
+  ``e = psi - psi_d`` (rad), ``e_r = r - omega + theta_c'`` (rad/s; ``theta_c'`` the line of
+  sight's rate with the ILOS rate evaluated continuously) and the sway speed ``v`` (m/s). The
+  ILOS state between samples is the linear interpolation of the controller's own (Euler)
+  integrator, so the errors at every sample are the controller's.
+* **The nominal loop.** ``x_e' = v_x``, ``v_x' = a_x``, ``y_e' = -p + U0 e + v``,
+  ``p' = (U0/Delta)(-p + U0 e + v) + u_i``, ``e' = e_r``, ``e_r' = a_psi``,
+  ``v' = alpha_v v - (m11 U0/m22) e_r + beta_v a_psi``, with the held commands of the law
+  ``a_x = -k_u (v_x + k_x x_e)``, ``a_psi = -k_p e - k_d e_r`` and ``u_i = U0 sigma y_e / Delta^2``
+  at the samples. It is a sampled-data LTI loop (:func:`cascade_loop`) whose peak-to-peak gains
+  :func:`~auv_hinf.implementation.peak.peak_gains` bounds rigorously.
+* **What drives it.** Each state's exact derivative less the nominal one is a residual ``w_j``
+  (:func:`residual_bounds`): the box's mass and drag mismatch, the current's turn with the
+  track, the trigonometry of the line of sight and of the heading error, the speed the vehicle
+  really has, the hold of the feed-forward between samples, the saturation of the along-track
+  correction. Each is bounded, term by term, over the *error box* (:class:`CascadeErrors`) the
+  states are assumed to stay in; the bounds of the vehicle's accelerations use the actuator
+  limits, so they hold whatever the law commands.
+* **First exit.** With the start's free response and the residuals' bounds through the peak
+  gains (plus the outputs' motion between the gains' fine steps), a box ``B`` whose image is
+  strictly inside it cannot be left: at the first exit every residual would have been within its
+  bound up to then, so the states would have been strictly inside ``B``. :func:`certify_cascade`
+  finds ``B`` by a monotone fixed-point iteration from the free response, inflates it by
+  :data:`FIXED_POINT_MARGIN` and checks the strict inclusion there. The commanded thrust and rudder
+  are then bounded over ``B`` and checked against the limits: the law is never saturated, as the
+  residuals assume.
+
+The certificate covers the cascade at the declared sample time with no delay and exact
+measurements (what ``simulate`` runs), and ILOS guidance only: plain LOS has no integral state,
+and its cross-track error is a function of ``p``, which this loop does not express.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from auv_hinf._typing import FloatArray
+from auv_hinf.actuation.limits import RudderActuation
+from auv_hinf.composed.loops import Plant
+from auv_hinf.guidance.law import MAX_START_CRAB, MIN_RUDDER_SPEED, GuidanceConfig, SlotMotion, integral_start
+from auv_hinf.implementation.peak import PeakGains, SampledLoop, free_peaks, peak_gains
+from auv_hinf.mission.fleet import wrap_angle
+from auv_hinf.robust.box import ParameterBox
+
+#: The state's names, in the loop's order (m, m/s, m, m/s, rad, rad/s, m/s).
+STATES = ("along_track", "along_speed", "cross_track", "sight", "heading", "heading_rate", "sway")
+X_E, V_X, Y_E, P, E, E_R, V = range(7)
+#: The linear expressions of the nominal loop whose peaks are bounded with the states (:func:`_rows`):
+#: ``y_e'``, ``theta'``, ``r - omega``, ``v'``, ``p'``, ``y_e''`` of the nominal loop (m/s, rad/s,
+#: rad/s, m/s^2, m/s^2, m/s^2), the heading feedback ``a_psi`` and the held commands ``tau``,
+#: ``a_x`` (rad/s^2, rad/s^2, m/s^2). Bounding them directly keeps the cancellations between
+#: their terms, which a sum of the states' bounds loses.
+DERIVED = ("ydot_lin", "sight_lin", "yaw_lin", "vdot_lin", "pdot_lin", "yddot_lin", "a_psi", "tau", "a_x")
+NB = len(STATES) + len(DERIVED)
+#: Relative inflation of the fixed point before the strict inclusion is checked: the image must
+#: fit inside the inflated box, which leaves room for the first-exit argument's strictness.
+FIXED_POINT_MARGIN = 1e-3
+#: Absolute floor added to every component of the inflated box (SI units of each state): a state
+#: nothing drives (zero bound) still gets a box with an interior.
+FIXED_POINT_FLOOR = 1e-9
+#: Relative step below which the fixed-point iteration counts as converged.
+FIXED_POINT_RTOL = 1e-6
+#: Most fixed-point iterations: the iteration contracts geometrically when the small gain holds.
+MAX_ITERATIONS = 400
+#: Most re-inflations of the fixed point before its strict inclusion is given up.
+INFLATIONS = 20
+#: Largest ``(P + C)/U0`` (the line of sight's sine) an error box may assume: beyond it the
+#: line-of-sight angle is not bounded away from a right angle and the vehicle may turn back.
+MAX_SIGHT_SINE = 0.95
+#: Largest heading angle off the track (line of sight plus heading error, rad) an error box may
+#: assume: below a right angle the surge speed keeps its sign.
+MAX_TRACK_ANGLE = 0.45 * math.pi
+
+
+@dataclass(frozen=True)
+class CascadeProblem:
+    """What the cascade's certificate depends on.
+
+    Attributes
+    ----------
+    guidance : GuidanceConfig
+        The ILOS guidance and the autopilots' gains.
+    plant : Plant
+        The controller's model, the ``[uncertainty]`` box and the current's bounds.
+    act : RudderActuation
+        The propeller and the rudder (the limits; the rudder derivatives are exact).
+    speed : tuple of float
+        ``[min, max]`` of every slot's ground speed ``U`` (m/s).
+    accel : float
+        Bound of every slot's ``|p_d''|`` (m/s^2).
+    turn_rate : float
+        Bound of every slot's course rate ``|omega|`` (rad/s).
+    turn_accel : float
+        Bound of ``|omega'|`` (rad/s^2).
+    jerk : float
+        Bound of every slot's ``|p_d'''|`` (m/s^3).
+    sample_time : float
+        The cascade's period ``h`` (s).
+    start : tuple of float
+        Bounds of the seven states at ``t = 0`` (:data:`STATES`, SI units).
+    """
+
+    guidance: GuidanceConfig
+    plant: Plant
+    act: RudderActuation
+    speed: tuple[float, float]
+    accel: float
+    turn_rate: float
+    turn_accel: float
+    jerk: float
+    sample_time: float
+    start: tuple[float, ...] = field(default=(0.0,) * 7)
+
+    @property
+    def reference_speed(self) -> float:
+        """``U0`` (m/s): the middle of the slots' speed range, the surge speed of the nominal loop."""
+        return 0.5 * (self.speed[0] + self.speed[1])
+
+    @property
+    def speed_jerk(self) -> float:
+        """Bound of ``|U''|`` (m/s^3): ``U'' = t . p_d''' + omega n . p_d''``."""
+        return self.jerk + self.turn_rate * self.accel
+
+
+@dataclass(frozen=True)
+class Actuation:
+    """Bounds of what the cascade commands, over an error box.
+
+    Attributes
+    ----------
+    thrust : float
+        ``|T|`` (N).
+    rudder : float
+        ``|delta|`` (rad).
+    surge : tuple of float
+        ``[min, max]`` of the surge speed through the water (m/s).
+    yaw_rate : float
+        ``|r|`` (rad/s).
+    """
+
+    thrust: float
+    rudder: float
+    surge: tuple[float, float]
+    yaw_rate: float
+
+
+def _gains(g: GuidanceConfig) -> tuple[float, float]:
+    """The heading loop's ``(k_p, k_d)`` (1/s^2, 1/s): critically damped at ``heading_bandwidth``."""
+    return g.heading_bandwidth**2, 2.0 * g.heading_bandwidth
+
+
+def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
+    """The nominal loop's linear expressions, as rows on ``(x, a_x, tau, u_i)`` (7 states, 3 commands).
+
+    ``ydot`` is ``y_e'``, ``pdot`` is ``p'``, ``sight_rate`` is ``theta'`` (with ``u_i`` held at
+    ``y_e``), ``yaw_rate`` is ``r - omega``, ``vdot`` is ``v'``, ``sight_accel`` is ``theta''``
+    and ``erdot`` is ``e_r'``: the linear parts of the exact expressions, at ``u = U0``,
+    ``theta = 0``, ``omega = 0`` and the model's coefficients.
+    """
+    g, m, act = problem.guidance, problem.plant.model, problem.act
+    u0, delta = problem.reference_speed, g.lookahead
+    a_g, b_g = u0 / delta, g.sigma / delta
+
+    def row(**terms: float) -> FloatArray:
+        out = np.zeros(10)
+        names = {
+            **{n: k for k, n in enumerate(("x_e", "v_x", "y_e", "p", "e", "e_r", "v"))},
+            "a_x": 7,
+            "tau": 8,
+            "u_i": 9,
+        }
+        for name, value in terms.items():
+            out[names[name]] = value
+        return out
+
+    ydot = row(p=-1.0, e=u0, v=1.0)
+    pdot = a_g * ydot + row(u_i=1.0)
+    sight_rate = (ydot + b_g * row(y_e=1.0)) / delta
+    yaw_rate = row(e_r=1.0) - sight_rate
+    vdot = (
+        -m.m11 * u0 / m.m22 * yaw_rate - m.d22_lin / m.m22 * row(v=1.0) + m.m33 / (act.lever_arm * m.m22) * row(tau=1.0)
+    )
+    sight_accel = (-pdot + u0 * row(e_r=1.0) + vdot + b_g * ydot) / delta
+    munk = (m.m22 - m.m11) * u0 / m.m33
+    erdot = row(tau=1.0) - munk * row(v=1.0) + sight_accel
+    return {
+        "ydot": ydot,
+        "pdot": pdot,
+        "sight_rate": sight_rate,
+        "yaw_rate": yaw_rate,
+        "vdot": vdot,
+        "sight_accel": sight_accel,
+        "erdot": erdot,
+        "xdot": row(v_x=1.0),
+        "vxdot": row(a_x=1.0),
+        "edot": row(e_r=1.0),
+    }
+
+
+def _law(problem: CascadeProblem) -> FloatArray:
+    """The held commands' linear law on the measured state, shape (3, 7)."""
+    g, m = problem.guidance, problem.plant.model
+    u0 = problem.reference_speed
+    kp, kd = _gains(g)
+    d_c = np.zeros((3, 7))
+    d_c[0, [X_E, V_X]] = (-g.speed_gain * g.along_track_gain, -g.speed_gain)
+    d_c[1, [E, E_R, V]] = (-kp, -kd, (m.m22 - m.m11) * u0 / m.m33)
+    d_c[2, Y_E] = u0 * g.sigma / g.lookahead**2
+    return d_c
+
+
+def cascade_loop(problem: CascadeProblem) -> SampledLoop:
+    """The nominal sampled loop of one vehicle (see the module docstring), outputs the seven states.
+
+    The held commands are ``a_x`` (m/s^2), ``tau`` (the yaw acceleration the rudder is asked
+    for, rad/s^2: the heading feedback plus the Munk moment the law cancels, per the model's
+    inertia) and ``u_i`` (the ILOS integral's push on ``p``, m/s^2).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its gains, model, rudder and reference speed).
+    """
+    rows = _rows(problem)
+    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
+    full = np.vstack([rows[k] for k in order])
+    outputs = np.vstack([np.hstack([np.eye(7), np.zeros((7, 3 + 7))]), _derived_outputs(problem, rows)])
+    b_w = np.eye(7)
+    b_w[P, Y_E] = problem.reference_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
+    return SampledLoop(
+        full[:, :7],
+        full[:, 7:],
+        b_w,
+        np.eye(7),
+        np.zeros((7, 1)),
+        np.zeros((0, 1)),
+        np.zeros((0, 0)),
+        np.zeros((0, 7)),
+        np.zeros((3, 0)),
+        _law(problem),
+        problem.sample_time,
+        0.0,
+        outputs,
+        STATES + DERIVED,
+    )
+
+
+def _derived_outputs(problem: CascadeProblem, rows: dict[str, FloatArray]) -> FloatArray:
+    """The loop's rows of :data:`DERIVED`, on ``(x, a_x, tau, u_i, y_used)`` (17 columns)."""
+    kp, kd = _gains(problem.guidance)
+    u0 = problem.reference_speed
+    out = np.zeros((len(DERIVED), 17))
+    on_x_u = {
+        "ydot_lin": rows["ydot"],
+        "sight_lin": rows["sight_rate"],
+        "yaw_lin": rows["yaw_rate"],
+        "vdot_lin": rows["vdot"],
+        "pdot_lin": rows["pdot"],
+        "yddot_lin": -rows["pdot"] + u0 * rows["edot"] + rows["vdot"],
+        "tau": np.eye(10)[8],
+        "a_x": np.eye(10)[7],
+    }
+    for k, name in enumerate(DERIVED):
+        if name == "a_psi":  # the heading feedback the held command was computed with
+            out[k, 10 + E], out[k, 10 + E_R] = -kp, -kd
+        else:
+            out[k, :10] = on_x_u[name]
+    return out
+
+
+def _corners(num: tuple[float, float], den: tuple[float, float]) -> tuple[float, float]:
+    """Range of ``x / y`` for ``x`` in ``num`` and ``y > 0`` in ``den``."""
+    values = [n / d for n in num for d in den]
+    return min(values), max(values)
+
+
+def _off(rng: tuple[float, float], value: float) -> float:
+    """``max |x - value|`` over ``x`` in ``rng``."""
+    return max(abs(rng[0] - value), abs(rng[1] - value))
+
+
+def _product_off(ranges: list[tuple[float, float]], divisor: tuple[float, float], value: float) -> float:
+    """``max |x_1 ... x_k / y - value|`` over the ranges (positive divisor): at a corner (monotone in each)."""
+    best = 0.0
+    for combo in np.array(np.meshgrid(*ranges, divisor)).reshape(len(ranges) + 1, -1).T:
+        best = max(best, abs(float(np.prod(combo[:-1])) / float(combo[-1]) - value))
+    return best
+
+
+def commands(problem: CascadeProblem, box: FloatArray) -> FloatArray:
+    """Bounds of the nominal loop's held commands ``|a_x|, |tau|, |u_i|`` over ``box`` (m/s^2, rad/s^2, m/s^2).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    box : ndarray, shape (7,)
+        Bounds of the states.
+    """
+    box = np.asarray(box, dtype=float)
+    out: FloatArray = np.abs(_law(problem)) @ box[:7]
+    if box.size == NB:
+        out[:2] = np.minimum(out[:2], [box[7 + DERIVED.index("a_x")], box[7 + DERIVED.index("tau")]])
+    return out
+
+
+def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArray, Actuation] | str:
+    """Bounds of the seven residuals ``|w_j|`` while the states stay in ``box``, and of the commands.
+
+    Each residual is a state's exact derivative less the nominal loop's (:func:`_rows`). Every
+    inequality is written out in ``docs/derivations/guidance.md`` (section "Residuals"), term by
+    term, in the order of this code. Ranges over the box of plants are taken at its corners,
+    where each quantity (a product or ratio of positive coefficients) is extreme.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    box : ndarray, shape (7,)
+        Bounds of ``|x_e|, |v_x|, |y_e|, |p|, |e|, |e_r|, |v|`` (SI units).
+
+    Returns
+    -------
+    (ndarray, Actuation) or str
+        The residuals' bounds (shape (7,)) and the commands' bounds, or why the box is not an
+        operating region of the cascade (the line of sight or the heading reaches its limit, the
+        surge speed drops below the rudder's, or changes too much over one sample).
+    """
+    g, pl, act = problem.guidance, problem.plant, problem.act
+    m = pl.model
+    h = problem.sample_time
+    xb, vxb, yb, pb, eb, erb, vb = (float(x) for x in box[:7])
+    derived = dict(zip(DERIVED, map(float, box[7:]), strict=False))
+
+    def tighter(name: str, crude: float) -> float:
+        """The smaller of a sum of the states' bounds and the derived bound (both hold)."""
+        return min(crude, derived.get(name, math.inf))
+
+    u0 = problem.reference_speed
+    lo_u, hi_u = problem.speed
+    c, c_rate = pl.current, pl.current_rate
+    omega, omega_dot, accel = problem.turn_rate, problem.turn_accel, problem.accel
+    delta, sigma = g.lookahead, g.sigma
+    a_g, b_g = u0 / delta, sigma / delta
+    ku, kx, lx = g.speed_gain, g.along_track_gain, g.along_track_length
+    kp, kd = _gains(g)
+    m11, m22, m33 = pl.interval("m11"), pl.interval("m22"), pl.interval("m33")
+    munk, munk_hat = pl.munk(), m.m22 - m.m11
+    lever = abs(act.lever_arm)
+    # -- the line of sight theta, |(U - c_t) sin(theta)| = |p + c_n|, the track angle beta = e - theta
+    # and the surge speed through the water, u cos(beta) = U + v_x - c_t + v sin(beta)
+    if lo_u <= c:
+        return f"the current ({c:.3g} m/s) is not below the slots' slowest speed ({lo_u:.3g} m/s)"
+    sin_t = (pb + c) / (lo_u - c)
+    if sin_t > MAX_SIGHT_SINE:
+        return f"the line of sight reaches {math.degrees(math.asin(min(sin_t, 1.0))):.3g} deg off the track"
+    cos_t = math.sqrt(1.0 - sin_t * sin_t)
+    track = eb + math.asin(sin_t)
+    if track > MAX_TRACK_ANGLE:
+        return f"the heading reaches {math.degrees(track):.3g} deg off the track"
+    sin_b, cos_b = math.sin(track), math.cos(track)
+    u_lo = lo_u - vxb - c - vb * sin_b
+    u_hi = (hi_u + vxb + c + vb * sin_b) / cos_b
+    if u_lo < MIN_RUDDER_SPEED:
+        return f"the surge speed may drop to {u_lo:.3g} m/s, below the rudder's {MIN_RUDDER_SPEED} m/s"
+    du = max(u_hi - u0, u0 - u_lo)
+    du_along = 0.5 * (hi_u - lo_u) + vxb + c + vb * sin_b  # |u cos(beta) - U0|
+    # -- w3: y_e' less -p + U0 e + v
+    w3 = (
+        du * math.sin(eb)
+        + u0 * (eb - math.sin(eb) * cos_t)
+        + u_hi * (1.0 - math.cos(eb)) * sin_t
+        + vb * (1.0 - cos_b)
+        + (vxb + vb * sin_b + u_hi * (1.0 - cos_b)) * sin_t
+        + omega * xb
+    )
+    y_lin = tighter("ydot_lin", pb + u0 * eb + vb)
+    ydot = y_lin + w3
+    sight_rate = (ydot + sigma * yb / delta) / delta  # |theta'| (held ILOS rate or not)
+    sight_lin = tighter("sight_lin", (y_lin + b_g * yb) / delta)  # the nominal loop's theta'
+    sight_gap = (w3 + (1.0 - cos_t**2) * y_lin + b_g * (1.0 - cos_t**4) * yb) / delta
+    yaw_lin = tighter("yaw_lin", erb + sight_lin)  # |e_r - theta'_nominal|
+    rel_yaw = min(erb + sight_rate, yaw_lin + sight_gap)  # |r - omega|
+    r_max = omega + rel_yaw
+    # -- the commands: the law's whole yaw acceleration, the thrust and the rudder
+    a_x, tau, _ = commands(problem, box)
+    sat_x = xb / math.sqrt(1.0 + (xb / lx) ** 2)
+    a_x_sat = min(ku * (vxb + kx * sat_x), a_x + ku * kx * (xb - sat_x))
+    a_psi = tighter("a_psi", kp * eb + kd * erb)
+    d33_hat = m.d33_lin + m.d33_quad * r_max
+    tau_full = min(
+        a_psi + (d33_hat * r_max + abs(munk_hat) * u_hi * vb) / m.m33,
+        tau + (d33_hat * r_max + abs(munk_hat) * du * vb) / m.m33,
+    )
+    thrust = m.m11 * (accel + a_x_sat) + (m.d11_lin + m.d11_quad * u_hi) * u_hi + m.m22 * vb * r_max
+    rudder = m.m33 * tau_full / (abs(act.rudder_yaw) * u_lo**2)
+    actuation = Actuation(thrust, rudder, (u_lo, u_hi), r_max)
+    # -- |u'|: the law's thrust less the plant's drag, or else the thrust limit (both hold); the
+    # hold's drag term slope11 h |u'| appears on both sides and is solved for
+    d11_lin, d11_quad = pl.interval("d11_lin")[1], pl.interval("d11_quad")[1]
+    d33_lin, d33_quad = pl.interval("d33_lin")[1], pl.interval("d33_quad")[1]
+    slope11 = d11_lin + 2.0 * d11_quad * u_hi  # bound of d(d11(u) u)/du
+    slope33 = d33_lin + 2.0 * d33_quad * r_max
+    u_dot = (act.tau_x + m22[1] * vb * r_max + pl.damping("11", u_hi)[1] * u_hi) / m11[0]
+    if m11[0] > slope11 * h:
+        law = m.m11 * (accel + a_x_sat) + pl.damping_mismatch("11", u_hi) * u_hi + (m22[1] + m.m22) * vb * r_max
+        u_dot = min(u_dot, law / (m11[0] - slope11 * h))
+    if h * u_dot >= u_lo or m33[0] <= slope33 * h:
+        return "the sample time is too long for the surge speed's or the yaw drag's change over one sample"
+    rho = ((1.0 - h * u_dot / u_lo) ** 2, (1.0 + h * u_dot / u_lo) ** 2)  # (u / u_k)^2
+    # -- w7: v' less its nominal; the rudder's side force and its nominal share one deflection
+    inv_m22 = _off((rho[0] / m22[1], rho[1] / m22[0]), 1.0 / m.m22)  # |rho/m22' - 1/m22|
+    side = (
+        inv_m22 * m.m33 * a_psi
+        + rho[1] * d33_hat * r_max / m22[0]
+        + abs(munk_hat) * vb * _product_off([rho, (u_lo, u_hi)], m22, u0 / m.m22)
+    ) / lever
+    w7 = (
+        side
+        + _product_off([m11, (u_lo, u_hi)], m22, m.m11 * u0 / m.m22) * r_max
+        + m.m11 * u0 / m.m22 * (omega + sight_gap)
+        + _off(_corners(pl.interval("d22_lin"), m22), m.d22_lin / m.m22) * vb
+        + pl.interval("d22_quad")[1] * vb * vb / m22[0]
+    )
+    v_lin = tighter("vdot_lin", m.m11 * u0 / m.m22 * yaw_lin + m.d22_lin / m.m22 * vb + m.m33 / (lever * m.m22) * tau)
+    v_dot = v_lin + w7
+    # -- |r'|: the law's moment against the plant's, the cancellations paired (the Munk moment on
+    # the held speeds, the yaw drag at the sample); the hold's drag term slope33 h |r'| is solved for
+    mu = pl.heading_gains()
+    munk_held = vb * u_hi * (abs(munk_hat) * h * u_dot / u_lo + _off(munk, munk_hat))
+    drag_cancel = (rho[1] - 1.0) * d33_hat * r_max + pl.damping_mismatch("33", r_max) * r_max
+    munk_r = abs(munk_hat) * rho[1] * u_hi * h * v_dot + munk_held
+    r_dot = (mu[1] * rho[1] * m33[0] * a_psi + munk_r + drag_cancel) / (m33[0] - slope33 * h)
+    # -- w1: x_e' = v_x + omega y_e
+    w1 = omega * yb
+    # -- w2: v_x' = a_x + w2
+    nu = (m.m11 / m11[1], m.m11 / m11[0])
+    w2 = (
+        ku * kx * (xb - sat_x)
+        + max(abs(nu[1] - 1.0), abs(1.0 - nu[0] * cos_b)) * (accel + a_x_sat)
+        + h * (problem.jerk + omega * accel)
+        + (
+            pl.damping_mismatch("11", u_hi) * u_hi
+            + slope11 * h * u_dot
+            + pl.spread("m22") * vb * r_max
+            + m.m22 * h * (v_dot * r_max + vb * r_dot)
+        )
+        / m11[0]
+        + sin_b * v_dot
+        + rel_yaw * (u_hi * sin_b + vb)
+        + omega * c
+        + c_rate
+    )
+    # -- w4: p' = (U' - c_t') sin(theta) + (U - c_t) cos(theta) theta' - c_n' less (U0/Delta)(y_e'_nominal + w3) + u_i
+    w4 = (
+        (accel + omega * c + c_rate) * sin_t
+        + max(hi_u + c - u0, u0 - (lo_u - c) * cos_t**3) * ydot / delta
+        + sigma / delta**2 * max(hi_u + c - u0, u0 - (lo_u - c) * cos_t**5) * yb
+        + omega * c
+        + c_rate
+    )
+    # -- w5: e' = e_r + (the held ILOS rate less the continuous one)
+    w5 = sigma * h * (ydot + 2.0 * sin_t * sight_rate * yb) / delta**2
+    # -- w6: e_r' = r' - omega' + theta_c'' less its nominal
+    yddot_gap = (
+        u_dot * sin_b
+        + w7
+        + v_dot * (1.0 - cos_b)
+        + yaw_lin * (du_along + vb * sin_b)
+        + sight_gap * (u_hi + vb * sin_b)
+        + u0 * b_g * h * ydot / delta
+        + omega * c
+        + c_rate
+        + omega_dot * xb
+        + omega * (vxb + omega * yb)
+    )
+    yddot_lin = tighter("yddot_lin", a_g * (y_lin + b_g * yb) + u0 * erb + v_lin)
+    sight_accel_gap = (
+        yddot_gap
+        + (1.0 - cos_t**2) * yddot_lin
+        + b_g * (w3 + (1.0 - cos_t**4) * y_lin)
+        + 2.0 * sin_t * sight_rate * (ydot + 2.0 * b_g * yb)
+    ) / delta
+    munk_pair = abs(munk_hat) * h * v_dot * _product_off([rho, (u_lo, u_hi)], m33, u0 / m.m33) + munk_held / m33[0]
+    drag_pair = (drag_cancel + slope33 * h * r_dot) / m33[0]
+    w6 = (
+        max(abs(mu[1] * rho[1] - 1.0), abs(1.0 - mu[0] * rho[0])) * a_psi
+        + munk_pair
+        + drag_pair
+        + omega_dot
+        + sight_accel_gap
+    )
+    return np.array([w1, w2, w3, w4, w5, w6, w7]), actuation
+
+
+@dataclass(frozen=True)
+class CascadeCertificate:
+    """The cascade's certificate, or why there is none.
+
+    Attributes
+    ----------
+    holds : bool
+        The errors stay in :attr:`errors` for every plant, current and mission time, and the
+        commands stay within the limits.
+    errors : ndarray or None
+        The verified box (SI units; ``None`` when none is found): the seven :data:`STATES`, then
+        the :data:`DERIVED` expressions.
+    actuation : Actuation or None
+        The commands' bounds over :attr:`errors`.
+    reason : str
+        Why it does not hold (empty when it does).
+    iterations : int
+        Fixed-point iterations used.
+    radius : float or None
+        Spectral radius of the nominal loop's period map (``None`` when the loop is unstable).
+    """
+
+    holds: bool
+    errors: FloatArray | None
+    actuation: Actuation | None
+    reason: str = ""
+    iterations: int = 0
+    radius: float | None = None
+
+    @property
+    def error_bounds(self) -> dict[str, float] | None:
+        """``{along_track, cross_track, heading}`` (m, m, rad), or ``None``."""
+        if self.errors is None:
+            return None
+        return {
+            "along_track": float(self.errors[X_E]),
+            "cross_track": float(self.errors[Y_E]),
+            "heading": float(self.errors[E]),
+        }
+
+    @property
+    def position_bound(self) -> float | None:
+        """Bound of every vehicle's distance to its slot, ``sqrt(x_e^2 + y_e^2)`` (m), or ``None``."""
+        if self.errors is None:
+            return None
+        return float(math.hypot(self.errors[X_E], self.errors[Y_E]))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe figures (SI units)."""
+        a = self.actuation
+        return {
+            "holds": self.holds,
+            "error_bounds": self.error_bounds,
+            "states": None if self.errors is None else dict(zip(STATES, map(float, self.errors[:7]), strict=True)),
+            "derived": None if self.errors is None else dict(zip(DERIVED, map(float, self.errors[7:]), strict=True)),
+            "certified_peak": None if a is None else {"force_x": a.thrust, "rudder": a.rudder},
+            "surge_speed": None if a is None else list(a.surge),
+            "yaw_rate": None if a is None else a.yaw_rate,
+            "sway_speed": None if self.errors is None else float(self.errors[V]),
+            "loop_radius": self.radius,
+            "iterations": self.iterations,
+            "reason": self.reason,
+        }
+
+
+def _image(problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: FloatArray) -> FloatArray | str:
+    """The bound of the states implied by ``box``: free response, residuals through the gains, intersample motion."""
+    res = residual_bounds(problem, box)
+    if isinstance(res, str):
+        return res
+    w, _ = res
+    cmds = commands(problem, box)
+    at_steps = gains.continuous @ w + free
+    between = gains.step * (gains.derivative @ np.concatenate([box[:7], cmds, w]))
+    out: FloatArray = at_steps + between
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _loop_analysis(problem: CascadeProblem) -> tuple[PeakGains, FloatArray] | None:
+    """The nominal loop's peak gains and free response (``None`` when unstable): the costly part, shared by
+    every box and current (the caller passes the problem without its current and start)."""
+    loop = cascade_loop(problem)
+    gains = peak_gains(loop)
+    fp = free_peaks(loop)
+    return None if gains is None or fp is None else (gains, fp)
+
+
+@functools.lru_cache(maxsize=256)
+def certify_cascade(problem: CascadeProblem) -> CascadeCertificate:
+    """The cascade's certificate (see the module docstring).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    """
+    if problem.guidance.sigma <= 0.0:
+        return CascadeCertificate(False, None, None, 'plain LOS is not certified in this version: use kind = "ilos"')
+    model, u0 = problem.plant.model, problem.reference_speed
+    key = replace(  # what the nominal loop depends on: the gains, the model, the rudder, U0 and h
+        problem,
+        plant=Plant(model, ParameterBox.from_ranges(model, ())),
+        speed=(u0, u0),
+        accel=0.0,
+        turn_rate=0.0,
+        turn_accel=0.0,
+        jerk=0.0,
+        start=(0.0,) * 7,
+    )
+    analysis = _loop_analysis(key)
+    if analysis is None:
+        return CascadeCertificate(
+            False, None, None, f"the nominal sampled cascade is unstable at h = {problem.sample_time:.4g} s"
+        )
+    gains, fp = analysis
+    free = np.abs(fp) @ np.asarray(problem.start, dtype=float)  # every output: the states and DERIVED
+    box = free.copy()
+    for k in range(1, MAX_ITERATIONS + 1):
+        nxt = _image(problem, gains, free, box)
+        if isinstance(nxt, str):
+            return CascadeCertificate(
+                False,
+                None,
+                None,
+                f"the small-gain bound does not close: the error bounds grow until {nxt}",
+                k,
+                gains.radius,
+            )
+        if np.all(nxt <= box * (1.0 + FIXED_POINT_RTOL) + FIXED_POINT_FLOOR):
+            break
+        box = np.maximum(box, nxt)
+    else:
+        return CascadeCertificate(
+            False, None, None, "no error box closes: the fixed point does not converge", k, gains.radius
+        )
+    # the strict inclusion, on the fixed point inflated; a component driven only by products of the
+    # others grows faster than the inflation, so the inflation is repeated on the image
+    final = box * (1.0 + FIXED_POINT_MARGIN) + FIXED_POINT_FLOOR
+    for _ in range(INFLATIONS):
+        image = _image(problem, gains, free, final)
+        if isinstance(image, str) or np.all(image < final):
+            break
+        final = np.maximum(final, image * (1.0 + FIXED_POINT_MARGIN) + FIXED_POINT_FLOOR)
+    if isinstance(image, str) or not np.all(image < final):
+        why = image if isinstance(image, str) else "the inflated box is not invariant"
+        return CascadeCertificate(False, None, None, f"no error box closes: {why}", k, gains.radius)
+    res = residual_bounds(problem, final)
+    assert not isinstance(res, str)  # the image was computed on the same box
+    actuation = res[1]
+    over = []
+    if actuation.thrust > problem.act.tau_x:
+        over.append(f"thrust {actuation.thrust:.4g} N > {problem.act.tau_x:.4g} N")
+    if actuation.rudder > problem.act.rudder_max:
+        over.append(f"rudder {actuation.rudder:.4g} rad > {problem.act.rudder_max:.4g} rad")
+    if over:
+        return CascadeCertificate(
+            False, final, actuation, "the commands exceed the limits: " + ", ".join(over), k, gains.radius
+        )
+    return CascadeCertificate(True, final, actuation, "", k, gains.radius)
+
+
+def cascade_states(
+    problem: CascadeProblem, states: FloatArray, integral: FloatArray, slot: SlotMotion, current: FloatArray
+) -> FloatArray:
+    """The seven states (:data:`STATES`) of vehicles at ``states`` with ILOS states ``integral``, shape (N, 7).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its lookahead and integral gain).
+    states : ndarray, shape (N, 6)
+        ``[x, y, psi, u, v, r]`` of every vehicle (water-relative body velocities).
+    integral : ndarray, shape (N,)
+        The controller's ILOS states ``y_i`` (s).
+    slot : SlotMotion
+        The slots at that time.
+    current : ndarray, shape (2,)
+        The current (m/s, inertial).
+    """
+    g = problem.guidance
+    delta, sigma = g.lookahead, g.sigma
+    c = np.asarray(current, dtype=float)
+    psi, u, v, r = states[:, 2], states[:, 3], states[:, 4], states[:, 5]
+    speed = slot.speed
+    tx, ty = slot.v[:, 0] / speed, slot.v[:, 1] / speed
+    omega = (slot.v[:, 0] * slot.a[:, 1] - slot.v[:, 1] * slot.a[:, 0]) / speed**2
+    ex, ey = states[:, 0] - slot.p[:, 0], states[:, 1] - slot.p[:, 1]
+    xe, ye = tx * ex + ty * ey, -ty * ex + tx * ey
+    theta = np.arctan((ye + sigma * integral) / delta)
+    e = wrap_angle(psi - (slot.course - theta))
+    gx = np.cos(psi) * u - np.sin(psi) * v + c[0]
+    gy = np.sin(psi) * u + np.cos(psi) * v + c[1]
+    ct, cn = tx * c[0] + ty * c[1], -ty * c[0] + tx * c[1]
+    vx = tx * gx + ty * gy - speed
+    ydot = -ty * gx + tx * gy - omega * xe
+    cos2 = np.cos(theta) ** 2
+    er = r - omega + cos2 * (ydot + sigma * cos2 * ye / delta) / delta
+    p = (speed - ct) * np.sin(theta) - cn
+    out: FloatArray = np.stack([xe, vx, ye, p, e, er, v], axis=-1)
+    return out
+
+
+def start_states(
+    problem: CascadeProblem, states: FloatArray, slot: SlotMotion, current: FloatArray | None
+) -> FloatArray:
+    """Bounds of the seven states at ``t = 0`` of vehicles started at ``states`` (shape (7,), SI units).
+
+    The ILOS state starts as the controller starts it (:func:`~auv_hinf.guidance.law.integral_start`).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    states : ndarray, shape (N, 6)
+        ``[x, y, psi, u, v, r]`` of every vehicle at ``t = 0`` (water-relative body velocities).
+    slot : SlotMotion
+        The slots at ``t = 0``.
+    current : ndarray, shape (2,), or None
+        The current the start is taken in (m/s); ``None``: any current up to the bound ``C``. The
+        current moves ``v_x`` by at most ``C``, ``p`` by ``C sqrt(1 + sin(theta)^2)`` and ``e_r`` by
+        ``C`` over the lookahead; the states are computed in no current and widened so.
+    """
+    c_free = problem.plant.current if current is None else 0.0
+    flow = np.zeros(2) if current is None else np.asarray(current, dtype=float)
+    x = np.abs(cascade_states(problem, states, integral_start(problem.guidance, states, slot), slot, flow))
+    # p = (U - c_t) sin(theta) - c_n moves by |c_t sin(theta) + c_n| <= C sqrt(1 + sin(theta)^2) with the
+    # current; in no current sin(theta) = p / U
+    sin_t = np.minimum(x[:, P] / slot.speed, 1.0) if current is None else np.zeros(len(x))
+    x[:, P] += c_free * np.sqrt(1.0 + sin_t**2)
+    x[:, V_X] += c_free
+    x[:, E_R] += c_free / problem.guidance.lookahead
+    out: FloatArray = x.max(axis=0)
+    return out
+
+
+def into_current_start(problem: CascadeProblem, slot: SlotMotion) -> FloatArray:
+    """Bounds of the states at ``t = 0`` of vehicles on their slots heading into any current up to the bound.
+
+    ``simulate`` and ``campaign`` start every vehicle so: its ground velocity is its slot's and the
+    ILOS state holds its crab (:func:`~auv_hinf.guidance.law.integral_start`). Then
+    ``x_e = y_e = e = v_x = v = 0``, ``p = c_n (cos(theta) - 1)`` (the crab ``theta`` makes
+    ``u sin(theta) = c_n`` with ``u cos(theta) = U - c_t``; ``|sin(theta)| <= C/(U - C)``) and
+    ``e_r = -omega`` (rad/s). A current too strong for :data:`~auv_hinf.guidance.law.MAX_START_CRAB`
+    leaves the start unbounded (``inf``).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    slot : SlotMotion
+        The slots at ``t = 0``.
+    """
+    c = problem.plant.current
+    speed = slot.speed
+    slowest = float(speed.min())
+    if c >= slowest * math.sin(MAX_START_CRAB):
+        return np.full(7, math.inf)
+    omega = (slot.v[:, 0] * slot.a[:, 1] - slot.v[:, 1] * slot.a[:, 0]) / speed**2
+    crab = math.asin(c / (slowest - c)) if c < 0.5 * slowest else 0.5 * math.pi
+    p = c * (1.0 - math.cos(crab))
+    return np.array([0.0, 0.0, 0.0, p, 0.0, float(np.abs(omega).max()), 0.0])
+
+
+__all__ = [
+    "FIXED_POINT_FLOOR",
+    "FIXED_POINT_MARGIN",
+    "FIXED_POINT_RTOL",
+    "INFLATIONS",
+    "MAX_ITERATIONS",
+    "MAX_SIGHT_SINE",
+    "MAX_TRACK_ANGLE",
+    "STATES",
+    "Actuation",
+    "CascadeCertificate",
+    "CascadeProblem",
+    "cascade_loop",
+    "cascade_states",
+    "certify_cascade",
+    "into_current_start",
+    "residual_bounds",
+    "start_states",
+]

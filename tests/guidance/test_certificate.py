@@ -1,0 +1,201 @@
+"""The ILOS cascade's certificate: sound against the simulated cascade, and its answers re-run.
+
+Properties asserted:
+
+* on plants at the box's vertices and interior, in currents at the bound in several directions,
+  every one of the seven states of the certificate, computed from the simulated cascade at every
+  sample, stays within the certified box; the commanded thrust and rudder within their bounds;
+* the certified start bounds the states of the configured start in every current;
+* a refused fleet's advised current (or box scale) certifies when re-run;
+* what the certificate does not cover is refused with its reason: plain LOS, a delay, a rudder
+  too small for the commands;
+* ``certify --json`` and ``simulate --json`` carry the interface keys.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from itertools import product
+
+import numpy as np
+import pytest
+
+from auv_hinf.cascade.certificate import STATES, cascade_states, start_states
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.design_point import raw_fleet
+from auv_hinf.certificate.parts.guidance import guidance_summary, plant_multipliers
+from auv_hinf.cli.main import main
+from auv_hinf.config.settings import config_from_dict
+from auv_hinf.guidance.law import SlotMotion
+from auv_hinf.guidance.simulation import simulate_guidance, slot_motion
+from auv_hinf.robust.box import PARAMETERS
+from tests.helpers import to_toml
+
+#: Three REMUS 100 in line abreast on a straight transit: a fleet the certificate covers.
+TRANSIT = {
+    "vehicle": {"preset": "remus100"},
+    "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0]]},
+    "reference": {"kind": "line", "speed": 1.5},
+    "actuators": {"preset": "remus100"},
+    "guidance": {"kind": "ilos"},
+    "uncertainty": {
+        "m11": [0.97, 1.03],
+        "m22": [0.97, 1.03],
+        "m33": [0.97, 1.03],
+        "d11_quad": [0.8, 1.2],
+        "d22_lin": [0.8, 1.2],
+        "d22_quad": [0.8, 1.2],
+    },
+    "disturbance": {"current_speed": 0.04},
+    "simulation": {"horizon": 200.0, "current": [0.0, 0.04]},
+}
+
+
+def transit(**tables: dict) -> object:
+    """The transit fleet with some tables replaced."""
+    return config_from_dict({**TRANSIT, **tables}, "transit")
+
+
+def _states_along(cfg, run, current) -> np.ndarray:
+    """The certificate's seven states of every vehicle at every sample of ``run``, shape (T, N, 7)."""
+    summary = guidance_summary(cfg)
+    slots = slot_motion(raw_fleet(cfg), run.t)
+    out = []
+    for k in range(run.t.size):
+        slot = SlotMotion(p=slots.p[k], v=slots.v[k], a=slots.a[k])
+        out.append(cascade_states(summary.problem, run.states[k], run.integral[k], slot, np.asarray(current)))
+    return np.stack(out)
+
+
+@pytest.mark.slow
+def test_every_state_of_the_simulated_cascade_stays_in_the_certified_box():
+    cfg = transit()
+    summary = guidance_summary(cfg)
+    assert summary.holds, summary.reason
+    cert, problem = summary.certificate, summary.problem
+    box = cert.errors[:7]
+    lo, hi = np.asarray(problem.plant.box.lo), np.asarray(problem.plant.box.hi)
+    declared = [k for k in range(9) if lo[k] < 1.0 or hi[k] > 1.0]
+    rng = np.random.default_rng(7)
+    runs = []
+    for corner in list(product((0, 1), repeat=len(declared)))[::9]:  # every ninth vertex: 8 of 64
+        m = np.ones(9)
+        m[declared] = np.where(np.array(corner) == 1, hi[declared], lo[declared])
+        runs.append(m)
+    runs += [lo + rng.random(9) * (hi - lo) for _ in range(2)]
+    worst = np.zeros(7)
+    peaks = np.zeros(2)
+    for i, m in enumerate(runs):
+        angle = 2.0 * np.pi * i / len(runs)
+        current = problem.plant.current * np.array([np.cos(angle), np.sin(angle)])
+        plant = cfg.vehicle.__class__(**{n: getattr(cfg.vehicle, n) * m[k] for k, n in enumerate(PARAMETERS)})
+        run = simulate_guidance(cfg.guidance, plant, cfg.vehicle, cfg.actuators, raw_fleet(cfg), 200.0, tuple(current))
+        worst = np.maximum(worst, np.abs(_states_along(cfg, run, current)).max(axis=(0, 1)))
+        peaks = np.maximum(peaks, [np.abs(run.thrust_cmd).max(), np.abs(run.rudder_cmd).max()])
+    for name, w, b in zip(STATES, worst, box, strict=True):
+        assert w <= b, f"{name}: simulated {w:.4g} above the certified {b:.4g}"
+    assert peaks[0] <= cert.actuation.thrust and peaks[1] <= cert.actuation.rudder
+    assert peaks[0] <= cfg.actuators.tau_x and peaks[1] <= cfg.actuators.rudder_max
+    # the bounds are not vacuous: the along-track error (the surge drag's spread) reaches a fifth of its bound
+    assert worst[0] >= 0.2 * box[0]
+
+
+def test_the_certified_start_bounds_the_start_in_every_current():
+    cfg = transit(
+        simulation={
+            "horizon": 50.0,
+            "initial": [
+                [0.3, 0.2, 0.05, 1.5, 0.0, 0.0],
+                [0.0, 14.8, -0.02, 1.4, 0.01, 0.0],
+                [0.1, -15.0, 0.0, 1.55, 0.0, 0.01],
+            ],
+        }
+    )
+    problem = guidance_summary(cfg).problem
+    slots = slot_motion(raw_fleet(cfg), np.array([0.0]))
+    slot = SlotMotion(p=slots.p[0], v=slots.v[0], a=slots.a[0])
+    initial = np.asarray(cfg.simulation.initial)
+    bound = np.asarray(problem.start)
+    for angle in np.linspace(0.0, 2.0 * np.pi, 13):
+        current = problem.plant.current * np.array([np.cos(angle), np.sin(angle)])
+        exact = start_states(problem, initial, slot, current)
+        assert np.all(exact <= bound + 1e-12), (angle, exact, bound)
+
+
+def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
+    cfg = transit(disturbance={"current_speed": 0.3})
+    data = certify(cfg).to_dict()
+    assert data["certified"] is False and data["guidance"]["certified"] is False
+    why = data["parts"]["guidance"]["reasons"][0]
+    settings = {(s["table"], s["key"]): s["value"] for s in why["settings"]}
+    advised = settings[("disturbance", "current_speed")]
+    assert 0.0 < advised < 0.3
+    again = certify(transit(disturbance={"current_speed": advised})).to_dict()
+    assert again["certified"] is True and again["guidance"]["certified"] is True
+
+
+@pytest.mark.parametrize(
+    ("tables", "words"),
+    [
+        ({"guidance": {"kind": "los"}}, "plain LOS"),
+        ({"implementation": {"sample_time": 0.1, "delay": 0.05}}, "delay"),
+        (
+            {
+                "actuators": {
+                    "kind": "underactuated",
+                    "tau_x": 67.0,
+                    "rudder_max": 0.002,
+                    "rudder_sway": 9.64,
+                    "rudder_yaw": -6.15,
+                }
+            },
+            "rudder",
+        ),
+    ],
+)
+def test_what_is_not_covered_is_refused_with_its_reason(tables, words):
+    data = certify(transit(**tables)).to_dict()
+    assert data["certified"] is False and data["guidance"]["certified"] is False
+    assert words in data["parts"]["guidance"]["reasons"][0]["message"]
+
+
+@pytest.mark.slow
+def test_cli_certify_and_simulate_carry_the_interface(tmp_path, capsys):
+    path = tmp_path / "transit.toml"
+    path.write_text(to_toml(TRANSIT))
+    capsys.readouterr()
+    assert main(["certify", "--config", str(path), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    g = data["guidance"]
+    assert g["certified"] is True and set(g["error_bounds"]) == {"along_track", "cross_track", "heading"}
+    assert data["actuators"]["certified_peak"] == g["certified_peak"] and set(g["certified_peak"]) == {
+        "force_x",
+        "rudder",
+    }
+    assert (
+        data["formation"]["min_separation_certified"]
+        >= 15.0 - 2.0 * np.hypot(g["error_bounds"]["along_track"], g["error_bounds"]["cross_track"]) - 1e-9
+    )
+    assert main(["simulate", "--config", str(path), "--json", "--horizon", "60"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["certificate_covers_run"] is True and rep["within_certified_bounds"] is True
+    assert rep["certified_errors"] == g["error_bounds"]
+    moved = {**TRANSIT, "simulation": {"horizon": 60.0, "current": [0.0, 0.04], "plant": {"m22": 1.2}}}
+    path.write_text(to_toml(moved))
+    assert main(["simulate", "--config", str(path), "--json"]) == 1
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["certificate_covers_run"] is False and "box" in rep["coverage_reason"]
+
+
+def test_plant_multipliers_follow_the_parameter_order():
+    cfg = transit(simulation={"plant": {"m33": 1.02, "d11_quad": 0.9}})
+    m = plant_multipliers(cfg)
+    assert m[PARAMETERS.index("m33")] == 1.02 and m[PARAMETERS.index("d11_quad")] == 0.9
+    assert np.count_nonzero(m != 1.0) == 2
+
+
+def test_a_design_point_without_guidance_has_no_guidance_figures():
+    cfg = replace(transit(), guidance=None, actuators=None)
+    data = certify(cfg).to_dict()
+    assert data["parts"]["guidance"]["applies"] is False
