@@ -310,6 +310,43 @@ def _remus_survey_ilos() -> FormationConfig:
     )
 
 
+#: ``remus-transit-ilos``: three REMUS 100 in line abreast 15 m apart (m, inertial frame), on a
+#: straight transit at the cruise speed.
+TRANSIT_OFFSETS = ((0.0, 15.0), (0.0, 0.0), (0.0, -15.0))
+#: Its declared box: masses +-3 % (a well-identified vehicle: the cascade's certificate does not
+#: cover +-10 % on both m11 and m22, docs/derivations/guidance.md), every damping coefficient +-20 %.
+TRANSIT_BOX: tuple[tuple[str, tuple[float, float]], ...] = tuple(
+    [(k, (0.97, 1.03)) for k in ("m11", "m22", "m33")]
+    + [(k, (0.8, 1.2)) for k in ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")]
+)
+#: Its current bound (m/s) and the simulated current (m/s, inertial: across the track): a
+#: sheltered transit, within what the cascade's certificate covers for this box.
+TRANSIT_CURRENT = 0.1
+#: Its ILOS gains: a heading loop of 2.4 rad/s and a 16 m lookahead, the gentlest candidates with
+#: which the cascade's certificate covers the box and the current (docs/derivations/guidance.md).
+TRANSIT_GUIDANCE = GuidanceConfig(kind="ilos", heading_bandwidth=2.4, lookahead=16.0)
+
+
+def _remus_transit_ilos() -> FormationConfig:
+    """Three REMUS 100 on a straight transit, steered by ILOS: a torpedo fleet the cascade's certificate covers."""
+    t = JacobiTransform(3, "paper")
+    shape = shape_from_offsets(np.asarray(TRANSIT_OFFSETS), t)
+    return FormationConfig(
+        name="remus-transit-ilos",
+        vehicle=remus100(),
+        n=3,
+        jacobi="paper",
+        shape=tuple((float(a), float(b)) for a, b in shape),
+        envelope=REMUS_ENVELOPE,
+        reference=ReferenceConfig("line", (("speed", REMUS_SPEED), ("heading", 0.0))),
+        simulation=SimulationConfig(horizon=300.0, current=(0.0, TRANSIT_CURRENT)),
+        uncertainty=UncertaintyConfig(TRANSIT_BOX),
+        disturbance=DisturbanceConfig(current_speed=TRANSIT_CURRENT),
+        actuators=vehicle_actuators("remus100"),
+        guidance=TRANSIT_GUIDANCE,
+    )
+
+
 #: The registry: preset name -> factory of the complete configuration.
 PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "paper-triangle": _paper_triangle,
@@ -320,6 +357,7 @@ PRESET_REGISTRY: dict[str, Callable[[], FormationConfig]] = {
     "bluerov2-survey": _bluerov2_survey,
     "remus-survey": _remus_survey,
     "remus-survey-ilos": _remus_survey_ilos,
+    "remus-transit-ilos": _remus_transit_ilos,
 }
 #: Names of the built-in presets (the CLI's ``--preset`` choices).
 PRESETS: tuple[str, ...] = tuple(PRESET_REGISTRY)

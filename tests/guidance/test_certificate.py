@@ -199,3 +199,27 @@ def test_a_design_point_without_guidance_has_no_guidance_figures():
     cfg = replace(transit(), guidance=None, actuators=None)
     data = certify(cfg).to_dict()
     assert data["parts"]["guidance"]["applies"] is False
+
+
+def test_gains_that_certify_the_declared_world_are_advised_first_and_certify_on_re_run():
+    cfg = transit(disturbance={"current_speed": 0.1})
+    data = certify(cfg).to_dict()
+    assert data["certified"] is False
+    settings = {(s["table"], s["key"]): s["value"] for s in data["parts"]["guidance"]["reasons"][0]["settings"]}
+    assert set(settings) == {("guidance", "heading_bandwidth"), ("guidance", "lookahead")}
+    gains = {k: v for (t, k), v in settings.items()}
+    again = certify(transit(disturbance={"current_speed": 0.1}, guidance={"kind": "ilos", **gains})).to_dict()
+    assert again["certified"] is True
+
+
+def test_the_transit_preset_certifies_a_torpedo_fleet_within_its_rudder():
+    from auv_hinf.config.presets import preset_config
+
+    data = certify(preset_config("remus-transit-ilos")).to_dict()
+    assert data["certified"] is True
+    g = data["guidance"]
+    assert (
+        g["certified_peak"]["rudder"] <= g["limits"]["rudder"]
+        and g["certified_peak"]["force_x"] <= g["limits"]["force_x"]
+    )
+    assert data["formation"]["min_separation_certified"] > 2.0

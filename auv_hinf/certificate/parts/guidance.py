@@ -11,9 +11,10 @@ sample time, the configured start) and proves it with
 cross-track and heading errors, of the sway speed, and of the commanded thrust and rudder, which
 must fit the limits. Its figures are the ``guidance`` object of ``certify --json``.
 
-When it does not hold, the part answers with the largest current and the largest scale of the
-box that certify (each with the other as declared; a bisection on certificates, so the answer
-itself is certified), as ``settings`` to re-run with.
+When it does not hold, the part answers with gains that certify the declared box and current
+(a faster heading loop, a longer lookahead: :data:`GAIN_CANDIDATES`), else the largest current
+and the largest scale of the box that certify (each with the other as declared; a bisection on
+certificates, so the answer itself is certified), as ``settings`` to re-run with.
 
 The certificate covers what ``simulate`` runs: the cascade sampled every ``[implementation]
 sample_time`` (10 Hz by default), without delay or measurement noise, ILOS guidance. A declared
@@ -45,7 +46,7 @@ from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.guidance.law import SlotMotion
+from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import STEP, slot_motion
 from auv_hinf.numerics.bisection import largest_holding
 from auv_hinf.robust.box import PARAMETERS
@@ -56,6 +57,16 @@ PART = "guidance"
 KEY = "guidance"
 #: Bisection steps of the advised current and box scale (each halves the bracket: 2^-10 of it).
 ADVICE_STEPS = 10
+#: Decimals of an advised value (rounded towards the certified side).
+ADVICE_DIGITS = 4
+#: Gains tried when the declared ones do not certify, as (heading bandwidth, lookahead) multipliers
+#: of the declared ones, gentlest first: a faster heading loop rejects more of the residuals that
+#: drive the heading and the sway, and a longer lookahead slows the cross-track loop's coupling to
+#: them (docs/derivations/guidance.md).
+GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0))
+#: Largest heading bandwidth times sample time tried: the sampled heading loop keeps a tenth of a
+#: period per radian of its bandwidth's phase (0.4 rad at 10 Hz and 4 rad/s).
+MAX_BANDWIDTH_STEP = 0.4
 
 
 def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem | str:
@@ -143,6 +154,9 @@ class GuidanceSummary:
     current_speed, box_scale : float or None
         When it does not hold: the largest current (m/s, with the declared box) and the largest
         scale of the declared box (with the declared current) that certify; ``None``: none found.
+    gains : GuidanceConfig or None
+        When it does not hold: the first gains of :data:`GAIN_CANDIDATES` that certify the
+        declared box and current (``None``: none does).
     """
 
     problem: CascadeProblem | None
@@ -150,6 +164,7 @@ class GuidanceSummary:
     reason: str
     current_speed: float | None = None
     box_scale: float | None = None
+    gains: GuidanceConfig | None = None
 
     @property
     def holds(self) -> bool:
@@ -188,22 +203,60 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
     if problem.plant.box.declared:
         top = min(1.0, problem.plant.box.max_scale)
         scale = largest_holding(lambda s: certify_cascade(_with(problem, scale=s)).holds, top, steps=ADVICE_STEPS)
-    return GuidanceSummary(problem, cert, cert.reason, current, scale)
+    return GuidanceSummary(problem, cert, cert.reason, current, scale, _certifying_gains(problem))
+
+
+def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
+    """The first of :data:`GAIN_CANDIDATES` whose certificate holds for ``problem``'s box and current."""
+    g = problem.guidance
+    for bandwidth, lookahead in GAIN_CANDIDATES:
+        w = g.heading_bandwidth * bandwidth
+        if w * problem.sample_time > MAX_BANDWIDTH_STEP:
+            continue
+        gains = replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead)
+        if certify_cascade(replace(problem, guidance=gains)).holds:
+            return gains
+    return None
+
+
+def _down(x: float) -> float:
+    """``x`` rounded down to :data:`ADVICE_DIGITS` decimals (an advised value never exceeds the certified one)."""
+    return math.floor(x * 10**ADVICE_DIGITS) / 10**ADVICE_DIGITS
+
+
+def _up(x: float) -> float:
+    """``x`` rounded up to :data:`ADVICE_DIGITS` decimals."""
+    return math.ceil(x * 10**ADVICE_DIGITS) / 10**ADVICE_DIGITS
 
 
 def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
-    """The settings to re-run with, and their sentence (empty when none certifies)."""
+    """The settings to re-run with, and their sentence (empty when none certifies).
+
+    Gains that certify the declared box and current come first (they leave the declared world as
+    it is), then the largest current, then the largest box scale. Every advised value is rounded
+    towards the certified side: a current down, a box's lower multipliers up and upper ones down.
+    """
     problem = summary.problem
     if problem is None:
         return (), ""
+    if summary.gains is not None:
+        g = summary.gains
+        settings = (
+            Setting("guidance", "heading_bandwidth", g.heading_bandwidth),
+            Setting("guidance", "lookahead", g.lookahead),
+        )
+        return settings, (
+            f"heading_bandwidth = {g.heading_bandwidth:.4g} rad/s with lookahead = {g.lookahead:.4g} m certifies "
+            "the declared box and current"
+        )
     if summary.current_speed is not None and summary.current_speed > 0.0:
-        c = summary.current_speed
-        return (Setting("disturbance", "current_speed", round(c, 4)),), f"a current up to {c:.4g} m/s certifies"
+        c = _down(summary.current_speed)
+        return (Setting("disturbance", "current_speed", c),), f"a current up to {c:.4g} m/s certifies"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         scaled = problem.plant.box.scaled(summary.box_scale)
         declared = {name for name, _ in cfg.uncertainty.box}
         settings = tuple(
-            Setting("uncertainty", name, [round(scaled.lo[k], 4), round(scaled.hi[k], 4)])
+            Setting("uncertainty", name, [_up(scaled.lo[k]), _down(scaled.hi[k])])
             for k, name in enumerate(PARAMETERS)
             if name in declared
         )
@@ -241,7 +294,13 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
         "surge_speed": body.get("surge_speed"),
         "sample_time": None if problem is None else problem.sample_time,
         "start": None if problem is None else dict(zip(STATES, problem.start, strict=True)),
-        "largest_certifiable": {"current_speed": summary.current_speed, "box_scale": summary.box_scale},
+        "largest_certifiable": {
+            "current_speed": summary.current_speed,
+            "box_scale": summary.box_scale,
+            "gains": None
+            if summary.gains is None
+            else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
+        },
         "reason": summary.reason,
     }
 
@@ -448,8 +507,11 @@ def plant_multipliers(cfg: FormationConfig) -> np.ndarray:
 
 
 __all__ = [
+    "ADVICE_DIGITS",
     "ADVICE_STEPS",
+    "GAIN_CANDIDATES",
     "KEY",
+    "MAX_BANDWIDTH_STEP",
     "PART",
     "GuidancePart",
     "GuidanceSummary",
