@@ -221,12 +221,14 @@ def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
 
 def _down(x: float) -> float:
     """``x`` rounded down to :data:`ADVICE_DIGITS` decimals (an advised value never exceeds the certified one)."""
-    return math.floor(x * 10**ADVICE_DIGITS) / 10**ADVICE_DIGITS
+    scale = 10.0**ADVICE_DIGITS
+    return math.floor(x * scale) / scale
 
 
 def _up(x: float) -> float:
     """``x`` rounded up to :data:`ADVICE_DIGITS` decimals."""
-    return math.ceil(x * 10**ADVICE_DIGITS) / 10**ADVICE_DIGITS
+    scale = 10.0**ADVICE_DIGITS
+    return math.ceil(x * scale) / scale
 
 
 def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
@@ -241,7 +243,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         return (), ""
     if summary.gains is not None:
         g = summary.gains
-        settings = (
+        settings: tuple[Setting, ...] = (
             Setting("guidance", "heading_bandwidth", g.heading_bandwidth),
             Setting("guidance", "lookahead", g.lookahead),
         )
