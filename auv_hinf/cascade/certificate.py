@@ -104,14 +104,15 @@ class CascadeProblem:
         The propeller and the rudder (the limits; the rudder derivatives are exact).
     speed : tuple of float
         ``[min, max]`` of every slot's ground speed ``U`` (m/s).
-    accel : float
-        Bound of every slot's ``|p_d''|`` (m/s^2).
+    speed_rate : float
+        Bound of every slot's ``|U'|`` (m/s^2): ``|p_d''|`` in general, 0 for a slot of constant speed.
     turn_rate : float
         Bound of every slot's course rate ``|omega|`` (rad/s).
     turn_accel : float
         Bound of ``|omega'|`` (rad/s^2).
-    jerk : float
-        Bound of every slot's ``|p_d'''|`` (m/s^3).
+    speed_jerk : float
+        Bound of ``|U''|`` (m/s^3): ``|p_d'''| + |omega| |p_d''|`` in general (``U'' = t . p_d''' +
+        omega n . p_d''``), 0 for a slot of constant speed.
     sample_time : float
         The cascade's period ``h`` (s).
     start : tuple of float
@@ -122,10 +123,10 @@ class CascadeProblem:
     plant: Plant
     act: RudderActuation
     speed: tuple[float, float]
-    accel: float
+    speed_rate: float
     turn_rate: float
     turn_accel: float
-    jerk: float
+    speed_jerk: float
     sample_time: float
     start: tuple[float, ...] = field(default=(0.0,) * 7)
 
@@ -133,11 +134,6 @@ class CascadeProblem:
     def reference_speed(self) -> float:
         """``U0`` (m/s): the middle of the slots' speed range, the surge speed of the nominal loop."""
         return 0.5 * (self.speed[0] + self.speed[1])
-
-    @property
-    def speed_jerk(self) -> float:
-        """Bound of ``|U''|`` (m/s^3): ``U'' = t . p_d''' + omega n . p_d''``."""
-        return self.jerk + self.turn_rate * self.accel
 
 
 @dataclass(frozen=True)
@@ -322,7 +318,27 @@ def commands(problem: CascadeProblem, box: FloatArray) -> FloatArray:
     return out
 
 
-def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArray, Actuation] | str:
+@dataclass(frozen=True)
+class Residuals:
+    """What an error box implies: the residuals' bounds, the commands' bounds, the sway speed's own bound.
+
+    Attributes
+    ----------
+    inputs : ndarray, shape (7,)
+        Bounds of the residuals ``w1 .. w7`` (SI units).
+    actuation : Actuation
+        Bounds of the commanded thrust and rudder, the surge range and the yaw rate.
+    sway : float
+        The bound of ``|v|`` (m/s) that the sway's own damped equation gives over the box (``inf``
+        when it is not damped): a second bound of the sway speed beside the loop's.
+    """
+
+    inputs: FloatArray
+    actuation: Actuation
+    sway: float
+
+
+def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str:
     """Bounds of the seven residuals ``|w_j|`` while the states stay in ``box``, and of the commands.
 
     Each residual is a state's exact derivative less the nominal loop's (:func:`_rows`). Every
@@ -339,10 +355,10 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArra
 
     Returns
     -------
-    (ndarray, Actuation) or str
-        The residuals' bounds (shape (7,)) and the commands' bounds, or why the box is not an
-        operating region of the cascade (the line of sight or the heading reaches its limit, the
-        surge speed drops below the rudder's, or changes too much over one sample).
+    Residuals or str
+        The residuals' bounds, the commands' bounds and the sway's own bound, or why the box is
+        not an operating region of the cascade (the line of sight or the heading reaches its
+        limit, the surge speed drops below the rudder's, or changes too much over one sample).
     """
     g, pl, act = problem.guidance, problem.plant, problem.act
     m = pl.model
@@ -357,7 +373,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArra
     u0 = problem.reference_speed
     lo_u, hi_u = problem.speed
     c, c_rate = pl.current, pl.current_rate
-    omega, omega_dot, accel = problem.turn_rate, problem.turn_accel, problem.accel
+    omega, omega_dot, accel = problem.turn_rate, problem.turn_accel, problem.speed_rate  # accel: |U'|
     delta, sigma = g.lookahead, g.sigma
     a_g, b_g = u0 / delta, sigma / delta
     ku, kx, lx = g.speed_gain, g.along_track_gain, g.along_track_length
@@ -442,6 +458,19 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArra
     )
     v_lin = tighter("vdot_lin", m.m11 * u0 / m.m22 * yaw_lin + m.d22_lin / m.m22 * vb + m.m33 / (lever * m.m22) * tau)
     v_dot = v_lin + w7
+    # -- the sway's own bound, by its damped scalar equation: m22' v' = -(d22'(v) + k_m) v + k_m (v - v_k)
+    # + (rho/l)(m33 a_psi + d33(r_k) r_k) - m11' u r, with k_m = -rho m_u u_k / l the side force of the
+    # rudder's Munk compensation (a damping when the rudder is aft, l < 0); |v| cannot pass the positive
+    # root of d22q V^2 + (d22 + k_m) V = F while the other states stay in the box
+    k_m = [-r * munk_hat * u / act.lever_arm for r in rho for u in (u_lo, u_hi)]
+    k_lo, k_abs = min(k_m), max(abs(k) for k in k_m)
+    force = rho[1] / lever * (m.m33 * a_psi + d33_hat * r_max) + m11[1] * u_hi * r_max + k_abs * h * v_dot
+    damping = pl.interval("d22_lin")[0] + k_lo
+    d22q_lo = pl.interval("d22_quad")[0]
+    if d22q_lo > 0.0:
+        sway = (-damping + math.sqrt(damping * damping + 4.0 * d22q_lo * force)) / (2.0 * d22q_lo)
+    else:
+        sway = force / damping if damping > 0.0 else math.inf
     # -- |r'|: the law's moment against the plant's, the cancellations paired (the Munk moment on
     # the held speeds, the yaw drag at the sample); the hold's drag term slope33 h |r'| is solved for
     mu = pl.heading_gains()
@@ -456,7 +485,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArra
     w2 = (
         ku * kx * (xb - sat_x)
         + max(abs(nu[1] - 1.0), abs(1.0 - nu[0] * cos_b)) * (accel + a_x_sat)
-        + h * (problem.jerk + omega * accel)
+        + h * problem.speed_jerk
         + (
             pl.damping_mismatch("11", u_hi) * u_hi
             + slope11 * h * u_dot
@@ -508,7 +537,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> tuple[FloatArra
         + omega_dot
         + sight_accel_gap
     )
-    return np.array([w1, w2, w3, w4, w5, w6, w7]), actuation
+    return Residuals(np.array([w1, w2, w3, w4, w5, w6, w7]), actuation, sway)
 
 
 @dataclass(frozen=True)
@@ -581,11 +610,12 @@ def _image(problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: Flo
     res = residual_bounds(problem, box)
     if isinstance(res, str):
         return res
-    w, _ = res
+    w = res.inputs
     cmds = commands(problem, box)
     at_steps = gains.continuous @ w + free
     between = gains.step * (gains.derivative @ np.concatenate([box[:7], cmds, w]))
     out: FloatArray = at_steps + between
+    out[V] = min(out[V], max(problem.start[V], res.sway))  # both bound the sway speed
     return out
 
 
@@ -615,10 +645,10 @@ def certify_cascade(problem: CascadeProblem) -> CascadeCertificate:
         problem,
         plant=Plant(model, ParameterBox.from_ranges(model, ())),
         speed=(u0, u0),
-        accel=0.0,
+        speed_rate=0.0,
         turn_rate=0.0,
         turn_accel=0.0,
-        jerk=0.0,
+        speed_jerk=0.0,
         start=(0.0,) * 7,
     )
     analysis = _loop_analysis(key)
@@ -660,7 +690,7 @@ def certify_cascade(problem: CascadeProblem) -> CascadeCertificate:
         return CascadeCertificate(False, None, None, f"no error box closes: {why}", k, gains.radius)
     res = residual_bounds(problem, final)
     assert not isinstance(res, str)  # the image was computed on the same box
-    actuation = res[1]
+    actuation = res.actuation
     over = []
     if actuation.thrust > problem.act.tau_x:
         over.append(f"thrust {actuation.thrust:.4g} N > {problem.act.tau_x:.4g} N")
@@ -787,6 +817,7 @@ __all__ = [
     "Actuation",
     "CascadeCertificate",
     "CascadeProblem",
+    "Residuals",
     "cascade_loop",
     "cascade_states",
     "certify_cascade",

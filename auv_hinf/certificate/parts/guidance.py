@@ -48,6 +48,7 @@ from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import STEP, slot_motion
+from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
 from auv_hinf.numerics.bisection import largest_holding
 from auv_hinf.robust.box import PARAMETERS
 
@@ -57,6 +58,8 @@ PART = "guidance"
 KEY = "guidance"
 #: Bisection steps of the advised current and box scale (each halves the bracket: 2^-10 of it).
 ADVICE_STEPS = 10
+#: The centre paths whose speed is constant by construction (their ``speed`` parameter).
+CONSTANT_SPEED_PATHS = (LineReference, CircleReference, LawnmowerReference)
 #: Decimals of an advised value (rounded towards the certified side).
 ADVICE_DIGITS = 4
 #: Gains tried when the declared ones do not certify, as (heading bandwidth, lookahead) multipliers
@@ -97,17 +100,21 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
     if float(speed_lo.min()) <= 0.0:
         return "a slot stops on the mission: line-of-sight guidance needs a moving slot"
     jerk, _ = mission_jerks(point.mission, point.offsets, cfg.frame)
+    accel = float(tube.accel.max())
     turn = float((tube.accel / speed_lo).max())
     turn_accel = float((jerk / speed_lo + 2.0 * tube.accel**2 / speed_lo**2).max())
+    # in the inertial frame every slot moves with the centre: a centre path of constant speed by
+    # construction (the line, the circle, the lawn-mower) gives U' = U'' = 0
+    constant = cfg.frame == "inertial" and isinstance(point.mission, CONSTANT_SPEED_PATHS)
     problem = CascadeProblem(
         guidance=g,
         plant=deployed_plant(cfg),
         act=act,
         speed=(float(speed_lo.min()), float(tube.speed[:, 1].max())),
-        accel=float(tube.accel.max()),
+        speed_rate=0.0 if constant else accel,
         turn_rate=turn,
         turn_accel=turn_accel,
-        jerk=float(jerk),
+        speed_jerk=0.0 if constant else float(jerk) + turn * accel,
         sample_time=impl.sample_time if impl.sample_time > 0.0 else STEP,
     )
     return replace(problem, start=tuple(float(x) for x in configured_start(cfg, problem)))
@@ -511,6 +518,7 @@ def plant_multipliers(cfg: FormationConfig) -> np.ndarray:
 __all__ = [
     "ADVICE_DIGITS",
     "ADVICE_STEPS",
+    "CONSTANT_SPEED_PATHS",
     "GAIN_CANDIDATES",
     "KEY",
     "MAX_BANDWIDTH_STEP",
