@@ -2,7 +2,8 @@
 
 Each vehicle of a ``[guidance]`` fleet runs the cascade of :mod:`auv_hinf.guidance.law` on its
 own slot, sampled every ``h`` seconds (its thrust and rudder held), on a plant anywhere in the
-``[uncertainty]`` box, in a current ``|c| <= C`` (constant, or with ``|c'|`` bounded). This
+``[uncertainty]`` box, in a constant current ``|c| <= C`` (the residuals carry a bound of ``|c'|``,
+which the guidance part keeps at 0: the 3-DOF model's water-relative velocities assume it). This
 module proves, for every such plant and current and every mission time, bounds of the errors,
 of the commanded thrust and rudder, and of the sway speed. The derivation is in
 ``docs/derivations/guidance.md``; in short:
@@ -16,19 +17,24 @@ of the commanded thrust and rudder, and of the sway speed. The derivation is in
   sight's rate with the ILOS rate evaluated continuously) and the sway speed ``v`` (m/s). The
   ILOS state between samples is the linear interpolation of the controller's own (Euler)
   integrator, so the errors at every sample are the controller's.
-* **The nominal loop.** ``x_e' = v_x``, ``v_x' = a_x``, ``y_e' = -p + U0 e + v``,
-  ``p' = (U0/Delta)(-p + U0 e + v) + u_i``, ``e' = e_r``, ``e_r' = a_psi``,
-  ``v' = alpha_v v - (m11 U0/m22) e_r + beta_v a_psi``, with the held commands of the law
-  ``a_x = -k_u (v_x + k_x x_e)``, ``a_psi = -k_p e - k_d e_r`` and ``u_i = U0 sigma y_e / Delta^2``
-  at the samples. It is a sampled-data LTI loop (:func:`cascade_loop`) whose peak-to-peak gains
-  :func:`~auv_hinf.implementation.peak.peak_gains` bounds rigorously.
+* **The nominal loop.** At ``u = U0``, ``theta = 0``, ``omega = 0`` and the model's coefficients
+  the cascade is linear (:func:`_rows`): ``x_e' = v_x``, ``v_x' = a_x``, ``y_e' = -p + U0 e + v``,
+  ``p' = (U0/Delta) y_e' + u_i``, ``e' = e_r``, ``e_r' = tau - (m_u U0/m33) v + theta''``,
+  ``v' = -(m11 U0/m22)(e_r - theta') - (d22/m22) v + (m33/(l m22)) tau``, with the held commands
+  ``a_x = -k_u (v_x + k_x x_e)``, ``tau = -k_p e - k_d e_r + (m_u U0/m33) v`` (the Munk moment the
+  law cancels included) and ``u_i = U0 sigma y_e / Delta^2`` at the samples. It is a sampled-data
+  LTI loop (:func:`cascade_loop`) whose peak-to-peak gains
+  :func:`~auv_hinf.implementation.peak.peak_gains` bounds rigorously, to the states and to the
+  linear expressions :data:`DERIVED` (bounded directly, they keep their terms' cancellations).
 * **What drives it.** Each state's exact derivative less the nominal one is a residual ``w_j``
   (:func:`residual_bounds`): the box's mass and drag mismatch, the current's turn with the
   track, the trigonometry of the line of sight and of the heading error, the speed the vehicle
   really has, the hold of the feed-forward between samples, the saturation of the along-track
-  correction. Each is bounded, term by term, over the *error box* (:class:`CascadeErrors`) the
-  states are assumed to stay in; the bounds of the vehicle's accelerations use the actuator
-  limits, so they hold whatever the law commands.
+  correction. Each is bounded, term by term, over the *error box* (the states and the derived
+  expressions within assumed bounds); the bounds of the vehicle's accelerations use the law's
+  commands against the plant's terms, or the actuator limits. The sway speed is bounded twice,
+  by the loop and by its own damped equation (drag and the rudder's Munk compensation, a scalar
+  comparison), and the smaller bound is kept.
 * **First exit.** With the start's free response and the residuals' bounds through the peak
   gains (plus the outputs' motion between the gains' fine steps), a box ``B`` whose image is
   strictly inside it cannot be left: at the first exit every residual would have been within its

@@ -223,3 +223,9 @@ def test_the_transit_preset_certifies_a_torpedo_fleet_within_its_rudder():
         and g["certified_peak"]["force_x"] <= g["limits"]["force_x"]
     )
     assert data["formation"]["min_separation_certified"] > 2.0
+
+
+def test_a_time_varying_current_is_not_evaluated():
+    data = certify(transit(disturbance={"current_speed": 0.04, "current_rate": 0.001})).to_dict()
+    assert data["certified"] is False
+    assert "current_rate" in data["parts"]["guidance"]["reasons"][0]["message"]

@@ -95,6 +95,11 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
             "the cascade is certified at [implementation] sample_time without delay or noise in this version: "
             "remove [implementation] delay and [implementation.noise]"
         )
+    if cfg.disturbance.current_rate:
+        return (
+            "the cascade is certified in a constant current (the 3-DOF model's water-relative velocities); "
+            "remove [disturbance] current_rate"
+        )
     tube = point.tube
     speed_lo = tube.speed[:, 0]
     if float(speed_lo.min()) <= 0.0:
