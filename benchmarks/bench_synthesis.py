@@ -31,7 +31,9 @@ def synthesis() -> str:
     for name in ("bluerov2-line", "remus-line"):
         cfg = preset_config(name)
         point = design_point(replace(cfg, robust=False))  # the tube, box and current only
-        act: Actuators | None = cfg.actuators
+        # a propeller-and-rudder vehicle (the REMUS) has no limits of the fully actuated law's forces:
+        # its design is timed without limits (certify refuses that law on it, docs/vehicles.md)
+        act: Actuators | None = cfg.actuators if isinstance(cfg.actuators, Actuators) else None
         args = (point.box, cfg.envelope, point.tube, point.current, act)
         for label, fn in (("bandwidth family", design_robust), ("LMI synthesis", synthesise_robust)):
             t, design = _timed_design(fn, *args)
@@ -56,7 +58,8 @@ def synthesis() -> str:
         rows,
         "Both designs are certified by the same robust certificate on the declared box and current. "
         "`covers` is false when no candidate fits the actuator limits: certify then answers with the "
-        "largest certifiable box and current.",
+        "largest certifiable box and current. The REMUS is designed without limits: it has a propeller and a "
+        "rudder, and certify refuses the fully actuated law on it.",
     )
 
 

@@ -663,7 +663,17 @@ def certify_cascade(problem: CascadeProblem) -> CascadeCertificate:
             False, None, None, f"the nominal sampled cascade is unstable at h = {problem.sample_time:.4g} s"
         )
     gains, fp = analysis
-    free = np.abs(fp) @ np.asarray(problem.start, dtype=float)  # every output: the states and DERIVED
+    start = np.asarray(problem.start, dtype=float)
+    if not np.all(np.isfinite(start)):
+        return CascadeCertificate(
+            False,
+            None,
+            None,
+            "the start is not bounded: the current is too strong for the start's crab",
+            0,
+            gains.radius,
+        )
+    free = np.abs(fp) @ start  # every output: the states and DERIVED
     box = free.copy()
     for k in range(1, MAX_ITERATIONS + 1):
         nxt = _image(problem, gains, free, box)

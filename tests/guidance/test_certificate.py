@@ -229,3 +229,9 @@ def test_a_time_varying_current_is_not_evaluated():
     data = certify(transit(disturbance={"current_speed": 0.04, "current_rate": 0.001})).to_dict()
     assert data["certified"] is False
     assert "current_rate" in data["parts"]["guidance"]["reasons"][0]["message"]
+
+
+def test_a_current_too_strong_for_the_start_is_refused_without_a_numerical_warning(recwarn):
+    data = certify(transit(disturbance={"current_speed": 1.5})).to_dict()
+    assert data["certified"] is False and "start" in data["parts"]["guidance"]["reasons"][0]["message"]
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
