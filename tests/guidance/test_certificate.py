@@ -23,8 +23,8 @@ import pytest
 
 from auv_hinf.cascade.certificate import STATES, cascade_states, start_states
 from auv_hinf.certificate.assembly import certify
-from auv_hinf.certificate.design_point import raw_fleet
-from auv_hinf.certificate.parts.guidance import guidance_summary, plant_multipliers
+from auv_hinf.certificate.design_point import design_point, raw_fleet
+from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary, plant_multipliers
 from auv_hinf.cli.main import main
 from auv_hinf.config.settings import config_from_dict
 from auv_hinf.guidance.law import SlotMotion
@@ -112,7 +112,7 @@ def test_the_certified_start_bounds_the_start_in_every_current():
             ],
         }
     )
-    problem = guidance_summary(cfg).problem
+    problem = cascade_problem(cfg, design_point(cfg))
     slots = slot_motion(raw_fleet(cfg), np.array([0.0]))
     slot = SlotMotion(p=slots.p[0], v=slots.v[0], a=slots.a[0])
     initial = np.asarray(cfg.simulation.initial)
@@ -123,6 +123,7 @@ def test_the_certified_start_bounds_the_start_in_every_current():
         assert np.all(exact <= bound + 1e-12), (angle, exact, bound)
 
 
+@pytest.mark.slow
 def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
     cfg = transit(disturbance={"current_speed": 0.3})
     data = certify(cfg).to_dict()
@@ -140,7 +141,7 @@ def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
     [
         ({"guidance": {"kind": "los"}}, "plain LOS"),
         ({"implementation": {"sample_time": 0.1, "delay": 0.05}}, "delay"),
-        (
+        pytest.param(
             {
                 "actuators": {
                     "kind": "underactuated",
@@ -151,6 +152,7 @@ def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
                 }
             },
             "rudder",
+            marks=pytest.mark.slow,
         ),
     ],
 )
@@ -201,6 +203,7 @@ def test_a_design_point_without_guidance_has_no_guidance_figures():
     assert data["parts"]["guidance"]["applies"] is False
 
 
+@pytest.mark.slow
 def test_gains_that_certify_the_declared_world_are_advised_first_and_certify_on_re_run():
     cfg = transit(disturbance={"current_speed": 0.1})
     data = certify(cfg).to_dict()
@@ -212,6 +215,7 @@ def test_gains_that_certify_the_declared_world_are_advised_first_and_certify_on_
     assert again["certified"] is True
 
 
+@pytest.mark.slow
 def test_the_transit_preset_certifies_a_torpedo_fleet_within_its_rudder():
     from auv_hinf.config.presets import preset_config
 

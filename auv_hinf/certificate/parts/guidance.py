@@ -184,11 +184,14 @@ class GuidanceSummary:
         return self.certificate is not None and self.certificate.holds
 
 
-def _with(problem: CascadeProblem, *, current: float | None = None, scale: float | None = None) -> CascadeProblem:
-    """``problem`` with another current bound (m/s) or its box scaled."""
+def _with(
+    cfg: FormationConfig, problem: CascadeProblem, *, current: float | None = None, scale: float | None = None
+) -> CascadeProblem:
+    """``problem`` with another current bound (m/s) or its box scaled, and the start's bounds in that current."""
     pl = problem.plant
     box = pl.box if scale is None else pl.box.scaled(scale)
-    return replace(problem, plant=Plant(pl.model, box, pl.current if current is None else current, pl.current_rate))
+    other = replace(problem, plant=Plant(pl.model, box, pl.current if current is None else current, pl.current_rate))
+    return replace(other, start=tuple(float(x) for x in configured_start(cfg, other)))
 
 
 @functools.lru_cache(maxsize=32)
@@ -209,13 +212,14 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
     current = None
     if problem.plant.current > 0.0:
         current = largest_holding(
-            lambda c: certify_cascade(_with(problem, current=c)).holds, problem.plant.current, steps=ADVICE_STEPS
+            lambda c: certify_cascade(_with(cfg, problem, current=c)).holds, problem.plant.current, steps=ADVICE_STEPS
         )
     scale = None
     if problem.plant.box.declared:
         top = min(1.0, problem.plant.box.max_scale)
-        scale = largest_holding(lambda s: certify_cascade(_with(problem, scale=s)).holds, top, steps=ADVICE_STEPS)
-    return GuidanceSummary(problem, cert, cert.reason, current, scale, _certifying_gains(problem))
+        scale = largest_holding(lambda s: certify_cascade(_with(cfg, problem, scale=s)).holds, top, steps=ADVICE_STEPS)
+    bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
+    return GuidanceSummary(problem, cert, cert.reason, current, scale, _certifying_gains(problem) if bounded else None)
 
 
 def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
