@@ -134,6 +134,9 @@ def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
     for name in ("theorem1", "closed_loop", "robust", "implementation"):
         assert data["parts"][name]["applies"] is False
     assert [r["part"] for r in data["parts"]["guidance"]["reasons"]] == ["guidance"]
+    # neither a smaller current, a smaller box nor the gains tried certify: the answer says the mission binds
+    why = data["parts"]["guidance"]["reasons"][0]
+    assert "mission binds" in why["message"] and why["settings"] == []
 
 
 @pytest.mark.slow

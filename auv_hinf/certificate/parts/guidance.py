@@ -169,6 +169,9 @@ class GuidanceSummary:
     gains : GuidanceConfig or None
         When it does not hold: the first gains of :data:`GAIN_CANDIDATES` that certify the
         declared box and current (``None``: none does).
+    mission_binds : bool
+        Nothing of the above certifies, and neither does the nominal plant in no current: the
+        mission (its turns, its slots' speeds) and the gains bind, not the box or the current.
     """
 
     problem: CascadeProblem | None
@@ -177,6 +180,7 @@ class GuidanceSummary:
     current_speed: float | None = None
     box_scale: float | None = None
     gains: GuidanceConfig | None = None
+    mission_binds: bool = False
 
     @property
     def holds(self) -> bool:
@@ -219,7 +223,10 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
         top = min(1.0, problem.plant.box.max_scale)
         scale = largest_holding(lambda s: certify_cascade(_with(cfg, problem, scale=s)).holds, top, steps=ADVICE_STEPS)
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
-    return GuidanceSummary(problem, cert, cert.reason, current, scale, _certifying_gains(problem) if bounded else None)
+    gains = _certifying_gains(problem) if bounded else None
+    bare = _with(cfg, replace(problem, plant=Plant(problem.plant.model, problem.plant.box.scaled(0.0))), current=0.0)
+    binds = current is None and scale is None and gains is None and not certify_cascade(bare).holds
+    return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds)
 
 
 def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
@@ -279,6 +286,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             if name in declared
         )
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies"
+    if summary.mission_binds:
+        frame = " and the path-frame slots' speed changes" if problem.speed[1] > problem.speed[0] * (1.0 + 1e-9) else ""
+        return (), (
+            "no smaller current, smaller box or faster heading loop certifies it: the mission binds (its turns"
+            f"{frame}; a straight line in the inertial frame certifies more easily, docs/derivations/guidance.md)"
+        )
     return (), ""
 
 
@@ -355,7 +368,9 @@ class GuidancePart:
         if summary.holds and cert is not None:
             return Verdict(self.name, True, True, (), figures, detail=summary, position_bound=cert.position_bound)
         settings, advice = _advice(cfg, summary)
-        text = f"guidance: {summary.reason}" + (f"; {advice} (re-run with it)" if advice else "")
+        text = f"guidance: {summary.reason}" + (
+            f"; {advice}" + (" (re-run with it)" if settings else "") if advice else ""
+        )
         actuation = None if cert is None else cert.actuation
         channel, value, limit = "guidance", None, None
         if actuation is not None and isinstance(cfg.actuators, RudderActuation):
