@@ -288,12 +288,6 @@ def _derived_outputs(problem: CascadeProblem, rows: dict[str, FloatArray]) -> Fl
     return out
 
 
-def _corners(num: tuple[float, float], den: tuple[float, float]) -> tuple[float, float]:
-    """Range of ``x / y`` for ``x`` in ``num`` and ``y > 0`` in ``den``."""
-    values = [n / d for n in num for d in den]
-    return min(values), max(values)
-
-
 def _off(rng: tuple[float, float], value: float) -> float:
     """``max |x - value|`` over ``x`` in ``rng``."""
     return max(abs(rng[0] - value), abs(rng[1] - value))
@@ -459,7 +453,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         side
         + _product_off([m11, (u_lo, u_hi)], m22, m.m11 * u0 / m.m22) * r_max
         + m.m11 * u0 / m.m22 * (omega + sight_gap)
-        + _off(_corners(pl.interval("d22_lin"), m22), m.d22_lin / m.m22) * vb
+        + _product_off([pl.interval("d22_lin")], m22, m.d22_lin / m.m22) * vb
         + pl.interval("d22_quad")[1] * vb * vb / m22[0]
     )
     v_lin = tighter("vdot_lin", m.m11 * u0 / m.m22 * yaw_lin + m.d22_lin / m.m22 * vb + m.m33 / (lever * m.m22) * tau)
@@ -743,7 +737,7 @@ def cascade_states(
     psi, u, v, r = states[:, 2], states[:, 3], states[:, 4], states[:, 5]
     speed = slot.speed
     tx, ty = slot.v[:, 0] / speed, slot.v[:, 1] / speed
-    omega = (slot.v[:, 0] * slot.a[:, 1] - slot.v[:, 1] * slot.a[:, 0]) / speed**2
+    omega = slot.course_rate
     ex, ey = states[:, 0] - slot.p[:, 0], states[:, 1] - slot.p[:, 1]
     xe, ye = tx * ex + ty * ey, -ty * ex + tx * ey
     theta = np.arctan((ye + sigma * integral) / delta)
@@ -815,7 +809,7 @@ def into_current_start(problem: CascadeProblem, slot: SlotMotion) -> FloatArray:
     slowest = float(speed.min())
     if c >= slowest * math.sin(MAX_START_CRAB):
         return np.full(7, math.inf)
-    omega = (slot.v[:, 0] * slot.a[:, 1] - slot.v[:, 1] * slot.a[:, 0]) / speed**2
+    omega = slot.course_rate
     crab = math.asin(c / (slowest - c)) if c < 0.5 * slowest else 0.5 * math.pi
     p = c * (1.0 - math.cos(crab))
     return np.array([0.0, 0.0, 0.0, p, 0.0, float(np.abs(omega).max()), 0.0])

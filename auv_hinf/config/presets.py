@@ -189,16 +189,20 @@ BLUEROV_BOX = (
 BLUEROV_ENVELOPE = Envelope(u=(-0.5, 1.0), v=(-0.5, 0.5), r=(-0.5, 0.5))
 
 
+def _paper_shape(offsets: ArrayLike) -> tuple[tuple[float, float], ...]:
+    """The ``[formation] shape`` (paper Jacobi vectors, m) of the vehicle offsets ``offsets`` (m)."""
+    pts = np.asarray(offsets, dtype=float)
+    return tuple((float(a), float(b)) for a, b in shape_from_offsets(pts, JacobiTransform(len(pts), "paper")))
+
+
 def _bluerov2_line() -> FormationConfig:
-    t = JacobiTransform(4, "paper")
-    shape = shape_from_offsets(np.asarray(BLUEROV_OFFSETS), t)
     initial = tuple((float(x), float(y), 0.0, BLUEROV_SPEED, 0.0, 0.0) for x, y in BLUEROV_OFFSETS)
     return FormationConfig(
         name="bluerov2-line",
         vehicle=bluerov2_heavy(),
         n=4,
         jacobi="paper",
-        shape=tuple((float(a), float(b)) for a, b in shape),
+        shape=_paper_shape(BLUEROV_OFFSETS),
         envelope=BLUEROV_ENVELOPE,
         robust=True,
         reference=ReferenceConfig("line", (("speed", BLUEROV_SPEED), ("heading", 0.0))),
@@ -243,8 +247,7 @@ BLUEROV_SURVEY_HORIZON = 900.0
 
 def _bluerov2_survey() -> FormationConfig:
     deployed = _bluerov2_deployed()
-    t = JacobiTransform(4, "paper")
-    shape = tuple((float(a), float(b)) for a, b in shape_from_offsets(np.asarray(BLUEROV_SQUARE), t))
+    shape = _paper_shape(BLUEROV_SQUARE)
     return replace(
         deployed,
         name="bluerov2-survey",
@@ -271,7 +274,7 @@ SURVEY_HORIZON = 1200.0
 
 def _remus_survey() -> FormationConfig:
     t = JacobiTransform(5, "paper")
-    shape = tuple((float(a), float(b)) for a, b in shape_from_offsets(np.asarray(SURVEY_V), t))
+    shape = _paper_shape(SURVEY_V)
     # on the slots at t = 0: the pattern starts at the origin on a straight +x leg (course 0, no turn)
     off = offsets_from_shape(np.asarray(shape), t)
     initial = tuple((float(x), float(y), 0.0, REMUS_SPEED, 0.0, 0.0) for x, y in off)
@@ -329,14 +332,12 @@ TRANSIT_GUIDANCE = GuidanceConfig(kind="ilos", heading_bandwidth=2.4, lookahead=
 
 def _remus_transit_ilos() -> FormationConfig:
     """Three REMUS 100 on a straight transit, steered by ILOS: a torpedo fleet the cascade's certificate covers."""
-    t = JacobiTransform(3, "paper")
-    shape = shape_from_offsets(np.asarray(TRANSIT_OFFSETS), t)
     return FormationConfig(
         name="remus-transit-ilos",
         vehicle=remus100(),
         n=3,
         jacobi="paper",
-        shape=tuple((float(a), float(b)) for a, b in shape),
+        shape=_paper_shape(TRANSIT_OFFSETS),
         envelope=REMUS_ENVELOPE,
         reference=ReferenceConfig("line", (("speed", REMUS_SPEED), ("heading", 0.0))),
         simulation=SimulationConfig(horizon=300.0, current=(0.0, TRANSIT_CURRENT)),

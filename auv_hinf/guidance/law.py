@@ -151,6 +151,13 @@ class SlotMotion:
         """``gamma = atan2(p_d')`` (rad)."""
         return np.asarray(np.arctan2(self.v[..., 1], self.v[..., 0]))
 
+    @property
+    def course_rate(self) -> FloatArray:
+        """``omega = (p_d' x p_d'') / |p_d'|^2`` (rad/s), the course's rate (the speed floored at 1e-9 m/s)."""
+        return np.asarray(
+            (self.v[..., 0] * self.a[..., 1] - self.v[..., 1] * self.a[..., 0]) / np.maximum(self.speed, 1e-9) ** 2
+        )
+
 
 @dataclass(frozen=True)
 class Commands:
@@ -224,7 +231,7 @@ def commands(
     psi, u, v, r = states[..., 2], states[..., 3], states[..., 4], states[..., 5]
     speed = np.maximum(slot.speed, 1e-9)
     tx, ty = slot.v[..., 0] / speed, slot.v[..., 1] / speed
-    omega = (slot.v[..., 0] * slot.a[..., 1] - slot.v[..., 1] * slot.a[..., 0]) / speed**2
+    omega = slot.course_rate
     speed_rate = (slot.v[..., 0] * slot.a[..., 0] + slot.v[..., 1] * slot.a[..., 1]) / speed
     ex, ey = states[..., 0] - slot.p[..., 0], states[..., 1] - slot.p[..., 1]
     xe, ye = tx * ex + ty * ey, -ty * ex + tx * ey

@@ -224,7 +224,7 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
         scale = largest_holding(lambda s: certify_cascade(_with(cfg, problem, scale=s)).holds, top, steps=ADVICE_STEPS)
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
     gains = _certifying_gains(problem) if bounded else None
-    bare = _with(cfg, replace(problem, plant=Plant(problem.plant.model, problem.plant.box.scaled(0.0))), current=0.0)
+    bare = _with(cfg, problem, current=0.0, scale=0.0)
     binds = current is None and scale is None and gains is None and not certify_cascade(bare).holds
     return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds)
 
