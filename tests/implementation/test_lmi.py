@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 
 from auv_hinf.closed_loop.nominal import position_decay_rate
 from auv_hinf.exceptions import DesignError
+from auv_hinf.implementation import limits
 from auv_hinf.implementation.limits import certified_lag, decay_at, exact_limit, held_plant, spectral_radius
 from auv_hinf.implementation.lmi import LagLoop, lmi_lag
 
@@ -103,6 +104,22 @@ def test_lkf_at_zero_lag_is_the_continuous_certificate():
     beta = decay_at(PAPER_POSITION, 0.0)
     exact = position_decay_rate(-2.1, 0.2605, 0.5, 1.8403)
     assert beta == pytest.approx(exact, rel=DECAY_RTOL) and beta <= exact
+
+
+def test_a_loop_certified_only_without_decay_answers_zero_after_a_bounded_search(monkeypatch):
+    """A rate bisection from 0 stops at its absolute width: about 25 LMI solves, not ~1,000 to underflow."""
+    # the deployed BlueROV2 surge loop with a box and a current at 0.2 s of lag: no positive rate is certified
+    loop = LagLoop((-7.789526686807653,), 1.5625, 2.5, 7.790037658234344, 5.077878373107323)
+    solves = []
+
+    def counted(*args, **kwargs):
+        solves.append(args[2])
+        return lmi_lag(*args, **kwargs)
+
+    monkeypatch.setattr(limits, "lmi_lag", counted)
+    assert decay_at(loop, 0.2) == 0.0
+    assert len(solves) <= 40
+    assert 0.0 < min(solves) <= limits.DECAY_ATOL  # it searched down to the absolute floor, and no further
 
 
 def test_paper_triangle_limits_and_tightness():

@@ -19,7 +19,13 @@ from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import body_block, paper2011, remus100
 from auv_hinf.robust.bandwidth import family_gains
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary, box_lambda, box_sigma, heading_perturbation
-from auv_hinf.robust.invariant_set import robust_certificate
+from auv_hinf.robust.invariant_set import (
+    heading_ellipsoid,
+    heading_matrix,
+    heading_vertices,
+    position_ellipsoid,
+    robust_certificate,
+)
 from auv_hinf.robust.margin import exhibited_scale, linearised_scale, trim_max_real
 from auv_hinf.simulation.engine import simulate
 from auv_hinf.simulation.scenario import Scenario
@@ -177,3 +183,21 @@ def test_box_scaling_and_validation() -> None:
         box.scaled(box.max_scale * 1.01)
     with pytest.raises(ValueError, match="unknown uncertain parameter"):
         ParameterBox.from_ranges(box.nominal, (("mass", (0.9, 1.1)),))
+
+
+def test_remembered_ellipsoids_are_the_verified_ones_and_cannot_be_changed():
+    """The ellipsoid caches answer a repeated SDP with the same verified ellipsoid, read-only, and
+    a different argument with its own: a box's vertex LMIs hold for the remembered matrix."""
+    stiff, damp = (1.0, 2.0), (1.5, 3.0)
+    first = heading_ellipsoid(stiff, damp, 0.3, 0.5)
+    assert first is not None and heading_ellipsoid(stiff, damp, 0.3, 0.5) is first
+    assert not first.matrix.flags.writeable
+    for a in heading_vertices(stiff, damp):  # the remembered matrix still satisfies every vertex LMI
+        assert np.linalg.eigvalsh(heading_matrix(first.matrix, a, 0.3)).max() <= 0.0
+    other = heading_ellipsoid(stiff, (1.5, 3.5), 0.3, 0.5)
+    assert other is not None and other is not first
+    a0, c2 = np.array([[0.0, 1.0], [-0.5, -1.2]]), np.array([0.5, 1.2])
+    pos = position_ellipsoid(a0, 0.3, 0.05, c2, 0.2, 10.0)
+    assert pos is not None and position_ellipsoid(a0.copy(), 0.3, 0.05, list(c2), 0.2, 10.0) is pos
+    assert not pos.matrix.flags.writeable
+    assert position_ellipsoid(a0 * 1.01, 0.3, 0.05, c2, 0.2, 10.0) is not pos
