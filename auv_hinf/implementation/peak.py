@@ -350,6 +350,27 @@ def period_radius(loop: SampledLoop) -> float:
     return float(np.abs(np.linalg.eigvals(_maps(loop)[2])).max())
 
 
+def _sumsq(x: FloatArray) -> FloatArray:
+    """``sum_i x[..., i]^2`` over the last axis (a few plant states: summed slice by slice, which
+    numpy does far faster than a reduction over a short inner axis)."""
+    out: FloatArray = np.square(x[..., 0])
+    for i in range(1, x.shape[-1]):
+        out += np.square(x[..., i])
+    return out
+
+
+def _row_quad(m: FloatArray, w: FloatArray) -> FloatArray:
+    """``sqrt(m_i W m_i^T)`` of every row ``m_i`` of ``m`` (``W`` positive semidefinite; round-off clipped at 0)."""
+    out: FloatArray = np.sqrt(np.maximum(((m @ w) * m).sum(axis=1), 0.0))
+    return out
+
+
+def _col_quad(m: FloatArray, w: FloatArray) -> FloatArray:
+    """``sqrt(m_j^T W m_j)`` of every column ``m_j`` of ``m`` (``W`` positive semidefinite; round-off clipped at 0)."""
+    out: FloatArray = np.sqrt(np.maximum(((w @ m) * m).sum(axis=0), 0.0))
+    return out
+
+
 def _row_norms(m: FloatArray) -> FloatArray:
     """The Euclidean norm of every row of ``m`` (``np.linalg.norm(m, axis=1)``, without its overhead)."""
     out: FloatArray = np.sqrt(np.einsum("ij,ij->i", m, m))
@@ -405,29 +426,29 @@ def peak_gains(loop: SampledLoop) -> PeakGains | None:
             inj[:, nw : nw + nn] = per.steps[q][0] @ entry
         inj[per.plant, nw + nn : k] = loop.a @ loop.b_w * (0.5 * length * length)
         inj[per.plant, k:] = np.eye(n)
-        resp = np.einsum("os,sjc->ojc", out, carried[:, : q + 1, :])
+        resp = (out @ carried[:, : q + 1, :].reshape(size, (q + 1) * cols)).reshape(no, q + 1, cols)
         acc[q, :, : q + 1] += np.abs(resp[..., :k])
-        rem[q, :, : q + 1] += np.sqrt(np.einsum("ojc,ojc->oj", resp[..., k:], resp[..., k:]))
+        rem[q, :, : q + 1] += np.sqrt(_sumsq(resp[..., k:]))
     state = carried.reshape(size, steps * cols)
     # the outputs of MIN_PERIODS consecutive periods on the state at the first one's start
     powers = [np.eye(size)]
     for _ in range(MIN_PERIODS):
         powers.append(phi @ powers[-1])
     leap = powers.pop()  # Phi^MIN_PERIODS
-    seen = np.einsum("ms,psz->mpz", stack, np.stack(powers))  # (steps * no, MIN_PERIODS, size)
+    seen = np.stack([stack @ pw for pw in powers], axis=1)  # (steps * no, MIN_PERIODS, size)
     periods = 0
     while True:
-        block = np.einsum("mpz,zc->mpc", seen, state).reshape(steps, no, MIN_PERIODS, steps, cols)
+        block = (seen @ state).reshape(steps, no, MIN_PERIODS, steps, cols)
         state = leap @ state
         acc += np.abs(block[..., :k]).sum(axis=2)
         tail_part = block[..., k:]
-        rem += np.sqrt(np.einsum("...i,...i->...", tail_part, tail_part)).sum(axis=2)
+        rem += np.sqrt(_sumsq(tail_part)).sum(axis=2)
         periods += MIN_PERIODS
         tails = _tails(rows, state, p, rho).reshape(steps, no, steps, cols)
         so_far = np.maximum(acc[..., : nw + nn].sum(axis=2).max(axis=0), 1e-300)
         if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= MAX_PERIODS:
             acc += tails[..., :k]
-            rem += np.sqrt(np.einsum("...i,...i->...", tails[..., k:], tails[..., k:]))
+            rem += np.sqrt(_sumsq(tails[..., k:]))
             break
     # int_0^delta |l e^{A s} B_w| ds <= delta |l B_w| + delta^2/2 |l A B_w| + |l| ||A||^2 ||B_w|| int s^2 e^{a s}/2 ds
     norm_a = float(np.linalg.norm(loop.a, 2))
@@ -530,7 +551,7 @@ def _sweep(loop: SampledLoop, start: FloatArray, unit_input: bool) -> tuple[Floa
     for mp in maps:
         partial = mp @ partial
         rows.append(out @ partial)
-    row_norm = np.max(np.stack([np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", r, inv, r), 0.0)) for r in rows]), axis=0)
+    row_norm = np.max(np.stack([_row_quad(r, inv) for r in rows]), axis=0)
     plant_norm = float(np.sqrt(max(float(np.max(np.linalg.eigvalsh(inv[per.plant, per.plant]))), 0.0)))
     u_norm = float(np.sqrt(max(float(np.max(np.linalg.eigvalsh(inv[iu, iu]))), 0.0))) if nu else 0.0
     # within a step a deviation (homogeneous: the input is balanced at the equilibrium) moves by at
@@ -565,21 +586,23 @@ def _sweep(loop: SampledLoop, start: FloatArray, unit_input: bool) -> tuple[Floa
             batch.append(state)
             state = phi @ state + period_input
         starts = np.stack(batch, axis=1)  # (size, K, cols)
-        begun = np.einsum("qij,jkc->qikc", lead_all, starts) + offset_all[:, :, None, :]  # (steps, size, K, cols)
-        bx = begun[:, per.plant]
-        xdot = np.einsum("ij,qjkc->qikc", loop.a, bx) + drive[None, :, None, :]
+        steps, kc = lead_all.shape[0], starts.shape[1] * cols
+        begun = (lead_all @ starts.reshape(size, kc)).reshape(steps, size, -1, cols) + offset_all[:, :, None, :]
+        flat = begun.reshape(steps, size, kc)  # (steps, size, K * cols)
+        xdot = loop.a @ flat[:, per.plant] + drive.reshape(n, 1, cols).repeat(kc // cols, axis=1).reshape(n, kc)
         if nu:
-            xdot = xdot + np.einsum("ij,qjkc->qikc", loop.b_u, begun[:, iu])
-        z0 = np.abs(np.einsum("oi,qikc->qokc", out, begun))
-        d1 = np.abs(np.einsum("oi,qikc->qokc", c_full, xdot))
-        d2 = np.abs(np.einsum("oi,qikc->qokc", c_full @ loop.a, xdot))
+            xdot = xdot + loop.b_u @ flat[:, iu]
+        z0 = np.abs(out @ flat).reshape(steps, no, -1, cols)
+        d1 = np.abs(c_full @ xdot).reshape(steps, no, -1, cols)
+        d2 = np.abs((c_full @ loop.a) @ xdot).reshape(steps, no, -1, cols)
+        xdot = xdot.reshape(steps, n, -1, cols)
         r3 = cx_norm[None, :, None, None] * np.linalg.norm(xdot, axis=1)[:, None, :, :] * third
         top = z0 + lengths * d1 + 0.5 * lengths**2 * d2 + r3 * lengths**3
         peak = np.maximum(peak, top.max(axis=(0, 2)))
         area += (lengths * z0 + 0.5 * lengths**2 * d1 + lengths**3 / 6.0 * d2 + r3 * lengths**4 / 4.0).sum(axis=(0, 2))
         periods += MIN_PERIODS
         dev = state - steady
-        dev_p = np.sqrt(np.maximum(np.einsum("ji,jk,ki->i", dev, p, dev), 0.0))  # |d|_P per column
+        dev_p = _col_quad(dev, p)  # |d|_P per column
         env = (row_norm + move_tail)[:, None] * dev_p[None, :]  # a tail deviation's sup, times rho^k
         small = np.where(decaying, env <= TAIL_RTOL * np.maximum(peak, 1e-300), True)
         if np.all(small) or periods >= MAX_PERIODS:
@@ -636,11 +659,10 @@ def _tails(offsets: Sequence[FloatArray], state: FloatArray, p: FloatArray, rho:
     """
     w, v = np.linalg.eigh(p)
     inv = v @ np.diag(1.0 / w) @ v.T
-    cols = np.sqrt(np.maximum(np.einsum("ji,jk,ki->i", state, p, state), 0.0))
+    cols = _col_quad(state, p)
     out = []
     for o in offsets:
-        rows = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", o, inv, o), 0.0))
-        out.append(np.outer(rows, cols) / (1.0 - rho))
+        out.append(np.outer(_row_quad(o, inv), cols) / (1.0 - rho))
     return np.stack(out)
 
 
