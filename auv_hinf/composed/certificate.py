@@ -65,6 +65,7 @@ from auv_hinf.implementation.peak import (
 )
 from auv_hinf.law.gains import Gains
 from auv_hinf.models.envelope import Envelope
+from auv_hinf.numerics.integrators import FORCE_FLOOR
 
 #: Relative widening of the accepted bounds before the final self-consistency step.
 FIXED_POINT_RTOL = 1e-6
@@ -685,7 +686,8 @@ def force_bound(problem: DeployedProblem, op: OperatingBox, peaks: Peaks) -> For
 
     ``tau_xy = M_hat [R_y^T p_d'' - F - B_hat_y R_y^T p_d']`` and ``tau_psi = m33_hat (r_d' + d33_hat
     r_d / m33_hat - F_psi) + (m22_hat - m11_hat) u_y v_y``: the feedback ``F`` is each loop's
-    output, every other term is bounded on the operating box at the measured state.
+    output, every other term is bounded on the operating box at the measured state. A channel below
+    :data:`~auv_hinf.numerics.integrators.FORCE_FLOOR` is reported at it.
 
     Parameters
     ----------
@@ -710,9 +712,9 @@ def force_bound(problem: DeployedProblem, op: OperatingBox, peaks: Peaks) -> For
     ff_psi = (mdl.d33_lin + mdl.d33_quad * r_y) * mission.yaw_rate + dm_hat * u_y * v_y
     fb = (peaks.get(0, "F"), peaks.get(1, "F"), peaks.head("F"))
     return ForceBound(
-        force_x=mdl.m11 * (mission.accel + fb[0]) + ff_x,
-        force_y=mdl.m22 * (mission.accel + fb[1]) + ff_y,
-        moment=mdl.m33 * (mission.yaw_accel + fb[2]) + ff_psi,
+        force_x=max(FORCE_FLOOR, mdl.m11 * (mission.accel + fb[0]) + ff_x),
+        force_y=max(FORCE_FLOOR, mdl.m22 * (mission.accel + fb[1]) + ff_y),
+        moment=max(FORCE_FLOOR, mdl.m33 * (mission.yaw_accel + fb[2]) + ff_psi),
         feedback=fb,
         feed_forward=(ff_x, ff_y, ff_psi),
     )

@@ -67,6 +67,10 @@ def test_the_lawnmower_survey_is_refused_with_a_mission_change_that_certifies_wh
     reason = next(r for r in cert.findings if r.part == "composed")
     assert reason.settings, reason.message
     assert {s.table for s in reason.settings} <= {"reference", "design"}
+    # the JSON's advice lists the same answer as data, with the re-run's bound
+    (entry,) = cert.to_dict()["composed"]["advice"]
+    assert entry["settings"] == [s.to_dict() for s in reason.settings] and entry["scale"] is None
+    assert entry["setting"] in ("design", "turns", "speed") and entry["position_bound"] > 0.0
     again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in reason.settings]))
     assert again.certified, again.reasons
     assert again.to_dict()["composed"]["covers"]

@@ -15,7 +15,7 @@ from auv_hinf.certificate.run_plan import plan_run, with_start
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
 from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION
-from auv_hinf.config.settings import config_from_dict
+from auv_hinf.config.settings import config_from_dict, with_settings
 from auv_hinf.mission.fleet import H0_SUP, H1_SUP, FleetReference, shaped_start
 from auv_hinf.mission.paths import CircleReference, SineReference
 from auv_hinf.mission.separation import PAIRWISE_MAX_N, closest_approach, slot_separation
@@ -117,9 +117,12 @@ def test_slots_closer_than_twice_the_bound_plus_the_requirement_are_refused_with
     assert why.kind == "envelope" and why.vehicle == 1 and why.limit == 2.0
     assert why.value == pytest.approx(f["min_separation_certified"])
     assert "vehicles 2 and 3" in why.message and "1.5 m apart" in why.message and "min_separation = 2 m" in why.message
-    (setting,) = why.settings
-    scaled = np.array(setting.value)
-    assert setting.key == "offsets" and np.linalg.norm(scaled[1] - scaled[2]) >= 2.0
+    setting, *removed = why.settings
+    assert setting.key == "shape" and {r.key for r in removed} == {"offsets", "polygon_radius"}
+    assert all(r.value is None for r in removed) and "[formation] shape = " in why.message
+    # the advice, written back into the file's form (offsets here), certifies the separation
+    again = certify(with_settings(cert.config, [(x.table, x.key, x.value) for x in why.settings]))
+    assert again.verdict("separation").ok, again.reasons
     # the same slots with a smaller requirement hold
     assert certify(replace(cert.config, min_separation=1.0)).verdict("separation").ok
 

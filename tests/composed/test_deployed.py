@@ -20,6 +20,7 @@ from auv_hinf.composed.loops import Errors
 from auv_hinf.config.settings import config_from_dict, with_settings
 from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.model import Implementation
+from auv_hinf.numerics.integrators import FORCE_FLOOR
 from auv_hinf.simulation.engine import simulate
 from tests.helpers import DEPLOYED, DEPLOYED_BOXED
 
@@ -192,3 +193,21 @@ def test_a_run_with_a_declared_box_and_current_is_judged_by_the_composed_certifi
     assert report["certificate_covers_run"] and report["robust_covers_run"] is True
     assert report["robust_bounds"] == {k.removesuffix("_error"): v for k, v in report["certified_errors"].items()}
     assert "composed" in report["robust_reason"]
+
+
+@pytest.mark.slow
+def test_a_channel_the_mission_never_loads_is_certified_above_the_simulations_round_off():
+    """Exact measurements on a straight line in still water: sway force and yaw moment are zero by symmetry,
+    and the simulation commands round-off there; the certified peak carries the force floor, and every
+    commanded channel of the run stays within the certified peak."""
+    exact = {"sample_time": 0.1, "delay": 0.1, "noise": {"position": 0.0, "velocity": 0.0, "heading": 0.0}}
+    cfg = config_from_dict({**DEPLOYED, "simulation": {"horizon": 20.0}, "implementation": exact}, "exact")
+    cert = certify(cfg)
+    peak = cert.to_dict()["actuators"]["certified_peak"]
+    assert cert.certified and min(peak.values()) >= FORCE_FLOOR
+    assert cert.to_dict()["composed"]["certified_peak"] == pytest.approx(peak)
+    plan = plan_run(cfg)
+    report = run_report(plan, simulate(plan.scenario))
+    assert report["certificate_covers_run"]
+    for channel, commanded in report["commanded_peak"].items():
+        assert commanded <= peak[channel], (channel, commanded, peak[channel])

@@ -41,6 +41,7 @@ from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actu
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.numerics.integrators import FORCE_FLOOR
 from auv_hinf.robust.margin import largest_certifiable
 
 #: The part's registry name and JSON key.
@@ -120,6 +121,8 @@ class ActuatorCheck:
 def peak_of(bounds: list[Peak]) -> Peak | None:
     """Elementwise largest of thrust bounds (``None`` for none).
 
+    A channel certified below :data:`~auv_hinf.numerics.integrators.FORCE_FLOOR` is reported at it.
+
     Parameters
     ----------
     bounds : list of Peak
@@ -127,7 +130,7 @@ def peak_of(bounds: list[Peak]) -> Peak | None:
     """
     if not bounds:
         return None
-    return (max(b[0] for b in bounds), max(b[1] for b in bounds), max(b[2] for b in bounds))
+    return tuple(max(FORCE_FLOOR, *(b[k] for b in bounds)) for k in range(3))  # type: ignore[return-value]
 
 
 def check_actuators(

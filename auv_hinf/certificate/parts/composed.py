@@ -312,8 +312,10 @@ class ComposedPart:
             lead = "no one setting alone certifies; all of these together do" if together else "each alone certifies"
             message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
-            text, settings = _no_advice(ctx.point, summary.problem)
+            text, settings, entry = _no_advice(ctx.point, summary.problem)
             message += f" ({text})"
+            if entry is not None:  # the JSON's advice lists every answer the text gives
+                figures["advice"] = [entry]
         why = Reason(self.name, "not_covered", message, channel=None if c is None else c.governed_by, settings=settings)
         return Verdict(self.name, False, True, (why,), figures, binding=binding, detail=summary)
 
@@ -386,7 +388,10 @@ class ComposedPart:
             what = a["setting"]
             if what == "together":
                 what = ", ".join(a.get("scaled") or []) + " together"
-            out.append(f"    certifies with          {values} (the {what} at {a['scale']:.3g} of the declared)")
+            if a.get("scale") is None:  # a change of the design or the mission, not a declared value shrunk
+                out.append(f"    certifies with          {values} (a change of the {what})")
+            else:
+                out.append(f"    certifies with          {values} (the {what} at {a['scale']:.3g} of the declared)")
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
@@ -590,20 +595,30 @@ def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | N
     return None
 
 
-def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...]]:
+def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...], dict[str, Any] | None]:
     """What certifies when no declared setting does at the design's gains: the design, the mission, or a re-run.
 
     The design or mission changes of :func:`~auv_hinf.certificate.mission_advice.mission_advice`
     come first; when none covers, the declared settings shrunk together with the gains a re-run
-    designs (:func:`rerun_together`).
+    designs (:func:`rerun_together`). Returns the sentence, the settings, and the entry of the
+    ``composed.advice`` list of ``certify --json`` (``setting`` is ``design``, ``turns``, ``speed``
+    or ``together``; ``None`` when nothing certifies).
     """
     found = mission_advice(point, covered_position_bound)
     if found:
         a = found[0]
         kind = {"design": "gains designed for the deployed loop", "turns": "wider turns", "speed": "a slower mission"}
+        entry = {
+            "setting": a.what,
+            "scaled": [],
+            "scale": None,
+            "settings": [s.to_dict() for s in a.settings],
+            "position_bound": a.position_bound,
+        }
         return (
             f"no declared setting certifies when shrunk, even all together; {kind[a.what]} certify: {a.line()}",
             a.settings,
+            entry,
         )
     together = rerun_together(point.config, problem)
     if together is not None and together.certificate.errors is not None:
@@ -613,12 +628,14 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
             f"with the gains a re-run designs, these values of {', '.join(together.scaled)} certify: "
             f"{_advice_line(together)} (certified |e| <= {bound:.3g} m)",
             advice_settings(together),
+            _advice_dict(together),
         )
     return (
         f"no declared setting certifies when shrunk, even all together, and neither do {tried(point.config)}: "
         "nothing tried certifies this loop (a faster [implementation] sample_time with a shorter delay, or other "
         "gains, may; none was found)",
         (),
+        None,
     )
 
 

@@ -46,8 +46,10 @@ PART = "separation"
 KEY = "formation"
 #: The parts that bound the tracking errors: each one that applies must prove a position bound.
 BOUNDING_PARTS = ("composed", "closed_loop", "robust", "implementation", "guidance")
-#: Largest fleet for which a refusal suggests the scaled ``[formation] offsets`` themselves.
-OFFSETS_ADVICE_MAX_N = 12
+#: Largest fleet for which a refusal suggests the scaled ``[formation] shape`` itself.
+SHAPE_ADVICE_MAX_N = 12
+#: The keys of ``[formation]`` that give the formation's geometry, exactly one of which is set.
+FORMATION_FORMS = ("shape", "offsets", "polygon_radius")
 #: Relative margin on the advised spread, above the rounding of the advised values to 4 digits.
 ADVICE_MARGIN = 1e-3
 #: Relative tolerance of the test that the formation is a regular polygon (then ``polygon_radius`` is advised).
@@ -144,15 +146,38 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
 
 
 def _scale_settings(point: DesignPoint, factor: float) -> tuple[Setting, ...]:
-    """The ``[formation]`` value that spreads the formation by ``factor``: its polygon radius, or its offsets."""
+    """The ``[formation]`` value that spreads the formation by ``factor``, and the removal of the other forms.
+
+    A regular polygon gets its ``polygon_radius``; any other formation its Jacobi ``shape`` (what
+    ``init`` and a configuration's TOML form write). The table accepts exactly one of ``shape``,
+    ``offsets`` and ``polygon_radius``, so the other two are removed (``None``): re-running with the
+    settings works whichever form the file used.
+    """
     off = point.offsets
     n = off.shape[0]
     radius = float(np.hypot(off[:, 0], off[:, 1]).mean())
+    value: float | list[list[float]]
     if np.allclose(off, regular_polygon(n, radius), rtol=0.0, atol=POLYGON_RTOL * max(radius, 1.0)):
-        return (Setting("formation", "polygon_radius", float(f"{radius * factor:.4g}")),)
-    if n <= OFFSETS_ADVICE_MAX_N:
-        return (Setting("formation", "offsets", [[float(f"{x * factor:.4g}") for x in row] for row in off]),)
-    return ()
+        key, value = "polygon_radius", float(f"{radius * factor:.4g}")
+    elif n <= SHAPE_ADVICE_MAX_N:
+        # 7 digits: a pair's distance is a difference of the vectors, whose rounding it must not eat
+        key, value = "shape", [[float(f"{x * factor:.7g}") for x in row] for row in point.config.shape]
+    else:
+        return ()
+    others = [k for k in FORMATION_FORMS if k != key]
+    return (Setting("formation", key, value), *(Setting("formation", k, None) for k in others))
+
+
+def _bound_levers(point: DesignPoint) -> str:
+    """What reduces the certified error bound, among what the configuration declares."""
+    cfg = point.config
+    levers = ["a start nearer the slots"] if cfg.simulation.initial is not None else []
+    levers += ["a smaller [uncertainty] box"] if cfg.uncertainty.box else []
+    levers += ["a smaller [disturbance] current_speed"] if (cfg.disturbance.current_speed or 0.0) > 0.0 else []
+    impl = cfg.implementation
+    levers += ["less [implementation.noise]"] if impl.sampled and not impl.noise.exact else []
+    levers += ["a shorter [implementation] delay"] if impl.sampled and impl.delay > 0.0 else []
+    return ", ".join(levers) or "other gains, or a slower mission"
 
 
 def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
@@ -180,19 +205,30 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
     b, certified = sep.position_bound, s.distance - 2.0 * sep.position_bound
     shaped = f" less {s.shaping:.4g} m for the shaped start" if s.shaping > 0.0 else ""
     factor = (sep.required + 2.0 * b + s.shaping) / s.slot_distance
+    settings = _scale_settings(point, factor * (1.0 + ADVICE_MARGIN))
+    spread = (
+        f"[formation] {settings[0].key} = {settings[0].value}, in place of " + " or ".join(x.key for x in settings[1:])
+        if settings
+        else "[formation] polygon_radius, offsets or shape"
+    )
     return Reason(
         PART,
         "envelope",
         f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below "
         f"[formation] min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped}, "
         f"and each vehicle's position error is certified <= {b:.4g} m (certified = slot distance - 2 x bound); "
-        f"spread the formation about {factor:.3g} times ([formation] polygon_radius, offsets or shape), or "
-        "reduce the certified error bound (a start nearer the slots, a smaller [uncertainty] box or current)",
+        f"spread the formation about {factor:.3g} times ({spread}), or reduce the certified error bound "
+        f"({_bound_levers(point)})"
+        + (
+            "; in the path frame wider slots are faster in the turns, which may raise the bound: re-run to check"
+            if point.config.frame == "path"
+            else ""
+        ),
         channel="separation",
         vehicle=i,
         value=certified,
         limit=sep.required,
-        settings=_scale_settings(point, factor * (1.0 + ADVICE_MARGIN)),
+        settings=settings,
     )
 
 
@@ -269,9 +305,10 @@ class SeparationPart:
 __all__ = [
     "ADVICE_MARGIN",
     "BOUNDING_PARTS",
+    "FORMATION_FORMS",
     "KEY",
-    "OFFSETS_ADVICE_MAX_N",
     "POLYGON_RTOL",
+    "SHAPE_ADVICE_MAX_N",
     "SeparationBound",
     "SeparationPart",
     "refusal",
