@@ -662,9 +662,9 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
                     "nominal loops and the couplings are too large for these gains",
                 ),
             )
+        errors = Errors.from_array(np.maximum(reached.as_array(), errors.as_array()))  # reported as "last"
         if why in ("diverged", "slip", "gain"):
             break
-        errors = Errors.from_array(np.maximum(reached.as_array(), errors.as_array()))
         if not OperatingBox.of(mission, plant.current, errors).within(problem.envelope):
             # every later round starts from these errors and only adds to them (the system is
             # monotone in the operating box), so its bounds would leave the envelope too

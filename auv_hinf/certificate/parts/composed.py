@@ -309,7 +309,11 @@ class ComposedPart:
         )
         if hint:
             together = any(a.knob == "together" for a in summary.advice)
-            lead = "no one setting alone certifies; all of these together do" if together else "each alone certifies"
+            lead = (
+                "at the design's gains no one setting alone certifies; all of these together do (re-run)"
+                if together
+                else "each alone certifies"
+            )
             message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
             text, settings, entry = _no_advice(ctx.point, summary.problem)
