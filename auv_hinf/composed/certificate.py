@@ -468,7 +468,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         m[q, ix(f"{j}:v_m")] += dc
         m[q, ix(f"{j}:F")] += dl
         m[q, ix(f"{other}:v")] += r + coriolis
-        m[q, ix("h:dpsi")] += dist.misrotation
+        m[q, ix("h:dpsi")] += dist.misrotation[j]
         m[ix(f"{j}:q_e"), ix(f"{other}:e")] += r
         if integral:  # the integrator turns with the body frame: |z_b| changes by r h |z| per sample
             m[ix(f"{j}:p_z"), ix("0:z")] += r * h

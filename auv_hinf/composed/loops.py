@@ -854,9 +854,10 @@ class Disturbances:
         ``W_r``: the residual of the lag, the reference and the current's rate in ``eta'`` (m/s^2).
     heading : float
         ``W_psi``: what drives ``e_r'`` beyond its channels (rad/s^2).
-    misrotation : float
-        Gain (m/s^2 per rad) of the heading's change since its measurement on ``eta'``: the drift
-        compensation and the feed-forward turned by it.
+    misrotation : tuple of float
+        Gains (m/s^2 per rad) of the heading's change since its measurement on the surge and sway
+        components of ``eta'``: the drift compensation and the feed-forward turned by it
+        (:func:`misrotation_gains`).
     munk : tuple of float
         Gains (rad/s^2 per m/s) of the surge and sway velocity errors' changes since their
         measurement on ``e_r'`` (the Munk moment the law cancels on old velocities).
@@ -869,7 +870,7 @@ class Disturbances:
     deficit_rate: float
     residual: float
     heading: float
-    misrotation: float
+    misrotation: tuple[float, float]
     munk: tuple[float, float]
     parts: dict[str, float]
 
@@ -949,7 +950,7 @@ def disturbances(
     r_gap = errors.yaw_rate + n.yaw_rate + min(mission.yaw_accel * tau, 2.0 * mission.yaw_rate)
     coriolis_rate = (errors.yaw_rate * munk_abs * nu_d + r_gap * abs(munk_hat) * s_hi) / m_lo
     w_r = feed_lag + compensation + coriolis_rate + c_rate
-    misrotation = lam_hi * (b_hat * s_hi + mission.accel)
+    misrotation = misrotation_gains(plant, op, mission, impl, lam_hi, (u_y, v_y, r_y))
     # --- heading: what is not a channel of its loop
     d33_hat = mdl.d33_lin + mdl.d33_quad * mission.yaw_rate
     nu_d_change = nu_d_rate * tau  # the desired relative velocity's change over the lag
@@ -983,6 +984,63 @@ def disturbances(
         misrotation=misrotation,
         munk=(munk_gain * v_y, munk_gain * u_y),
         parts=parts,
+    )
+
+
+def misrotation_gains(
+    plant: Plant,
+    op: OperatingBox,
+    mission: MissionBounds,
+    impl: Implementation,
+    lam_hi: float,
+    measured: tuple[float, float, float],
+) -> tuple[float, float]:
+    """Gains (m/s^2 per rad) of the heading's change since measured on the surge and sway parts of ``eta'``.
+
+    The law turns its drift compensation ``B_hat(nu_y) R_y^T p_d'`` and its feed-forward
+    ``R_y^T p_d''`` with the measured heading ``psi_y``; with ``delta = psi - psi_y`` the error is
+    ``B_hat (R(delta) - I) p`` with ``p = R^T p_d'`` the desired ground velocity in the body frame,
+    ``|p_x| <= S`` and ``|p_y| <= S sin(slip)`` (``slip`` the mission's heading offset plus the heading
+    error, :class:`OperatingBox`). Componentwise ``|((R(delta) - I) p)_x| <= |delta| (|p_y| + |p_x|
+    delta_m/2)`` and ``|(..)_y| <= |delta| (|p_x| + |p_y| delta_m/2)``, from ``|sin delta| <= |delta|`` and
+    ``1 - cos delta <= delta^2/2 <= |delta| delta_m/2``, with ``delta_m = r_max (h + d) + n_psi`` the
+    largest ``|delta|`` in the operating box (the yaw rate over the largest lag, plus the heading
+    noise). ``B_hat`` is the diagonal ``(d_jj_lin + d_jj_quad |nu_y,j|)/m_jj`` plus Coriolis terms of at
+    most ``rho_hat r_y`` off the diagonal. On a straight line (``p_y`` small) the surge part is second
+    order in ``delta``: the compensation is turned across the track, not along it. Each axis keeps the
+    smaller of this and the norm bound ``lambda (|B_hat| S + |p_d''|)``; the feed-forward's turn
+    (``|p_d''|``, of any direction) is counted whole on both.
+
+    Parameters
+    ----------
+    plant : Plant
+        Model, box and current.
+    op : OperatingBox
+        The operating box.
+    mission : MissionBounds
+        The desired motion.
+    impl : Implementation
+        Sample time, delay and noise bounds.
+    lam_hi : float
+        Largest input gain ``m_hat/m``.
+    measured : tuple of float
+        Bounds of the measured ``|u_y|, |v_y|`` (m/s) and ``|r_y|`` (rad/s).
+    """
+    mdl = plant.model
+    u_y, v_y, r_y = measured
+    s_hi = mission.speed[1]
+    rho_hat = max(abs(mdl.m22 / mdl.m11 - 1.0), abs(1.0 - mdl.m11 / mdl.m22))
+    b1 = (mdl.d11_lin + mdl.d11_quad * u_y) / mdl.m11
+    b2 = (mdl.d22_lin + mdl.d22_quad * v_y) / mdl.m22
+    off = rho_hat * r_y
+    whole = lam_hi * ((max(b1, b2) + off) * s_hi + mission.accel)
+    p_y = s_hi * math.sin(min(op.slip, MAX_SLIP))
+    half = 0.5 * min(op.r * impl.max_lag + impl.noise.heading, math.pi)
+    along = b1 * (p_y + s_hi * half) + off * (s_hi + p_y * half)
+    across = b2 * (s_hi + p_y * half) + off * (p_y + s_hi * half)
+    return (
+        min(whole, lam_hi * (along + mission.accel)),
+        min(whole, lam_hi * (across + mission.accel)),
     )
 
 
@@ -1048,6 +1106,7 @@ __all__ = [
     "disturbances",
     "heading_axis",
     "heading_loop",
+    "misrotation_gains",
     "nominal_loops",
     "position_axes",
 ]

@@ -5,8 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from auv_hinf.composed.loops import Plant, drag_residual, residual_nominal
-from auv_hinf.models.vehicle import bluerov2_heavy, remus100
+from auv_hinf.composed.loops import (
+    Errors,
+    MissionBounds,
+    OperatingBox,
+    Plant,
+    drag_residual,
+    misrotation_gains,
+    residual_nominal,
+)
+from auv_hinf.implementation.model import Implementation, MeasurementNoise
+from auv_hinf.models.vehicle import bluerov2_heavy, body_block, remus100
 from auv_hinf.robust.box import PARAMETERS, ParameterBox
 
 BOX = (("m22", (0.9, 1.1)), ("d22_lin", (0.8, 1.2)), ("d22_quad", (0.8, 1.2)))
@@ -59,3 +68,40 @@ def test_about_zero_speed_the_best_slope_leaves_a_sixth_of_the_symmetric_perturb
     exact = (3.0 - 2.0 * np.sqrt(2.0)) * k * v * v
     assert exact <= bound <= exact * 1.01
     assert a0 == pytest.approx(-2.0 * (np.sqrt(2.0) - 1.0) * k * v, rel=1e-3)
+
+
+@pytest.mark.parametrize("vehicle", [bluerov2_heavy(), remus100()], ids=["bluerov2", "remus100"])
+@pytest.mark.parametrize(("speed", "heading_error", "yaw_rate"), [(0.4, 0.0, 0.0), (1.5, 0.05, 0.02), (0.3, 0.3, 0.2)])
+def test_the_turned_compensation_is_bounded_per_axis_by_brute_force(vehicle, speed, heading_error, yaw_rate):
+    """Sample the law's drift compensation and feed-forward turned by a heading change: each body
+    component of the error stays within its misrotation gain times the change, and the surge gain is
+    second order on a straight line (far below the norm bound it replaced)."""
+    mission = MissionBounds(
+        speed=(speed, speed), accel=0.0, yaw_rate=0.0, yaw_accel=0.0, offset=0.0, jerk=0.0, yaw_jerk=0.0
+    )
+    errors = Errors(0.1, 0.05, heading_error, yaw_rate)
+    op = OperatingBox.of(mission, 0.0, errors)
+    impl = Implementation(0.1, 0.1, noise=MeasurementNoise(0.05, 0.004, 0.004, 0.002))
+    u_y, v_y, r_y = max(abs(op.u[0]), abs(op.u[1])) + 0.004, op.v + 0.004, op.r + 0.002
+    gains = misrotation_gains(
+        Plant(vehicle, ParameterBox.from_ranges(vehicle, ())), op, mission, impl, 1.0, (u_y, v_y, r_y)
+    )
+    delta_max = op.r * impl.max_lag + impl.noise.heading
+    rng = np.random.default_rng(7)
+    worst = np.zeros(2)
+    for _ in range(4000):
+        u, v, r = rng.uniform(-u_y, u_y), rng.uniform(-v_y, v_y), rng.uniform(-r_y, r_y)
+        b = -body_block(vehicle, u, v, 0.0) + np.array(
+            [[0.0, (vehicle.m22 - vehicle.m11) * r / vehicle.m11], [(vehicle.m22 - vehicle.m11) * r / vehicle.m22, 0.0]]
+        )
+        angle = rng.uniform(-op.slip, op.slip)
+        p = speed * rng.uniform(0.0, 1.0) * np.array([np.cos(angle), np.sin(angle)])
+        delta = rng.choice([-1.0, 1.0]) * delta_max * rng.uniform(0.0, 1.0) ** 0.25
+        rot = np.array([[np.cos(delta), -np.sin(delta)], [np.sin(delta), np.cos(delta)]])
+        err = np.abs(b @ (rot - np.eye(2)) @ p)
+        worst = np.maximum(worst, err / abs(delta))
+    assert np.all(worst <= np.array(gains) * (1 + 1e-12)), (worst, gains)
+    assert worst[1] >= 0.3 * gains[1]  # the cross-track gain is nearly reached
+    if heading_error == 0.0 and yaw_rate == 0.0:
+        whole = (max(vehicle.d11_lin + vehicle.d11_quad * u_y, 0.0) / vehicle.m11) * speed
+        assert gains[0] < 0.1 * whole  # on a straight line the surge part is second order
