@@ -913,7 +913,7 @@ def disturbances(
     munk_abs = max(abs(munk[0]), abs(munk[1]))
     munk_hat = mdl.m22 - mdl.m11
     d_munk = max(abs(munk[0] - munk_hat), abs(munk[1] - munk_hat))
-    rho_hat = max(abs(mdl.m22 / mdl.m11 - 1.0), abs(1.0 - mdl.m11 / mdl.m22))
+    rho_hat = _coriolis_ratio(mdl)
     u_abs = max(abs(op.u[0]), abs(op.u[1]))
     u_y, v_y, r_y = u_abs + n.velocity, op.v + n.velocity, op.r + n.yaw_rate
     # --- w_c: the equilibrium deficit at nu = nu_d (drag mismatch, current, feed-forward mass error)
@@ -987,6 +987,11 @@ def disturbances(
     )
 
 
+def _coriolis_ratio(mdl: VehicleParams) -> float:
+    """``max(|m22/m11 - 1|, |1 - m11/m22|)`` of the law's model: its Coriolis terms per rad/s of yaw rate."""
+    return max(abs(mdl.m22 / mdl.m11 - 1.0), abs(1.0 - mdl.m11 / mdl.m22))
+
+
 def misrotation_gains(
     plant: Plant,
     op: OperatingBox,
@@ -1029,7 +1034,7 @@ def misrotation_gains(
     mdl = plant.model
     u_y, v_y, r_y = measured
     s_hi = mission.speed[1]
-    rho_hat = max(abs(mdl.m22 / mdl.m11 - 1.0), abs(1.0 - mdl.m11 / mdl.m22))
+    rho_hat = _coriolis_ratio(mdl)
     b1 = (mdl.d11_lin + mdl.d11_quad * u_y) / mdl.m11
     b2 = (mdl.d22_lin + mdl.d22_quad * v_y) / mdl.m22
     off = rho_hat * r_y
