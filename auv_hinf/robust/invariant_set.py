@@ -294,6 +294,12 @@ def _position_ellipsoid(
     return ell
 
 
+def clear_ellipsoid_caches() -> None:
+    """Forget every remembered heading and position ellipsoid (benchmarks time cold designs with it)."""
+    heading_ellipsoid.cache_clear()
+    _position_ellipsoid.cache_clear()
+
+
 @lru_cache(maxsize=1)
 def _heading_sdp() -> tuple[cp.Problem, dict[str, Any], cp.Variable]:
     verts = [cp.Parameter((2, 2)) for _ in range(4)]
@@ -772,6 +778,7 @@ __all__ = [
     "Ellipsoid",
     "RobustCertificate",
     "best_ellipsoid",
+    "clear_ellipsoid_caches",
     "heading_ellipsoid",
     "heading_matrix",
     "heading_vertices",
