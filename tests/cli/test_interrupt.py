@@ -33,11 +33,18 @@ def _last_line(err: str) -> str:
 
 
 @pytest.mark.slow
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_sigint_to_a_real_campaign_keeps_the_finished_runs(tmp_path: Path) -> None:
     runs, out = 400, tmp_path / "campaign"
     cmd = [sys.executable, "-m", "auv_hinf.cli.main", "campaign", "--preset", "paper-triangle", "--runs", str(runs)]
     cmd += ["--chunk", "2", "--horizon", "20", "--out", str(out)]  # serial, one chunk of 2 runs every ~0.2 s
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    # Ctrl-C as a terminal delivers it: the child's SIGINT at its default, even when this test runs in a
+    # job that ignores it (a shell's background job inherits SIGINT ignored, and Python then installs no
+    # KeyboardInterrupt handler at all)
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=_default_sigint)
     chunks: list[bytes] = []  # raw: a read may split the bar's multi-byte characters
     assert proc.stderr is not None
     reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stderr.read1(4096), b"")))
