@@ -736,17 +736,16 @@ def cascade_states(
     c = np.asarray(current, dtype=float)
     psi, u, v, r = states[:, 2], states[:, 3], states[:, 4], states[:, 5]
     speed = slot.speed
-    tx, ty = slot.v[:, 0] / speed, slot.v[:, 1] / speed
     omega = slot.course_rate
-    ex, ey = states[:, 0] - slot.p[:, 0], states[:, 1] - slot.p[:, 1]
-    xe, ye = tx * ex + ty * ey, -ty * ex + tx * ey
+    xe, ye = slot.along_across(states[:, 0] - slot.p[:, 0], states[:, 1] - slot.p[:, 1])
     theta = np.arctan((ye + sigma * integral) / delta)
     e = wrap_angle(psi - (slot.course - theta))
     gx = np.cos(psi) * u - np.sin(psi) * v + c[0]
     gy = np.sin(psi) * u + np.cos(psi) * v + c[1]
-    ct, cn = tx * c[0] + ty * c[1], -ty * c[0] + tx * c[1]
-    vx = tx * gx + ty * gy - speed
-    ydot = -ty * gx + tx * gy - omega * xe
+    ct, cn = slot.along_across(c[0], c[1])
+    g_along, g_across = slot.along_across(gx, gy)
+    vx = g_along - speed
+    ydot = g_across - omega * xe
     cos2 = np.cos(theta) ** 2
     er = r - omega + cos2 * (ydot + sigma * cos2 * ye / delta) / delta
     p = (speed - ct) * np.sin(theta) - cn

@@ -913,7 +913,6 @@ def disturbances(
     munk_abs = max(abs(munk[0]), abs(munk[1]))
     munk_hat = mdl.m22 - mdl.m11
     d_munk = max(abs(munk[0] - munk_hat), abs(munk[1] - munk_hat))
-    rho_hat = _coriolis_ratio(mdl)
     u_abs = max(abs(op.u[0]), abs(op.u[1]))
     u_y, v_y, r_y = u_abs + n.velocity, op.v + n.velocity, op.r + n.yaw_rate
     # --- w_c: the equilibrium deficit at nu = nu_d (drag mismatch, current, feed-forward mass error)
@@ -938,8 +937,8 @@ def disturbances(
     # the loop (c), its turn by the heading's change is the misrotation channel; what remains is nu_d's
     # change over the lag, p_d''s change over it, and the desired heading's turn over it
     slope_hat = max(mdl.d11_quad / mdl.m11, mdl.d22_quad / mdl.m22)
-    b_hat = max((mdl.d11_lin + mdl.d11_quad * u_y) / mdl.m11, (mdl.d22_lin + mdl.d22_quad * v_y) / mdl.m22)
-    b_hat += rho_hat * r_y
+    b1, b2, off = compensation_bounds(mdl, (u_y, v_y, r_y))
+    b_hat = max(b1, b2) + off
     reference_turn = min(mission.yaw_rate * tau, math.pi)
     nu_d_rate = op.r * (s_hi + c) + mission.accel + c_rate
     feed_lag = lam_hi * (min(mission.jerk * tau, 2.0 * mission.accel) + reference_turn * mission.accel)
@@ -987,9 +986,28 @@ def disturbances(
     )
 
 
-def _coriolis_ratio(mdl: VehicleParams) -> float:
-    """``max(|m22/m11 - 1|, |1 - m11/m22|)`` of the law's model: its Coriolis terms per rad/s of yaw rate."""
-    return max(abs(mdl.m22 / mdl.m11 - 1.0), abs(1.0 - mdl.m11 / mdl.m22))
+def compensation_bounds(mdl: VehicleParams, measured: tuple[float, float, float]) -> tuple[float, float, float]:
+    """Bounds of the law's drift-compensation matrix ``B_hat(nu_y)`` at measured velocities within ``measured``.
+
+    ``B_hat = [[d11(u)/m11, (m22 - m11) r/m11], [(m22 - m11) r/m22, d22(v)/m22]]`` of the law's model
+    (:meth:`~auv_hinf.law.formation_law.VehicleLaw.unsaturated`).
+
+    Parameters
+    ----------
+    mdl : VehicleParams
+        The law's model.
+    measured : tuple of float
+        Bounds of the measured ``|u_y|, |v_y|`` (m/s) and ``|r_y|`` (rad/s).
+
+    Returns
+    -------
+    tuple of float
+        Its diagonal entries' bounds ``b1, b2`` and its off-diagonal ones' bound
+        ``max(|m22/m11 - 1|, |1 - m11/m22|) r_y`` (1/s).
+    """
+    u_y, v_y, r_y = measured
+    rho = max(abs(mdl.m22 / mdl.m11 - 1.0), abs(1.0 - mdl.m11 / mdl.m22))
+    return (mdl.d11_lin + mdl.d11_quad * u_y) / mdl.m11, (mdl.d22_lin + mdl.d22_quad * v_y) / mdl.m22, rho * r_y
 
 
 def misrotation_gains(
@@ -1031,13 +1049,8 @@ def misrotation_gains(
     measured : tuple of float
         Bounds of the measured ``|u_y|, |v_y|`` (m/s) and ``|r_y|`` (rad/s).
     """
-    mdl = plant.model
-    u_y, v_y, r_y = measured
     s_hi = mission.speed[1]
-    rho_hat = _coriolis_ratio(mdl)
-    b1 = (mdl.d11_lin + mdl.d11_quad * u_y) / mdl.m11
-    b2 = (mdl.d22_lin + mdl.d22_quad * v_y) / mdl.m22
-    off = rho_hat * r_y
+    b1, b2, off = compensation_bounds(plant.model, measured)
     whole = lam_hi * ((max(b1, b2) + off) * s_hi + mission.accel)
     p_y = s_hi * math.sin(min(op.slip, MAX_SLIP))
     half = 0.5 * min(op.r * impl.max_lag + impl.noise.heading, math.pi)
@@ -1108,6 +1121,7 @@ __all__ = [
     "OperatingBox",
     "Plant",
     "axis_loop",
+    "compensation_bounds",
     "disturbances",
     "heading_axis",
     "heading_loop",

@@ -151,6 +151,19 @@ class SlotMotion:
         """``gamma = atan2(p_d')`` (rad)."""
         return np.asarray(np.arctan2(self.v[..., 1], self.v[..., 0]))
 
+    def along_across(self, x: FloatArray | float, y: FloatArray | float) -> tuple[FloatArray, FloatArray]:
+        """Components of the inertial vectors ``(x, y)`` along and across each slot's track (the unit tangent
+        ``t = p_d'/|p_d'|`` and the normal ``n`` to its left; the speed floored at 1e-9 m/s).
+
+        Parameters
+        ----------
+        x, y : ndarray or float
+            Inertial components (any unit), broadcastable to the slots' shape ``(..., N)``.
+        """
+        speed = np.maximum(self.speed, 1e-9)
+        tx, ty = self.v[..., 0] / speed, self.v[..., 1] / speed
+        return np.asarray(tx * x + ty * y), np.asarray(-ty * x + tx * y)
+
     @property
     def course_rate(self) -> FloatArray:
         """``omega = (p_d' x p_d'') / |p_d'|^2`` (rad/s), the course's rate (the speed floored at 1e-9 m/s)."""
@@ -229,14 +242,12 @@ def commands(
         Measured ground velocity (m/s, inertial; a DVL's bottom track).
     """
     psi, u, v, r = states[..., 2], states[..., 3], states[..., 4], states[..., 5]
-    speed = np.maximum(slot.speed, 1e-9)
-    tx, ty = slot.v[..., 0] / speed, slot.v[..., 1] / speed
     omega = slot.course_rate
-    speed_rate = (slot.v[..., 0] * slot.a[..., 0] + slot.v[..., 1] * slot.a[..., 1]) / speed
-    ex, ey = states[..., 0] - slot.p[..., 0], states[..., 1] - slot.p[..., 1]
-    xe, ye = tx * ex + ty * ey, -ty * ex + tx * ey
-    rel_x, rel_y = ground[..., 0] - slot.v[..., 0], ground[..., 1] - slot.v[..., 1]
-    ye_dot = -ty * rel_x + tx * rel_y - omega * xe
+    speed_rate = (slot.v[..., 0] * slot.a[..., 0] + slot.v[..., 1] * slot.a[..., 1]) / np.maximum(slot.speed, 1e-9)
+    xe, ye = slot.along_across(states[..., 0] - slot.p[..., 0], states[..., 1] - slot.p[..., 1])
+    _, rel_across = slot.along_across(ground[..., 0] - slot.v[..., 0], ground[..., 1] - slot.v[..., 1])
+    ye_dot = rel_across - omega * xe
+    s_along, _ = slot.along_across(ground[..., 0], ground[..., 1])
     delta_ = gcfg.lookahead
     sigma = gcfg.sigma
     s = ye + sigma * integral
@@ -252,7 +263,6 @@ def commands(
     rudder_cmd = moment / (act.rudder_yaw * u_eff * u_eff)
     lx = gcfg.along_track_length
     s_d = slot.speed - gcfg.along_track_gain * xe / np.sqrt(1.0 + (xe / lx) ** 2)
-    s_along = tx * ground[..., 0] + ty * ground[..., 1]
     thrust_cmd = model.m11 * (speed_rate - gcfg.speed_gain * (s_along - s_d)) + d11 * u - model.m22 * v * r
     return Commands(
         thrust_cmd=thrust_cmd,

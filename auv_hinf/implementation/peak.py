@@ -589,7 +589,7 @@ def _sweep(loop: SampledLoop, start: FloatArray, unit_input: bool) -> tuple[Floa
         steps, kc = lead_all.shape[0], starts.shape[1] * cols
         begun = (lead_all @ starts.reshape(size, kc)).reshape(steps, size, -1, cols) + offset_all[:, :, None, :]
         flat = begun.reshape(steps, size, kc)  # (steps, size, K * cols)
-        xdot = loop.a @ flat[:, per.plant] + drive.reshape(n, 1, cols).repeat(kc // cols, axis=1).reshape(n, kc)
+        xdot = loop.a @ flat[:, per.plant] + np.tile(drive, kc // cols)
         if nu:
             xdot = xdot + loop.b_u @ flat[:, iu]
         z0 = np.abs(out @ flat).reshape(steps, no, -1, cols)

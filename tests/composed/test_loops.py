@@ -10,6 +10,7 @@ from auv_hinf.composed.loops import (
     MissionBounds,
     OperatingBox,
     Plant,
+    compensation_bounds,
     drag_residual,
     misrotation_gains,
     residual_nominal,
@@ -89,17 +90,21 @@ def test_the_turned_compensation_is_bounded_per_axis_by_brute_force(vehicle, spe
     delta_max = op.r * impl.max_lag + impl.noise.heading
     rng = np.random.default_rng(7)
     worst = np.zeros(2)
+    bounds = np.array(compensation_bounds(vehicle, (u_y, v_y, r_y)))
+    entries = np.zeros(3)
     for _ in range(4000):
         u, v, r = rng.uniform(-u_y, u_y), rng.uniform(-v_y, v_y), rng.uniform(-r_y, r_y)
         b = -body_block(vehicle, u, v, 0.0) + np.array(
             [[0.0, (vehicle.m22 - vehicle.m11) * r / vehicle.m11], [(vehicle.m22 - vehicle.m11) * r / vehicle.m22, 0.0]]
         )
+        entries = np.maximum(entries, [abs(b[0, 0]), abs(b[1, 1]), max(abs(b[0, 1]), abs(b[1, 0]))])
         angle = rng.uniform(-op.slip, op.slip)
         p = speed * rng.uniform(0.0, 1.0) * np.array([np.cos(angle), np.sin(angle)])
         delta = rng.choice([-1.0, 1.0]) * delta_max * rng.uniform(0.0, 1.0) ** 0.25
         rot = np.array([[np.cos(delta), -np.sin(delta)], [np.sin(delta), np.cos(delta)]])
         err = np.abs(b @ (rot - np.eye(2)) @ p)
         worst = np.maximum(worst, err / abs(delta))
+    assert np.all(entries <= bounds * (1 + 1e-12)), (entries, bounds)  # the law's matrix within its bounds
     assert np.all(worst <= np.array(gains) * (1 + 1e-12)), (worst, gains)
     assert worst[1] >= 0.3 * gains[1]  # the cross-track gain is nearly reached
     if heading_error == 0.0 and yaw_rate == 0.0:

@@ -122,7 +122,7 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
         speed_jerk=0.0 if constant else float(jerk) + turn * accel,
         sample_time=impl.sample_time if impl.sample_time > 0.0 else STEP,
     )
-    return replace(problem, start=tuple(float(x) for x in configured_start(cfg, problem)))
+    return _with(cfg, problem)
 
 
 def _slots_at_start(cfg: FormationConfig) -> SlotMotion:
@@ -191,7 +191,7 @@ class GuidanceSummary:
 def _with(
     cfg: FormationConfig, problem: CascadeProblem, *, current: float | None = None, scale: float | None = None
 ) -> CascadeProblem:
-    """``problem`` with another current bound (m/s) or its box scaled, and the start's bounds in that current."""
+    """``problem`` with another current bound (m/s) or its box scaled, and the configured start's bounds in it."""
     pl = problem.plant
     box = pl.box if scale is None else pl.box.scaled(scale)
     other = replace(problem, plant=Plant(pl.model, box, pl.current if current is None else current, pl.current_rate))
