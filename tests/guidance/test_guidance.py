@@ -15,7 +15,7 @@ from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import ReferenceConfig, SimulationConfig, config_from_dict
 from auv_hinf.exceptions import ConfigError, ParameterError
-from auv_hinf.guidance.law import GuidanceConfig
+from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance
 from auv_hinf.mission.fleet import FleetReference, reference_from_dict
 from auv_hinf.models.vehicle import remus100
@@ -250,3 +250,17 @@ def test_ilos_starts_in_the_crab_of_the_current_and_holds_the_line_from_the_star
     yi = integral_start(g, states, slot)
     assert yi[0] == pytest.approx(g.lookahead * np.tan(-0.1) / g.sigma) and yi[1] == yi[2] == 0.0
     assert np.all(integral_start(GuidanceConfig(kind="los"), states, slot) == 0.0)
+
+
+def test_a_slots_track_frame_takes_its_own_velocity_along_and_its_left_normal_across():
+    rng = np.random.default_rng(3)
+    v = rng.normal(0.0, 1.5, (6, 2))
+    slot = SlotMotion(rng.normal(0.0, 10.0, (6, 2)), v, rng.normal(0.0, 0.1, (6, 2)))
+    along, across = slot.along_across(v[:, 0], v[:, 1])
+    np.testing.assert_allclose(along, np.hypot(v[:, 0], v[:, 1]), rtol=1e-12)
+    np.testing.assert_allclose(across, 0.0, atol=1e-12)
+    along, across = slot.along_across(-v[:, 1], v[:, 0])  # the velocity turned 90 degrees left
+    np.testing.assert_allclose((along, across), (0.0 * along, np.hypot(v[:, 0], v[:, 1])), atol=1e-12)
+    x, y = rng.normal(size=6), rng.normal(size=6)
+    a, c = slot.along_across(x, y)
+    np.testing.assert_allclose(a * a + c * c, x * x + y * y, rtol=1e-12)  # a rotation: lengths kept
