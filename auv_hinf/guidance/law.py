@@ -152,8 +152,10 @@ class SlotMotion:
         return np.asarray(np.arctan2(self.v[..., 1], self.v[..., 0]))
 
     def along_across(self, x: FloatArray | float, y: FloatArray | float) -> tuple[FloatArray, FloatArray]:
-        """Components of the inertial vectors ``(x, y)`` along and across each slot's track (the unit tangent
-        ``t = p_d'/|p_d'|`` and the normal ``n`` to its left; the speed floored at 1e-9 m/s).
+        """Components of the inertial vectors ``(x, y)`` along and across each slot's track.
+
+        Along the unit tangent ``t = p_d'/|p_d'|`` and the normal ``n`` to its left (the speed floored
+        at 1e-9 m/s).
 
         Parameters
         ----------
