@@ -52,19 +52,23 @@ and its cross-track error is a function of ``p``, which this loop does not expre
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.composed.loops import Plant
+from auv_hinf.design.jacobi_sigma import PROGRESS_DELAY
 from auv_hinf.guidance.law import MAX_START_CRAB, MIN_RUDDER_SPEED, GuidanceConfig, SlotMotion, integral_start
-from auv_hinf.implementation.peak import PeakGains, SampledLoop, free_peaks, peak_gains
+from auv_hinf.implementation.peak import MAX_PERIODS, PeakGains, SampledLoop, free_peaks, peak_gains
 from auv_hinf.mission.fleet import wrap_angle
-from auv_hinf.robust.box import ParameterBox
+from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.robust.box import PARAMETERS, ParameterBox
 
 #: The state's names, in the loop's order (m, m/s, m, m/s, rad, rad/s, m/s).
 STATES = ("along_track", "along_speed", "cross_track", "sight", "heading", "heading_rate", "sway")
@@ -123,6 +127,9 @@ class CascadeProblem:
         The cascade's period ``h`` (s).
     start : tuple of float
         Bounds of the seven states at ``t = 0`` (:data:`STATES`, SI units).
+    nominal : VehicleParams or None
+        The plant of the nominal loop: the centre of a cell of the box that ``plant.box`` has been
+        narrowed to (:func:`certify_cascade`); ``None``: the controller's model.
     """
 
     guidance: GuidanceConfig
@@ -135,6 +142,12 @@ class CascadeProblem:
     speed_jerk: float
     sample_time: float
     start: tuple[float, ...] = field(default=(0.0,) * 7)
+    nominal: VehicleParams | None = None
+
+    @property
+    def nominal_plant(self) -> VehicleParams:
+        """The nominal loop's plant: :attr:`nominal`, or the controller's model."""
+        return self.nominal if self.nominal is not None else self.plant.model
 
     @property
     def reference_speed(self) -> float:
@@ -177,7 +190,7 @@ def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
     and ``erdot`` is ``e_r'``: the linear parts of the exact expressions, at ``u = U0``,
     ``theta = 0``, ``omega = 0`` and the model's coefficients.
     """
-    g, m, act = problem.guidance, problem.plant.model, problem.act
+    g, m, n, act = problem.guidance, problem.plant.model, problem.nominal_plant, problem.act
     u0, delta = problem.reference_speed, g.lookahead
     a_g, b_g = u0 / delta, g.sigma / delta
 
@@ -197,12 +210,13 @@ def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
     pdot = a_g * ydot + row(u_i=1.0)
     sight_rate = (ydot + b_g * row(y_e=1.0)) / delta
     yaw_rate = row(e_r=1.0) - sight_rate
+    # the plant's coefficients are the nominal plant's; the rudder is commanded through the model's m33
     vdot = (
-        -m.m11 * u0 / m.m22 * yaw_rate - m.d22_lin / m.m22 * row(v=1.0) + m.m33 / (act.lever_arm * m.m22) * row(tau=1.0)
+        -n.m11 * u0 / n.m22 * yaw_rate - n.d22_lin / n.m22 * row(v=1.0) + m.m33 / (act.lever_arm * n.m22) * row(tau=1.0)
     )
     sight_accel = (-pdot + u0 * row(e_r=1.0) + vdot + b_g * ydot) / delta
-    munk = (m.m22 - m.m11) * u0 / m.m33
-    erdot = row(tau=1.0) - munk * row(v=1.0) + sight_accel
+    munk = (n.m22 - n.m11) * u0 / n.m33
+    erdot = m.m33 / n.m33 * row(tau=1.0) - munk * row(v=1.0) + sight_accel
     return {
         "ydot": ydot,
         "pdot": pdot,
@@ -361,7 +375,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         limit, the surge speed drops below the rudder's, or changes too much over one sample).
     """
     g, pl, act = problem.guidance, problem.plant, problem.act
-    m = pl.model
+    m, n = pl.model, problem.nominal_plant
     h = problem.sample_time
     xb, vxb, yb, pb, eb, erb, vb = (float(x) for x in box[:7])
     derived = dict(zip(DERIVED, map(float, box[7:]), strict=False))
@@ -379,7 +393,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     ku, kx, lx = g.speed_gain, g.along_track_gain, g.along_track_length
     kp, kd = _gains(g)
     m11, m22, m33 = pl.interval("m11"), pl.interval("m22"), pl.interval("m33")
-    munk, munk_hat = pl.munk(), m.m22 - m.m11
+    munk, munk_hat, munk_n = pl.munk(), m.m22 - m.m11, n.m22 - n.m11
     lever = abs(act.lever_arm)
     # -- the line of sight theta, |(U - c_t) sin(theta)| = |p + c_n|, the track angle beta = e - theta
     # and the surge speed through the water, u cos(beta) = U + v_x - c_t + v sin(beta)
@@ -443,20 +457,20 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         return "the sample time is too long for the surge speed's or the yaw drag's change over one sample"
     rho = ((1.0 - h * u_dot / u_lo) ** 2, (1.0 + h * u_dot / u_lo) ** 2)  # (u / u_k)^2
     # -- w7: v' less its nominal; the rudder's side force and its nominal share one deflection
-    inv_m22 = _off((rho[0] / m22[1], rho[1] / m22[0]), 1.0 / m.m22)  # |rho/m22' - 1/m22|
+    inv_m22 = _off((rho[0] / m22[1], rho[1] / m22[0]), 1.0 / n.m22)  # |rho/m22' - 1/m22|
     side = (
         inv_m22 * m.m33 * a_psi
         + rho[1] * d33_hat * r_max / m22[0]
-        + abs(munk_hat) * vb * _product_off([rho, (u_lo, u_hi)], m22, u0 / m.m22)
+        + abs(munk_hat) * vb * _product_off([rho, (u_lo, u_hi)], m22, u0 / n.m22)
     ) / lever
     w7 = (
         side
-        + _product_off([m11, (u_lo, u_hi)], m22, m.m11 * u0 / m.m22) * r_max
-        + m.m11 * u0 / m.m22 * (omega + sight_gap)
-        + _product_off([pl.interval("d22_lin")], m22, m.d22_lin / m.m22) * vb
+        + _product_off([m11, (u_lo, u_hi)], m22, n.m11 * u0 / n.m22) * r_max
+        + n.m11 * u0 / n.m22 * (omega + sight_gap)
+        + _product_off([pl.interval("d22_lin")], m22, n.d22_lin / n.m22) * vb
         + pl.interval("d22_quad")[1] * vb * vb / m22[0]
     )
-    v_lin = tighter("vdot_lin", m.m11 * u0 / m.m22 * yaw_lin + m.d22_lin / m.m22 * vb + m.m33 / (lever * m.m22) * tau)
+    v_lin = tighter("vdot_lin", n.m11 * u0 / n.m22 * yaw_lin + n.d22_lin / n.m22 * vb + m.m33 / (lever * n.m22) * tau)
     v_dot = v_lin + w7
     # -- the sway's own bound, by its damped scalar equation: m22' v' = -(d22'(v) + k_m) v + k_m (v - v_k)
     # + (rho/l)(m33 a_psi + d33(r_k) r_k) - m11' u r, with k_m = -rho m_u u_k / l the side force of the
@@ -528,10 +542,18 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         + b_g * (w3 + (1.0 - cos_t**4) * y_lin)
         + 2.0 * sin_t * sight_rate * (ydot + 2.0 * b_g * yb)
     ) / delta
-    munk_pair = abs(munk_hat) * h * v_dot * _product_off([rho, (u_lo, u_hi)], m33, u0 / m.m33) + munk_held / m33[0]
+    # the Munk moments against the nominal loop's (munk_hat U0 v_k - munk_n U0 v)/m33_n: the held speeds'
+    # part, then (munk_n - munk') u v/m33' + (munk_hat - munk_n) v (u/m33' - U0/m33_n)
+    munk_pair = (
+        abs(munk_hat) * h * v_dot * _product_off([rho, (u_lo, u_hi)], m33, u0 / n.m33)
+        + vb * u_hi * abs(munk_hat) * h * u_dot / (u_lo * m33[0])
+        + vb * _off(munk, munk_n) * u_hi / m33[0]
+        + vb * abs(munk_hat - munk_n) * _product_off([(u_lo, u_hi)], m33, u0 / n.m33)
+    )
+    mu_n = m.m33 / n.m33
     drag_pair = (drag_cancel + slope33 * h * r_dot) / m33[0]
     w6 = (
-        max(abs(mu[1] * rho[1] - 1.0), abs(1.0 - mu[0] * rho[0])) * a_psi
+        max(abs(mu[1] * rho[1] - mu_n), abs(mu_n - mu[0] * rho[0])) * a_psi
         + munk_pair
         + drag_pair
         + omega_dot
@@ -557,9 +579,12 @@ class CascadeCertificate:
     reason : str
         Why it does not hold (empty when it does).
     iterations : int
-        Fixed-point iterations used.
+        Fixed-point iterations used (summed over the cells).
     radius : float or None
-        Spectral radius of the nominal loop's period map (``None`` when the loop is unstable).
+        Spectral radius of the nominal loop's period map (``None`` when the loop is unstable; the
+        largest over the cells).
+    cells : int
+        Cells of the box certified one by one (1: the whole box at once; :func:`certify_cascade`).
     """
 
     holds: bool
@@ -568,6 +593,7 @@ class CascadeCertificate:
     reason: str = ""
     iterations: int = 0
     radius: float | None = None
+    cells: int = 1
 
     @property
     def error_bounds(self) -> dict[str, float] | None:
@@ -601,6 +627,7 @@ class CascadeCertificate:
             "sway_speed": None if self.errors is None else float(self.errors[V]),
             "loop_radius": self.radius,
             "iterations": self.iterations,
+            "cells": self.cells,
             "reason": self.reason,
         }
 
@@ -619,29 +646,147 @@ def _image(problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: Flo
     return out
 
 
-@functools.lru_cache(maxsize=16)
-def _loop_analysis(problem: CascadeProblem) -> tuple[PeakGains, FloatArray] | None:
+@functools.lru_cache(maxsize=64)
+def _loop_analysis(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> tuple[PeakGains, FloatArray] | None:
     """The nominal loop's peak gains and free response (``None`` when unstable): the costly part, shared by
     every box and current (the caller passes the problem without its current and start)."""
     loop = cascade_loop(problem)
-    gains = peak_gains(loop)
-    fp = free_peaks(loop)
+    gains = peak_gains(loop, max_periods)
+    fp = free_peaks(loop, max_periods)
     return None if gains is None or fp is None else (gains, fp)
 
 
+#: How many times :func:`certify_cascade` may halve a cell of the box that does not certify. The
+#: masses are constant: every plant lies in one cell for ever, so the box is certified when every
+#: cell is, and the mass ratios (the Coriolis and Munk terms, the rudder's authority) enter each
+#: cell's nominal loop at the cell's centre instead of as spreads around the model. Only the cells
+#: that fail are halved again.
+MAX_CELL_DEPTH = 2
+#: Most cells :func:`certify_cascade` certifies one by one before it gives up (each costs one
+#: nominal loop's peak gains, about 0.9 s for a REMUS at 10 Hz): 64 is every cell of two levels
+#: of halving but the first level's.
+MAX_CELLS = 64
+#: The coefficients a cell is halved along: the three masses, on which the heading-sway block's
+#: nominal coefficients depend (the Coriolis ratio ``m11/m22``, the Munk coefficient ``m22 - m11``
+#: over ``m33``, the rudder's authority ``m33_hat/m33``).
+CELL_PARAMETERS = ("m11", "m22", "m33")
+#: Periods of a cell's nominal loop summed exactly before the tail bound is added (the whole box's
+#: loop sums up to :data:`~auv_hinf.implementation.peak.MAX_PERIODS`): the ILOS loop's slowest mode
+#: at 10 Hz contracts by about 0.997 per period, and from 8,192 periods on the added tail moves no
+#: peak gain of a REMUS 100 cascade by more than 0.6 % (a larger gain, never a smaller one), at 40 %
+#: of the cost.
+CELL_MAX_PERIODS = 8192
+
+
+def halves(problem: CascadeProblem) -> list[CascadeProblem]:
+    """``problem``'s box halved along every uncertain :data:`CELL_PARAMETERS`, each half about its own centre.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its box; ``nominal`` is replaced by each cell's centre).
+    """
+    pl = problem.plant
+    split = [name for name in CELL_PARAMETERS if pl.interval(name)[0] < pl.interval(name)[1]]
+    base = problem.nominal_plant
+    out = []
+    for sides in itertools.product((0, 1), repeat=len(split)):
+        bounds = {}
+        for name, side in zip(split, sides):
+            a, b = pl.interval(name)
+            mid = 0.5 * (a + b)
+            bounds[name] = (a, mid) if side == 0 else (mid, b)
+        values = {name: float(getattr(base, name)) for name in PARAMETERS}
+        values.update({name: 0.5 * (a + b) for name, (a, b) in bounds.items()})
+        centre = VehicleParams(**values, name=base.name)
+        lo, hi = [], []
+        for j, name in enumerate(PARAMETERS):
+            a, b = bounds.get(name, pl.interval(name))
+            value = float(getattr(centre, name))
+            lo.append(min(a / value, 1.0) if value > 0.0 else pl.box.lo[j])
+            hi.append(max(b / value, 1.0) if value > 0.0 else pl.box.hi[j])
+        box = ParameterBox(centre, tuple(lo), tuple(hi))
+        out.append(replace(problem, plant=replace(pl, box=box), nominal=centre))
+    return out
+
+
+def _centre_only(problem: CascadeProblem) -> CascadeProblem:
+    """``problem`` for its nominal plant alone (a box of one plant; the same nominal loop)."""
+    centre = problem.nominal_plant
+    return replace(problem, plant=replace(problem.plant, box=ParameterBox(centre)), nominal=centre)
+
+
+def _union(certs: list[CascadeCertificate]) -> CascadeCertificate:
+    """The certificate of a box from the certificates of the cells that cover it (all hold)."""
+    errors = np.max(np.stack([c.errors for c in certs if c.errors is not None]), axis=0)
+    acts = [c.actuation for c in certs if c.actuation is not None]
+    actuation = Actuation(
+        max(a.thrust for a in acts),
+        max(a.rudder for a in acts),
+        (min(a.surge[0] for a in acts), max(a.surge[1] for a in acts)),
+        max(a.yaw_rate for a in acts),
+    )
+    radius = max(c.radius for c in certs if c.radius is not None)
+    return CascadeCertificate(True, errors, actuation, "", sum(c.iterations for c in certs), radius, len(certs))
+
+
 @functools.lru_cache(maxsize=256)
-def certify_cascade(problem: CascadeProblem) -> CascadeCertificate:
-    """The cascade's certificate (see the module docstring).
+def certify_cascade(problem: CascadeProblem, cells: bool = True) -> CascadeCertificate:
+    """The cascade's certificate (see the module docstring), on the whole box or else on cells of it.
+
+    When the whole box does not certify and :data:`CELL_PARAMETERS` are uncertain, the box is
+    halved along them (:func:`halves`), and each half that does not certify is halved again, at
+    most :data:`MAX_CELL_DEPTH` times and :data:`MAX_CELLS` cells in all; the box certifies when
+    every cell does, with the largest of the cells' bounds. The search gives up early when a cell's
+    centre plant alone does not certify. Otherwise the whole box's refusal is returned.
 
     Parameters
     ----------
     problem : CascadeProblem
         The cascade.
+    cells : bool
+        Try cells when the whole box does not certify (the advice's searches do not: a setting
+        that certifies the whole box certifies with cells too).
     """
+    whole = _certify_one(problem)
+    if whole.holds or not cells or problem.nominal is not None:
+        return whole
+    with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
+        certs = _cells(problem, MAX_CELL_DEPTH, bar)
+    return _union(certs) if certs is not None else whole
+
+
+def _cells(problem: CascadeProblem, depth: int, bar: tqdm) -> list[CascadeCertificate] | None:
+    """The certificates of cells that cover ``problem``'s box (its halves, recursively), or ``None``.
+
+    ``bar`` counts the cells certified against :data:`MAX_CELLS`."""
+    pl = problem.plant
+    if depth == 0 or not any(pl.interval(n)[0] < pl.interval(n)[1] for n in CELL_PARAMETERS):
+        return None
+    out = []
+    for half in halves(problem):
+        if bar.n >= MAX_CELLS:
+            return None
+        bar.update(1)
+        cert = _certify_one(half, CELL_MAX_PERIODS)
+        if cert.holds:
+            out.append(cert)
+            continue
+        if not _certify_one(_centre_only(half), CELL_MAX_PERIODS).holds:
+            return None  # not even the cell's centre plant certifies: no finer cell around it will
+        deeper = _cells(half, depth - 1, bar)
+        if deeper is None:
+            return None
+        out += deeper
+    return out
+
+
+def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> CascadeCertificate:
+    """The certificate of one box, with the nominal loop at ``problem.nominal_plant``."""
     if problem.guidance.sigma <= 0.0:
         return CascadeCertificate(False, None, None, 'plain LOS is not certified in this version: use kind = "ilos"')
     model, u0 = problem.plant.model, problem.reference_speed
-    key = replace(  # what the nominal loop depends on: the gains, the model, the rudder, U0 and h
+    key = replace(  # what the nominal loop depends on: the gains, the model, the nominal plant, the rudder, U0, h
         problem,
         plant=Plant(model, ParameterBox.from_ranges(model, ())),
         speed=(u0, u0),
@@ -651,7 +796,7 @@ def certify_cascade(problem: CascadeProblem) -> CascadeCertificate:
         speed_jerk=0.0,
         start=(0.0,) * 7,
     )
-    analysis = _loop_analysis(key)
+    analysis = _loop_analysis(key, max_periods)
     if analysis is None:
         return CascadeCertificate(
             False, None, None, f"the nominal sampled cascade is unstable at h = {problem.sample_time:.4g} s"

@@ -343,14 +343,18 @@ class Plant:
         return self.box.interval(name)
 
     def spread(self, name: str) -> float:
-        """``max |p - p_hat|`` of a coefficient over the box (SI units).
+        """``max |p - p_hat|`` of a coefficient over the box (SI units), against the model's ``p_hat``.
+
+        The box may be a cell of a larger one, centred elsewhere (its own nominal plant).
 
         Parameters
         ----------
         name : str
             One of :data:`~auv_hinf.robust.box.PARAMETERS`.
         """
-        return self.box.spread(name)
+        lo, hi = self.interval(name)
+        value = float(getattr(self.model, name))
+        return max(value - lo, hi - value)
 
     def input_gains(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """Ranges of ``lambda_j = m_jj_hat/m_jj`` on the surge and sway axes (dimensionless)."""

@@ -377,7 +377,7 @@ def _row_norms(m: FloatArray) -> FloatArray:
     return out
 
 
-def peak_gains(loop: SampledLoop) -> PeakGains | None:
+def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains | None:
     """Upper bounds of the peak-to-peak gains of ``loop`` (see the module docstring), or ``None`` when unstable.
 
     By periodicity, the gain at an output phase ``q`` sums, over the injection steps ``j`` of one
@@ -388,6 +388,9 @@ def peak_gains(loop: SampledLoop) -> PeakGains | None:
     ----------
     loop : SampledLoop
         The loop.
+    max_periods : int
+        Most periods summed exactly before the tail bound is added (fewer: faster, and the
+        gains of a slow loop come out larger, never smaller).
     """
     n = loop.sizes[0]
     per, maps, phi, out = _maps(loop)
@@ -446,7 +449,7 @@ def peak_gains(loop: SampledLoop) -> PeakGains | None:
         periods += MIN_PERIODS
         tails = _tails(rows, state, p, rho).reshape(steps, no, steps, cols)
         so_far = np.maximum(acc[..., : nw + nn].sum(axis=2).max(axis=0), 1e-300)
-        if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= MAX_PERIODS:
+        if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= max_periods:
             acc += tails[..., :k]
             rem += np.sqrt(_sumsq(tails[..., k:]))
             break
@@ -503,7 +506,9 @@ class StepBounds:
         return float(self.peak[output, channel]) * size + area * rate
 
 
-def _sweep(loop: SampledLoop, start: FloatArray, unit_input: bool) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+def _sweep(
+    loop: SampledLoop, start: FloatArray, unit_input: bool, max_periods: int = MAX_PERIODS
+) -> tuple[FloatArray, FloatArray, FloatArray] | None:
     """Peak and area of every output along responses of the loop, and which outputs decay.
 
     Each column of ``start`` (an augmented state) is a response from that state, with the unit
@@ -605,7 +610,7 @@ def _sweep(loop: SampledLoop, start: FloatArray, unit_input: bool) -> tuple[Floa
         dev_p = _col_quad(dev, p)  # |d|_P per column
         env = (row_norm + move_tail)[:, None] * dev_p[None, :]  # a tail deviation's sup, times rho^k
         small = np.where(decaying, env <= TAIL_RTOL * np.maximum(peak, 1e-300), True)
-        if np.all(small) or periods >= MAX_PERIODS:
+        if np.all(small) or periods >= max_periods:
             peak = np.maximum(peak, steady_out + env)
             area = np.where(decaying, area + env * loop.sample_time / (1.0 - rho), np.inf)
             return peak, area, decaying
@@ -628,7 +633,7 @@ def step_bounds(loop: SampledLoop) -> StepBounds | None:
     return StepBounds(peak=swept[0], area=swept[1])
 
 
-def free_peaks(loop: SampledLoop) -> FloatArray | None:
+def free_peaks(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> FloatArray | None:
     """Bounds of ``sup_t |z(t)|`` per unit initial plant state, shape ``(no, n)`` (``None`` when unstable).
 
     The loop starts at rest but for its plant state ``x(0) = e_i``; measurements before ``t = 0``
@@ -639,6 +644,9 @@ def free_peaks(loop: SampledLoop) -> FloatArray | None:
     ----------
     loop : SampledLoop
         The loop.
+    max_periods : int
+        Most periods followed exactly before the contraction bound takes over (as in
+        :func:`peak_gains`).
     """
     n, nu, ny, nc = loop.sizes
     size = _period(loop).size
@@ -648,7 +656,7 @@ def free_peaks(loop: SampledLoop) -> FloatArray | None:
     for j in range(slots):
         begin = n + nc + nu + ny + j * ny
         state[begin : begin + ny, :] = loop.c_y
-    swept = _sweep(loop, state, False)
+    swept = _sweep(loop, state, False, max_periods)
     return None if swept is None else swept[0]
 
 

@@ -216,16 +216,20 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
     current = None
     if problem.plant.current > 0.0:
         current = largest_holding(
-            lambda c: certify_cascade(_with(cfg, problem, current=c)).holds, problem.plant.current, steps=ADVICE_STEPS
+            lambda c: certify_cascade(_with(cfg, problem, current=c), cells=False).holds,
+            problem.plant.current,
+            steps=ADVICE_STEPS,
         )
     scale = None
     if problem.plant.box.declared:
         top = min(1.0, problem.plant.box.max_scale)
-        scale = largest_holding(lambda s: certify_cascade(_with(cfg, problem, scale=s)).holds, top, steps=ADVICE_STEPS)
+        scale = largest_holding(
+            lambda s: certify_cascade(_with(cfg, problem, scale=s), cells=False).holds, top, steps=ADVICE_STEPS
+        )
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
     gains = _certifying_gains(problem) if bounded else None
     bare = _with(cfg, problem, current=0.0, scale=0.0)
-    binds = current is None and scale is None and gains is None and not certify_cascade(bare).holds
+    binds = current is None and scale is None and gains is None and not certify_cascade(bare, cells=False).holds
     return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds)
 
 
@@ -237,7 +241,7 @@ def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
         if w * problem.sample_time > MAX_BANDWIDTH_STEP:
             continue
         gains = replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead)
-        if certify_cascade(replace(problem, guidance=gains)).holds:
+        if certify_cascade(replace(problem, guidance=gains), cells=False).holds:
             return gains
     return None
 
@@ -301,6 +305,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
     Keys: the ``[guidance]`` gains, ``certified``, ``error_bounds{along_track, cross_track,
     heading}`` (m, m, rad), ``certified_peak{force_x, rudder}`` (N, rad), ``limits``, ``states``
     (the whole certified box), ``sample_time`` (s), ``start`` (the certified start's bounds),
+    ``cells`` (the cells of the box certified one by one, 1 for the whole box at once),
     ``largest_certifiable{current_speed, box_scale}`` and ``reason``.
 
     Parameters
@@ -325,6 +330,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
         "surge_speed": body.get("surge_speed"),
         "sample_time": None if problem is None else problem.sample_time,
         "start": None if problem is None else dict(zip(STATES, problem.start, strict=True)),
+        "cells": body.get("cells"),
         "largest_certifiable": {
             "current_speed": summary.current_speed,
             "box_scale": summary.box_scale,
@@ -400,8 +406,10 @@ class GuidancePart:
         b, pk, lim = f.get("error_bounds"), f.get("certified_peak"), f.get("limits")
         if not f.get("certified") or b is None or pk is None:
             return [f"{head} not certified: {f.get('reason', '')}"]
+        cells = f.get("cells") or 1
+        by = f" (the box in {cells} cells, each certified with its own nominal plant)" if cells > 1 else ""
         out = [
-            f"{head} certified at h = {f['sample_time']:.4g} s",
+            f"{head} certified at h = {f['sample_time']:.4g} s{by}",
             f"    errors <= along-track {b['along_track']:.4g} m, cross-track {b['cross_track']:.4g} m, "
             f"heading {b['heading']:.4g} rad; sway <= {f['sway_speed']:.4g} m/s",
         ]

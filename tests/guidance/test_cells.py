@@ -1,0 +1,155 @@
+"""Cells of the box for the ILOS cascade's certificate: they cover the box, and what they certify holds.
+
+Properties asserted:
+
+* the halves of a box cover it exactly along each mass and leave the other coefficients alone;
+  each half's nominal plant is its centre, and the model-against-plant spreads are still taken
+  against the controller's model;
+* a nominal loop placed at the model reproduces the whole box's certificate to the last bit;
+* a box of masses +-10 % that the whole box's certificate refuses is certified by its cells, and
+  plants at the box's vertices (the smallest Munk coefficient first), in currents at the bound in
+  several directions, keep every state of the simulated cascade inside the certified box and
+  every command inside its certified bound: from the default start (in trim, crabbed into the
+  current: the surge drag's spread moves the along-track error) and from a start on the slots
+  heading along the track (not crabbed: the cross-track loop moves).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from auv_hinf.cascade.certificate import CELL_PARAMETERS, STATES, cascade_states, certify_cascade, halves
+from auv_hinf.certificate.design_point import design_point, raw_fleet
+from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary
+from auv_hinf.config.settings import config_from_dict
+from auv_hinf.guidance.law import SlotMotion
+from auv_hinf.guidance.simulation import simulate_guidance, slot_motion
+from auv_hinf.robust.box import PARAMETERS
+
+#: Three REMUS 100 on a transit with every mass +-10 % and the drag uncertain: the whole box is
+#: refused, its cells certify.
+MASSES = {
+    "vehicle": {"preset": "remus100"},
+    "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0]]},
+    "reference": {"kind": "line", "speed": 1.5},
+    "actuators": {"preset": "remus100"},
+    "guidance": {"kind": "ilos", "heading_bandwidth": 2.4, "lookahead": 16.0},
+    "uncertainty": {
+        "m11": [0.9, 1.1],
+        "m22": [0.9, 1.1],
+        "m33": [0.9, 1.1],
+        "d11_quad": [0.9, 1.1],
+        "d22_quad": [0.8, 1.2],
+    },
+    "disturbance": {"current_speed": 0.1},
+    "simulation": {"horizon": 150.0, "current": [0.0, 0.1]},
+}
+
+
+@pytest.fixture(scope="module")
+def masses():
+    cfg = config_from_dict(MASSES, "masses")
+    return cfg, cascade_problem(cfg, design_point(cfg))
+
+
+def test_halves_cover_the_box_and_are_centred_on_their_own_nominal_plant(masses):
+    _, problem = masses
+    plant = problem.plant
+    cells = halves(problem)
+    assert len(cells) == 2 ** len(CELL_PARAMETERS)
+    for name in PARAMETERS:
+        parent = plant.interval(name)
+        pieces = sorted({c.plant.interval(name) for c in cells})
+        if name in CELL_PARAMETERS:
+            assert len(pieces) == 2
+            assert pieces[0][0] == pytest.approx(parent[0], rel=1e-15)
+            assert pieces[1][1] == pytest.approx(parent[1], rel=1e-15)
+            assert pieces[0][1] == pytest.approx(pieces[1][0], rel=1e-15)  # no gap between the halves
+        else:
+            assert pieces == [pytest.approx(parent, rel=1e-15)]
+    for cell in cells:
+        centre = cell.nominal
+        assert centre is not None
+        for name in PARAMETERS:
+            lo, hi = cell.plant.interval(name)
+            value = getattr(centre, name)
+            assert lo * (1 - 1e-15) <= value <= hi * (1 + 1e-15)
+            # the law's mismatch is still against the controller's model, not the cell's centre
+            hat = getattr(plant.model, name)
+            assert cell.plant.spread(name) == pytest.approx(max(hat - lo, hi - hat), rel=1e-15, abs=1e-12)
+        assert cell.plant.model == plant.model
+
+
+def test_a_nominal_loop_at_the_model_reproduces_the_whole_box(masses):
+    _, problem = masses
+    problem = replace(problem, plant=replace(problem.plant, box=problem.plant.box.scaled(0.3)))
+    whole = certify_cascade(problem, cells=False)
+    at_model = certify_cascade(replace(problem, nominal=problem.plant.model), cells=False)
+    assert whole.holds and at_model.holds
+    assert np.array_equal(whole.errors, at_model.errors)
+    assert whole.actuation == at_model.actuation
+
+
+#: The second fleet: the same box in a 0.02 m/s current, every vehicle started on its slot heading
+#: along the track (not into the current), so that the cross-track loop has a transient.
+ALONG_THE_TRACK = {
+    **MASSES,
+    "disturbance": {"current_speed": 0.02},
+    "simulation": {
+        "horizon": 150.0,
+        "current": [0.0, 0.02],
+        "initial": [[0.0, 0.0, 0.0, 1.5, 0.0, 0.0], [0.0, 15.0, 0.0, 1.5, 0.0, 0.0], [0.0, -15.0, 0.0, 1.5, 0.0, 0.0]],
+    },
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("tables", "moved"), [(MASSES, "along_track"), (ALONG_THE_TRACK, "cross_track")], ids=["in-trim", "along-track"]
+)
+def test_a_box_refused_whole_is_certified_by_cells_and_simulated_vertices_stay_inside(tables, moved):
+    cfg = config_from_dict(tables, "cells")
+    problem = cascade_problem(cfg, design_point(cfg))
+    assert not certify_cascade(problem, cells=False).holds
+    summary = guidance_summary(cfg)
+    assert summary.holds, summary.reason
+    cert = summary.certificate
+    assert cert.cells > 1
+    box = cert.errors[:7]
+    lo, hi = np.asarray(problem.plant.box.lo), np.asarray(problem.plant.box.hi)
+    runs = []
+    # vertices (1: the upper end) of m11, m22, m33, d11_quad, d22_quad: the smallest Munk coefficient
+    # (m11 high, m22 low) at both yaw inertias, its opposite, and two more; the surge drag at either
+    # end drives the along-track error
+    vertices = [(1, 0, 0, 0, 0), (1, 0, 1, 1, 1), (0, 1, 0, 0, 1), (1, 1, 0, 1, 0), (0, 0, 1, 0, 0)]
+    for m11, m22, m33, d11, d22 in vertices:
+        m = np.ones(9)
+        for name, side in zip(("m11", "m22", "m33", "d11_quad", "d22_quad"), (m11, m22, m33, d11, d22), strict=True):
+            k = PARAMETERS.index(name)
+            m[k] = hi[k] if side else lo[k]
+        runs.append(m)
+    worst = np.zeros(7)
+    peaks = np.zeros(2)
+    slots_fleet = raw_fleet(cfg)
+    initial = None if cfg.simulation.initial is None else np.asarray(cfg.simulation.initial)
+    for i, m in enumerate(runs):
+        angle = 2.0 * np.pi * i / len(runs) + 0.3
+        current = problem.plant.current * np.array([np.cos(angle), np.sin(angle)])
+        plant = cfg.vehicle.__class__(**{n: getattr(cfg.vehicle, n) * m[k] for k, n in enumerate(PARAMETERS)})
+        run = simulate_guidance(
+            cfg.guidance, plant, cfg.vehicle, cfg.actuators, slots_fleet, 150.0, tuple(current), initial=initial
+        )
+        slots = slot_motion(slots_fleet, run.t)
+        for k in range(run.t.size):
+            slot = SlotMotion(p=slots.p[k], v=slots.v[k], a=slots.a[k])
+            states = cascade_states(problem, run.states[k], run.integral[k], slot, current)
+            worst = np.maximum(worst, np.abs(states).max(axis=0))
+        peaks = np.maximum(peaks, [np.abs(run.thrust_cmd).max(), np.abs(run.rudder_cmd).max()])
+    for name, w, b in zip(STATES, worst, box, strict=True):
+        assert w <= b, f"{name}: simulated {w:.4g} above the certified {b:.4g}"
+    assert peaks[0] <= cert.actuation.thrust and peaks[1] <= cert.actuation.rudder
+    # not vacuous: the state the start or the drag's spread moves reaches a fifth of its bound
+    assert worst[STATES.index(moved)] >= 0.2 * box[STATES.index(moved)], (moved, worst, box)
