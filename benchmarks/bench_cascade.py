@@ -2,10 +2,11 @@
 
 ``remus-transit-ilos``: three REMUS 100 on a straight transit at 1.5 m/s, masses +-3 %, damping
 +-20 %, currents up to 0.1 m/s; and the same fleet with every mass +-10 %, which the whole box's
-certificate refuses and the cells of the box certify. Peers measured in the same run: one simulated run of the fleet (the
-measurement the certificate replaces) and a campaign of runs over the box and the currents. The
-user's path is ``auv-hinf certify`` on the preset's TOML file (a fresh process). Conservatism: the
-certified bounds against the worst of the campaign (box vertices first, currents at the bound).
+certificate refuses and the cells of the box certify. Peers measured in the same run: one
+simulated run of the fleet (the measurement the certificate replaces) and a campaign of runs
+over the box and the currents. The user's path is ``auv-hinf certify`` on the preset's TOML file
+(a fresh process). Conservatism: the certified bounds against the worst of the campaign (box
+vertices first, currents at the bound).
 
 Run alone with ``python benchmarks/bench_cascade.py`` (prints the table).
 """
@@ -55,6 +56,12 @@ def _warm(problem: cascade.CascadeProblem) -> cascade.CascadeCertificate:
     return cascade.certify_cascade(problem)
 
 
+def _ratios(bounds: dict[str, float], worst: dict[str, float]) -> str:
+    """``name certified / worst = ratio`` of the along-track, cross-track and heading errors."""
+    names = ("along_track", "cross_track", "heading")
+    return ", ".join(f"{k} {bounds[k]:.3g} / {worst[k]:.3g} = {bounds[k] / worst[k]:.3g}" for k in names)
+
+
 def cascade_cost() -> str:
     cfg = preset_config("remus-transit-ilos")
     problem = guidance_summary(cfg).problem
@@ -84,14 +91,9 @@ def cascade_cost() -> str:
         ["CLI `certify --json` of the preset (a fresh process)", f"{t_cli:.1f}", "yes"],
         [f"masses +-10 %: the whole box ({cells.cells} cells of it, cold caches)", f"{t_cells:.1f}", "yes"],
     ]
-    wb, wa = cells.error_bounds, cells.actuation
-    wworst, wpeak = wide_camp["worst_errors"], wide_camp["worst_commanded_peak"]
-    wide_ratios = ", ".join(
-        f"{k} {wb[k]:.3g} / {wworst[k]:.3g} = {wb[k] / wworst[k]:.3g}" for k in ("along_track", "cross_track", "heading")
-    )
-    ratios = ", ".join(
-        f"{k} {b[k]:.3g} / {worst[k]:.3g} = {b[k] / worst[k]:.3g}" for k in ("along_track", "cross_track", "heading")
-    )
+    wa, wpeak = cells.actuation, wide_camp["worst_commanded_peak"]
+    wide_ratios = _ratios(cells.error_bounds, wide_camp["worst_errors"])
+    ratios = _ratios(b, worst)
     note = (
         f"Medians of {REPEATS} runs, BLAS pinned to one thread. Three REMUS 100 on a straight transit at 1.5 m/s, "
         "masses +-3 %, damping +-20 %, currents up to 0.1 m/s, the cascade at 10 Hz. Conservatism against the worst "

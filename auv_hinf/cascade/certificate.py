@@ -663,9 +663,10 @@ def _loop_analysis(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> t
 #: that fail are halved again.
 MAX_CELL_DEPTH = 2
 #: Most cells :func:`certify_cascade` certifies one by one before it gives up (each costs one
-#: nominal loop's peak gains, about 0.9 s for a REMUS at 10 Hz): 64 is every cell of two levels
-#: of halving but the first level's.
-MAX_CELLS = 64
+#: nominal loop's peak gains, about 0.9 s for a REMUS at 10 Hz): 72 is every cell of two levels
+#: of halving along three masses (8 + 64), so the depth binds first; a smaller budget bounds the
+#: time of a refusal instead.
+MAX_CELLS = 72
 #: The coefficients a cell is halved along: the three masses, on which the heading-sway block's
 #: nominal coefficients depend (the Coriolis ratio ``m11/m22``, the Munk coefficient ``m22 - m11``
 #: over ``m33``, the rudder's authority ``m33_hat/m33``).
