@@ -752,32 +752,44 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True) -> CascadeCerti
     whole = _certify_one(problem)
     if whole.holds or not cells or problem.nominal is not None:
         return whole
+    pl = problem.plant
+    if not any(pl.interval(n)[0] < pl.interval(n)[1] for n in CELL_PARAMETERS):
+        return whole
     with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
         certs = _cells(problem, MAX_CELL_DEPTH, bar)
-    return _union(certs) if certs is not None else whole
+    if isinstance(certs, list):
+        return _union(certs)
+    return replace(whole, reason=f"{whole.reason} (the box in cells of its masses does not certify either: {certs})")
 
 
-def _cells(problem: CascadeProblem, depth: int, bar: tqdm) -> list[CascadeCertificate] | None:
-    """The certificates of cells that cover ``problem``'s box (its halves, recursively), or ``None``.
+def _masses(problem: CascadeProblem) -> str:
+    """The cell's mass ranges, for a refusal (kg, kg, kg m^2)."""
+    return ", ".join(
+        f"{n} in [{problem.plant.interval(n)[0]:.4g}, {problem.plant.interval(n)[1]:.4g}]" for n in CELL_PARAMETERS
+    )
+
+
+def _cells(problem: CascadeProblem, depth: int, bar: tqdm) -> list[CascadeCertificate] | str:
+    """The certificates of cells that cover ``problem``'s box (its halves, recursively), or why there are none.
 
     ``bar`` counts the cells certified against :data:`MAX_CELLS`."""
-    pl = problem.plant
-    if depth == 0 or not any(pl.interval(n)[0] < pl.interval(n)[1] for n in CELL_PARAMETERS):
-        return None
     out = []
     for half in halves(problem):
         if bar.n >= MAX_CELLS:
-            return None
+            return f"{MAX_CELLS} cells were tried"
         bar.update(1)
         cert = _certify_one(half, CELL_MAX_PERIODS)
         if cert.holds:
             out.append(cert)
             continue
         if not _certify_one(_centre_only(half), CELL_MAX_PERIODS).holds:
-            return None  # not even the cell's centre plant certifies: no finer cell around it will
+            # not even the cell's centre plant certifies: no finer cell around it will
+            return f"the plant at the centre of the cell {_masses(half)} is refused alone"
+        if depth <= 1:
+            return f"the cell {_masses(half)} is refused after {MAX_CELL_DEPTH} halvings"
         deeper = _cells(half, depth - 1, bar)
-        if deeper is None:
-            return None
+        if isinstance(deeper, str):
+            return deeper
         out += deeper
     return out
 
