@@ -538,6 +538,93 @@ def _peaks(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[Peaks,
     return Peaks(axes, heading), dist, radius
 
 
+#: The couplings of the small-gain system, by the perturbation channel they drive (the row) and
+#: the peak that drives it (the column's output), in words; ``{axis}`` and ``{other}`` are filled in.
+_COUPLINGS = {
+    ("q", "v"): "the {axis} drag's slope about the nominal loop's (the box's spread and the velocity error's)",
+    ("q", "v_m"): "the {axis} drag compensation on the measured velocity (its slope's spread)",
+    ("q", "F"): "the {axis} mass ratio on the law's feedback (the box's m_hat/m)",
+    ("q", "other:v"): "the body frame's turn and the Coriolis terms from the {other} velocity into the {axis} loop",
+    ("q", "h:dpsi"): "the {axis} drift compensation turned by the heading's change over the lag",
+    ("q_e", "other:e"): "the body frame's turn of the {other} position error into the {axis} loop",
+    ("n_e", "e"): "the heading noise's turn of the measured {axis} position error",
+    ("p_z", "z"): "the integrator's turn with the body frame ({axis})",
+    ("h:q", "h:v"): "the yaw drag's slope about the nominal loop's",
+    ("h:q", "h:v_m"): "the yaw drag compensation on the measured yaw rate",
+    ("h:q", "h:F"): "the yaw inertia ratio on the heading feedback",
+    ("h:q", "dv"): "the Munk moment of the {axis} velocity's change over the lag",
+}
+#: Axis names of the position loops, by index.
+_AXES = ("surge", "sway")
+
+
+def _coupling(row: str, col: str) -> str | None:
+    """The words of the coupling from the peak ``col`` into the perturbation channel ``row`` (``None``: a loop gain)."""
+    r_axis, r_name = row.split(":")
+    c_axis, c_name = col.split(":")
+    if r_axis == "h":
+        key = ("h:q", f"h:{c_name}") if c_axis == "h" else ("h:q", c_name)
+        j = None if c_axis == "h" else int(c_axis)
+    else:
+        j = int(r_axis)
+        same = c_axis == r_axis
+        key = (r_name, c_name if same else ("h:dpsi" if c_axis == "h" else f"other:{c_name}"))
+        if r_name == "n_e" or r_name == "p_z":
+            key = (r_name, c_name)
+    text = _COUPLINGS.get(key)
+    if text is None:
+        return None
+    axis = _AXES[j] if j is not None else "yaw"
+    other = _AXES[1 - j] if j is not None else ""
+    return text.format(axis=axis, other=other)
+
+
+#: Couplings named in a small-gain refusal.
+BINDING_COUPLINGS = 3
+
+
+def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> str:
+    """The couplings that close the small-gain loop at ``errors``, with their shares, in words.
+
+    The shares are the Perron sensitivities of the system's spectral radius: entry ``M_ij``'s
+    share is ``y_i M_ij x_j / (rho y.x)`` with ``x``, ``y`` the right and left Perron vectors of
+    the nonnegative ``M``; the shares of every entry sum to 1. Each perturbation channel's
+    entries are named by the physical coupling (:data:`_COUPLINGS`), the loops' own gains not,
+    and the named couplings' shares are given as fractions of their sum.
+
+    Parameters
+    ----------
+    problem : DeployedProblem
+        The problem.
+    rnd : Round
+        The round's loops.
+    errors : Errors
+        The errors the disturbances are taken at.
+    """
+    plant, mission = problem.plant, problem.mission
+    op = OperatingBox.of(mission, plant.current, errors)
+    dist = disturbances(plant, op, mission, problem.implementation, problem.gains, errors)
+    _, m, ix = _system(problem, rnd, dist)
+    w, v = np.linalg.eig(m)
+    k = int(np.argmax(np.abs(w)))
+    rho = float(np.abs(w[k]))
+    wl, u = np.linalg.eig(m.T)
+    x, y = np.abs(v[:, k].real), np.abs(u[:, int(np.argmax(np.abs(wl)))].real)
+    if rho <= 0.0 or float(y @ x) <= 0.0:
+        return ""
+    shares = m * np.outer(y, x) / (rho * float(y @ x))
+    named: dict[str, float] = {}
+    for i, j in zip(*np.nonzero(shares), strict=True):
+        text = _coupling(ix.names[i], ix.names[j])
+        if text is not None:
+            named[text] = named.get(text, 0.0) + float(shares[i, j])
+    total = sum(named.values())
+    if total <= 0.0:
+        return ""
+    top = sorted(named.items(), key=lambda kv: -kv[1])[:BINDING_COUPLINGS]
+    return "; ".join(f"{t} ({100.0 * f / total:.0f} %)" for t, f in top if f >= 0.005 * total)
+
+
 def _inside(op: OperatingBox, room: OperatingBox) -> bool:
     """``op`` lies inside ``room`` (the box the loops were built for)."""
     return (
@@ -633,7 +720,7 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
             ),
         )
     errors = problem.initial
-    why = ""
+    why, binds = "", ""
     for attempt in range(ROUNDS):
         op = OperatingBox.of(mission, plant.current, _widen(errors, 1.0 + BOX_ROOM))
         if op.slip >= MAX_SLIP:
@@ -654,14 +741,18 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
         if got is not None:
             return _accepted(problem, rnd, got, reached)
         if why == "gain" and attempt == 0:
+            binds = binding(problem, rnd, reached)
             return DeployedCertificate(
                 False,
                 "stability",
                 (
                     "the small-gain condition fails even at the start's errors: the plant's spread around the "
-                    "nominal loops and the couplings are too large for these gains",
+                    "nominal loops and the couplings are too large for these gains"
+                    + (f" (what closes the loop, by share of the couplings: {binds})" if binds else ""),
                 ),
             )
+        if why == "gain":
+            binds = binding(problem, rnd, reached)
         errors = Errors.from_array(np.maximum(reached.as_array(), errors.as_array()))  # reported as "last"
         if why in ("diverged", "slip", "gain"):
             break
@@ -676,7 +767,8 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
         (
             f"{_GROWTH[why]} (last |e| <= {errors.position:.3g} m, |e'| <= {errors.velocity:.3g} m/s, "
             f"|e_psi| <= {errors.heading:.3g} rad"
-            + (f"; the mission's heading offset is {mission.offset:.3g} rad)" if why == "slip" else ")"),
+            + (f"; the mission's heading offset is {mission.offset:.3g} rad)" if why == "slip" else ")")
+            + (f"; what closes the loop, by share of the couplings: {binds}" if why == "gain" and binds else ""),
         ),
     )
 

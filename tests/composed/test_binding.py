@@ -1,0 +1,103 @@
+"""A small-gain refusal of the composed certificate names the couplings that close the loop.
+
+Properties asserted, on the deployed BlueROV2 fleet with a declared box and current (refused at
+the start's errors):
+
+* the refusal gives the couplings, by their share of the loop's gain;
+* every coupling the small-gain system can carry is named (a perturbation channel's entries,
+  except the varying delay's staleness terms, which this fleet does not have);
+* removing the entries of the coupling named first lowers the system's spectral radius, and by
+  more than removing those of the one named last (the shares are Perron sensitivities).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.composed import composed_summary
+from auv_hinf.composed import certificate as composed
+from auv_hinf.composed.loops import OperatingBox, disturbances
+from auv_hinf.config.settings import config_from_dict
+from auv_hinf.robust.box import ParameterBox
+from tests.helpers import DEPLOYED
+
+#: The box and current of the refusal (at the start's errors, with the fleet's gains): masses
+#: +-20 %, surge and sway drag +-40 %, 0.1 m/s.
+BOX = (
+    ("m11", (0.8, 1.2)),
+    ("m22", (0.8, 1.2)),
+    ("d11_lin", (0.6, 1.4)),
+    ("d11_quad", (0.6, 1.4)),
+    ("d22_quad", (0.6, 1.4)),
+)
+#: Perturbation channels whose entries are the varying delay's staleness (not named).
+STALENESS = ("n_v", "h:n_e", "h:n_v")
+
+
+@pytest.fixture(scope="module")
+def refused():
+    point = design_point(config_from_dict(DEPLOYED, "deployed"))
+    problem = composed_summary(point, search=False).problem
+    assert problem is not None
+    plant = replace(problem.plant, box=ParameterBox.from_ranges(problem.plant.model, BOX), current=0.1)
+    problem = replace(problem, plant=plant)
+    cert = composed.certify_deployed(problem)
+    assert not cert.covers
+    op = composed.OperatingBox.of(
+        problem.mission, plant.current, composed._widen(problem.initial, 1.0 + composed.BOX_ROOM)
+    )
+    rnd = composed.make_round(problem, op)
+    assert not isinstance(rnd, str)
+    dist = disturbances(
+        plant,
+        OperatingBox.of(problem.mission, plant.current, problem.initial),
+        problem.mission,
+        problem.implementation,
+        problem.gains,
+        problem.initial,
+    )
+    _, m, ix = composed._system(problem, rnd, dist)
+    return problem, cert, m, ix
+
+
+def _radius(m: np.ndarray) -> float:
+    return float(np.abs(np.linalg.eigvals(m)).max())
+
+
+def test_the_refusal_names_what_closes_the_loop(refused):
+    _, cert, m, _ = refused
+    assert _radius(m) >= 1.0
+    assert "what closes the loop, by share of the couplings:" in cert.reasons[0]
+    named = cert.reasons[0].split("couplings: ")[1].split("; ")
+    shares = [float(part.rsplit("(", 1)[1].split(" %")[0]) for part in named]
+    assert shares == sorted(shares, reverse=True) and 0.0 < sum(shares) <= 100.5
+
+
+def test_every_coupling_of_the_system_is_named(refused):
+    _, _, m, ix = refused
+    for i, j in zip(*np.nonzero(m), strict=True):
+        row, col = ix.names[i], ix.names[j]
+        channel = row.split(":", 1)[1] if not row.startswith("h:") else row
+        if channel not in ("q", "q_e", "n_e", "p_z", "h:q"):
+            continue  # a loop's own gain, or the measurements' staleness
+        assert composed._coupling(row, col) is not None, (row, col)
+
+
+def test_removing_the_first_named_coupling_lowers_the_radius_most(refused):
+    _, cert, m, ix = refused
+    named = cert.reasons[0].split("couplings: ")[1].split("; ")
+    texts = [part.rsplit(" (", 1)[0] for part in named]
+
+    def without(text: str) -> float:
+        cut = m.copy()
+        for i, j in zip(*np.nonzero(m), strict=True):
+            if composed._coupling(ix.names[i], ix.names[j]) == text:
+                cut[i, j] = 0.0
+        return _radius(cut)
+
+    first, last = without(texts[0]), without(texts[-1])
+    assert first < _radius(m) and first < last
