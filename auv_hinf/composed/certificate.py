@@ -277,6 +277,9 @@ class DeployedCertificate:
         The nominal loops of the accepted operating box.
     small_gain : float or None
         Spectral radius of the accepted small-gain matrix (< 1).
+    binding : tuple of (str, float)
+        When the small gain fails: the couplings that close the loop and their shares of the
+        couplings' total (:func:`binding`), largest first; empty otherwise.
     """
 
     covers: bool
@@ -289,6 +292,7 @@ class DeployedCertificate:
     peaks: Peaks | None = None
     round: Round | None = field(default=None, compare=False)
     small_gain: float | None = None
+    binding: tuple[tuple[str, float], ...] = ()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -583,8 +587,8 @@ def _coupling(row: str, col: str) -> str | None:
 BINDING_COUPLINGS = 3
 
 
-def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> str:
-    """The couplings that close the small-gain loop at ``errors``, with their shares, in words.
+def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple[str, float], ...]:
+    """The couplings that close the small-gain loop at ``errors``, with their shares (fractions), largest first.
 
     The shares are the Perron sensitivities of the system's spectral radius: entry ``M_ij``'s
     share is ``y_i M_ij x_j / (rho y.x)`` with ``x``, ``y`` the right and left Perron vectors of
@@ -611,7 +615,7 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> str:
     wl, u = np.linalg.eig(m.T)
     x, y = np.abs(v[:, k].real), np.abs(u[:, int(np.argmax(np.abs(wl)))].real)
     if rho <= 0.0 or float(y @ x) <= 0.0:
-        return ""
+        return ()
     shares = m * np.outer(y, x) / (rho * float(y @ x))
     named: dict[str, float] = {}
     for i, j in zip(*np.nonzero(shares), strict=True):
@@ -620,9 +624,16 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> str:
             named[text] = named.get(text, 0.0) + float(shares[i, j])
     total = sum(named.values())
     if total <= 0.0:
-        return ""
+        return ()
     top = sorted(named.items(), key=lambda kv: -kv[1])[:BINDING_COUPLINGS]
-    return "; ".join(f"{t} ({100.0 * f / total:.0f} %)" for t, f in top if f >= 0.005 * total)
+    return tuple((t, f / total) for t, f in top if f >= 0.005 * total)
+
+
+def _binding_words(binds: tuple[tuple[str, float], ...]) -> str:
+    """``binds`` as a clause of a refusal (empty when there is none)."""
+    if not binds:
+        return ""
+    return "what closes the loop, by share of the couplings: " + "; ".join(f"{t} ({100.0 * f:.0f} %)" for t, f in binds)
 
 
 def _inside(op: OperatingBox, room: OperatingBox) -> bool:
@@ -720,7 +731,8 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
             ),
         )
     errors = problem.initial
-    why, binds = "", ""
+    why = ""
+    binds: tuple[tuple[str, float], ...] = ()
     for attempt in range(ROUNDS):
         op = OperatingBox.of(mission, plant.current, _widen(errors, 1.0 + BOX_ROOM))
         if op.slip >= MAX_SLIP:
@@ -748,8 +760,9 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
                 (
                     "the small-gain condition fails even at the start's errors: the plant's spread around the "
                     "nominal loops and the couplings are too large for these gains"
-                    + (f" (what closes the loop, by share of the couplings: {binds})" if binds else ""),
+                    + (f" ({_binding_words(binds)})" if binds else ""),
                 ),
+                binding=binds,
             )
         if why == "gain":
             binds = binding(problem, rnd, reached)
@@ -768,8 +781,9 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
             f"{_GROWTH[why]} (last |e| <= {errors.position:.3g} m, |e'| <= {errors.velocity:.3g} m/s, "
             f"|e_psi| <= {errors.heading:.3g} rad"
             + (f"; the mission's heading offset is {mission.offset:.3g} rad)" if why == "slip" else ")")
-            + (f"; what closes the loop, by share of the couplings: {binds}" if why == "gain" and binds else ""),
+            + (f"; {_binding_words(binds)}" if why == "gain" and binds else ""),
         ),
+        binding=binds if why == "gain" else (),
     )
 
 
@@ -856,6 +870,7 @@ def summary(cert: DeployedCertificate) -> dict[str, Any]:
         "certified_peak": None if cert.force is None else cert.force.to_dict(),
         "operating_box": None if cert.op is None else cert.op.to_dict(),
         "small_gain": cert.small_gain,
+        "binding": [{"coupling": t, "share": f} for t, f in cert.binding],
     }
 
 

@@ -72,9 +72,12 @@ def test_the_refusal_names_what_closes_the_loop(refused):
     _, cert, m, _ = refused
     assert _radius(m) >= 1.0
     assert "what closes the loop, by share of the couplings:" in cert.reasons[0]
-    named = cert.reasons[0].split("couplings: ")[1].split("; ")
-    shares = [float(part.rsplit("(", 1)[1].split(" %")[0]) for part in named]
-    assert shares == sorted(shares, reverse=True) and 0.0 < sum(shares) <= 100.5
+    shares = [f for _, f in cert.binding]
+    assert shares == sorted(shares, reverse=True) and 0.0 < sum(shares) <= 1.0 + 1e-12
+    for text, share in cert.binding:
+        assert f"{text} ({100.0 * share:.0f} %)" in cert.reasons[0]
+    digest = composed.summary(cert)["binding"]
+    assert [b["coupling"] for b in digest] == [t for t, _ in cert.binding]
 
 
 def test_every_coupling_of_the_system_is_named(refused):
@@ -89,8 +92,7 @@ def test_every_coupling_of_the_system_is_named(refused):
 
 def test_removing_the_first_named_coupling_lowers_the_radius_most(refused):
     _, cert, m, ix = refused
-    named = cert.reasons[0].split("couplings: ")[1].split("; ")
-    texts = [part.rsplit(" (", 1)[0] for part in named]
+    texts = [t for t, _ in cert.binding]
 
     def without(text: str) -> float:
         cut = m.copy()

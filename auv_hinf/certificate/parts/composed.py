@@ -133,6 +133,7 @@ class ComposedSummary:
             "certified_peak": None if c is None or c.force is None else c.force.to_dict(),
             "operating_box": None if c is None or c.op is None else c.op.to_dict(),
             "small_gain": None if c is None else c.small_gain,
+            "binding": [] if c is None else [{"coupling": t, "share": f} for t, f in c.binding],
             "start": None if self.problem is None else self.problem.initial.to_dict(),
             "current_speed": None if self.problem is None else self.problem.plant.current,
             "tightness": None if self.timing is None else self.timing.tightness,
