@@ -663,10 +663,10 @@ def _loop_analysis(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> t
 #: that fail are halved again.
 MAX_CELL_DEPTH = 2
 #: Most cells :func:`certify_cascade` certifies one by one before it gives up (each costs one
-#: nominal loop's peak gains, about 0.9 s for a REMUS at 10 Hz): 72 is every cell of two levels
-#: of halving along three masses (8 + 64), so the depth binds first; a smaller budget bounds the
-#: time of a refusal instead.
-MAX_CELLS = 72
+#: nominal loop's peak gains, about 0.9 s for a REMUS at 10 Hz): 80 is the 8 corners of three
+#: masses and every cell of two levels of halving (8 + 64), so the depth binds first; a smaller
+#: budget bounds the time of a refusal instead.
+MAX_CELLS = 80
 #: The coefficients a cell is halved along: the three masses, on which the heading-sway block's
 #: nominal coefficients depend (the Coriolis ratio ``m11/m22``, the Munk coefficient ``m22 - m11``
 #: over ``m33``, the rudder's authority ``m33_hat/m33``).
@@ -679,6 +679,27 @@ CELL_PARAMETERS = ("m11", "m22", "m33")
 CELL_MAX_PERIODS = 8192
 
 
+def _split(problem: CascadeProblem) -> list[str]:
+    """The uncertain :data:`CELL_PARAMETERS` of ``problem``'s box."""
+    return [name for name in CELL_PARAMETERS if problem.plant.interval(name)[0] < problem.plant.interval(name)[1]]
+
+
+def _cell(problem: CascadeProblem, bounds: dict[str, tuple[float, float]]) -> CascadeProblem:
+    """``problem`` on the cell of its box with the ranges ``bounds`` (SI units; the others kept), about its centre."""
+    pl, base = problem.plant, problem.nominal_plant
+    values = {name: float(getattr(base, name)) for name in PARAMETERS}
+    values.update({name: 0.5 * (a + b) for name, (a, b) in bounds.items()})
+    centre = VehicleParams(**values, name=base.name)
+    lo, hi = [], []
+    for j, name in enumerate(PARAMETERS):
+        a, b = bounds.get(name, pl.interval(name))
+        value = values[name]
+        lo.append(min(a / value, 1.0) if value > 0.0 else pl.box.lo[j])
+        hi.append(max(b / value, 1.0) if value > 0.0 else pl.box.hi[j])
+    box = ParameterBox(centre, tuple(lo), tuple(hi))
+    return replace(problem, plant=replace(pl, box=box), nominal=centre)
+
+
 def halves(problem: CascadeProblem) -> list[CascadeProblem]:
     """``problem``'s box halved along every uncertain :data:`CELL_PARAMETERS`, each half about its own centre.
 
@@ -688,26 +709,15 @@ def halves(problem: CascadeProblem) -> list[CascadeProblem]:
         The cascade (its box; ``nominal`` is replaced by each cell's centre).
     """
     pl = problem.plant
-    split = [name for name in CELL_PARAMETERS if pl.interval(name)[0] < pl.interval(name)[1]]
-    base = problem.nominal_plant
+    split = _split(problem)
     out = []
     for sides in itertools.product((0, 1), repeat=len(split)):
         bounds = {}
-        for name, side in zip(split, sides):
+        for name, side in zip(split, sides, strict=True):
             a, b = pl.interval(name)
             mid = 0.5 * (a + b)
             bounds[name] = (a, mid) if side == 0 else (mid, b)
-        values = {name: float(getattr(base, name)) for name in PARAMETERS}
-        values.update({name: 0.5 * (a + b) for name, (a, b) in bounds.items()})
-        centre = VehicleParams(**values, name=base.name)
-        lo, hi = [], []
-        for j, name in enumerate(PARAMETERS):
-            a, b = bounds.get(name, pl.interval(name))
-            value = float(getattr(centre, name))
-            lo.append(min(a / value, 1.0) if value > 0.0 else pl.box.lo[j])
-            hi.append(max(b / value, 1.0) if value > 0.0 else pl.box.hi[j])
-        box = ParameterBox(centre, tuple(lo), tuple(hi))
-        out.append(replace(problem, plant=replace(pl, box=box), nominal=centre))
+        out.append(_cell(problem, bounds))
     return out
 
 
@@ -752,21 +762,47 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True) -> CascadeCerti
     whole = _certify_one(problem)
     if whole.holds or not cells or problem.nominal is not None:
         return whole
-    pl = problem.plant
-    if not any(pl.interval(n)[0] < pl.interval(n)[1] for n in CELL_PARAMETERS):
+    if not _split(problem):
         return whole
     with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
-        certs = _cells(problem, MAX_CELL_DEPTH, bar)
+        certs = _refused_vertex(problem, bar) or _cells(problem, MAX_CELL_DEPTH, bar)
     if isinstance(certs, list):
         return _union(certs)
     return replace(whole, reason=f"{whole.reason} (the box in cells of its masses does not certify either: {certs})")
 
 
+def _mass_vertices(problem: CascadeProblem) -> list[CascadeProblem]:
+    """``problem`` at each corner of its masses' ranges (the other coefficients' ranges kept), the
+    smallest Munk coefficient ``m22 - m11`` first; each corner is its own nominal plant."""
+    pl = problem.plant
+    split = _split(problem)
+    out = [
+        _cell(problem, {name: (pl.interval(name)[end],) * 2 for name, end in zip(split, ends, strict=True)})
+        for ends in itertools.product((0, 1), repeat=len(split))
+    ]
+    return sorted(out, key=lambda c: c.nominal_plant.m22 - c.nominal_plant.m11)
+
+
+def _refused_vertex(problem: CascadeProblem, bar: tqdm) -> str:
+    """Why the first corner of the masses that is refused alone is refused (empty when none is).
+
+    A cell that holds a refused corner would have to do better than the corner's own nominal loop:
+    the search does not try, and refuses at once (each corner costs one nominal loop, the smallest
+    Munk coefficient first, where the heading-sway block is weakest)."""
+    for corner in _mass_vertices(problem):
+        bar.update(1)
+        if not _certify_one(corner, CELL_MAX_PERIODS).holds:
+            return f"the corner {_masses(corner)} of the masses, with the box's other ranges, is refused alone"
+    return ""
+
+
 def _masses(problem: CascadeProblem) -> str:
-    """The cell's mass ranges, for a refusal (kg, kg, kg m^2)."""
-    return ", ".join(
-        f"{n} in [{problem.plant.interval(n)[0]:.4g}, {problem.plant.interval(n)[1]:.4g}]" for n in CELL_PARAMETERS
-    )
+    """The cell's mass ranges (or values), for a refusal (kg, kg, kg m^2)."""
+    parts = []
+    for name, unit in zip(CELL_PARAMETERS, ("kg", "kg", "kg m^2"), strict=True):
+        lo, hi = problem.plant.interval(name)
+        parts.append(f"{name} = {lo:.4g} {unit}" if lo == hi else f"{name} in [{lo:.4g}, {hi:.4g}] {unit}")
+    return ", ".join(parts)
 
 
 def _cells(problem: CascadeProblem, depth: int, bar: tqdm) -> list[CascadeCertificate] | str:
