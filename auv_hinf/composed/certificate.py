@@ -526,12 +526,20 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
     return c, m, ix
 
 
-def _peaks(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[Peaks, Disturbances, float] | None:
-    """The peaks the small gain proves when the disturbances are those of ``errors``' operating box."""
+def _system_at(
+    problem: DeployedProblem, rnd: Round, errors: Errors
+) -> tuple[FloatArray, FloatArray, _Index, Disturbances]:
+    """``(c, M, index, disturbances)`` of the small-gain system with the disturbances of ``errors``' operating box."""
     plant, mission = problem.plant, problem.mission
     op = OperatingBox.of(mission, plant.current, errors)
     dist = disturbances(plant, op, mission, problem.implementation, problem.gains, errors)
     c, m, ix = _system(problem, rnd, dist)
+    return c, m, ix, dist
+
+
+def _peaks(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[Peaks, Disturbances, float] | None:
+    """The peaks the small gain proves when the disturbances are those of ``errors``' operating box."""
+    c, m, ix, dist = _system_at(problem, rnd, errors)
     sol = small_gain(c, m)
     if sol is None:
         return None
@@ -567,14 +575,14 @@ def _coupling(row: str, col: str) -> str | None:
     r_axis, r_name = row.split(":")
     c_axis, c_name = col.split(":")
     if r_axis == "h":
-        key = ("h:q", f"h:{c_name}") if c_axis == "h" else ("h:q", c_name)
+        key = ("h:q", f"h:{c_name}" if c_axis == "h" else c_name)
         j = None if c_axis == "h" else int(c_axis)
     else:
         j = int(r_axis)
-        same = c_axis == r_axis
-        key = (r_name, c_name if same else ("h:dpsi" if c_axis == "h" else f"other:{c_name}"))
-        if r_name == "n_e" or r_name == "p_z":
+        if c_axis == r_axis or r_name in ("n_e", "p_z"):
             key = (r_name, c_name)
+        else:
+            key = (r_name, f"h:{c_name}" if c_axis == "h" else f"other:{c_name}")
     text = _COUPLINGS.get(key)
     if text is None:
         return None
@@ -605,10 +613,7 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple
     errors : Errors
         The errors the disturbances are taken at.
     """
-    plant, mission = problem.plant, problem.mission
-    op = OperatingBox.of(mission, plant.current, errors)
-    dist = disturbances(plant, op, mission, problem.implementation, problem.gains, errors)
-    _, m, ix = _system(problem, rnd, dist)
+    _, m, ix, _ = _system_at(problem, rnd, errors)
     w, v = np.linalg.eig(m)
     k = int(np.argmax(np.abs(w)))
     rho = float(np.abs(w[k]))
@@ -752,20 +757,19 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
         got, reached, why = _fixed_point(problem, rnd)
         if got is not None:
             return _accepted(problem, rnd, got, reached)
-        if why == "gain" and attempt == 0:
-            binds = binding(problem, rnd, reached)
-            return DeployedCertificate(
-                False,
-                "stability",
-                (
-                    "the small-gain condition fails even at the start's errors: the plant's spread around the "
-                    "nominal loops and the couplings are too large for these gains"
-                    + (f" ({_binding_words(binds)})" if binds else ""),
-                ),
-                binding=binds,
-            )
         if why == "gain":
             binds = binding(problem, rnd, reached)
+            if attempt == 0:
+                return DeployedCertificate(
+                    False,
+                    "stability",
+                    (
+                        "the small-gain condition fails even at the start's errors: the plant's spread around the "
+                        "nominal loops and the couplings are too large for these gains"
+                        + (f" ({_binding_words(binds)})" if binds else ""),
+                    ),
+                    binding=binds,
+                )
         errors = Errors.from_array(np.maximum(reached.as_array(), errors.as_array()))  # reported as "last"
         if why in ("diverged", "slip", "gain"):
             break

@@ -352,9 +352,7 @@ class Plant:
         name : str
             One of :data:`~auv_hinf.robust.box.PARAMETERS`.
         """
-        lo, hi = self.interval(name)
-        value = float(getattr(self.model, name))
-        return max(value - lo, hi - value)
+        return self.box.spread(name, self.model)
 
     def input_gains(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """Ranges of ``lambda_j = m_jj_hat/m_jj`` on the surge and sway axes (dimensionless)."""

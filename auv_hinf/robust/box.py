@@ -124,16 +124,19 @@ class ParameterBox:
         v = float(getattr(self.nominal, name))
         return v * self.lo[k], v * self.hi[k]
 
-    def spread(self, name: str) -> float:
+    def spread(self, name: str, about: VehicleParams | None = None) -> float:
         """``max |p - p_hat|`` of parameter ``name`` over the box (SI units).
 
         Parameters
         ----------
         name : str
             One of :data:`PARAMETERS`.
+        about : VehicleParams, optional
+            The parameters ``p_hat`` is taken from (default: the box's nominal; a cell of a
+            larger box is centred elsewhere than the controller's model).
         """
         lo, hi = self.interval(name)
-        v = float(getattr(self.nominal, name))
+        v = float(getattr(self.nominal if about is None else about, name))
         return max(v - lo, hi - v)
 
     def plant(self, multipliers: FloatArray) -> VehicleParams:

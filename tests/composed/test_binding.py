@@ -20,7 +20,6 @@ import pytest
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import composed_summary
 from auv_hinf.composed import certificate as composed
-from auv_hinf.composed.loops import OperatingBox, disturbances
 from auv_hinf.config.settings import config_from_dict
 from auv_hinf.robust.box import ParameterBox
 from tests.helpers import DEPLOYED
@@ -52,15 +51,7 @@ def refused():
     )
     rnd = composed.make_round(problem, op)
     assert not isinstance(rnd, str)
-    dist = disturbances(
-        plant,
-        OperatingBox.of(problem.mission, plant.current, problem.initial),
-        problem.mission,
-        problem.implementation,
-        problem.gains,
-        problem.initial,
-    )
-    _, m, ix = composed._system(problem, rnd, dist)
+    _, m, ix, _ = composed._system_at(problem, rnd, problem.initial)
     return problem, cert, m, ix
 
 
