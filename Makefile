@@ -26,9 +26,12 @@ demo: $(STAMP)
 	$(BIN)/auv-hinf simulate --preset paper-triangle --out $(OUT)/simulation
 	@echo "plots and JSON written under $(OUT)/"
 
-# Lint and format check, strict typing, the tests, the doctests, the
-# notebooks (nbmake executes them), then the documentation with warnings as errors.
-test: lint typecheck pytest docs
+# Lint and format check, strict typing and the documentation with warnings as errors (side by
+# side: each is one process), then the tests, the doctests and the notebooks (nbmake executes
+# them).
+test: $(STAMP)
+	$(MAKE) --no-print-directory -j2 --output-sync=target lint typecheck docs
+	$(MAKE) --no-print-directory pytest
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
@@ -38,22 +41,24 @@ typecheck: $(STAMP)
 	$(BIN)/python -m mypy auv_hinf
 
 # The tests run on TEST_WORKERS processes (pytest-xdist), one test file per process at a
-# time so that module fixtures are built once. BLAS gets one thread per process: the
-# matrices are small, and on a busy 2-core machine two BLAS threads spin-wait (one test
-# then takes 7 s instead of 0.03 s). OpenBLAS is also held to one kernel family (AVX2,
-# "Haswell"): its AVX-512 kernels round differently, and the interior-point SDPs of the robust
-# certificate land on different (equally verified) points, which moves recorded numbers by
-# up to 16 %; with one kernel family the recorded outputs reproduce on every x86-64 machine.
+# time so that module fixtures are built once. The notebooks are collected first: they are
+# among the longest files, and handed out last they leave one worker idle at the end. BLAS
+# gets one thread per process: the matrices are small, and on a busy 2-core machine two
+# BLAS threads spin-wait (one test then takes 7 s instead of 0.03 s). OpenBLAS is also
+# held to one kernel family (AVX2, "Haswell"): its AVX-512 kernels round differently, and
+# the interior-point SDPs of the robust certificate land on different (equally verified)
+# points, which moves recorded numbers by up to 16 %; with one kernel family the recorded
+# outputs reproduce on every x86-64 machine.
 TEST_WORKERS ?= 2
 PIN_BLAS := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_CORETYPE=Haswell
 
 pytest: $(STAMP)
-	$(PIN_BLAS) $(BIN)/python -m pytest tests auv_hinf --doctest-modules --nbmake notebooks \
+	$(PIN_BLAS) $(BIN)/python -m pytest --nbmake notebooks tests auv_hinf --doctest-modules \
 	  -n $(TEST_WORKERS) --dist loadfile
 
 # The same run with line coverage (about 25 % more CPU, so not part of `make test`).
 coverage: $(STAMP)
-	$(PIN_BLAS) $(BIN)/python -m pytest tests auv_hinf --doctest-modules --nbmake notebooks \
+	$(PIN_BLAS) $(BIN)/python -m pytest --nbmake notebooks tests auv_hinf --doctest-modules \
 	  -n $(TEST_WORKERS) --dist loadfile --cov=auv_hinf --cov-report=term:skip-covered
 
 # The fast subset for the edit-test loop, under 90 s on 2 cores: the tests not marked slow

@@ -44,9 +44,9 @@ START_BOUND = 60.0
 #: 80 ms one-way latency (its measurements arrive about 90 ms old, above the certified 50 ms).
 FAULTS = ("--loss", "0,0.8,0,0", "--latency", "0,0,0.08,0")
 NEUTRAL_STICKS = [0, 0, 500, 0]
-#: Length of the covered real-time run (s): 300 steps at 10 Hz, long enough for the errors to settle
+#: Length of the covered real-time run (s): 150 steps at 10 Hz, long enough for the errors to settle
 #: and the timing statistics to mean something (the measured figures of docs/deployment.md are of a 60 s run).
-RUN_SECONDS = 30.0
+RUN_SECONDS = 15.0
 
 #: The monitor's timing assumptions: the only ones a clean loopback run can violate (a late step or message).
 TIMING = {"period", "lag", "delay", "stale"}
