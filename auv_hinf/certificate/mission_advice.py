@@ -58,22 +58,24 @@ class MissionAdvice:
 
     def line(self) -> str:
         """The change, as the TOML values to write, and what it certifies."""
-        values = ", ".join(f"[{s.table}] {s.key} = {_toml(s.value)}" for s in self.settings)
+        values = ", ".join(s.toml() for s in self.settings)
         return f"{values} (certified |e| <= {self.position_bound:.3g} m)"
 
 
-def _toml(v: object) -> str:
-    return f'"{v}"' if isinstance(v, str) else "true" if v is True else f"{v:.4g}" if isinstance(v, float) else str(v)
+def mission_changes(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
+    """The changes of the mission a user can make, gentlest first: wider turns, then a slower mission.
 
+    The lawn-mower's ``turn_radius`` and ``spacing`` (or the circle's ``radius``) times each of
+    :data:`TURN_FACTORS`, then ``[reference] speed`` times each of :data:`SPEED_FACTORS`; each as
+    ``(kind, settings)`` with ``kind`` ``"turns"`` or ``"speed"``.
 
-def _candidates(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
-    """The changes to try, in order (see the module docstring)."""
-    design: tuple[Setting, ...] = ()
-    out: list[tuple[str, tuple[Setting, ...]]] = []
-    if cfg.synthesis != "deployed" or not cfg.robust:
-        design = (Setting("design", "robust", True), Setting("design", "synthesis", "deployed"))
-        out.append(("design", design))
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    """
     ref = cfg.reference.kwargs()
+    out: list[tuple[str, tuple[Setting, ...]]] = []
     for f in TURN_FACTORS:
         turn: tuple[Setting, ...]
         if cfg.reference.kind == "lawnmower":
@@ -85,9 +87,19 @@ def _candidates(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
             turn = (Setting("reference", "radius", ref["radius"] * f),)
         else:
             break
-        out.append(("turns", design + turn))
-    out += [("speed", (*design, Setting("reference", "speed", ref["speed"] * f))) for f in SPEED_FACTORS]
+        out.append(("turns", turn))
+    out += [("speed", (Setting("reference", "speed", ref["speed"] * f),)) for f in SPEED_FACTORS]
     return out
+
+
+def _candidates(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
+    """The changes to try, in order (see the module docstring)."""
+    design: tuple[Setting, ...] = ()
+    out: list[tuple[str, tuple[Setting, ...]]] = []
+    if cfg.synthesis != "deployed" or not cfg.robust:
+        design = (Setting("design", "robust", True), Setting("design", "synthesis", "deployed"))
+        out.append(("design", design))
+    return out + [(what, design + settings) for what, settings in mission_changes(cfg)]
 
 
 #: How each kind of change is named in a refusal that lists what was tried.
@@ -138,4 +150,4 @@ def mission_advice(
     return ()
 
 
-__all__ = ["SPEED_FACTORS", "TRIED", "TURN_FACTORS", "MissionAdvice", "mission_advice", "tried"]
+__all__ = ["SPEED_FACTORS", "TRIED", "TURN_FACTORS", "MissionAdvice", "mission_advice", "mission_changes", "tried"]

@@ -65,6 +65,14 @@ class Setting:
         """JSON-safe dictionary."""
         return {"table": self.table, "key": self.key, "value": self.value}
 
+    def toml(self) -> str:
+        """The value as a user writes it: ``[table] key = value`` (4 significant digits)."""
+        v = self.value
+        text = f'"{v}"' if isinstance(v, str) else "true" if v is True else "false" if v is False else None
+        if text is None:
+            text = f"{v:.4g}" if isinstance(v, float) else str(v)
+        return f"[{self.table}] {self.key} = {text}"
+
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Setting:
         """Inverse of :meth:`to_dict`.

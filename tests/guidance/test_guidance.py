@@ -13,7 +13,7 @@ from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.settings import ReferenceConfig, SimulationConfig, config_from_dict
+from auv_hinf.config.settings import ReferenceConfig, SimulationConfig, config_from_dict, with_settings
 from auv_hinf.exceptions import ConfigError, ParameterError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance
@@ -134,9 +134,19 @@ def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
     for name in ("theorem1", "closed_loop", "robust", "implementation"):
         assert data["parts"][name]["applies"] is False
     assert [r["part"] for r in data["parts"]["guidance"]["reasons"]] == ["guidance"]
-    # neither a smaller current, a smaller box nor the gains tried certify: the answer says the mission binds
+    # neither a smaller current, a smaller box nor the gains tried certify: the answer says the mission
+    # binds, with wider turns and the current and box it certifies with; re-run, they certify
     why = data["parts"]["guidance"]["reasons"][0]
-    assert "mission binds" in why["message"] and why["settings"] == []
+    answer = data["guidance"]["largest_certifiable"]["mission"]
+    assert "mission binds" in why["message"] and why["settings"] == answer["settings"]
+    written = {(s["table"], s["key"]): s["value"] for s in why["settings"]}
+    assert written[("reference", "turn_radius")] > cfg.reference.kwargs()["turn_radius"]
+    assert 0.0 < answer["scale"] < 1.0
+    assert 0.0 < written[("disturbance", "current_speed")] <= answer["scale"] * cfg.disturbance.current_speed
+    assert {t for t, _ in written} == {"reference", "disturbance", "uncertainty"}
+    again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
+    assert again["guidance"]["certified"] is True
+    assert again["guidance"]["error_bounds"]["cross_track"] <= answer["position_bound"]
 
 
 @pytest.mark.slow

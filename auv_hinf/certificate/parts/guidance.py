@@ -14,7 +14,13 @@ must fit the limits. Its figures are the ``guidance`` object of ``certify --json
 When it does not hold, the part answers with gains that certify the declared box and current
 (a faster heading loop, a longer lookahead: :data:`GAIN_CANDIDATES`), else the largest current
 and the largest scale of the box that certify (each with the other as declared; a bisection on
-certificates, so the answer itself is certified), as ``settings`` to re-run with.
+certificates, so the answer itself is certified), as ``settings`` to re-run with. When none of
+these certifies, the turns or the speed of the mission bind: it tries the mission's changes
+(:func:`~auv_hinf.certificate.mission_advice.mission_changes`: wider turns, then a slower
+mission) with the declared box and current, and when none certifies them, the largest joint scale
+of the current and the box on the gentlest turns and on the slowest speed
+(:func:`mission_answer`). Every answer is the rewritten configuration's own certificate, as a
+re-run computes it.
 
 The certificate covers what ``simulate`` runs: the cascade sampled every ``[implementation]
 sample_time`` (10 Hz by default), without delay or measurement noise, ILOS guidance. A declared
@@ -30,6 +36,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.cascade.certificate import (
@@ -42,14 +49,17 @@ from auv_hinf.cascade.certificate import (
 )
 from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
+from auv_hinf.certificate.mission_advice import mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.composed.loops import Plant
-from auv_hinf.config.settings import FormationConfig
+from auv_hinf.config.settings import FormationConfig, with_settings
+from auv_hinf.design.jacobi_sigma import PROGRESS_DELAY
+from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import STEP, slot_motion
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
-from auv_hinf.numerics.bisection import largest_holding
+from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.robust.box import PARAMETERS
 
 #: The part's registry name.
@@ -67,6 +77,9 @@ ADVICE_DIGITS = 4
 #: drive the heading and the sway, and a longer lookahead slows the cross-track loop's coupling to
 #: them (docs/derivations/guidance.md).
 GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0))
+#: Bisection steps of the joint scale of the current and the box on a changed mission (2^-6 of it):
+#: each step is one certificate of the changed mission, and the answer is re-run once more.
+MISSION_SCALE_STEPS = 6
 #: Largest heading bandwidth times sample time tried: the sampled heading loop keeps a tenth of a
 #: period per radian of its bandwidth's phase (0.4 rad at 10 Hz and 4 rad/s).
 MAX_BANDWIDTH_STEP = 0.4
@@ -152,6 +165,37 @@ def configured_start(cfg: FormationConfig, problem: CascadeProblem) -> np.ndarra
 
 
 @dataclass(frozen=True)
+class MissionAnswer:
+    """A change of the mission (with, if needed, a smaller current and box) at which the cascade is certified.
+
+    Attributes
+    ----------
+    what : {"turns", "speed"}
+        Wider turns or a slower mission.
+    settings : tuple of Setting
+        Every value to write: the mission's, then the current and the box when ``scale < 1``.
+    scale : float
+        The joint scale of the declared current and box in the answer (1: as declared).
+    position_bound : float
+        The certified bound of every vehicle's distance to its slot in the rewritten configuration (m).
+    """
+
+    what: str
+    settings: tuple[Setting, ...]
+    scale: float
+    position_bound: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dictionary: ``{change, settings: [{table, key, value}], scale, position_bound}``."""
+        return {
+            "change": self.what,
+            "settings": [x.to_dict() for x in self.settings],
+            "scale": self.scale,
+            "position_bound": self.position_bound,
+        }
+
+
+@dataclass(frozen=True)
 class GuidanceSummary:
     """The guidance part's result for one configuration.
 
@@ -172,6 +216,9 @@ class GuidanceSummary:
     mission_binds : bool
         Nothing of the above certifies, and neither does the nominal plant in no current: the
         mission (its turns, its slots' speeds) and the gains bind, not the box or the current.
+    mission : MissionAnswer or None
+        When nothing of the above certifies: a change of the mission that does
+        (:func:`mission_answer`).
     """
 
     problem: CascadeProblem | None
@@ -181,6 +228,7 @@ class GuidanceSummary:
     box_scale: float | None = None
     gains: GuidanceConfig | None = None
     mission_binds: bool = False
+    mission: MissionAnswer | None = None
 
     @property
     def holds(self) -> bool:
@@ -230,7 +278,104 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
     gains = _certifying_gains(problem) if bounded else None
     bare = _with(cfg, problem, current=0.0, scale=0.0)
     binds = current is None and scale is None and gains is None and not certify_cascade(bare, cells=False).holds
-    return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds)
+    answered = bool(current) or bool(scale) or gains is not None
+    mission = None if answered or not bounded else mission_answer(cfg)
+    return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission)
+
+
+def _changed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[FormationConfig, CascadeProblem] | None:
+    """``cfg`` rewritten with ``settings`` and its cascade problem (``None``: not a valid or evaluable one)."""
+    try:
+        out = with_settings(cfg, [(x.table, x.key, x.value) for x in settings])
+    except ConfigError:
+        return None
+    problem = cascade_problem(out, design_point(out))
+    return None if isinstance(problem, str) else (out, problem)
+
+
+def _holds(problem: CascadeProblem) -> bool:
+    """The whole box's certificate holds (what holds whole also holds with cells)."""
+    return certify_cascade(problem, cells=False).holds
+
+
+def _world(cfg: FormationConfig, problem: CascadeProblem, scale: float) -> tuple[Setting, ...]:
+    """The declared current and box scaled by ``scale``, as settings rounded towards the certified side."""
+    out: list[Setting] = []
+    if problem.plant.current > 0.0:
+        out.append(Setting("disturbance", "current_speed", _down(problem.plant.current * scale)))
+    if problem.plant.box.declared:
+        scaled = problem.plant.box.scaled(scale)
+        declared = {name for name, _ in cfg.uncertainty.box}
+        out += [
+            Setting("uncertainty", name, [_up(scaled.lo[k]), _down(scaled.hi[k])])
+            for k, name in enumerate(PARAMETERS)
+            if name in declared
+        ]
+    return tuple(out)
+
+
+def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
+    """The mildest change of the mission that certifies the declared box and current, else the best scaled one.
+
+    The changes (:func:`~auv_hinf.certificate.mission_advice.mission_changes`) come in two kinds,
+    each a ladder from mild to gentle: wider turns, then a slower mission. Each change is
+    certified on the rewritten configuration as a re-run builds it. The gentlest change of a kind
+    is tried first; when it certifies the declared box and current, its milder ones are tried in
+    order and the first that certifies is the answer (coverage is not proven monotone along a
+    ladder, so a refused gentlest change ends its kind). When no kind certifies them, the gentlest
+    change of each kind gets the largest joint scale ``s`` of the current and the box that
+    certifies it (a bisection of :data:`MISSION_SCALE_STEPS` steps from ``s = 0``, the nominal
+    plant in still water), and the larger ``s`` wins. That answer, rounded towards the certified
+    side, is certified once more as written, and dropped if it is not.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        A configuration whose cascade is refused and whose declared current, box and gains, shrunk
+        or changed alone, do not certify.
+    """
+    ladders: dict[str, list[tuple[Setting, ...]]] = {}
+    for what, settings in mission_changes(cfg):
+        ladders.setdefault(what, []).append(settings)
+    gentlest: dict[str, tuple[tuple[Setting, ...], FormationConfig, CascadeProblem]] = {}
+    with tqdm(total=len(ladders), unit="kind", desc="mission changes", leave=False, delay=PROGRESS_DELAY) as bar:
+        for what, ladder in ladders.items():
+            bar.update(1)
+            changed = _changed(cfg, ladder[-1])
+            if changed is None:
+                continue
+            gentlest[what] = (ladder[-1], *changed)
+            if not _holds(changed[1]):
+                continue
+            for settings in ladder:  # mildest first; the gentlest holds, so one does
+                milder = changed if settings is ladder[-1] else _changed(cfg, settings)
+                if milder is None:
+                    continue
+                cert = certify_cascade(milder[1], cells=False)  # what holds whole holds with cells
+                if cert.holds and cert.position_bound is not None:
+                    return MissionAnswer(what, settings, 1.0, cert.position_bound)
+    best: tuple[float, str, tuple[Setting, ...], FormationConfig, CascadeProblem] | None = None
+    for what, (settings, new_cfg, problem) in gentlest.items():
+
+        def scaled(x: float, c: FormationConfig = new_cfg, p: CascadeProblem = problem) -> bool:
+            return _holds(_with(c, p, current=p.plant.current * x, scale=x))
+
+        if not scaled(0.0):  # the declared world, at scale 1, is refused: bisect between
+            continue
+        scale, _ = bisect(scaled, 0.0, 1.0, steps=MISSION_SCALE_STEPS)
+        if scale > 0.0 and (best is None or scale > best[0]):
+            best = (scale, what, settings, new_cfg, problem)
+    if best is None:
+        return None
+    scale, what, settings, new_cfg, problem = best
+    written = settings + _world(new_cfg, problem, scale)
+    rerun = _changed(cfg, written)
+    if rerun is None:
+        return None
+    cert = certify_cascade(rerun[1], cells=False)
+    if not cert.holds or cert.position_bound is None:
+        return None
+    return MissionAnswer(what, written, scale, cert.position_bound)
 
 
 def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
@@ -282,14 +427,25 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         c = _down(summary.current_speed)
         return (Setting("disturbance", "current_speed", c),), f"a current up to {c:.4g} m/s certifies"
     if summary.box_scale is not None and summary.box_scale > 0.0:
-        scaled = problem.plant.box.scaled(summary.box_scale)
-        declared = {name for name, _ in cfg.uncertainty.box}
-        settings = tuple(
-            Setting("uncertainty", name, [_up(scaled.lo[k]), _down(scaled.hi[k])])
-            for k, name in enumerate(PARAMETERS)
-            if name in declared
-        )
+        settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies"
+    if summary.mission is not None:
+        m = summary.mission
+        values = ", ".join(x.toml() for x in m.settings)
+        world = (
+            "the declared box and current"
+            if m.scale >= 1.0
+            else f"the current and the box together at {m.scale:.3g} of the declared"
+        )
+        lead = (
+            "the mission binds (even the nominal plant in still water is refused)"
+            if summary.mission_binds
+            else "no smaller current, smaller box or gains alone certify"
+        )
+        return m.settings, (
+            f"{lead}: {values} certifies ({'wider turns' if m.what == 'turns' else 'a slower mission'}, "
+            f"{world}; every vehicle within {m.position_bound:.3g} m of its slot)"
+        )
     if summary.mission_binds:
         frame = " and the path-frame slots' speed changes" if problem.speed[1] > problem.speed[0] * (1.0 + 1e-9) else ""
         return (), (
@@ -337,6 +493,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             "gains": None
             if summary.gains is None
             else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
+            "mission": None if summary.mission is None else summary.mission.to_dict(),
         },
         "reason": summary.reason,
     }
