@@ -10,9 +10,10 @@ certificate computed from its configured start):
 
 1. gains designed for the deployed loop (``[design] robust = true, synthesis = "deployed"``),
    when the design is another;
-2. wider turns: the lawn-mower's ``turn_radius`` and ``spacing`` (or the circle's ``radius``)
-   times :data:`TURN_FACTORS` in turn;
-3. a slower mission: ``[reference] speed`` times :data:`SPEED_FACTORS` in turn.
+2. wider turns: the lawn-mower's ``turn_radius`` and ``spacing`` (or the circle's ``radius``,
+   or the sine's curvature) times :data:`TURN_FACTORS` in turn;
+3. a slower mission: ``[reference] speed`` times :data:`SPEED_FACTORS` in turn;
+4. both: the widest turns at each slower speed (:func:`mission_changes`).
 
 Each answer is one at which the certificate was computed and covers, with its position bound, so
 re-running with it certifies the composed part. Coverage is not proven monotone in these
@@ -21,6 +22,7 @@ settings: the first covered value of each ladder is reported, not the least chan
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -63,11 +65,14 @@ class MissionAdvice:
 
 
 def mission_changes(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
-    """The changes of the mission a user can make, gentlest first: wider turns, then a slower mission.
+    """The changes of the mission a user can make, each kind from mild to gentle.
 
-    The lawn-mower's ``turn_radius`` and ``spacing`` (or the circle's ``radius``) times each of
-    :data:`TURN_FACTORS`, then ``[reference] speed`` times each of :data:`SPEED_FACTORS`; each as
-    ``(kind, settings)`` with ``kind`` ``"turns"`` or ``"speed"``.
+    ``"turns"``: the turns' radius of curvature times each of :data:`TURN_FACTORS` (the
+    lawn-mower's ``turn_radius`` and ``spacing``, the circle's ``radius``, or the sine's ``omega``
+    over the factor's square root: its curvature is ``A omega^2 / speed``). ``"speed"``:
+    ``[reference] speed`` times each of :data:`SPEED_FACTORS` (not for the sine, whose turns
+    tighten as it slows). ``"both"``: the widest turns with each slower speed. Each change is
+    ``(kind, settings)``.
 
     Parameters
     ----------
@@ -75,20 +80,24 @@ def mission_changes(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]
         The configuration.
     """
     ref = cfg.reference.kwargs()
-    out: list[tuple[str, tuple[Setting, ...]]] = []
+    kind = cfg.reference.kind
+    turns: list[tuple[Setting, ...]] = []
     for f in TURN_FACTORS:
-        turn: tuple[Setting, ...]
-        if cfg.reference.kind == "lawnmower":
-            turn = (
-                Setting("reference", "turn_radius", ref["turn_radius"] * f),
-                Setting("reference", "spacing", ref["spacing"] * f),
+        if kind == "lawnmower":
+            turns.append(
+                (
+                    Setting("reference", "turn_radius", ref["turn_radius"] * f),
+                    Setting("reference", "spacing", ref["spacing"] * f),
+                )
             )
-        elif cfg.reference.kind == "circle":
-            turn = (Setting("reference", "radius", ref["radius"] * f),)
-        else:
-            break
-        out.append(("turns", turn))
-    out += [("speed", (Setting("reference", "speed", ref["speed"] * f),)) for f in SPEED_FACTORS]
+        elif kind == "circle":
+            turns.append((Setting("reference", "radius", ref["radius"] * f),))
+        elif kind == "sine":
+            turns.append((Setting("reference", "omega", ref["omega"] / math.sqrt(f)),))
+    speeds = [] if kind == "sine" else [(Setting("reference", "speed", ref["speed"] * f),) for f in SPEED_FACTORS]
+    out = [("turns", t) for t in turns] + [("speed", v) for v in speeds]
+    if turns:
+        out += [("both", turns[-1] + v) for v in speeds]
     return out
 
 
@@ -107,6 +116,7 @@ TRIED = {
     "design": "gains designed for the deployed loop",
     "turns": f"turns up to {TURN_FACTORS[-1]:g} times wider",
     "speed": "half and a quarter of the mission speed",
+    "both": "the widest turns at the slower speeds",
 }
 
 

@@ -43,6 +43,12 @@ ReasonKind = Literal[
 REASON_KINDS: tuple[ReasonKind, ...] = get_args(ReasonKind)
 
 
+def _number(v: float) -> str:
+    """``v`` with 4 significant digits when they give it back exactly, else its shortest exact form."""
+    short = f"{v:.4g}"
+    return short if float(short) == v else repr(v)
+
+
 @dataclass(frozen=True)
 class Setting:
     """A value of the configuration that would change a verdict.
@@ -66,11 +72,16 @@ class Setting:
         return {"table": self.table, "key": self.key, "value": self.value}
 
     def toml(self) -> str:
-        """The value as a user writes it: ``[table] key = value`` (4 significant digits)."""
+        """The value as a user writes it: ``[table] key = value``.
+
+        A float is printed with 4 significant digits when they give it back exactly, else in
+        full: a value rounded for reading could break a constraint of the configuration (a
+        lawn-mower's spacing against its turn radius) or leave the certified side.
+        """
         v = self.value
         text = f'"{v}"' if isinstance(v, str) else "true" if v is True else "false" if v is False else None
         if text is None:
-            text = f"{v:.4g}" if isinstance(v, float) else str(v)
+            text = _number(v) if isinstance(v, float) else str(v)
         return f"[{self.table}] {self.key} = {text}"
 
     @classmethod

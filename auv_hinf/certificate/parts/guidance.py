@@ -77,9 +77,17 @@ ADVICE_DIGITS = 4
 #: drive the heading and the sway, and a longer lookahead slows the cross-track loop's coupling to
 #: them (docs/derivations/guidance.md).
 GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0))
-#: Bisection steps of the joint scale of the current and the box on a changed mission (2^-6 of it):
-#: each step is one certificate of the changed mission, and the answer is re-run once more.
+#: Bisection steps of the joint scale of the current and the box, on the declared or a changed
+#: mission (2^-6 of it): each step is one certificate, and the answer is certified once more as
+#: written.
 MISSION_SCALE_STEPS = 6
+#: A change of the mission is a different survey: it is advised over the current and the box shrunk
+#: together on the declared mission only when it certifies the declared ones, or more than this
+#: many times the joint scale.
+MISSION_OVER_TOGETHER = 2.0
+#: How each kind of change of the mission (:func:`~auv_hinf.certificate.mission_advice.mission_changes`)
+#: is named in an answer.
+CHANGE_WORDS = {"turns": "wider turns", "speed": "a slower mission", "both": "wider turns at a slower speed"}
 #: Largest heading bandwidth times sample time tried: the sampled heading loop keeps a tenth of a
 #: period per radian of its bandwidth's phase (0.4 rad at 10 Hz and 4 rad/s).
 MAX_BANDWIDTH_STEP = 0.4
@@ -219,6 +227,10 @@ class GuidanceSummary:
     mission : MissionAnswer or None
         When nothing of the above certifies: a change of the mission that does
         (:func:`mission_answer`).
+    together : float or None
+        When neither the current nor the box alone certifies, both are declared and the nominal
+        plant in still water certifies the declared mission: the largest joint scale of the two
+        that certifies it (0: none found).
     """
 
     problem: CascadeProblem | None
@@ -229,6 +241,7 @@ class GuidanceSummary:
     gains: GuidanceConfig | None = None
     mission_binds: bool = False
     mission: MissionAnswer | None = None
+    together: float | None = None
 
     @property
     def holds(self) -> bool:
@@ -278,9 +291,15 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
     gains = _certifying_gains(problem) if bounded else None
     bare = _with(cfg, problem, current=0.0, scale=0.0)
     binds = current is None and scale is None and gains is None and not certify_cascade(bare, cells=False).holds
-    answered = bool(current) or bool(scale) or gains is not None
-    mission = None if answered or not bounded else mission_answer(cfg)
-    return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission)
+    if bool(current) or bool(scale) or gains is not None or not bounded:
+        return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds)
+    together = None
+    if not binds and problem.plant.current > 0.0 and problem.plant.box.declared:
+        together = _largest_scale(cfg, problem)
+        if together > 0.0 and _confirmed(cfg, _world(cfg, problem, together)) is None:
+            together = 0.0  # its rounded values, as written, are refused
+    mission = mission_answer(cfg)
+    return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission, together)
 
 
 def _changed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[FormationConfig, CascadeProblem] | None:
@@ -314,19 +333,34 @@ def _world(cfg: FormationConfig, problem: CascadeProblem, scale: float) -> tuple
     return tuple(out)
 
 
-def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
-    """The mildest change of the mission that certifies the declared box and current, else the best scaled one.
+def _largest_scale(cfg: FormationConfig, problem: CascadeProblem) -> float:
+    """The largest joint scale in ``[0, 1)`` of ``problem``'s current and box that certifies (0: none).
 
-    The changes (:func:`~auv_hinf.certificate.mission_advice.mission_changes`) come in two kinds,
-    each a ladder from mild to gentle: wider turns, then a slower mission. Each change is
+    A bisection of :data:`MISSION_SCALE_STEPS` steps from ``s = 0``, the nominal plant in still
+    water (checked first); the declared world, ``s = 1``, is known to be refused.
+    """
+
+    def holds(x: float) -> bool:
+        return _holds(_with(cfg, problem, current=problem.plant.current * x, scale=x))
+
+    if not holds(0.0):
+        return 0.0
+    return bisect(holds, 0.0, 1.0, steps=MISSION_SCALE_STEPS)[0]
+
+
+def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
+    """The mildest change of the mission that certifies the declared box and current, else a scaled one.
+
+    The changes (:func:`~auv_hinf.certificate.mission_advice.mission_changes`) come in kinds,
+    each a ladder from mild to gentle: wider turns, a slower mission, and both. Each change is
     certified on the rewritten configuration as a re-run builds it. The gentlest change of a kind
     is tried first; when it certifies the declared box and current, its milder ones are tried in
     order and the first that certifies is the answer (coverage is not proven monotone along a
-    ladder, so a refused gentlest change ends its kind). When no kind certifies them, the gentlest
-    change of each kind gets the largest joint scale ``s`` of the current and the box that
-    certifies it (a bisection of :data:`MISSION_SCALE_STEPS` steps from ``s = 0``, the nominal
-    plant in still water), and the larger ``s`` wins. That answer, rounded towards the certified
-    side, is certified once more as written, and dropped if it is not.
+    ladder, so a refused gentlest change ends its kind). When no kind certifies them, the answer is
+    the gentlest change of the first kind (wider turns before a slower mission, before both) with
+    the largest joint scale of the current and the box that certifies it, when there is one
+    (:func:`_largest_scale`). That answer, rounded towards the certified side, is certified once
+    more as written, and dropped if it is not.
 
     Parameters
     ----------
@@ -337,14 +371,14 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
     ladders: dict[str, list[tuple[Setting, ...]]] = {}
     for what, settings in mission_changes(cfg):
         ladders.setdefault(what, []).append(settings)
-    gentlest: dict[str, tuple[tuple[Setting, ...], FormationConfig, CascadeProblem]] = {}
+    gentlest: list[tuple[str, tuple[Setting, ...], FormationConfig, CascadeProblem]] = []
     with tqdm(total=len(ladders), unit="kind", desc="mission changes", leave=False, delay=PROGRESS_DELAY) as bar:
         for what, ladder in ladders.items():
             bar.update(1)
             changed = _changed(cfg, ladder[-1])
             if changed is None:
                 continue
-            gentlest[what] = (ladder[-1], *changed)
+            gentlest.append((what, ladder[-1], *changed))
             if not _holds(changed[1]):
                 continue
             for settings in ladder:  # mildest first; the gentlest holds, so one does
@@ -354,28 +388,22 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
                 cert = certify_cascade(milder[1], cells=False)  # what holds whole holds with cells
                 if cert.holds and cert.position_bound is not None:
                     return MissionAnswer(what, settings, 1.0, cert.position_bound)
-    best: tuple[float, str, tuple[Setting, ...], FormationConfig, CascadeProblem] | None = None
-    for what, (settings, new_cfg, problem) in gentlest.items():
+    for what, settings, new_cfg, problem in gentlest:  # the first kind whose gentlest change certifies some
+        scale = _largest_scale(new_cfg, problem)
+        if scale > 0.0:
+            written = settings + _world(new_cfg, problem, scale)
+            bound = _confirmed(cfg, written)
+            return None if bound is None else MissionAnswer(what, written, scale, bound)
+    return None
 
-        def scaled(x: float, c: FormationConfig = new_cfg, p: CascadeProblem = problem) -> bool:
-            return _holds(_with(c, p, current=p.plant.current * x, scale=x))
 
-        if not scaled(0.0):  # the declared world, at scale 1, is refused: bisect between
-            continue
-        scale, _ = bisect(scaled, 0.0, 1.0, steps=MISSION_SCALE_STEPS)
-        if scale > 0.0 and (best is None or scale > best[0]):
-            best = (scale, what, settings, new_cfg, problem)
-    if best is None:
-        return None
-    scale, what, settings, new_cfg, problem = best
-    written = settings + _world(new_cfg, problem, scale)
-    rerun = _changed(cfg, written)
+def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
+    """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, ``None`` if refused."""
+    rerun = _changed(cfg, settings)
     if rerun is None:
         return None
     cert = certify_cascade(rerun[1], cells=False)
-    if not cert.holds or cert.position_bound is None:
-        return None
-    return MissionAnswer(what, written, scale, cert.position_bound)
+    return cert.position_bound if cert.holds else None
 
 
 def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
@@ -429,11 +457,19 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies"
-    if summary.mission is not None:
-        m = summary.mission
+    m = summary.mission
+    s0 = summary.together or 0.0
+    if s0 > 0.0 and (m is None or (m.scale < 1.0 and m.scale <= MISSION_OVER_TOGETHER * s0)):
+        other = "" if m is None else f"; or, with a change of the mission, {', '.join(x.toml() for x in m.settings)}"
+        return _world(cfg, problem, s0), (
+            f"no smaller current or smaller box alone certifies: the current and the box together at {s0:.3g} of "
+            f"the declared do, on the declared mission ({', '.join(x.toml() for x in _world(cfg, problem, s0))})"
+            f"{other}"
+        )
+    if m is not None:
         values = ", ".join(x.toml() for x in m.settings)
         world = (
-            "the declared box and current"
+            "the current and the box as declared"
             if m.scale >= 1.0
             else f"the current and the box together at {m.scale:.3g} of the declared"
         )
@@ -443,7 +479,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             else "no smaller current, smaller box or gains alone certify"
         )
         return m.settings, (
-            f"{lead}: {values} certifies ({'wider turns' if m.what == 'turns' else 'a slower mission'}, "
+            f"{lead}: {values} certifies ({CHANGE_WORDS[m.what]}, "
             f"{world}; every vehicle within {m.position_bound:.3g} m of its slot)"
         )
     if summary.mission_binds:
@@ -493,6 +529,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             "gains": None
             if summary.gains is None
             else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
+            "together": summary.together,
             "mission": None if summary.mission is None else summary.mission.to_dict(),
         },
         "reason": summary.reason,

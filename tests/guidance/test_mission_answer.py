@@ -1,0 +1,99 @@
+"""Answers to a refused guidance cascade that change the mission, or shrink the current and box together.
+
+Properties asserted:
+
+* the mission's changes come as ladders from mild to gentle, in the units a user writes (a
+  lawn-mower's turn radius and spacing together, a sine's frequency so that its curvature falls
+  by the same factors, no slower sine, whose turns would tighten), and both kinds at once;
+* a value is printed as it must be written: exactly when four digits would change it;
+* a fleet whose current and box each refuse it alone, on a mission its nominal plant certifies,
+  is answered on that mission, with the two shrunk together, and re-running with the answer
+  certifies it (the mission's own answer is followed in ``test_guidance.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from auv_hinf.certificate.assembly import certify
+from auv_hinf.certificate.mission_advice import SPEED_FACTORS, TURN_FACTORS, mission_changes
+from auv_hinf.certificate.reason import Setting
+from auv_hinf.config.presets import preset_config
+from auv_hinf.config.settings import ReferenceConfig, config_from_dict, with_settings
+
+#: Four torpedo vehicles (figures within 15 % of a REMUS 100, a weaker propeller and rudder) on a
+#: line in a current up to 0.3 m/s, masses and drag +-15 %: neither the current nor the box alone
+#: certifies, the nominal plant in still water does.
+TOGETHER = {
+    "vehicle": {
+        "m11": 34.55,
+        "m22": 58.06,
+        "m33": 9.58,
+        "d11_lin": 0.0,
+        "d11_quad": 1.78,
+        "d22_lin": 40.0,
+        "d22_quad": 1113.5,
+        "d33_lin": 3.3,
+        "d33_quad": 103.4,
+    },
+    "formation": {"n": 4, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0], [-15.0, 0.0]]},
+    "reference": {"kind": "line", "speed": 2.0, "heading": 0.5},
+    "actuators": {"kind": "underactuated", "tau_x": 40.0, "rudder_max": 0.15, "rudder_sway": 9.64, "rudder_yaw": -6.15},
+    "guidance": {"kind": "ilos"},
+    "uncertainty": {k: [0.85, 1.15] for k in ("m11", "m22", "m33", "d11_quad", "d22_quad", "d33_quad")},
+    "disturbance": {"current_speed": 0.3},
+}
+
+
+def test_the_mission_changes_are_ladders_in_the_users_units():
+    cfg = preset_config("remus-survey-ilos")
+    ref = cfg.reference.kwargs()
+    changes = mission_changes(cfg)
+    kinds = [what for what, _ in changes]
+    assert kinds == ["turns"] * len(TURN_FACTORS) + ["speed"] * len(SPEED_FACTORS) + ["both"] * len(SPEED_FACTORS)
+    for f, (_, settings) in zip(TURN_FACTORS, changes, strict=False):
+        values = {s.key: s.value for s in settings}
+        assert values == {"turn_radius": ref["turn_radius"] * f, "spacing": ref["spacing"] * f}
+    widest = changes[len(TURN_FACTORS) - 1][1]
+    for f, (_, settings) in zip(SPEED_FACTORS, changes[-len(SPEED_FACTORS) :], strict=True):
+        assert settings == (*widest, Setting("reference", "speed", ref["speed"] * f))
+    # a sine's curvature is A omega^2 / speed: its turns widen by f with omega / sqrt(f), and it is never slowed
+    sine = ReferenceConfig("sine", (("speed", 1.5), ("amplitude", 30.0), ("omega", 0.05)))
+    changes = mission_changes(replace(cfg, reference=sine))
+    assert [what for what, _ in changes] == ["turns"] * len(TURN_FACTORS)
+    for f, (_, (s,)) in zip(TURN_FACTORS, changes, strict=True):
+        assert s.key == "omega" and 30.0 * s.value**2 / 1.5 == pytest.approx(30.0 * 0.05**2 / 1.5 / f, rel=1e-12)
+    line = ReferenceConfig("line", (("speed", 1.5), ("heading", 0.0)))
+    assert [w for w, _ in mission_changes(replace(cfg, reference=line))] == ["speed"] * len(SPEED_FACTORS)
+
+
+def test_a_value_is_printed_exactly_when_four_digits_would_change_it():
+    assert Setting("disturbance", "current_speed", 0.0281).toml() == "[disturbance] current_speed = 0.0281"
+    assert Setting("reference", "turn_radius", 480.0).toml() == "[reference] turn_radius = 480"
+    text = Setting("reference", "spacing", 496.2696 * 8).toml()
+    assert float(text.split("= ")[1]) == 496.2696 * 8
+    assert Setting("design", "synthesis", "deployed").toml() == '[design] synthesis = "deployed"'
+    assert Setting("design", "robust", True).toml() == "[design] robust = true"
+    assert Setting("uncertainty", "m11", [0.9696, 1.0304]).toml() == "[uncertainty] m11 = [0.9696, 1.0304]"
+
+
+@pytest.mark.slow
+def test_a_current_and_box_that_bind_together_are_shrunk_together_on_the_declared_mission():
+    cfg = config_from_dict(TOGETHER, "together")
+    data = certify(cfg).to_dict()
+    assert data["guidance"]["certified"] is False
+    found = data["guidance"]["largest_certifiable"]
+    assert found["current_speed"] in (None, 0.0) and found["box_scale"] in (None, 0.0)
+    assert 0.0 < found["together"] < 1.0
+    why = data["parts"]["guidance"]["reasons"][0]
+    written = {(s["table"], s["key"]): s["value"] for s in why["settings"]}
+    assert {t for t, _ in written} == {"disturbance", "uncertainty"}  # the mission is kept
+    assert written[("disturbance", "current_speed")] <= found["together"] * 0.3
+    for (table, key), value in written.items():
+        if table == "uncertainty":
+            assert 0.85 < value[0] <= 1.0 <= value[1] < 1.15, (key, value)
+    assert "on the declared mission" in why["message"]
+    again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
+    assert again["guidance"]["certified"] is True
