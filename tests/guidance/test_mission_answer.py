@@ -8,7 +8,9 @@ Properties asserted:
 * a value is printed as it must be written: exactly when four digits would change it;
 * a fleet whose current and box each refuse it alone, on a mission its nominal plant certifies,
   is answered on that mission, with the two shrunk together, and re-running with the answer
-  certifies it (the mission's own answer is followed in ``test_guidance.py``).
+  certifies it (the mission's own answer is followed in ``test_guidance.py``);
+* a mission on which a slot stops is answered with wider turns on which none does, and re-running
+  with them certifies.
 """
 
 from __future__ import annotations
@@ -95,5 +97,30 @@ def test_a_current_and_box_that_bind_together_are_shrunk_together_on_the_declare
         if table == "uncertainty":
             assert 0.85 < value[0] <= 1.0 <= value[1] < 1.15, (key, value)
     assert "on the declared mission" in why["message"]
+    again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
+    assert again["guidance"]["certified"] is True
+
+
+#: Three REMUS 100 in the path frame, the outer two 18 m across the track, on 15 m turns: the inner
+#: slot of each turn stops, and no gains, current or box can certify that.
+SLOT_STOPS = {
+    "vehicle": {"preset": "remus100"},
+    "formation": {"n": 3, "frame": "path", "offsets": [[0.0, 0.0], [0.0, 18.0], [0.0, -18.0]]},
+    "reference": {"kind": "lawnmower", "speed": 1.0, "leg_length": 300.0, "spacing": 60.0, "turn_radius": 15.0},
+    "actuators": {"preset": "remus100"},
+    "guidance": {"kind": "ilos"},
+}
+
+
+@pytest.mark.slow
+def test_a_mission_on_which_a_slot_stops_is_answered_with_one_on_which_none_does():
+    cfg = config_from_dict(SLOT_STOPS, "stops")
+    data = certify(cfg).to_dict()
+    why = data["parts"]["guidance"]["reasons"][0]
+    assert data["guidance"]["certified"] is False and "a slot stops" in why["message"]
+    assert why["kind"] == "not_covered"  # a mission to change, not an unsupported configuration
+    written = {(s["table"], s["key"]): s["value"] for s in why["settings"]}
+    assert {t for t, _ in written} == {"reference"}
+    assert written[("reference", "turn_radius")] > 18.0  # the outer slots no longer reach the turn's centre
     again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
     assert again["guidance"]["certified"] is True

@@ -77,6 +77,9 @@ ADVICE_DIGITS = 4
 #: drive the heading and the sway, and a longer lookahead slows the cross-track loop's coupling to
 #: them (docs/derivations/guidance.md).
 GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0))
+#: Why a mission on which a slot stops (a path-frame slot inside a turn) is not evaluated: the
+#: refusal then answers with a change of the mission (:func:`mission_answer`).
+SLOT_STOPS = "a slot stops on the mission: line-of-sight guidance needs a moving slot"
 #: Bisection steps of the joint scale of the current and the box, on the declared or a changed
 #: mission (2^-6 of it): each step is one certificate, and the answer is certified once more as
 #: written.
@@ -124,7 +127,7 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
     tube = point.tube
     speed_lo = tube.speed[:, 0]
     if float(speed_lo.min()) <= 0.0:
-        return "a slot stops on the mission: line-of-sight guidance needs a moving slot"
+        return SLOT_STOPS
     jerk, _ = mission_jerks(point.mission, point.offsets, cfg.frame)
     accel = float(tube.accel.max())
     turn = float((tube.accel / speed_lo).max())
@@ -270,7 +273,8 @@ def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
     """
     problem = cascade_problem(cfg, design_point(cfg))
     if isinstance(problem, str):
-        return GuidanceSummary(None, None, problem)
+        mission = mission_answer(cfg) if problem == SLOT_STOPS else None
+        return GuidanceSummary(None, None, problem, mission=mission)
     cert = certify_cascade(problem)
     if cert.holds:
         return GuidanceSummary(problem, cert, "")
@@ -431,16 +435,31 @@ def _up(x: float) -> float:
     return math.ceil(x * scale) / scale
 
 
+def _mission_sentence(m: MissionAnswer) -> str:
+    """``m``'s values, what they change and the certified distance to the slot, in words."""
+    values = ", ".join(x.toml() for x in m.settings)
+    world = (
+        "the current and the box as declared"
+        if m.scale >= 1.0
+        else f"the current and the box together at {m.scale:.3g} of the declared"
+    )
+    within = f"every vehicle within {m.position_bound:.3g} m of its slot"
+    return f"{values} certifies ({CHANGE_WORDS[m.what]}, {world}; {within})"
+
+
 def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
     """The settings to re-run with, and their sentence (empty when none certifies).
 
     Gains that certify the declared box and current come first (they leave the declared world as
-    it is), then the largest current, then the largest box scale. Every advised value is rounded
-    towards the certified side: a current down, a box's lower multipliers up and upper ones down.
+    it is), then the largest current, then the largest box scale, then the current and the box
+    together on the declared mission or a change of the mission (:data:`MISSION_OVER_TOGETHER`).
+    Every advised value is rounded towards the certified side: a current down, a box's lower
+    multipliers up and upper ones down.
     """
     problem = summary.problem
     if problem is None:
-        return (), ""
+        m = summary.mission
+        return ((), "") if m is None else (m.settings, _mission_sentence(m))
     if summary.gains is not None:
         g = summary.gains
         settings: tuple[Setting, ...] = (
@@ -467,21 +486,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             f"{other}"
         )
     if m is not None:
-        values = ", ".join(x.toml() for x in m.settings)
-        world = (
-            "the current and the box as declared"
-            if m.scale >= 1.0
-            else f"the current and the box together at {m.scale:.3g} of the declared"
-        )
         lead = (
             "the mission binds (even the nominal plant in still water is refused)"
             if summary.mission_binds
             else "no smaller current, smaller box or gains alone certify"
         )
-        return m.settings, (
-            f"{lead}: {values} certifies ({CHANGE_WORDS[m.what]}, "
-            f"{world}; every vehicle within {m.position_bound:.3g} m of its slot)"
-        )
+        return m.settings, f"{lead}: {_mission_sentence(m)}"
     if summary.mission_binds:
         frame = " and the path-frame slots' speed changes" if problem.speed[1] > problem.speed[0] * (1.0 + 1e-9) else ""
         return (), (
@@ -578,7 +588,8 @@ class GuidancePart:
                 channel, value, limit = "rudder", actuation.rudder, cfg.actuators.rudder_max
             elif actuation.thrust > cfg.actuators.tau_x:
                 channel, value, limit = "force_x", actuation.thrust, cfg.actuators.tau_x
-        kind = "unsupported" if summary.problem is None else "thrust" if channel != "guidance" else "not_covered"
+        unsupported = summary.problem is None and summary.mission is None
+        kind = "unsupported" if unsupported else "thrust" if channel != "guidance" else "not_covered"
         why = Reason(self.name, kind, text, channel=channel, value=value, limit=limit, settings=settings)
         return Verdict(self.name, False, True, (why,), figures, detail=summary)
 
