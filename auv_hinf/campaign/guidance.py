@@ -29,7 +29,7 @@ import pandas as pd
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
 from auv_hinf.certificate.document import json_safe
-from auv_hinf.certificate.parts.guidance import guidance_summary, run_coverage
+from auv_hinf.certificate.parts.guidance import guidance_certificate, run_coverage
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, Interrupted, ParameterError
@@ -97,7 +97,7 @@ class GuidanceCampaign:
         saturated = int(np.sum(t["saturation_fraction"] > 0.0))
         close = int(np.sum(t["min_separation"] < cfg.min_separation))
         done = len(t)
-        cert = guidance_summary(cfg).certificate
+        cert = guidance_certificate(cfg).certificate
         certified = cert is not None and cert.holds
         covered = int(np.sum(t["covered"])) if done else 0
         outside = int(np.sum(~t["within_bounds"])) if done else 0

@@ -53,7 +53,7 @@ from auv_hinf.certificate.mission_advice import mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.composed.loops import Plant
-from auv_hinf.config.settings import FormationConfig, with_settings
+from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
 from auv_hinf.design.jacobi_sigma import PROGRESS_DELAY
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
@@ -262,22 +262,56 @@ def _with(
     return replace(other, start=tuple(float(x) for x in configured_start(cfg, other)))
 
 
-@functools.lru_cache(maxsize=32)
-def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
-    """The cascade's certificate of ``cfg`` and, when it does not hold, what would certify.
+def _reduced(cfg: FormationConfig) -> FormationConfig:
+    """``cfg`` without what the cascade's certificate and its answers do not read: the name, and the
+    ``[simulation]`` table but its ``initial`` states (a run's horizon, plant, current and seed)."""
+    return replace(cfg, name="guidance", simulation=SimulationConfig(initial=cfg.simulation.initial))
+
+
+def guidance_certificate(cfg: FormationConfig) -> GuidanceSummary:
+    """The cascade's certificate of ``cfg`` alone, without the answers of a refusal (what a run is judged by).
 
     Parameters
     ----------
     cfg : FormationConfig
         The configuration (with ``[guidance]``).
     """
+    return _certificate(_reduced(cfg))
+
+
+def guidance_summary(cfg: FormationConfig) -> GuidanceSummary:
+    """The cascade's certificate of ``cfg`` and, when it does not hold, what would certify.
+
+    Each is computed once for every configuration that differs only in what it does not read
+    (:func:`_reduced`).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (with ``[guidance]``).
+    """
+    return _summary(_reduced(cfg))
+
+
+@functools.lru_cache(maxsize=32)
+def _certificate(cfg: FormationConfig) -> GuidanceSummary:
+    """:func:`guidance_certificate` of a reduced configuration."""
     problem = cascade_problem(cfg, design_point(cfg))
     if isinstance(problem, str):
-        mission = mission_answer(cfg) if problem == SLOT_STOPS else None
-        return GuidanceSummary(None, None, problem, mission=mission)
+        return GuidanceSummary(None, None, problem)
     cert = certify_cascade(problem)
+    return GuidanceSummary(problem, cert, "" if cert.holds else cert.reason)
+
+
+@functools.lru_cache(maxsize=32)
+def _summary(cfg: FormationConfig) -> GuidanceSummary:
+    """:func:`guidance_summary` of a reduced configuration: its certificate, and the answers of a refusal."""
+    base = _certificate(cfg)
+    problem, cert = base.problem, base.certificate
+    if problem is None or cert is None:
+        return replace(base, mission=mission_answer(cfg)) if base.reason == SLOT_STOPS else base
     if cert.holds:
-        return GuidanceSummary(problem, cert, "")
+        return base
     current = None
     if problem.plant.current > 0.0:
         current = largest_holding(
@@ -716,7 +750,7 @@ def run_coverage(
     six_dof : bool
         The run is on the 6-DOF model.
     """
-    summary = guidance_summary(cfg)
+    summary = guidance_certificate(cfg)
     covered, why = covers_run(cfg, summary, multipliers, current, initial)
     if six_dof:
         covered, why = False, f"this run is on the 6-DOF REMUS 100; the certificate is of the 3-DOF model ({why})"
@@ -765,6 +799,7 @@ __all__ = [
     "cascade_problem",
     "configured_start",
     "covers_run",
+    "guidance_certificate",
     "guidance_figures",
     "guidance_summary",
     "plant_multipliers",
