@@ -72,13 +72,15 @@ class Setting:
         return {"table": self.table, "key": self.key, "value": self.value}
 
     def toml(self) -> str:
-        """The value as a user writes it: ``[table] key = value``.
+        """The value as a user writes it: ``[table] key = value`` (``remove [table] key`` for ``None``).
 
         A float is printed with 4 significant digits when they give it back exactly, else in
         full: a value rounded for reading could break a constraint of the configuration (a
         lawn-mower's spacing against its turn radius) or leave the certified side.
         """
         v = self.value
+        if v is None:
+            return f"remove [{self.table}] {self.key}"
         text = f'"{v}"' if isinstance(v, str) else "true" if v is True else "false" if v is False else None
         if text is None:
             text = _number(v) if isinstance(v, float) else str(v)

@@ -10,7 +10,9 @@ Properties asserted:
   is answered on that mission, with the two shrunk together, and re-running with the answer
   certifies it (the mission's own answer is followed in ``test_guidance.py``);
 * a mission on which a slot stops is answered with wider turns on which none does, and re-running
-  with them certifies.
+  with them certifies;
+* a declared start that binds (the vehicles tens of metres off their slots) is answered with the
+  start on the slots, the declared box and current kept, and re-running from there certifies.
 """
 
 from __future__ import annotations
@@ -124,3 +126,49 @@ def test_a_mission_on_which_a_slot_stops_is_answered_with_one_on_which_none_does
     assert written[("reference", "turn_radius")] > 18.0  # the outer slots no longer reach the turn's centre
     again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
     assert again["guidance"]["certified"] is True
+
+
+#: Four REMUS-like vehicles on a straight line in a 0.05 m/s current, started tens of metres off
+#: their slots: from their slots they are certified, from this start not.
+FAR_START = {
+    "vehicle": {
+        "m11": 30.2,
+        "m22": 68.4,
+        "m33": 8.0,
+        "d11_lin": 0.0,
+        "d11_quad": 1.55,
+        "d22_lin": 44.0,
+        "d22_quad": 1290.0,
+        "d33_lin": 2.9,
+        "d33_quad": 97.0,
+    },
+    "formation": {"n": 4, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0], [0.0, 30.0]]},
+    "reference": {"kind": "line", "speed": 1.5},
+    "actuators": {"kind": "underactuated", "tau_x": 80.0, "rudder_max": 0.24, "rudder_sway": 10.2, "rudder_yaw": -5.8},
+    "guidance": {"kind": "ilos"},
+    "uncertainty": {"m11": [0.97, 1.03], "m22": [0.97, 1.03], "d11_quad": [0.8, 1.2], "d22_lin": [0.8, 1.2]},
+    "disturbance": {"current_speed": 0.05},
+    "simulation": {
+        "horizon": 200.0,
+        "initial": [
+            [-30.0, -40.0, 0.9, 0.8, 0.0, 0.0],
+            [25.0, 45.0, -0.9, 2.0, 0.0, 0.0],
+            [-20.0, -60.0, 0.6, 1.0, 0.0, 0.0],
+            [30.0, 60.0, -0.7, 1.5, 0.0, 0.0],
+        ],
+    },
+}
+
+
+@pytest.mark.slow
+def test_a_declared_start_that_binds_is_answered_with_the_slots_and_the_world_kept():
+    cfg = config_from_dict(FAR_START, "far")
+    data = certify(cfg).to_dict()
+    why = data["parts"]["guidance"]["reasons"][0]
+    assert data["guidance"]["certified"] is False and "the declared start binds" in why["message"]
+    assert why["settings"] == [{"table": "simulation", "key": "initial", "value": None}]
+    assert "remove [simulation] initial" in why["message"]
+    again = certify(with_settings(cfg, [("simulation", "initial", None)])).to_dict()
+    assert again["guidance"]["certified"] is True
+    bound = data["guidance"]["largest_certifiable"]["start_on_slots"]["position_bound"]
+    assert again["guidance"]["error_bounds"]["cross_track"] <= bound

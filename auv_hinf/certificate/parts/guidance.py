@@ -77,6 +77,9 @@ ADVICE_DIGITS = 4
 #: drive the heading and the sway, and a longer lookahead slows the cross-track loop's coupling to
 #: them (docs/derivations/guidance.md).
 GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0))
+#: The answer that starts every vehicle on its slot, heading into the current: the declared
+#: ``[simulation] initial`` removed.
+RESTART = Setting("simulation", "initial", None)
 #: Why a mission on which a slot stops (a path-frame slot inside a turn) is not evaluated: the
 #: refusal then answers with a change of the mission (:func:`mission_answer`).
 SLOT_STOPS = "a slot stops on the mission: line-of-sight guidance needs a moving slot"
@@ -234,6 +237,10 @@ class GuidanceSummary:
         When neither the current nor the box alone certifies, both are declared and the nominal
         plant in still water certifies the declared mission: the largest joint scale of the two
         that certifies it (0: none found).
+    start_bound : float or None
+        When ``[simulation] initial`` is declared and the default start (every vehicle on its slot,
+        heading into the current) certifies the declared box and current: its certified distance
+        to the slot (m).
     """
 
     problem: CascadeProblem | None
@@ -245,6 +252,7 @@ class GuidanceSummary:
     mission_binds: bool = False
     mission: MissionAnswer | None = None
     together: float | None = None
+    start_bound: float | None = None
 
     @property
     def holds(self) -> bool:
@@ -312,6 +320,10 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         return replace(base, mission=mission_answer(cfg)) if base.reason == SLOT_STOPS else base
     if cert.holds:
         return base
+    if cfg.simulation.initial is not None:
+        start_bound = _confirmed(cfg, (RESTART,))
+        if start_bound is not None:
+            return replace(base, start_bound=start_bound)
     current = None
     if problem.plant.current > 0.0:
         current = largest_holding(
@@ -494,19 +506,21 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     if problem is None:
         m = summary.mission
         return ((), "") if m is None else (m.settings, _mission_sentence(m))
+    if summary.start_bound is not None:
+        return (RESTART,), (
+            f"the declared start binds: every vehicle started on its slot, heading into the current, certifies "
+            f"({RESTART.toml()}; every vehicle within {summary.start_bound:.3g} m of its slot)"
+        )
     if summary.gains is not None:
         g = summary.gains
         settings: tuple[Setting, ...] = (
             Setting("guidance", "heading_bandwidth", g.heading_bandwidth),
             Setting("guidance", "lookahead", g.lookahead),
         )
-        return settings, (
-            f"heading_bandwidth = {g.heading_bandwidth:.4g} rad/s with lookahead = {g.lookahead:.4g} m certifies "
-            "the declared box and current"
-        )
+        return settings, (f"{', '.join(x.toml() for x in settings)} (rad/s, m) certifies the declared box and current")
     if summary.current_speed is not None and summary.current_speed > 0.0:
-        c = _down(summary.current_speed)
-        return (Setting("disturbance", "current_speed", c),), f"a current up to {c:.4g} m/s certifies"
+        current = Setting("disturbance", "current_speed", _down(summary.current_speed))
+        return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies"
@@ -528,10 +542,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         return m.settings, f"{lead}: {_mission_sentence(m)}"
     if summary.mission_binds:
         frame = " and the path-frame slots' speed changes" if problem.speed[1] > problem.speed[0] * (1.0 + 1e-9) else ""
-        return (), (
-            "no smaller current, smaller box or faster heading loop certifies it: the mission binds (its turns"
-            f"{frame}; a straight line in the inertial frame certifies more easily, docs/derivations/guidance.md)"
-        )
+        if problem.turn_rate > 0.0 or frame:
+            return (), (
+                "no smaller current, smaller box or faster heading loop certifies it: the mission binds (its turns"
+                f"{frame}; a straight line in the inertial frame certifies more easily, docs/derivations/guidance.md)"
+            )
+        return (), "no smaller current, smaller box or faster heading loop certifies it, even from the slots"
     return (), ""
 
 
@@ -574,6 +590,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             if summary.gains is None
             else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
             "together": summary.together,
+            "start_on_slots": None if summary.start_bound is None else {"position_bound": summary.start_bound},
             "mission": None if summary.mission is None else summary.mission.to_dict(),
         },
         "reason": summary.reason,
