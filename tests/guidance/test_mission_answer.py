@@ -51,6 +51,19 @@ TOGETHER = {
 }
 
 
+def _refused(tables: dict, name: str) -> tuple[object, dict, dict]:
+    """The configuration of ``tables``, its refused ``certify --json`` and the guidance part's reason."""
+    cfg = config_from_dict(tables, name)
+    data = certify(cfg).to_dict()
+    assert data["guidance"]["certified"] is False
+    return cfg, data, data["parts"]["guidance"]["reasons"][0]
+
+
+def _rerun(cfg: object, why: dict) -> dict:
+    """``certify --json`` of ``cfg`` rewritten with the reason's settings."""
+    return certify(with_settings(cfg, [(x["table"], x["key"], x["value"]) for x in why["settings"]])).to_dict()
+
+
 def test_the_mission_changes_are_ladders_in_the_users_units():
     cfg = preset_config("remus-survey-ilos")
     ref = cfg.reference.kwargs()
@@ -85,13 +98,10 @@ def test_a_value_is_printed_exactly_when_four_digits_would_change_it():
 
 @pytest.mark.slow
 def test_a_current_and_box_that_bind_together_are_shrunk_together_on_the_declared_mission():
-    cfg = config_from_dict(TOGETHER, "together")
-    data = certify(cfg).to_dict()
-    assert data["guidance"]["certified"] is False
+    cfg, data, why = _refused(TOGETHER, "together")
     found = data["guidance"]["largest_certifiable"]
     assert found["current_speed"] in (None, 0.0) and found["box_scale"] in (None, 0.0)
     assert 0.0 < found["together"] < 1.0
-    why = data["parts"]["guidance"]["reasons"][0]
     written = {(s["table"], s["key"]): s["value"] for s in why["settings"]}
     assert {t for t, _ in written} == {"disturbance", "uncertainty"}  # the mission is kept
     assert written[("disturbance", "current_speed")] <= found["together"] * 0.3
@@ -99,7 +109,7 @@ def test_a_current_and_box_that_bind_together_are_shrunk_together_on_the_declare
         if table == "uncertainty":
             assert 0.85 < value[0] <= 1.0 <= value[1] < 1.15, (key, value)
     assert "on the declared mission" in why["message"]
-    again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
+    again = _rerun(cfg, why)
     assert again["guidance"]["certified"] is True
 
 
@@ -116,15 +126,13 @@ SLOT_STOPS = {
 
 @pytest.mark.slow
 def test_a_mission_on_which_a_slot_stops_is_answered_with_one_on_which_none_does():
-    cfg = config_from_dict(SLOT_STOPS, "stops")
-    data = certify(cfg).to_dict()
-    why = data["parts"]["guidance"]["reasons"][0]
-    assert data["guidance"]["certified"] is False and "a slot stops" in why["message"]
+    cfg, _, why = _refused(SLOT_STOPS, "stops")
+    assert "a slot stops" in why["message"]
     assert why["kind"] == "not_covered"  # a mission to change, not an unsupported configuration
     written = {(s["table"], s["key"]): s["value"] for s in why["settings"]}
     assert {t for t, _ in written} == {"reference"}
     assert written[("reference", "turn_radius")] > 18.0  # the outer slots no longer reach the turn's centre
-    again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
+    again = _rerun(cfg, why)
     assert again["guidance"]["certified"] is True
 
 
@@ -162,13 +170,11 @@ FAR_START = {
 
 @pytest.mark.slow
 def test_a_declared_start_that_binds_is_answered_with_the_slots_and_the_world_kept():
-    cfg = config_from_dict(FAR_START, "far")
-    data = certify(cfg).to_dict()
-    why = data["parts"]["guidance"]["reasons"][0]
-    assert data["guidance"]["certified"] is False and "the declared start binds" in why["message"]
+    cfg, data, why = _refused(FAR_START, "far")
+    assert "the declared start binds" in why["message"]
     assert why["settings"] == [{"table": "simulation", "key": "initial", "value": None}]
     assert "remove [simulation] initial" in why["message"]
-    again = certify(with_settings(cfg, [("simulation", "initial", None)])).to_dict()
+    again = _rerun(cfg, why)
     assert again["guidance"]["certified"] is True
     bound = data["guidance"]["largest_certifiable"]["start_on_slots"]["position_bound"]
     assert again["guidance"]["error_bounds"]["cross_track"] <= bound
