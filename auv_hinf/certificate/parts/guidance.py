@@ -11,16 +11,18 @@ sample time, the configured start) and proves it with
 cross-track and heading errors, of the sway speed, and of the commanded thrust and rudder, which
 must fit the limits. Its figures are the ``guidance`` object of ``certify --json``.
 
-When it does not hold, the part answers with gains that certify the declared box and current
+When it does not hold, the part answers with the start on the slots when a declared ``[simulation]
+initial`` is what binds, else with gains that certify the declared box and current
 (a faster heading loop, a longer lookahead: :data:`GAIN_CANDIDATES`), else the largest current
 and the largest scale of the box that certify (each with the other as declared; a bisection on
 certificates, so the answer itself is certified), as ``settings`` to re-run with. When none of
-these certifies, the turns or the speed of the mission bind: it tries the mission's changes
-(:func:`~auv_hinf.certificate.mission_advice.mission_changes`: wider turns, then a slower
-mission) with the declared box and current, and when none certifies them, the largest joint scale
-of the current and the box on the gentlest turns and on the slowest speed
-(:func:`mission_answer`). Every answer is the rewritten configuration's own certificate, as a
-re-run computes it.
+these certifies, it shrinks the current and the box together on the declared mission (when the
+nominal plant in still water certifies it), and tries the mission's changes
+(:func:`~auv_hinf.certificate.mission_advice.mission_changes`: wider turns, a slower mission, both)
+with the declared box and current, else with the two scaled together (:func:`mission_answer`);
+a change of the mission is preferred only when it certifies much more of them
+(:data:`MISSION_OVER_TOGETHER`). Every answer is the rewritten configuration's own certificate, as
+a re-run computes it.
 
 The certificate covers what ``simulate`` runs: the cascade sampled every ``[implementation]
 sample_time`` (10 Hz by default), without delay or measurement noise, ILOS guidance. A declared
@@ -496,8 +498,9 @@ def _mission_sentence(m: MissionAnswer) -> str:
 def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
     """The settings to re-run with, and their sentence (empty when none certifies).
 
-    Gains that certify the declared box and current come first (they leave the declared world as
-    it is), then the largest current, then the largest box scale, then the current and the box
+    The start on the slots (when a declared start binds) and gains that certify the declared box
+    and current come first (they leave the declared world as it is), then the largest current,
+    then the largest box scale, then the current and the box
     together on the declared mission or a change of the mission (:data:`MISSION_OVER_TOGETHER`).
     Every advised value is rounded towards the certified side: a current down, a box's lower
     multipliers up and upper ones down.
