@@ -7,7 +7,7 @@ verdict, next to the sentence a person reads. No code decides anything from the 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, get_args
 
@@ -44,7 +44,7 @@ REASON_KINDS: tuple[ReasonKind, ...] = get_args(ReasonKind)
 
 
 def _number(v: float) -> str:
-    """``v`` with 4 significant digits when they give it back exactly, else its shortest exact form."""
+    """``v`` (a number) with 4 significant digits when they give it back exactly, else its shortest exact form."""
     short = f"{v:.4g}"
     return short if float(short) == v else repr(v)
 
@@ -82,6 +82,8 @@ class Setting:
         if v is None:
             return f"remove [{self.table}] {self.key}"
         text = f'"{v}"' if isinstance(v, str) else "true" if v is True else "false" if v is False else None
+        if text is None and isinstance(v, (list, tuple)):
+            text = "[" + ", ".join(_number(x) for x in v) + "]"
         if text is None:
             text = _number(v) if isinstance(v, float) else str(v)
         return f"[{self.table}] {self.key} = {text}"
@@ -96,6 +98,17 @@ class Setting:
             ``table``, ``key`` and ``value``.
         """
         return cls(str(data["table"]), str(data["key"]), data["value"])
+
+
+def toml_line(settings: Iterable[Setting]) -> str:
+    """The settings as a user writes them, comma-separated (:meth:`Setting.toml`).
+
+    Parameters
+    ----------
+    settings : iterable of Setting
+        The values.
+    """
+    return ", ".join(s.toml() for s in settings)
 
 
 @dataclass(frozen=True)
@@ -198,4 +211,4 @@ def reason_from(part: str, exc: Exception, prefix: str = "") -> Reason:
     return Reason(part, "solver" if isinstance(exc, SolverError) else "not_covered", message)
 
 
-__all__ = ["REASON_KINDS", "Reason", "ReasonKind", "Setting", "reason_from"]
+__all__ = ["REASON_KINDS", "Reason", "ReasonKind", "Setting", "reason_from", "toml_line"]

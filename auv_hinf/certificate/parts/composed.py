@@ -35,7 +35,7 @@ from auv_hinf.certificate.mission_advice import mission_advice, tried
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
-from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.certificate.reason import Reason, Setting, toml_line
 from auv_hinf.composed.advice import TOGETHER, Advice, declared_knobs, largest_covered, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
@@ -389,7 +389,7 @@ class ComposedPart:
             return out
         out.append(f"    composed covered        NO: {'; '.join(f['reasons']) or 'not certified'}")
         for a in f.get("advice") or []:
-            values = ", ".join(f"[{s['table']}] {s['key']} = {_value(s['value'])}" for s in a["settings"])
+            values = toml_line(Setting.from_dict(s) for s in a["settings"])
             what = a["setting"]
             if what == "together":
                 what = ", ".join(a.get("scaled") or []) + " together"
@@ -645,17 +645,11 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
 
 
 def _advice_line(a: Advice) -> str:
-    return ", ".join(f"[{s.table}] {s.key} = {_value(s.value)}" for s in advice_settings(a))
+    return toml_line(advice_settings(a))
 
 
 def _seconds(x: float | None) -> str:
     return "none found" if x is None else f"{x:.4g} s"
-
-
-def _value(v: Any) -> str:
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
-    return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
 __all__ = [

@@ -53,7 +53,7 @@ from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.mission_advice import mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.certificate.reason import Reason, Setting, toml_line
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
 from auv_hinf.design.jacobi_sigma import PROGRESS_DELAY
@@ -186,8 +186,8 @@ class MissionAnswer:
 
     Attributes
     ----------
-    what : {"turns", "speed"}
-        Wider turns or a slower mission.
+    what : {"turns", "speed", "both"}
+        Wider turns, a slower mission, or the widest turns at a slower speed.
     settings : tuple of Setting
         Every value to write: the mission's, then the current and the box when ``scale < 1``.
     scale : float
@@ -485,14 +485,13 @@ def _up(x: float) -> float:
 
 def _mission_sentence(m: MissionAnswer) -> str:
     """``m``'s values, what they change and the certified distance to the slot, in words."""
-    values = ", ".join(x.toml() for x in m.settings)
     world = (
         "the current and the box as declared"
         if m.scale >= 1.0
         else f"the current and the box together at {m.scale:.3g} of the declared"
     )
     within = f"every vehicle within {m.position_bound:.3g} m of its slot"
-    return f"{values} certifies ({CHANGE_WORDS[m.what]}, {world}; {within})"
+    return f"{toml_line(m.settings)} certifies ({CHANGE_WORDS[m.what]}, {world}; {within})"
 
 
 def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
@@ -520,7 +519,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             Setting("guidance", "heading_bandwidth", g.heading_bandwidth),
             Setting("guidance", "lookahead", g.lookahead),
         )
-        return settings, (f"{', '.join(x.toml() for x in settings)} (rad/s, m) certifies the declared box and current")
+        return settings, f"{toml_line(settings)} (rad/s, m) certifies the declared box and current"
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
         return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
@@ -530,11 +529,11 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     m = summary.mission
     s0 = summary.together or 0.0
     if s0 > 0.0 and (m is None or (m.scale < 1.0 and m.scale <= MISSION_OVER_TOGETHER * s0)):
-        other = "" if m is None else f"; or, with a change of the mission, {', '.join(x.toml() for x in m.settings)}"
-        return _world(cfg, problem, s0), (
+        world = _world(cfg, problem, s0)
+        other = "" if m is None else f"; or, with a change of the mission, {toml_line(m.settings)}"
+        return world, (
             f"no smaller current or smaller box alone certifies: the current and the box together at {s0:.3g} of "
-            f"the declared do, on the declared mission ({', '.join(x.toml() for x in _world(cfg, problem, s0))})"
-            f"{other}"
+            f"the declared do, on the declared mission ({toml_line(world)}){other}"
         )
     if m is not None:
         lead = (
