@@ -427,9 +427,10 @@ class AxisRanges:
     gain : tuple of float
         ``lambda``: the multiple of the law's commands the plant applies (``m_hat/m``).
     cells : tuple of (float, float)
-        Sub-ranges of ``a`` that cover it: a constant plant (box, current, straight mission) keeps
-        its trim ``-(d_lin + 2 d_quad |x_d|)/m`` for ever, so it lies in one cell for ever (the
-        time-varying part is in every cell); each cell gets its own nominal loop.
+        Sub-ranges of ``a`` that cover it: a constant plant in a constant current on a straight
+        mission holds its trim ``-(d_lin + 2 d_quad |x_d|)/m`` but for the heading error's turn of
+        the body frame, so it lies in one cell for ever (the time-varying part and that turn are in
+        every cell); each cell gets its own nominal loop.
     residual : float or None
         When set, the axis's drag is not a slope perturbation but a residual: the one cell is the
         nominal slope itself, and ``residual`` bounds ``|f(y + eta) - f(y) - a0 eta|``
@@ -563,26 +564,29 @@ def _quotient_range(nums: list[float], masses: tuple[float, float]) -> tuple[flo
 
 
 def _damping(
-    plant: Plant, axis: str, desired: tuple[float, float], width: float, constant: bool
+    plant: Plant, axis: str, desired: tuple[float, float], width: float, drift: float | None
 ) -> tuple[tuple[float, float], tuple[tuple[float, float], ...]]:
     """Range of ``a = -(d_lin + d_quad theta)/m`` and its cells (see :class:`AxisRanges`).
 
     ``x_d`` in ``desired``, ``|x - x_d| <= width``. With ``theta = 2 |x_d| + tw``, the trim
-    ``t = -(d_lin + 2 d_quad |x_d|)/m`` is constant when ``constant`` (a straight mission, a
-    fixed plant and current) and the time-varying ``a - t = -d_quad tw / m``. When ``x`` keeps the
-    sign of ``x_d`` (``|x_d| > width``), ``|tw| <= width``; across zero ``-2 |x_d| <= tw <= width``,
-    so ``a`` may rise to ``-d_lin/m``. A cell of trims ``[t_k, t_k+1]`` holds plants with
-    ``|x_d| >= (-t_k+1 m - d_lin)/(2 d_quad)`` at least (box corners), which decides the case.
+    ``t = -(d_lin + 2 d_quad |x_d|)/m`` of one plant in one current on a straight mission moves
+    only as the heading error turns the body frame: ``|x_d|`` stays within ``drift`` of its value
+    at the start (:func:`trim_drift`), so the trim within ``2 d_quad drift / m``; ``drift`` is
+    ``None`` when the trim is not held (turns, a varying current) and the range gets no cells. The
+    time-varying ``a - t = -d_quad tw / m``: when ``x`` keeps the sign of ``x_d`` (``|x_d| >
+    width``), ``|tw| <= width``; across zero ``-2 |x_d| <= tw <= width``, so ``a`` may rise to
+    ``-d_lin/m``. A cell of start trims ``[t_k, t_k+1]`` holds plants with ``|x_d| >= (-t_k+1 m -
+    d_lin)/(2 d_quad) - drift`` at all times (box corners), which decides the case.
     """
     theta, _ = _slope_ranges(desired, width)
     lins, quads, masses = plant.interval(f"d{axis}_lin"), plant.interval(f"d{axis}_quad"), plant.interval(f"m{axis}")
     whole = _quotient_range([-dl - dq * th for dl in lins for dq in quads for th in theta], masses)
-    if not constant:
+    if drift is None:
         return whole, ()
     lo, hi = desired
     mags = (0.0, max(abs(lo), abs(hi))) if lo <= 0.0 <= hi else (min(abs(lo), abs(hi)), max(abs(lo), abs(hi)))
     trim = _quotient_range([-dl - 2.0 * dq * x for dl in lins for dq in quads for x in mags], masses)
-    wobble = quads[1] * width / masses[0]
+    wobble = quads[1] * (width + 2.0 * drift) / masses[0]
     count = min(MAX_CELLS, max(1, math.ceil((trim[1] - trim[0]) / CELL_WIDTH)))
     edges = np.linspace(trim[0], trim[1], count + 1)
     top = -lins[0] / masses[1]  # the least damped slope: -d_lin,min / m_max
@@ -593,10 +597,31 @@ def _damping(
         same_sign = True
         if quads[1] > 0.0:
             least = min((-t_hi * m - dl) / (2.0 * dq) for dl in lins for dq in quads for m in masses if dq > 0.0)
-            same_sign = max(0.0, least) > width
+            same_sign = max(0.0, least - drift) > width
         upper = float(t_hi) + wobble if same_sign else max(float(t_hi) + wobble, top)
         cells.append((max(float(t_lo) - wobble, whole[0]), min(upper, whole[1])))
     return whole, tuple(cells)
+
+
+def trim_drift(op: OperatingBox, current: float) -> tuple[float, float]:
+    """How far ``|u_d|`` and ``|v_d|`` of one plant in one constant current move on a straight mission (m/s).
+
+    On a line ``w = R(psi_d)^T (p_d' - c)`` is constant, with ``|w_x| <= U + C`` and ``|w_y| <= C``
+    (the desired ground velocity is along the course), and ``nu_d = R(e_psi)^T w`` turns with the
+    heading error ``|e_psi| <= E`` (the operating box's slip): ``u_d = w_x cos e_psi + w_y sin
+    e_psi`` moves by at most ``|w_x| (1 - cos E) + 2 |w_y| sin E``, and ``v_d`` by at most
+    ``2 |w_x| sin E + |w_y| (1 - cos E)``.
+
+    Parameters
+    ----------
+    op : OperatingBox
+        The operating box (its slip and the desired ground speed ``U``).
+    current : float
+        Bound ``C`` of the current's speed (m/s).
+    """
+    big, small = op.ground_speed[1] + current, current
+    turn, tilt = 1.0 - math.cos(op.slip), math.sin(op.slip)
+    return big * turn + 2.0 * small * tilt, 2.0 * big * tilt + small * turn
 
 
 def position_axes(
@@ -619,9 +644,13 @@ def position_axes(
     heading_noise : float
         Bound of the heading measurement's error (rad).
     straight : bool
-        The mission keeps its course (no turns): the current's body-frame components are then
-        constant, and the trims get cells (:func:`_damping`).
+        The mission keeps its course (no turns): in a constant current the trims then move only
+        as the heading error turns the body frame (:func:`trim_drift`), and get cells
+        (:func:`_damping`).
     """
+    drifts: tuple[float | None, float | None] = (None, None)
+    if straight and plant.current_rate == 0.0:
+        drifts = trim_drift(op, plant.current)
     slip_y = min(op.slip + heading_noise, MAX_SLIP)
     p_x = (op.ground_speed[0] * math.cos(slip_y), op.ground_speed[1])
     p_y = op.ground_speed[1] * math.sin(slip_y)
@@ -635,7 +664,7 @@ def position_axes(
     for axis, desired, width, p_range, slope_hat, k in axes:
         _, slope = _slope_ranges(desired, width)
         law_side = [slope_hat * a * b for a in slope for b in p_range]
-        out.append(_axis(plant, axis, desired, width, (min(law_side), max(law_side)), gains[k], straight))
+        out.append(_axis(plant, axis, desired, width, (min(law_side), max(law_side)), gains[k], drifts[k]))
     return out[0], out[1]
 
 
@@ -646,7 +675,7 @@ def _axis(
     width: float,
     compensation: tuple[float, float],
     gain: tuple[float, float],
-    straight: bool,
+    drift: float | None,
 ) -> AxisRanges:
     """An axis's ranges: trim cells when its speed keeps one sign, else a drag residual about the best slope.
 
@@ -655,7 +684,7 @@ def _axis(
     perturbation of half that range over-counts the drag's increment by about 3x (the increment is
     ``-k |eta| eta`` about zero speed); the residual of :func:`residual_nominal` is exact instead.
     """
-    whole, cells = _damping(plant, axis, desired, width, straight)
+    whole, cells = _damping(plant, axis, desired, width, drift)
     if desired[0] - width <= 0.0 <= desired[1] + width and width > 0.0:
         a0, residual = residual_nominal(plant, axis, desired, width, whole)
         return AxisRanges(whole, compensation, gain, ((a0, a0),), residual)
@@ -674,14 +703,16 @@ def heading_axis(plant: Plant, op: OperatingBox, mission: MissionBounds, straigh
     mission : MissionBounds
         The desired motion (its ``yaw_rate``).
     straight : bool
-        The mission keeps its course: the trim of ``a`` gets cells (:func:`_damping`).
+        The mission keeps its course: ``r_d = 0`` for ever, so the trim of ``a`` is held and gets
+        cells (:func:`_damping`).
     """
     desired = (-mission.yaw_rate, mission.yaw_rate)
     width = op.r - mission.yaw_rate
     _, slope = _slope_ranges(desired, width)
     comp = plant.model.d33_quad * mission.yaw_rate / plant.model.m33
     law_side = [comp * a * b for a in slope for b in (-1.0, 1.0)]
-    return _axis(plant, "33", desired, width, (min(law_side), max(law_side)), plant.heading_gains(), straight)
+    drift = 0.0 if straight else None
+    return _axis(plant, "33", desired, width, (min(law_side), max(law_side)), plant.heading_gains(), drift)
 
 
 #: The outputs of a position axis's loop, in order: the position and velocity errors, the held

@@ -13,6 +13,7 @@ from auv_hinf.composed.loops import (
     compensation_bounds,
     drag_residual,
     misrotation_gains,
+    position_axes,
     residual_nominal,
 )
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
@@ -110,3 +111,48 @@ def test_the_turned_compensation_is_bounded_per_axis_by_brute_force(vehicle, spe
     if heading_error == 0.0 and yaw_rate == 0.0:
         whole = (max(vehicle.d11_lin + vehicle.d11_quad * u_y, 0.0) / vehicle.m11) * speed
         assert gains[0] < 0.1 * whole  # on a straight line the surge part is second order
+
+
+@pytest.mark.parametrize(("current", "heading"), [(0.1, 0.05), (0.3, 0.4), (0.0, 0.2)])
+def test_one_plant_in_one_current_on_a_line_keeps_its_surge_slope_in_one_cell(current, heading):
+    """Brute force: a plant of the box, in a constant current, on a straight line, with the heading
+    error anywhere in ``[-E, E]`` and the surge velocity error anywhere in the box's width: every
+    mean-value slope it can have lies in one cell of the surge range (the cells are analysed as
+    constant plants, so a plant that could leave its cell would not be covered)."""
+    mdl = bluerov2_heavy()
+    box = ParameterBox.from_ranges(mdl, (("m11", (0.9, 1.1)), ("d11_lin", (0.8, 1.2)), ("d11_quad", (0.8, 1.2))))
+    plant = Plant(mdl, box, current)
+    speed, width = 0.4, 0.05
+    mission = MissionBounds((speed, speed), 0.0, 0.0, 0.0, 0.0, 0.0)
+    op = OperatingBox.of(mission, current, Errors(0.0, width, heading, 0.0, surge=width))
+    surge, _ = position_axes(plant, op, 0.0, straight=True)
+    assert len(surge.parts) > 1
+    rng = np.random.default_rng(3)
+    lo = np.array([box.lo[PARAMETERS.index(k)] for k in ("m11", "d11_lin", "d11_quad")])
+    hi = np.array([box.hi[PARAMETERS.index(k)] for k in ("m11", "d11_lin", "d11_quad")])
+    cells = np.array(surge.parts)
+    for _ in range(300):
+        mult = lo + (hi - lo) * rng.random(3)
+        if rng.random() < 0.5:
+            mult = lo + (hi - lo) * rng.integers(0, 2, 3)
+        m, dl, dq = mdl.m11 * mult[0], mdl.d11_lin * mult[1], mdl.d11_quad * mult[2]
+        c = current * np.array([np.cos(a := rng.uniform(0, 2 * np.pi)), np.sin(a)])
+        # over time: the heading error turns the body frame; the velocity error moves within the width
+        e_psi = np.concatenate([[-heading, heading], rng.uniform(-heading, heading, 400)])
+        w = np.array([speed, 0.0]) - c  # R(psi_d)^T (p_d' - c), psi_d = 0
+        u_d = w[0] * np.cos(e_psi) + w[1] * np.sin(e_psi)
+        eta = rng.uniform(-width, width, e_psi.size)
+        x = u_d + eta
+        theta = (np.abs(x) * x - np.abs(u_d) * u_d) / np.where(eta == 0.0, 1.0, eta)
+        slopes = -(dl + dq * theta) / m
+        assert any(((slopes >= a - 1e-12) & (slopes <= b + 1e-12)).all() for a, b in cells), (mult, c)
+
+
+def test_a_varying_current_moves_the_trim_across_the_range_so_it_gets_no_cells():
+    mdl = bluerov2_heavy()
+    box = ParameterBox.from_ranges(mdl, (("d11_quad", (0.8, 1.2)),))
+    mission = MissionBounds((0.4, 0.4), 0.0, 0.0, 0.0, 0.0, 0.0)
+    op = OperatingBox.of(mission, 0.2, Errors(0.0, 0.05, 0.05, 0.0))
+    held, _ = position_axes(Plant(mdl, box, 0.2), op, 0.0, straight=True)
+    varying, _ = position_axes(Plant(mdl, box, 0.2, current_rate=0.01), op, 0.0, straight=True)
+    assert len(held.parts) > 1 and varying.parts == (varying.damping,)
