@@ -63,11 +63,11 @@ from tqdm.auto import tqdm
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.composed.loops import Plant
-from auv_hinf.design.jacobi_sigma import PROGRESS_DELAY
 from auv_hinf.guidance.law import MAX_START_CRAB, MIN_RUDDER_SPEED, GuidanceConfig, SlotMotion, integral_start
 from auv_hinf.implementation.peak import MAX_PERIODS, PeakGains, SampledLoop, free_peaks, peak_gains
 from auv_hinf.mission.fleet import wrap_angle
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.progress import PROGRESS_DELAY
 from auv_hinf.robust.box import PARAMETERS, ParameterBox
 
 #: The state's names, in the loop's order (m, m/s, m, m/s, rad, rad/s, m/s).

@@ -110,6 +110,13 @@ def _candidates(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
     return out + [(what, design + settings) for what, settings in mission_changes(cfg)]
 
 
+#: How a change of each kind that certifies is named in an answer.
+CHANGE_WORDS = {
+    "design": "gains designed for the deployed loop",
+    "turns": "wider turns",
+    "speed": "a slower mission",
+    "both": "wider turns at a slower speed",
+}
 #: How each kind of change is named in a refusal that lists what was tried.
 TRIED = {
     "design": "gains designed for the deployed loop",
@@ -159,4 +166,13 @@ def mission_advice(
     return ()
 
 
-__all__ = ["SPEED_FACTORS", "TRIED", "TURN_FACTORS", "MissionAdvice", "mission_advice", "mission_changes", "tried"]
+__all__ = [
+    "CHANGE_WORDS",
+    "SPEED_FACTORS",
+    "TRIED",
+    "TURN_FACTORS",
+    "MissionAdvice",
+    "mission_advice",
+    "mission_changes",
+    "tried",
+]

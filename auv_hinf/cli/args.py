@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 #: Exit codes: success, a negative verdict, bad input; and Ctrl-C outside a run's loop (128 + SIGINT).
@@ -173,6 +174,19 @@ def per_vehicle(text: str) -> tuple[float, ...]:
     if not all(math.isfinite(v) and v >= 0.0 for v in values):
         raise argparse.ArgumentTypeError(f"expected finite numbers >= 0, got {text!r}")
     return values
+
+
+def path(text: str) -> Path:
+    """An argparse type: a file or directory name, not empty (an empty one would mean the working directory).
+
+    Parameters
+    ----------
+    text : str
+        The option's value as typed.
+    """
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty name: give a file or directory")
+    return Path(text)
 
 
 def join_numbers(argv: Sequence[str]) -> list[str]:

@@ -17,7 +17,6 @@ import math
 import os
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 if sys.version_info >= (3, 11):
@@ -46,6 +45,7 @@ from auv_hinf.cli.args import (
     UsageError,
     join_numbers,
     numeric,
+    path,
     per_vehicle,
     vector,
 )
@@ -73,9 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
         c = sub.add_parser(name, help=text, allow_abbrev=False)
         src = c.add_mutually_exclusive_group(required=True)
         src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
-        src.add_argument("--config", type=Path, help="TOML configuration file")
+        src.add_argument("--config", type=path, help="TOML configuration file")
         c.add_argument("--json", action="store_true", help="print one JSON object")
-        c.add_argument("--out", type=Path, help="directory for JSON and PNG outputs (created)")
+        c.add_argument("--out", type=path, help="directory for JSON and PNG outputs (created)")
         c.add_argument(
             "--design",
             choices=("nominal", "robust"),
@@ -97,7 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
             )
             c.add_argument(
                 "--save",
-                type=Path,
+                type=path,
                 metavar="FILE.parquet",
                 help="also write every vehicle's state every 0.1 s to this Parquet file (its folder is created), "
                 "streamed in row groups (memory O(N) at any N; one more integration of the run)",
@@ -134,7 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--certificate", action="store_true", help="the schema of the files certify --out and Certificate.save write"
     )
     i = sub.add_parser("init", help="write an annotated starting configuration", allow_abbrev=False)
-    i.add_argument("--out", type=Path, help="file to write (default: print to stdout)")
+    i.add_argument("--out", type=path, help="file to write (default: print to stdout)")
     i.add_argument("--preset", choices=PRESETS, default=PRESETS[0], help=f"starting point (default {PRESETS[0]})")
     i.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     _campaign_parser(sub)
@@ -150,7 +150,7 @@ def _campaign_parser(sub: Any) -> None:
     c = sub.add_parser("campaign", help="Monte Carlo runs from inside the certified start region", allow_abbrev=False)
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
-    src.add_argument("--config", type=Path, help="TOML configuration file")
+    src.add_argument("--config", type=path, help="TOML configuration file")
     numeric(c, "--runs", int, 1, 10**7, required=True, help="number of runs K")
     numeric(c, "--seed", int, 0, 2**63 - 1, default=0, help="root seed (default 0)")
     ex = c.add_mutually_exclusive_group()
@@ -160,7 +160,7 @@ def _campaign_parser(sub: Any) -> None:
         c, "--chunk", int, 1, 10**6, help=f"scenarios per batch (default: up to {MAX_CHUNK}, fewer if memory-bound)"
     )
     numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
-    c.add_argument("--out", type=Path, required=True, help="directory for runs.parquet, summary.json, PNGs")
+    c.add_argument("--out", type=path, required=True, help="directory for runs.parquet, summary.json, PNGs")
     c.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     c.add_argument(
         "--uncertified",
@@ -173,10 +173,10 @@ def _source(c: argparse.ArgumentParser, certificate: bool = True) -> None:
     """``--preset`` or ``--config`` (or ``--certificate``), exactly one."""
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--preset", choices=PRESETS, help=f"built-in preset ({', '.join(PRESETS)})")
-    src.add_argument("--config", type=Path, help="TOML configuration file")
+    src.add_argument("--config", type=path, help="TOML configuration file")
     if certificate:
         src.add_argument(
-            "--certificate", type=Path, help="a certificate file written by certify --out (not certified again)"
+            "--certificate", type=path, help="a certificate file written by certify --out (not certified again)"
         )
 
 
@@ -189,7 +189,7 @@ def _deployment_parsers(sub: Any) -> None:
     r.add_argument("--connect", action="append", metavar="URL", help="pymavlink connection string, one per vehicle")
     numeric(r, "--duration", float, 1e-3, 1e7, required=True, help="length of the run in s")
     r.add_argument(
-        "--log", type=Path, required=True, metavar="FILE.parquet", help="the run log (its folder is created)"
+        "--log", type=path, required=True, metavar="FILE.parquet", help="the run log (its folder is created)"
     )
     r.add_argument("--json", action="store_true", help="print the run's summary as one JSON object")
     r.add_argument("--on-violation", choices=ACTIONS, help="action on every violated assumption (default: see docs)")
@@ -227,14 +227,14 @@ def _deployment_parsers(sub: Any) -> None:
     numeric(f, "--sysid", int, 1, 250, default=1, help="system id of vehicle 0 (default 1)")
     numeric(f, "--seed", int, 0, 2**63 - 1, default=0, help="seed of the jitter and the losses")
     numeric(f, "--duration", float, 1e-3, 1e7, help="exit after this many s (default: on SIGINT or SIGTERM)")
-    f.add_argument("--report", type=Path, metavar="FILE.json", help="write what the vehicles received on exit")
+    f.add_argument("--report", type=path, metavar="FILE.json", help="write what the vehicles received on exit")
     f.add_argument("--realtime", action="store_true", help="ask for real-time scheduling of the vehicles (Linux)")
 
     p = sub.add_parser("replay", help="re-evaluate a run log against the certificate's assumptions", allow_abbrev=False)
-    p.add_argument("log", type=Path, help="a Parquet log of run, or a CSV log in the documented format")
+    p.add_argument("log", type=path, help="a Parquet log of run, or a CSV log in the documented format")
     _source(p)
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
-    p.add_argument("--plot", type=Path, metavar="FILE.png", help="plot the errors and ages against the bounds")
+    p.add_argument("--plot", type=path, metavar="FILE.png", help="plot the errors and ages against the bounds")
 
 
 def _report(kind: str, exc: BaseException) -> None:
@@ -261,7 +261,7 @@ def _classify(exc: BaseException) -> tuple[int, str]:
     if isinstance(exc, OSError):
         return EXIT_BAD_INPUT, "error"
     if isinstance(exc, ArithmeticError):  # overflow or division by zero from an extreme input value
-        return EXIT_BAD_INPUT, "error: numbers out of range"
+        return EXIT_BAD_INPUT, "error: a value is too large or too small to compute with (check the magnitudes given)"
     return EXIT_NEGATIVE, "internal error"
 
 

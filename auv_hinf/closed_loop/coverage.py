@@ -40,6 +40,7 @@ from auv_hinf.mission.paths import MissionReference
 from auv_hinf.mission.tubes import MAX_CELLS, default_cells, shaped_tube
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.progress import PROGRESS_DELAY
 from auv_hinf.numerics.quadratic_forms import start_bounds
 
 StartMode = Literal["shaped", "paper"]
@@ -51,9 +52,6 @@ TURN_TIMES: tuple[float, ...] = (20.0, 40.0, 60.0)
 #: Vehicles whose tubes are built at once: bounds the memory of the cell arrays
 #: (about 25,000 cells per vehicle for a 100 s blend).
 TUBE_CHUNK = 16
-#: Seconds the blend-time search runs before its progress bar appears (tqdm ``delay``): a
-#: search that ends sooner, as every start near its slots does, prints nothing.
-PROGRESS_DELAY = 2.0
 
 
 @dataclass(frozen=True)
@@ -307,7 +305,8 @@ def cover_start(
         Frame of the offsets (:class:`~auv_hinf.mission.fleet.FleetReference`).
     progress : bool
         Show a tqdm bar (stderr) over the candidates' tubes once the search has taken
-        :data:`PROGRESS_DELAY` s.
+        :data:`~auv_hinf.numerics.progress.PROGRESS_DELAY` s (a search that ends sooner, as every
+        start near its slots does, prints nothing).
 
     Returns
     -------
@@ -370,7 +369,6 @@ def _score(cov: Coverage) -> float:
 
 __all__ = [
     "BLEND_TIMES",
-    "PROGRESS_DELAY",
     "TUBE_CHUNK",
     "TURN_TIMES",
     "Coverage",

@@ -24,6 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from auv_hinf._typing import FormationFrame, GainMethod, JacobiKind, NoisePatternSetting, SynthesisKind
 from auv_hinf.actuation.limits import MAX_RUDDER, ActuationKind
 from auv_hinf.guidance import law as guidance_law
+from auv_hinf.implementation.model import MIN_SAMPLE_TIME
 from auv_hinf.law.gains import DEFAULT_K1
 from auv_hinf.mission.paths import lawnmower_min_spacing
 from auv_hinf.models.envelope import PAPER_ENVELOPE, check_interval
@@ -393,11 +394,25 @@ class ImplementationTable(_Table):
     """``[implementation]``: the controller as it runs (default: continuous, undelayed, exact)."""
 
     sample_time: float = _field(
-        0.0, "control period, forces held between samples (0: continuous)", "s", ge=0.0, le=60.0
+        0.0,
+        "control period, forces held between samples (0: continuous; else at least 0.001 s, 1 kHz)",
+        "s",
+        ge=0.0,
+        le=60.0,
     )
     delay: float = _field(0.0, "lumped input + measurement delay", "s", ge=0.0, le=60.0)
     varying_delay: bool = _field(False, "false: every sample late by exactly delay; true: by any value in [0, delay]")
     noise: NoiseTable = Field(default_factory=NoiseTable, description="bounds of the measurement errors")
+
+    @field_validator("sample_time")
+    @classmethod
+    def _period(cls, value: float) -> float:
+        if 0.0 < value < MIN_SAMPLE_TIME:
+            raise ValueError(
+                f"sample_time = {value!r} s is below {MIN_SAMPLE_TIME} s (1 kHz), faster than any AUV's control "
+                "loop: declare the real control period, or 0 for the continuous law"
+            )
+        return value
 
 
 class GuidanceTable(_Table):

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -257,6 +258,21 @@ def read_log(path: str | Path) -> LogData:
     missing = [c for c in CSV_REQUIRED if c not in frame.columns]
     if missing:
         raise LogError(f"{str(p)!r} lacks the column(s) {', '.join(missing)}; a log needs {', '.join(CSV_REQUIRED)}")
+    if frame.empty:
+        raise LogError(f"{str(p)!r} has no rows: there is nothing to replay")
+    for column in CSV_REQUIRED:
+        values = pd.to_numeric(frame[column], errors="coerce")
+        if values.isna().any():
+            row = int(np.flatnonzero(values.isna().to_numpy())[0])
+            raise LogError(
+                f"{str(p)!r}: column {column!r} must hold numbers, got {str(frame[column].iloc[row])!r} (row {row})"
+            )
+        frame[column] = values
+    if not np.all(np.isfinite(frame["time"].to_numpy(dtype=float))):
+        raise LogError(f"{str(p)!r}: column 'time' must be finite")
+    ids = frame["vehicle"].to_numpy(dtype=float)
+    if not np.all(ids == np.round(ids)):
+        raise LogError(f"{str(p)!r}: column 'vehicle' must hold whole numbers 0 .. N-1")
     if "step" not in frame.columns:
         frame = frame.assign(step=frame["time"].rank(method="dense").astype(int) - 1)
     frame = frame.sort_values(["step", "vehicle"], kind="stable").reset_index(drop=True)

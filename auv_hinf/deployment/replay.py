@@ -23,6 +23,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.deployment.log import ACHIEVED_COLUMNS, LAW_COLUMNS, STATE_COLUMNS, LogData
 from auv_hinf.deployment.monitor import Monitor, StepInput, Violation
 from auv_hinf.deployment.runtime import Assumptions, RuntimeLaw
+from auv_hinf.exceptions import LogError
 
 #: Tolerance of a replayed value against the logged one: both are the same float64 operations on
 #: the same logged numbers, and JSON keeps every digit, so they agree to round-off.
@@ -127,7 +128,10 @@ def replay(data: LogData, law: RuntimeLaw) -> ReplayResult:
     prev_time, max_age, max_period = math.nan, 0.0, 0.0
     for step, g in frame.groupby("step", sort=True):
         if len(g) != n:
-            raise ValueError(f"step {step}: {len(g)} rows for a fleet of {n}")
+            raise LogError(
+                f"step {step} of the log has {len(g)} rows, for a fleet of {n} vehicles: the log is not of this "
+                "configuration's fleet"
+            )
         t = float(g["time"].iloc[0])
         period = float(g["period"].iloc[0]) if "period" in g else t - prev_time
         prev_time = t

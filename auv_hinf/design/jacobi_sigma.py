@@ -57,6 +57,7 @@ from auv_hinf.models.jacobi import (
     positions_from_jacobi,
 )
 from auv_hinf.models.vehicle import VehicleParams, inertial_block
+from auv_hinf.numerics.progress import PROGRESS_DELAY
 
 #: Krylov dimension of :func:`jacobi_sigma_lower`: applications of ``M^T M`` per configuration.
 #: 24 steps agree with the dense SVD to ~1e-8 relative on the fleets of the tests (N <= 50);
@@ -236,10 +237,6 @@ BNB_BUDGET = 6_000_000
 #: Largest fleet whose Jacobi search evaluates each configuration by a dense 2N x 2N SVD
 #: (exact, O(N^3)); larger fleets use the matrix-free :func:`jacobi_sigma_lower` (O(N)).
 DENSE_SIGMA_MAX_N = 12
-
-
-#: Seconds before a progress bar appears: only slow searches show one.
-PROGRESS_DELAY = 1.0
 
 
 def jacobi_sigma_bounds(
@@ -494,7 +491,6 @@ __all__ = [
     "KRYLOV_BATCH_FLOATS",
     "KRYLOV_BREAKDOWN",
     "KRYLOV_DIM",
-    "PROGRESS_DELAY",
     "JacobiBnbResult",
     "jacobi_apply",
     "jacobi_branch_and_bound",

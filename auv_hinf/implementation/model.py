@@ -17,6 +17,10 @@ from typing import Any
 
 from auv_hinf.exceptions import ParameterError
 
+#: Shortest control period a configuration may declare (s): 1 kHz, above any AUV's control loop
+#: and the finest period the sampled simulation runs (a run costs about 1 ms per period).
+MIN_SAMPLE_TIME = 1e-3
+
 
 def _check_nonnegative(name: str, value: float, unit: str) -> float:
     v = float(value)
@@ -129,4 +133,4 @@ class Implementation:
         }
 
 
-__all__ = ["Implementation", "MeasurementNoise"]
+__all__ = ["MIN_SAMPLE_TIME", "Implementation", "MeasurementNoise"]

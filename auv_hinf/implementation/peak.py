@@ -151,12 +151,17 @@ class PeakGains:
 
 
 def _zoh(a: FloatArray, b: FloatArray, t: float) -> tuple[FloatArray, FloatArray]:
-    """Exact zero-order-hold maps ``(e^{A t}, int_0^t e^{A s} ds B)`` by python-control."""
+    """Exact zero-order-hold maps ``(e^{A t}, int_0^t e^{A s} ds B)`` by python-control.
+
+    A loop far too fast for the step overflows: its maps come out non-finite, and the period
+    map's contraction (:func:`_contraction`) then calls the loop unstable.
+    """
     n = a.shape[0]
     if t <= 0.0:
         return np.eye(n), np.zeros_like(b)
     sys = ct.ss(a, b, np.eye(n), np.zeros((n, b.shape[1])))
-    d = ct.sample_system(sys, t, method="zoh")
+    with np.errstate(over="ignore", invalid="ignore"):
+        d = ct.sample_system(sys, t, method="zoh")
     return np.asarray(d.A), np.asarray(d.B)
 
 
@@ -303,8 +308,11 @@ def _contraction(phi: FloatArray) -> tuple[FloatArray, float] | None:
     """A verified ``(P, rho)``: ``Phi^T P Phi <= rho^2 P``, ``P > 0``, ``rho < 1`` (``None`` when unstable).
 
     ``P`` solves the discrete Lyapunov equation of ``Phi / sqrt(r)``; ``rho`` is then measured by a
-    generalised eigenvalue problem and inflated by a relative 1e-9 for round-off.
+    generalised eigenvalue problem and inflated by a relative 1e-9 for round-off. A period map that
+    overflowed (a loop far too fast for its sample time) has no contraction either.
     """
+    if not np.all(np.isfinite(phi)):
+        return None
     radius = float(np.abs(np.linalg.eigvals(phi)).max())
     if radius >= UNSTABLE_RADIUS:
         return None
@@ -347,7 +355,10 @@ def period_radius(loop: SampledLoop) -> float:
     loop : SampledLoop
         The loop.
     """
-    return float(np.abs(np.linalg.eigvals(_maps(loop)[2])).max())
+    phi = _maps(loop)[2]
+    if not np.all(np.isfinite(phi)):
+        return math.inf  # the period map overflowed: the loop is far too fast for its sample time
+    return float(np.abs(np.linalg.eigvals(phi)).max())
 
 
 def _sumsq(x: FloatArray) -> FloatArray:

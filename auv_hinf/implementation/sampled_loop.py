@@ -35,16 +35,18 @@ from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+from tqdm.auto import tqdm
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.implementation.draws import ImplementationDraws
-from auv_hinf.implementation.model import Implementation
+from auv_hinf.implementation.model import MIN_SAMPLE_TIME, Implementation
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw, saturate
 from auv_hinf.mission.fleet import wrap_angle
 from auv_hinf.models.envelope import Envelope, envelope_bound, envelope_event, envelope_margin
 from auv_hinf.models.vehicle import PlantBatch, VehicleParams, ground_velocity, plant_derivative
 from auv_hinf.numerics.integrators import ATOL, RTOL, BatchSolution, SampleSink, dopri5
+from auv_hinf.numerics.progress import PROGRESS_DELAY
 
 #: Speed or yaw rate (m/s, rad/s) past which a run has diverged: no AUV moves at 100 m/s, and
 #: beyond it the quadratic damping makes the plant stiff (the run is stopped, not integrated on).
@@ -58,7 +60,7 @@ _END = np.array([1.0])
 #: Longest and shortest control period (s) of a continuous law (``sample_time = 0``) that runs
 #: with a delay or noise: every segment costs a restart of the integrator and a law evaluation
 #: (about 1 ms for a small fleet), so 1 ms over the paper's 300 s would cost minutes.
-FINE_PERIOD, FINEST_PERIOD = 1e-2, 1e-3
+FINE_PERIOD, FINEST_PERIOD = 1e-2, MIN_SAMPLE_TIME
 
 
 #: A continuous law's period is at most this fraction of the delay ...
@@ -520,8 +522,13 @@ def integrate_sampled(batch: HeldBatch, *, sink: SampleSink | None = None, trace
         raise ParameterError("the implementation is continuous and exact: simulate it with the continuous engine")
     loop = SampledLoop(batch, sink, trace)
     loop.start()
-    for k in range(loop.k_count):
-        loop.interval(k)
+    # a bar for long runs on a terminal only (delayed; campaign workers and pipes get none)
+    with tqdm(
+        total=loop.k_count, desc="sampled run", unit="sample", delay=PROGRESS_DELAY, leave=False, disable=None
+    ) as bar:
+        for k in range(loop.k_count):
+            loop.interval(k)
+            bar.update(1)
     return loop.solution()
 
 

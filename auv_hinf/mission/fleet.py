@@ -425,6 +425,25 @@ def with_turn_radius(mission: MissionReference, radius: float) -> dict[str, Any]
     return d
 
 
+def turn_radius_changes(mission: MissionReference, radius: float) -> dict[str, float]:
+    """The ``[reference]`` values that give ``mission`` the smallest radius of curvature ``radius`` (m).
+
+    The keys :func:`with_turn_radius` changes, with their new values: a circle's ``radius``, a
+    lawn-mower's ``turn_radius`` (and its ``spacing`` when the turns need more), a sine's
+    ``amplitude``; empty for a line.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        Centre path; read through its ``to_dict()``.
+    radius : float
+        New smallest radius of curvature (m).
+    """
+    before = mission.to_dict()
+    after = with_turn_radius(mission, radius)
+    return {k: float(v) for k, v in after.items() if k != "kind" and v != before.get(k)}
+
+
 #: A shaped start needs each initial ground speed to be at least this fraction of the
 #: mission's minimum speed: the course of a vehicle at rest is undefined, and at 1e-3 of the
 #: mission speed the yaw-rate reference ``|p''|/|p'|`` is already 1000 times the mission's.
@@ -771,6 +790,7 @@ __all__ = [
     "rigid_motion",
     "shaped_start",
     "turn_radius",
+    "turn_radius_changes",
     "with_turn_radius",
     "wrap_angle",
 ]

@@ -234,6 +234,13 @@ VELOCITY_SHARES = (0.3, 0.6, 0.9)
 DISTURBANCE_FLOOR = 1e-12
 
 
+#: Largest velocity cap ((m/s)^2 per (m/s^2)^2, a velocity half-width of 100 s times the disturbance):
+#: with no disturbance the cap is not a constraint, and above about 1e6 Clarabel fails on the SDP
+#: (it panics when the box is empty too). Every candidate is certified afterwards, so the cap only
+#: narrows the search.
+VELOCITY_CAP_MAX = 1e4
+
+
 OBJECTIVE = "minimise the certified peak force (relative to the actuator limits when declared)"
 
 
@@ -295,7 +302,7 @@ def synthesise_robust(
     # checked afterwards by the robust certificate of each candidate
     dbar = max(position_disturbance(box, env, summ, current, 0.0, lam, sigma), DISTURBANCE_FLOOR)
     for share in VELOCITY_SHARES:
-        cap = (share * half_v / dbar) ** 2
+        cap = min((share * half_v / dbar) ** 2, VELOCITY_CAP_MAX)
         for frac in RATES:
             found = synthesise_position(lam, lc, sigma, spread, frac * scale, cap)
             if found is None:
@@ -342,7 +349,14 @@ def synthesise_robust(
             gains = Gains(-lam / lc + 1.0, 1.0, heading_gains(box.nominal, (-1.0, -1.5)))
             gains = with_integral(gains, lam, lc) if integral else gains
             cert = robust_certificate(box, envelope, tube, gains, current, actuators)
-            return RobustDesign(gains, 1.0, 0.0, cert, tuple(tried), "the synthesis LMI is infeasible at every rate")
+            return RobustDesign(
+                gains,
+                1.0,
+                0.0,
+                cert,
+                tuple(tried),
+                "no synthesis LMI gave verified gains at any rate (infeasible, or the solver failed)",
+            )
         k = int(np.argmin([_score(c, None) if c.thrust is not None else math.inf for _, _, c in rated]))
         g, w, cert = rated[k]
         why = "no synthesised candidate covers the declared box; showing the one needing the least force"
@@ -362,6 +376,7 @@ __all__ = [
     "DISTURBANCE_FLOOR",
     "OBJECTIVE",
     "RATES",
+    "VELOCITY_CAP_MAX",
     "VELOCITY_SHARES",
     "PositionSynthesis",
     "synthesis_matrix",

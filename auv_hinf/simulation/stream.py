@@ -57,6 +57,9 @@ def parquet_path(path: str | Path) -> Path:
 def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_INTERVAL) -> Path:
     """Integrate ``scn`` again and stream every vehicle's state every ``interval`` s to ``path``.
 
+    The columns are ``time`` (s), ``vehicle`` and the state ``x, y, psi, u, v, r`` (m, rad, m/s,
+    rad/s; with integral action the integrator's too): the log format ``auv-hinf replay`` reads.
+
     Parameters
     ----------
     scn : Scenario
@@ -89,7 +92,7 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
     run = replace(scn, samples=samples)
     times, n, width = run.times, run.n, run.law.width
     names = STATE_COLUMNS + (INTEGRATOR_COLUMNS if width > 6 else ())
-    schema = pa.schema([("t", pa.float64()), ("vehicle", pa.int32())] + [(c, pa.float64()) for c in names])
+    schema = pa.schema([("time", pa.float64()), ("vehicle", pa.int32())] + [(c, pa.float64()) for c in names])
     vehicle = np.arange(n, dtype=np.int32)
     pending: list[tuple[NDArray[np.int_], FloatArray]] = []  # samples not yet written
     written = [0, -1]  # samples written, index of the last one
@@ -101,7 +104,7 @@ def save_trajectories(scn: Scenario, path: str | Path, interval: float = SAVE_IN
             idx = np.concatenate([i for i, _ in pending])
             states = np.concatenate([v for _, v in pending]).reshape(idx.size, n, -1)
             pending.clear()
-            cols = {"t": np.repeat(times[idx], n), "vehicle": np.tile(vehicle, idx.size)}
+            cols = {"time": np.repeat(times[idx], n), "vehicle": np.tile(vehicle, idx.size)}
             cols |= {c: states[:, :, k].ravel() for k, c in enumerate(names)}
             writer.write_table(pa.table(cols, schema=schema))
             written[0], written[1] = written[0] + idx.size, max(written[1], int(idx.max()))

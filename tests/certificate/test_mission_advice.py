@@ -83,3 +83,27 @@ def test_a_refusal_lists_only_the_changes_that_were_tried():
     assert "turns" not in tried(line) and "speed" in tried(line) and "gains designed" not in tried(line)
     survey = config_from_dict({**SURVEY, "design": {"robust": True, "synthesis": "lmi"}})
     assert tried(survey).startswith("gains designed for the deployed loop, turns up to 8 times wider")
+
+
+def test_a_circle_too_tight_for_the_yaw_rate_range_is_answered_in_its_own_keys_and_re_runs():
+    """The paper's fleet on a 5 m circle with yaw rates limited to 0.01 rad/s, sampled at 10 Hz.
+
+    The closed-loop refusal's setting is the circle's ``radius`` (a lawn-mower's key would not be
+    read), the composed part answers with a change of the mission, and the re-run of that answer
+    certifies."""
+    data = {
+        "envelope": {"r": [-0.01, 0.01]},
+        "reference": {"kind": "circle", "radius": 5.0},
+        "implementation": {"sample_time": 0.1},
+    }
+    cfg = config_from_dict(data, "tight circle")
+    cert = certify(cfg)
+    assert not cert.certified
+    closed = next(r for r in cert.findings if r.part == "closed_loop")
+    assert [(s.table, s.key) for s in closed.settings] == [("reference", "radius")]
+    speed = cfg.reference.kwargs()["speed"]
+    assert closed.settings[0].value >= speed / 0.01 * (1.0 - 1e-6)  # the yaw-rate limit's radius at least
+    composed = next(r for r in cert.findings if r.part == "composed")
+    assert composed.settings, composed.message
+    again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in composed.settings]))
+    assert again.certified, again.reasons

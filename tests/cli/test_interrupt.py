@@ -132,8 +132,8 @@ def test_simulate_interrupted_while_saving_keeps_the_run_and_the_rows_so_far(
     assert match is not None and match.group(1, 2) == ("1", "1"), err
     assert match.group(3).startswith(f"results so far in {out} and {save} (the run finished") and "of 5 s)" in err
     rows = pq.read_table(save).to_pandas()  # a valid file: the writer was closed
-    t_last = rows["t"].max()
-    assert 0.0 < t_last < 5.0 and len(rows) == 3 * rows["t"].nunique() and rows["t"].min() == 0.0
+    t_last = rows["time"].max()
+    assert 0.0 < t_last < 5.0 and len(rows) == 3 * rows["time"].nunique() and rows["time"].min() == 0.0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["saved_until"] == pytest.approx(t_last) and (out / "trajectories.png").exists()
 

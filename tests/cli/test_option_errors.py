@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from auv_hinf.cli.args import path
 from auv_hinf.cli.main import build_parser, main
 from tests.helpers import package_class_names
 
@@ -50,7 +51,7 @@ def _refused(action: argparse.Action) -> list[str]:
 
 def generated_cases() -> Iterator[tuple[str, list[str], str]]:
     for command, action in _value_options():
-        if action.type is Path or (action.type is None and action.choices is None):
+        if action.type is path or (action.type is None and action.choices is None):
             continue  # paths by hand, below; any text parses (--scheduler: the command refuses it)
         option = action.option_strings[0]
         for value in _refused(action):
@@ -101,6 +102,10 @@ def path_cases(tmp: Path) -> dict[tuple[str, str], list[tuple[list[str], str]]]:
         (["init", "--out", str(file)], "--out"),
         (["init", "--out", str(under_file / "x")], "--out"),
     ]
+    for (_, option), cases in out.items():  # an empty name (it would mean the working directory)
+        argv = list(cases[0][0])
+        argv[argv.index(option) + 1] = ""
+        cases.append((argv, option))
     return out
 
 
@@ -135,12 +140,12 @@ def _check(argv: list[str], option: str, capsys: pytest.CaptureFixture[str]) -> 
 
 
 def test_every_path_option_has_a_case(tmp_path: Path):
-    paths = {(c, a.option_strings[0]) for c, a in _value_options() if a.type is Path}
+    paths = {(c, a.option_strings[0]) for c, a in _value_options() if a.type is path}
     assert paths == set(path_cases(tmp_path))
 
 
 def test_every_option_with_a_value_is_walked():
-    typed = {(c, a.option_strings[0]) for c, a in _value_options() if a.type not in (Path, None) or a.choices}
+    typed = {(c, a.option_strings[0]) for c, a in _value_options() if a.type not in (path, None) or a.choices}
     walked = {(argv[0], argv[1].split("=")[0]) for _, argv, _ in generated_cases()}
     assert typed == walked, typed - walked  # each refuses something
 

@@ -211,3 +211,16 @@ def test_a_channel_the_mission_never_loads_is_certified_above_the_simulations_ro
     assert report["certificate_covers_run"]
     for channel, commanded in report["commanded_peak"].items():
         assert commanded <= peak[channel], (channel, commanded, peak[channel])
+
+
+def test_a_heading_range_narrower_than_the_circle_is_refused_with_the_full_circle():
+    """The composed certificate bounds the heading *error*: a declared ``envelope.psi`` narrower than
+    the full circle is refused (a line heading 3 rad with psi in [-0.1, 0.1] starts outside it),
+    and the answer is the full circle."""
+    data = {**DEPLOYED, "envelope": {**DEPLOYED["envelope"], "psi": [-0.1, 0.1]}}
+    data["reference"] = {"kind": "line", "speed": 0.4, "heading": 3.0}
+    cert = certify(config_from_dict(data, "narrow heading"))
+    assert not cert.certified
+    reason = next(r for r in cert.findings if r.part == "composed")
+    assert "narrower than the full circle" in reason.message
+    assert [(s.table, s.key) for s in reason.settings] == [("envelope", "psi")]

@@ -117,6 +117,7 @@ VALIDATOR_CASES: dict[tuple[tuple[str, ...], str], tuple[dict[str, Any], str]] =
     (("simulation",), "_moved_thrust_limit"): ({"simulation": {"thrust_limit": 100.0}}, "[actuators]"),
     (("uncertainty",), "_box"): ({"uncertainty": {"m11": [1.1, 1.2]}}, "uncertainty.m11"),
     (("actuators",), "_one_source"): ({"actuators": {"tau_x": 10.0}}, "tau_psi"),
+    (("implementation",), "_period"): ({"implementation": {"sample_time": 1e-300}}, "implementation.sample_time"),
     (("reference", "lawnmower"), "_turns_fit"): (
         {"reference": {"kind": "lawnmower", "leg_length": 100.0, "spacing": 20.0, "turn_radius": 10.0}},
         "reference.spacing",

@@ -62,6 +62,27 @@ def test_replay_refuses_missing_and_incomplete_logs(config, tmp_path, capsys):
     assert code == 2 and "lacks the column(s) r" in _err(capsys)
 
 
+HEADER = "time,vehicle,x,y,psi,u,v,r\n"
+
+
+@pytest.mark.parametrize(
+    ("rows", "words"),
+    [
+        ("", "has no rows"),
+        ("0,0,abc,0,0,0,0,0\n0,1,0,0,0,0,0,0\n", "column 'x' must hold numbers, got 'abc'"),
+        ("0,0,0,0,0,0,0,0\n0,1,nan,0,0,0,0,0\n", "column 'x' must hold numbers, got 'nan'"),
+        ("0,0,0,0,0,0,0,0\n0,0.5,0,0,0,0,0,0\n", "whole numbers"),
+        ("0,0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0,0\n", "for a fleet of 2 vehicles"),
+    ],
+    ids=["header only", "text", "nan", "fractional vehicle", "one vehicle of two"],
+)
+def test_replay_names_what_is_wrong_with_a_log(config, tmp_path, capsys, rows, words):
+    (tmp_path / "log.csv").write_text(HEADER + rows, encoding="utf-8")
+    code = main(["replay", str(tmp_path / "log.csv"), "--config", str(config)])
+    err = _err(capsys)
+    assert code == 2 and words in err and "internal error" not in err, err
+
+
 def test_the_link_decodes_navigation_and_ages_from_timesync():
     link = VehicleLink("udpin:127.0.0.1:0", 0, ArduSubMapping())
     try:

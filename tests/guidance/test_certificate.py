@@ -141,6 +141,8 @@ def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
     [
         ({"guidance": {"kind": "los"}}, "plain LOS"),
         ({"implementation": {"sample_time": 0.1, "delay": 0.05}}, "delay"),
+        # a lookahead of a nanometre: the period map overflows, which is an unstable loop, not a crash
+        ({"guidance": {"lookahead": 1e-9}}, "unstable"),
         pytest.param(
             {
                 "actuators": {

@@ -85,3 +85,13 @@ def test_synthesis_answers_without_a_covering_candidate(monkeypatch):
     assert design.certificate.thrust is not None
     assert max(design.certificate.thrust.as_tuple()[:2]) == max(best.thrust.as_tuple()[:2])
     assert design.gains.k1 > 0.0
+
+
+def test_a_plant_known_exactly_in_still_water_is_synthesised_without_a_solver_failure(capfd):
+    """Nothing declared: no disturbance sizes the velocity cap, which is then held at VELOCITY_CAP_MAX
+    (above about 1e6 Clarabel failed on every rate, and panicked with the box empty). The design
+    has covering candidates, and the solver says nothing on stderr."""
+    cfg = replace(preset_config("paper-triangle"), robust=True, synthesis="lmi")
+    design = design_point(cfg).robust_design
+    assert design is not None and design.certificate.covers and design.target >= 1.0
+    assert "no synthesis LMI" not in design.reason and "panicked" not in capfd.readouterr().err

@@ -25,13 +25,42 @@ from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_cert
 from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fit import ReferenceFit
-from auv_hinf.mission.fleet import FleetReference
+from auv_hinf.mission.fleet import FleetReference, turn_radius_changes
+from auv_hinf.models.envelope import Envelope
 
 #: The part's registry name and JSON key.
 PART = "closed_loop"
 #: A heading range counts as the full circle when its width is 2 pi up to this relative
 #: round-off (the default ``(-pi, pi)`` has width 2 pi exactly).
 FULL_CIRCLE_RTOL = 1e-12
+
+
+def full_heading_range(envelope: Envelope) -> None:
+    """Raise unless the envelope's heading range is the full circle (no certificate promises a heading range).
+
+    The certificates bound the errors, surge, sway and yaw rate, not the heading itself.
+
+    Parameters
+    ----------
+    envelope : Envelope
+        The declared envelope.
+
+    Raises
+    ------
+    DesignError
+        When ``envelope.psi`` is narrower than ``2 pi`` (its setting: the full circle).
+    """
+    width = envelope.psi[1] - envelope.psi[0]
+    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+        raise DesignError(
+            f"envelope.psi = {list(envelope.psi)} rad is narrower than the full circle: the certificates bound "
+            "surge, sway, yaw rate and the errors, not the heading itself, so they cannot promise a heading range",
+            kind="envelope",
+            channel="psi",
+            value=width,
+            limit=2.0 * math.pi,
+            settings=(("envelope", "psi", [-math.pi, math.pi]),),
+        )
 
 
 def mission_checks(point: DesignPoint) -> Gains:
@@ -48,17 +77,7 @@ def mission_checks(point: DesignPoint) -> Gains:
         As :func:`closed_loop_for`, for these checks.
     """
     cfg = point.config
-    width = cfg.envelope.psi[1] - cfg.envelope.psi[0]
-    if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
-        raise DesignError(
-            f"envelope.psi = {list(cfg.envelope.psi)} rad is narrower than the full circle: the closed-loop "
-            "certificate bounds surge, sway and yaw rate, not the heading itself, so it cannot promise a heading range",
-            kind="envelope",
-            channel="psi",
-            value=width,
-            limit=2.0 * math.pi,
-            settings=(("envelope", "psi", [-math.pi, math.pi]),),
-        )
+    full_heading_range(cfg.envelope)
     gains = point.require_gains()
     fit = point.fit
     if not fit.ok:
@@ -70,7 +89,9 @@ def mission_checks(point: DesignPoint) -> Gains:
             vehicle=None if b is None or cfg.frame != "path" else b.vehicle,
             value=None if b is None else b.margin,
             limit=0.0,
-            settings=() if fit.smallest_radius is None else (("reference", "turn_radius", fit.smallest_radius),),
+            settings=()
+            if fit.smallest_radius is None
+            else tuple(("reference", k, v) for k, v in turn_radius_changes(point.mission, fit.smallest_radius).items()),
         )
     return gains
 
@@ -139,7 +160,7 @@ def coverage_for(
         The start mode.
     progress : bool
         A search over blend times that runs longer than
-        :data:`~auv_hinf.closed_loop.coverage.PROGRESS_DELAY` shows a progress bar (stderr).
+        :data:`~auv_hinf.numerics.progress.PROGRESS_DELAY` shows a progress bar (stderr).
     """
     cfg = point.config
     return cover_start(
@@ -427,5 +448,6 @@ __all__ = [
     "closed_loop_for",
     "closed_loop_summary",
     "coverage_for",
+    "full_heading_range",
     "mission_checks",
 ]

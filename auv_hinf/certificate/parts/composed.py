@@ -31,17 +31,18 @@ from tqdm.auto import tqdm
 
 from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint, design_point
-from auv_hinf.certificate.mission_advice import mission_advice, tried
+from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_advice, tried
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.closed_loop import full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
-from auv_hinf.certificate.reason import Reason, Setting, toml_line
+from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line
 from auv_hinf.composed.advice import TOGETHER, Advice, declared_knobs, largest_covered, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.composed.reach import Reach, reach
 from auv_hinf.config.settings import FormationConfig, with_settings
-from auv_hinf.exceptions import AuvHinfError
+from auv_hinf.exceptions import AuvHinfError, DesignError
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.box import PARAMETERS
@@ -284,6 +285,14 @@ class ComposedPart:
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The composed summary of ``ctx.point``: covers, or why not with what would certify."""
+        cfg = ctx.point.config
+        if cfg.guidance is None and cfg.implementation.sampled:
+            try:  # the composed certificate bounds the heading error, not the heading
+                full_heading_range(cfg.envelope)
+            except DesignError as exc:
+                refused = ComposedSummary(True, None, False, (str(exc),))
+                why = reason_from(self.name, exc, "composed certificate not computed: ")
+                return Verdict(self.name, False, True, (why,), refused.to_dict(), detail=refused)
         summary = composed_summary(ctx.point)
         figures = summary.to_dict()
         c = summary.certificate
@@ -612,7 +621,6 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
     found = mission_advice(point, covered_position_bound)
     if found:
         a = found[0]
-        kind = {"design": "gains designed for the deployed loop", "turns": "wider turns", "speed": "a slower mission"}
         entry = {
             "setting": a.what,
             "scaled": [],
@@ -621,7 +629,7 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
             "position_bound": a.position_bound,
         }
         return (
-            f"no declared setting certifies when shrunk, even all together; {kind[a.what]} certify: {a.line()}",
+            f"no declared setting certifies when shrunk, even all together; {CHANGE_WORDS[a.what]} certify: {a.line()}",
             a.settings,
             entry,
         )

@@ -51,17 +51,17 @@ from auv_hinf.cascade.certificate import (
 )
 from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
-from auv_hinf.certificate.mission_advice import mission_changes
+from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting, toml_line
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
-from auv_hinf.design.jacobi_sigma import PROGRESS_DELAY
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import STEP, slot_motion
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
 from auv_hinf.numerics.bisection import bisect, largest_holding
+from auv_hinf.numerics.progress import PROGRESS_DELAY
 from auv_hinf.robust.box import PARAMETERS
 
 #: The part's registry name.
@@ -93,9 +93,6 @@ MISSION_SCALE_STEPS = 6
 #: together on the declared mission only when it certifies the declared ones, or more than this
 #: many times the joint scale.
 MISSION_OVER_TOGETHER = 2.0
-#: How each kind of change of the mission (:func:`~auv_hinf.certificate.mission_advice.mission_changes`)
-#: is named in an answer.
-CHANGE_WORDS = {"turns": "wider turns", "speed": "a slower mission", "both": "wider turns at a slower speed"}
 #: Largest heading bandwidth times sample time tried: the sampled heading loop keeps a tenth of a
 #: period per radian of its bandwidth's phase (0.4 rad at 10 Hz and 4 rad/s).
 MAX_BANDWIDTH_STEP = 0.4
