@@ -287,7 +287,9 @@ def certified_errors(plan: RunPlan) -> dict[str, float] | None:
 def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | None]:
     """:func:`certified_errors` and the part whose bounds they are (``None`` with no bounds).
 
-    The part is ``"composed"``, ``"implementation"`` or ``"closed_loop"``.
+    The part is ``"composed"``, ``"implementation"``, ``"closed_loop"`` or ``"robust"``: the
+    robust certificate's bounds when it covers a run that the nominal closed-loop certificate does
+    not (a plant of the box other than the model, or a current).
 
     Parameters
     ----------
@@ -297,6 +299,17 @@ def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | N
     composed = next((c for c in plan.checks if c.part == "composed" and c.covers and c.bounds is not None), None)
     if composed is not None and composed.bounds is not None:  # the deployed loop's own certificate
         return {f"{k}_error": v for k, v in composed.bounds.items()}, "composed"
+    nominal = next((c for c in plan.checks if c.part == "closed_loop" and c.role == "certificate"), None)
+    robust = plan.robust
+    if (
+        plan.implementation is None
+        and nominal is not None
+        and not (nominal.applies and nominal.covers)
+        and robust is not None
+        and robust.covered
+        and robust.bounds is not None
+    ):
+        return {f"{k}_error": max(v, NUMERICAL_FLOOR) for k, v in robust.bounds.items()}, "robust"
     if plan.implementation is not None:
         c = plan.implementation.certificate
         if not plan.implementation.covers or c is None or c.bounds is None:
@@ -388,8 +401,8 @@ DEFINITIONS = {
     "implementation": "how the controller ran: sample time and delay (s), noise bounds, seed of the draws, "
     "the law's period (s; null: continuous)",
     "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
-    "certified_errors_source": "the part whose bounds certified_errors are (composed, implementation or "
-    "closed_loop); a run covered by another part (covered_by) is bounded by that part's bounds, e.g. robust_bounds",
+    "certified_errors_source": "the part whose bounds certified_errors are (composed, implementation, closed_loop, "
+    "or robust for a run of a plant or current that only the robust certificate covers)",
     "covered_by": "the parts whose certificates cover this run",
     "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
     "shape_errors": "error of each Jacobi shape vector against the mission, in the formation's frame (along and "

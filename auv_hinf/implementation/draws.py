@@ -134,14 +134,19 @@ def against_noise(noise: MeasurementNoise, errors: FloatArray) -> FloatArray:
         The bounds.
     errors : ndarray, shape (..., 6)
         The true errors ``[ex, ey, epsi, eu, ev, er]`` at the measurement (m, rad, m/s body frame,
-        rad/s); a zero error gets no noise on its channel.
+        rad/s). A zero error is taken as pointing along +x (a vector) or positive (a scalar): the
+        pattern then kicks a loop that sits exactly on its slot, instead of leaving it there.
     """
     e = np.asarray(errors, dtype=float)
 
     def unit(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
         r = np.hypot(x, y)
         safe = np.where(r > 0.0, r, 1.0)
-        return np.where(r > 0.0, x / safe, 0.0), np.where(r > 0.0, y / safe, 0.0)
+        return np.where(r > 0.0, x / safe, 1.0), np.where(r > 0.0, y / safe, 0.0)
+
+    def sign(x: FloatArray) -> FloatArray:
+        out: FloatArray = np.where(x < 0.0, -1.0, 1.0)
+        return out
 
     px, py = unit(e[..., 0], e[..., 1])
     vx, vy = unit(e[..., 3], e[..., 4])
@@ -149,10 +154,10 @@ def against_noise(noise: MeasurementNoise, errors: FloatArray) -> FloatArray:
         [
             noise.position * px,
             noise.position * py,
-            noise.heading * np.sign(e[..., 2]),
+            noise.heading * sign(e[..., 2]),
             noise.velocity * vx,
             noise.velocity * vy,
-            noise.yaw_rate * np.sign(e[..., 5]),
+            noise.yaw_rate * sign(e[..., 5]),
         ]
     )
 

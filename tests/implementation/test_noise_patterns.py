@@ -49,7 +49,9 @@ def test_against_error_opposes_every_channel_at_its_bound():
     assert np.all(noise[..., 0] * errors[..., 0] + noise[..., 1] * errors[..., 1] < 0)  # opposite directions
     assert np.all(noise[..., 2] * errors[..., 2] < 0) and np.all(noise[..., 5] * errors[..., 5] < 0)
     assert np.all(noise[..., 3] * errors[..., 3] + noise[..., 4] * errors[..., 4] < 0)
-    assert np.allclose(against_noise(NOISE, np.zeros((1, 1, 6))), 0.0)  # no error, no push
+    # no error: a push all the same (along +x, positive), so a loop on its slot is kicked off it
+    kick = against_noise(NOISE, np.zeros((1, 1, 6)))[0, 0]
+    assert np.allclose(kick, [-NOISE.position, 0.0, -NOISE.heading, -NOISE.velocity, 0.0, -NOISE.yaw_rate])
     draws = ImplementationDraws(IMPL, [1, 2], 4, ["uniform", "against-error"])
     both = draws.against(errors)
     assert np.allclose(both[0], 0.0) and np.allclose(both[1], noise[1])
