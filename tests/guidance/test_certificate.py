@@ -26,7 +26,7 @@ from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, raw_fleet
 from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary, plant_multipliers
 from auv_hinf.cli.main import main
-from auv_hinf.config.settings import config_from_dict
+from auv_hinf.config.settings import config_from_dict, with_settings
 from auv_hinf.guidance.law import SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance, slot_motion
 from auv_hinf.robust.box import PARAMETERS
@@ -134,6 +134,25 @@ def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
     assert 0.0 < advised < 0.3
     again = certify(transit(disturbance={"current_speed": advised})).to_dict()
     assert again["certified"] is True and again["guidance"]["certified"] is True
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("tables", "expected"),
+    [
+        ({"guidance": {"kind": "los"}}, [("guidance", "kind", "ilos")]),
+        ({"implementation": {"sample_time": 0.1, "delay": 0.05}}, [("implementation", "delay", None)]),
+    ],
+    ids=["plain LOS", "a delay"],
+)
+def test_a_cascade_this_version_does_not_evaluate_is_answered_with_one_it_does_that_certifies(tables, expected):
+    cert = certify(transit(**tables))
+    reason = next(r for r in cert.findings if r.part == "guidance")
+    assert [(s.table, s.key, s.value) for s in reason.settings] == expected
+    supported = cert.to_dict()["guidance"]["largest_certifiable"]["supported"]
+    assert supported is not None and supported["position_bound"] > 0.0
+    again = certify(with_settings(transit(**tables), expected))
+    assert again.certified and again.to_dict()["guidance"]["certified"] is True
 
 
 @pytest.mark.parametrize(

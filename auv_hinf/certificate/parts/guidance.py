@@ -240,6 +240,12 @@ class GuidanceSummary:
         When ``[simulation] initial`` is declared and the default start (every vehicle on its slot,
         heading into the current) certifies the declared box and current: its certified distance
         to the slot (m).
+    supported : tuple of Setting
+        When the cascade is not evaluated (plain LOS, a delay or noise, a varying current): the
+        settings that make it one this version certifies (:func:`supported_settings`), when the
+        configuration re-run with them certifies; empty otherwise.
+    supported_bound : float or None
+        The certified distance to the slot (m) of that re-run.
     """
 
     problem: CascadeProblem | None
@@ -252,6 +258,8 @@ class GuidanceSummary:
     mission: MissionAnswer | None = None
     together: float | None = None
     start_bound: float | None = None
+    supported: tuple[Setting, ...] = ()
+    supported_bound: float | None = None
 
     @property
     def holds(self) -> bool:
@@ -316,7 +324,11 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
     base = _certificate(cfg)
     problem, cert = base.problem, base.certificate
     if problem is None or cert is None:
-        return replace(base, mission=mission_answer(cfg)) if base.reason == SLOT_STOPS else base
+        if base.reason == SLOT_STOPS:
+            return replace(base, mission=mission_answer(cfg))
+        switch = supported_settings(cfg)
+        bound = _confirmed(cfg, switch) if switch else None
+        return base if bound is None else replace(base, supported=switch, supported_bound=bound)
     if cert.holds:
         return base
     if cfg.simulation.initial is not None:
@@ -446,6 +458,30 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
     return None
 
 
+def supported_settings(cfg: FormationConfig) -> tuple[Setting, ...]:
+    """The settings that turn ``cfg``'s cascade into one this version certifies (empty: nothing to change).
+
+    Integral LOS for plain LOS, the sampled law without its delay and noise, a constant current
+    for a varying one.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        A configuration with ``[guidance]``.
+    """
+    g, impl = cfg.guidance, cfg.implementation
+    out: list[Setting] = []
+    if g is not None and g.sigma <= 0.0:
+        out.append(Setting("guidance", "kind", "ilos"))
+    if impl.delay > 0.0:
+        out.append(Setting("implementation", "delay", None))
+    if not impl.noise.exact:
+        out.append(Setting("implementation", "noise", None))
+    if cfg.disturbance.current_rate:
+        out.append(Setting("disturbance", "current_rate", None))
+    return tuple(out)
+
+
 def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
     """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, ``None`` if refused."""
     rerun = _changed(cfg, settings)
@@ -503,6 +539,11 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     """
     problem = summary.problem
     if problem is None:
+        if summary.supported_bound is not None:
+            return summary.supported, (
+                f"changed to what this version certifies ({toml_line(summary.supported)}), it is certified: every "
+                f"vehicle within {summary.supported_bound:.3g} m of its slot"
+            )
         m = summary.mission
         return ((), "") if m is None else (m.settings, _mission_sentence(m))
     if summary.start_bound is not None:
@@ -557,7 +598,8 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
     heading}`` (m, m, rad), ``certified_peak{force_x, rudder}`` (N, rad), ``limits``, ``states``
     (the whole certified box), ``sample_time`` (s), ``start`` (the certified start's bounds),
     ``cells`` (the cells of the box certified one by one, 1 for the whole box at once),
-    ``largest_certifiable{current_speed, box_scale}`` and ``reason``.
+    ``largest_certifiable{current_speed, box_scale, gains, together, start_on_slots, mission,
+    supported}`` and ``reason``.
 
     Parameters
     ----------
@@ -591,6 +633,12 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             "together": summary.together,
             "start_on_slots": None if summary.start_bound is None else {"position_bound": summary.start_bound},
             "mission": None if summary.mission is None else summary.mission.to_dict(),
+            "supported": None
+            if summary.supported_bound is None
+            else {
+                "settings": [x.to_dict() for x in summary.supported],
+                "position_bound": summary.supported_bound,
+            },
         },
         "reason": summary.reason,
     }
@@ -820,4 +868,5 @@ __all__ = [
     "guidance_summary",
     "plant_multipliers",
     "run_coverage",
+    "supported_settings",
 ]
