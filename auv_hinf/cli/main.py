@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 from collections.abc import Sequence
@@ -51,6 +50,7 @@ from auv_hinf.cli.args import (
 )
 from auv_hinf.cli.commands import COMMANDS
 from auv_hinf.config.presets import PRESETS
+from auv_hinf.config.schema import GAMMA_RANGE, MAX_DESIGN_RATE
 from auv_hinf.exceptions import AuvHinfError, LinkError, SolverError
 from auv_hinf.law.gains import DEFAULT_K1
 
@@ -63,10 +63,19 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", parser_class=Parser)
 
     d = sub.add_parser("design", help="Theorem 1 gains three ways, cross-checked four ways", allow_abbrev=False)
-    numeric(d, "--lam", float, -math.inf, 0.0, strict=True, required=True, help="nominal lambda < 0 (1/s)")
-    numeric(d, "--gamma", float, 0.0, math.inf, strict=True, required=True, help="H-infinity bound gamma > 0 (s)")
+    numeric(d, "--lam", float, -MAX_DESIGN_RATE, 0.0, strict=True, required=True, help="nominal lambda < 0 (1/s)")
+    numeric(d, "--gamma", float, *GAMMA_RANGE, required=True, help="H-infinity bound gamma > 0 (s)")
     numeric(d, "--n", int, 2, DESIGN_MAX_N, default=3, help=f"number of vehicles, 2..{DESIGN_MAX_N} (default 3)")
-    numeric(d, "--k1", float, default=DEFAULT_K1, help=f"Theorem 2 position gain (1/s^2), default {DEFAULT_K1:g}")
+    numeric(
+        d,
+        "--k1",
+        float,
+        0.0,
+        MAX_DESIGN_RATE,
+        strict=True,
+        default=DEFAULT_K1,
+        help=f"Theorem 2 position gain (1/s^2), default {DEFAULT_K1:g}",
+    )
     d.add_argument("--json", action="store_true", help="print one JSON object")
 
     for name, text in (("certify", "certify a formation design"), ("simulate", "simulate a scenario")):

@@ -80,6 +80,24 @@ MAX_HORIZON = 1e5  # s
 MAX_COORDINATE = 1e6  # m: offsets and radii beyond 1000 km are refused
 
 
+#: Range of a vehicle's inertias (kg, kg m^2) and largest damping coefficient (kg/s, kg/m, kg m^2/s,
+#: kg m^2): a laboratory model's 1e-6 to beyond the largest ships (5e8 kg). Outside it the numbers
+#: over- or underflow in the certificates (1e300 kg divides to zero), and no vehicle is there.
+MASS_RANGE = (1e-6, 1e9)
+MAX_DAMPING = 1e12
+
+
+#: Range of a ``[simulation.plant]`` multiplier: a plant a thousand times off its model is not a
+#: model error but another vehicle.
+MULTIPLIER_RANGE = (1e-3, 1e3)
+
+
+#: Largest magnitude of a design rate or gain (1/s, 1/s^2) and range of the H-infinity bound (s):
+#: beyond them the Riccati and norm computations overflow (a million 1/s is a microsecond loop).
+MAX_DESIGN_RATE = 1e6
+GAMMA_RANGE = (1e-6, 1e6)
+
+
 #: Largest angle (rad) taken as radians: one full turn. Every heading can be written within one turn, so a
 #: heading, a bound of the heading range or a start heading beyond it is degrees typed by mistake (90 is a
 #: quarter turn in degrees and 14 turns in radians). An error, not a warning: read as radians it silently
@@ -286,15 +304,15 @@ ReferenceTable = Annotated[
 class PlantTable(_Table):
     """``[simulation.plant]``: the true plant as multipliers (> 0) of the controller's parameters."""
 
-    m11: float | None = _field(None, "multiplier of m11", gt=0.0)
-    m22: float | None = _field(None, "multiplier of m22", gt=0.0)
-    m33: float | None = _field(None, "multiplier of m33", gt=0.0)
-    d11_lin: float | None = _field(None, "multiplier of d11_lin", gt=0.0)
-    d11_quad: float | None = _field(None, "multiplier of d11_quad", gt=0.0)
-    d22_lin: float | None = _field(None, "multiplier of d22_lin", gt=0.0)
-    d22_quad: float | None = _field(None, "multiplier of d22_quad", gt=0.0)
-    d33_lin: float | None = _field(None, "multiplier of d33_lin", gt=0.0)
-    d33_quad: float | None = _field(None, "multiplier of d33_quad", gt=0.0)
+    m11: float | None = _field(None, "multiplier of m11", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    m22: float | None = _field(None, "multiplier of m22", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    m33: float | None = _field(None, "multiplier of m33", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    d11_lin: float | None = _field(None, "multiplier of d11_lin", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    d11_quad: float | None = _field(None, "multiplier of d11_quad", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    d22_lin: float | None = _field(None, "multiplier of d22_lin", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    d22_quad: float | None = _field(None, "multiplier of d22_quad", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    d33_lin: float | None = _field(None, "multiplier of d33_lin", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    d33_quad: float | None = _field(None, "multiplier of d33_quad", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
 
 
 class UncertaintyTable(_Table):
@@ -510,15 +528,27 @@ class VehicleTable(_Table):
 
     preset: VehiclePreset | None = _field(None, "built-in vehicle; excludes the nine parameters")
     name: str | None = _field(None, "label of a custom vehicle (default: the configuration name)")
-    m11: float | None = _field(None, "surge inertia m - X_udot", "kg", gt=0.0, examples=[200.0])
-    m22: float | None = _field(None, "sway inertia m - Y_vdot", "kg", gt=0.0, examples=[250.0])
-    m33: float | None = _field(None, "yaw inertia I_z - N_rdot", "kg m^2", gt=0.0, examples=[80.0])
-    d11_lin: float | None = _field(None, "linear surge damping", "kg/s", ge=0.0, examples=[70.0])
-    d11_quad: float | None = _field(None, "quadratic surge damping (times |u|)", "kg/m", ge=0.0, examples=[100.0])
-    d22_lin: float | None = _field(None, "linear sway damping", "kg/s", ge=0.0, examples=[100.0])
-    d22_quad: float | None = _field(None, "quadratic sway damping (times |v|)", "kg/m", ge=0.0, examples=[200.0])
-    d33_lin: float | None = _field(None, "linear yaw damping", "kg m^2/s", ge=0.0, examples=[50.0])
-    d33_quad: float | None = _field(None, "quadratic yaw damping (times |r|)", "kg m^2", ge=0.0, examples=[100.0])
+    m11: float | None = _field(
+        None, "surge inertia m - X_udot", "kg", ge=MASS_RANGE[0], le=MASS_RANGE[1], examples=[200.0]
+    )
+    m22: float | None = _field(
+        None, "sway inertia m - Y_vdot", "kg", ge=MASS_RANGE[0], le=MASS_RANGE[1], examples=[250.0]
+    )
+    m33: float | None = _field(
+        None, "yaw inertia I_z - N_rdot", "kg m^2", ge=MASS_RANGE[0], le=MASS_RANGE[1], examples=[80.0]
+    )
+    d11_lin: float | None = _field(None, "linear surge damping", "kg/s", ge=0.0, le=MAX_DAMPING, examples=[70.0])
+    d11_quad: float | None = _field(
+        None, "quadratic surge damping (times |u|)", "kg/m", ge=0.0, le=MAX_DAMPING, examples=[100.0]
+    )
+    d22_lin: float | None = _field(None, "linear sway damping", "kg/s", ge=0.0, le=MAX_DAMPING, examples=[100.0])
+    d22_quad: float | None = _field(
+        None, "quadratic sway damping (times |v|)", "kg/m", ge=0.0, le=MAX_DAMPING, examples=[200.0]
+    )
+    d33_lin: float | None = _field(None, "linear yaw damping", "kg m^2/s", ge=0.0, le=MAX_DAMPING, examples=[50.0])
+    d33_quad: float | None = _field(
+        None, "quadratic yaw damping (times |r|)", "kg m^2", ge=0.0, le=MAX_DAMPING, examples=[100.0]
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -665,15 +695,18 @@ class DesignTable(_Table):
     """``[design]``: Theorem 1 gain method and bounds, Theorem 2 and heading gains."""
 
     method: GainMethod = _field("stabilizing", "Theorem 1 gain: paper (eq. 32), stabilizing root, or minimal")
-    gamma: float | None = _field(None, "H-infinity bound (default 1/sigma_upper of the envelope)", "s", gt=0.0)
+    gamma: float | None = _field(
+        None, "H-infinity bound (default 1/sigma_upper of the envelope)", "s", ge=GAMMA_RANGE[0], le=GAMMA_RANGE[1]
+    )
     lam: float | None = _field(
         None,
         "nominal lambda (default: the most negative over the envelope)",
         "1/s",
         lt=0.0,
+        ge=-MAX_DESIGN_RATE,
         alias="lambda",
     )
-    k1: float = _field(DEFAULT_K1, "Theorem 2 position gain", "1/s^2", gt=0.0)
+    k1: float = _field(DEFAULT_K1, "Theorem 2 position gain", "1/s^2", gt=0.0, le=MAX_DESIGN_RATE)
     robust: bool = _field(
         False,
         "use the robust design: alpha, k1 and the heading gains chosen for the [uncertainty] box and "

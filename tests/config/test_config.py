@@ -69,7 +69,7 @@ def test_string_number_rejected_int_accepted():
 def test_every_problem_listed_with_its_path_and_unit():
     lines = problems({"design": {"gamma": -1, "lambda": 0.5, "k1": math.nan}, "simulation": {"horizon": 0}})
     assert lines == [
-        "design.gamma must be > 0 [s], got -1",
+        "design.gamma must be >= 1e-06 [s], got -1",
         "design.lambda must be < 0 [1/s], got 0.5",
         "design.k1 must be finite, got nan",
         "simulation.horizon must be > 0 [s], got 0",
@@ -78,7 +78,10 @@ def test_every_problem_listed_with_its_path_and_unit():
 
 def test_negative_mass_and_damping():
     lines = problems({"vehicle": {**NINE, "m33": -1.0, "d22_quad": -0.1}})
-    assert lines == ["vehicle.m33 must be > 0 [kg m^2], got -1.0", "vehicle.d22_quad must be >= 0 [kg/m], got -0.1"]
+    assert lines == [
+        "vehicle.m33 must be >= 1e-06 [kg m^2], got -1.0",
+        "vehicle.d22_quad must be >= 0 [kg/m], got -0.1",
+    ]
 
 
 def test_preset_plus_parameters_rejected():
@@ -142,8 +145,9 @@ def test_offsets_and_polygon_agree():
 
 def test_design_ranges_in_python():
     cfg = preset_config("paper-triangle")
-    for kwargs, pattern in [({"gamma": 0.0}, "design.gamma must be > 0"), ({"lam": 1e-9}, "design.lambda must be < 0"),
-                            ({"k1": -1}, "design.k1"), ({"heading_poles": (-1.0, -1.0)}, "distinct"),
+    for kwargs, pattern in [({"gamma": 0.0}, "design.gamma must be >= 1e-06"),
+                            ({"lam": 1e-9}, "design.lambda must be < 0"), ({"k1": -1}, "design.k1"),
+                            ({"heading_poles": (-1.0, -1.0)}, "distinct"),
                             ({"method": "fast"}, "design.method must be one of")]:  # fmt: skip
         with pytest.raises(ConfigError, match=pattern):
             replace(cfg, **kwargs)
@@ -189,7 +193,7 @@ def test_simulation_uncertainty_disturbance():
     bad = {**data, "simulation": {**data["simulation"], "initial": [[0, 0, 0, 1, 0, 0]]}}
     assert "simulation.initial must have one row per vehicle (2), got 1" in problems(bad)
     assert problems({"uncertainty": {"m11": [1.1, 1.2]}})[0].startswith("uncertainty.m11: a relative range")
-    assert problems({"simulation": {"plant": {"m11": 0}}}) == ["simulation.plant.m11 must be > 0, got 0"]
+    assert problems({"simulation": {"plant": {"m11": 0}}}) == ["simulation.plant.m11 must be >= 0.001, got 0"]
     with pytest.raises(ConfigError, match=r"simulation\.initial must have one row per vehicle"):
         replace(preset_config("paper-triangle"), simulation=SimulationConfig(initial=((0, 0, 0, 0, 0, 0),)))
     with pytest.raises(ConfigError, match="uncertainty"):
@@ -285,7 +289,7 @@ def test_json_schema_has_units_and_forbids_extras():
     vehicle = schema["$defs"]["VehicleTable"]
     assert vehicle["additionalProperties"] is False
     m11 = next(s for s in vehicle["properties"]["m11"]["anyOf"] if s.get("type") == "number")
-    assert vehicle["properties"]["m11"]["unit"] == "kg" and m11["exclusiveMinimum"] == 0
+    assert vehicle["properties"]["m11"]["unit"] == "kg" and m11["minimum"] == 1e-6 and m11["maximum"] == 1e9
     assert "lambda" in schema["$defs"]["DesignTable"]["properties"]
 
 

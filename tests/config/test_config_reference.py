@@ -86,8 +86,8 @@ def test_config_md_states_units_ranges_and_the_k1_default():
     assert k1 == 0.5
     assert f"`[design] k1`, the\nTheorem 2 position gain, defaults to {k1:g} 1/s^2" in text
     design = _sections(text)["## `[design]`"]
-    assert "| `k1` | float | `1/s^2` | > 0 | `0.5` |" in design
-    assert "| `lambda` | float | `1/s` | < 0 | *not set* |" in design
+    assert "| `k1` | float | `1/s^2` | > 0, <= 1e6 | `0.5` |" in design
+    assert "| `lambda` | float | `1/s` | >= -1e6, < 0 | *not set* |" in design
     assert '| `method` | string | - | one of `"paper"`, `"stabilizing"`, `"minimal"` |' in design
 
 
