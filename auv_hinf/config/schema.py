@@ -87,9 +87,10 @@ MASS_RANGE = (1e-6, 1e9)
 MAX_DAMPING = 1e12
 
 
-#: Range of a ``[simulation.plant]`` multiplier: a plant a thousand times off its model is not a
-#: model error but another vehicle.
-MULTIPLIER_RANGE = (1e-3, 1e3)
+#: Range of a ``[simulation.plant]`` multiplier and of an ``[uncertainty]`` box's ends: a plant ten
+#: times off its model is not a model error but another vehicle (and with every coefficient at 1e-3
+#: the run is so stiff that the integrator grinds for minutes).
+MULTIPLIER_RANGE = (0.1, 10.0)
 
 
 #: Largest magnitude of a design rate or gain (1/s, 1/s^2) and range of the H-infinity bound (s):
@@ -316,7 +317,7 @@ class PlantTable(_Table):
 
 
 class UncertaintyTable(_Table):
-    """``[uncertainty]``: declared box of relative multipliers ``[lo, hi]``, 0 < lo <= 1 <= hi."""
+    """``[uncertainty]``: declared box of relative multipliers ``[lo, hi]``, 0.1 <= lo <= 1 <= hi <= 10."""
 
     m11: Pair | None = _field(None, "relative range [lo, hi] of m11")
     m22: Pair | None = _field(None, "relative range [lo, hi] of m22")
@@ -331,8 +332,9 @@ class UncertaintyTable(_Table):
     @field_validator(*PARAMETERS)
     @classmethod
     def _box(cls, value: list[float] | None, info: Any) -> list[float] | None:
-        if value is not None and not (0.0 < value[0] <= 1.0 <= value[1]):
-            raise ValueError(f"a relative range [lo, hi] must satisfy 0 < lo <= 1 <= hi, got {value}")
+        lo, hi = MULTIPLIER_RANGE
+        if value is not None and not (lo <= value[0] <= 1.0 <= value[1] <= hi):
+            raise ValueError(f"a relative range [lo, hi] must satisfy {lo:g} <= lo <= 1 <= hi <= {hi:g}, got {value}")
         return value
 
 

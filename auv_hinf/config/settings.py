@@ -176,7 +176,7 @@ class SimulationConfig:
 
 @dataclass(frozen=True)
 class UncertaintyConfig:
-    """Declared parameter box (``[uncertainty]``): name -> relative ``(lo, hi)``, 0 < lo <= 1 <= hi.
+    """Declared parameter box (``[uncertainty]``): name -> relative ``(lo, hi)``, 0.1 <= lo <= 1 <= hi <= 10.
 
     Attributes
     ----------

@@ -193,7 +193,7 @@ def test_simulation_uncertainty_disturbance():
     bad = {**data, "simulation": {**data["simulation"], "initial": [[0, 0, 0, 1, 0, 0]]}}
     assert "simulation.initial must have one row per vehicle (2), got 1" in problems(bad)
     assert problems({"uncertainty": {"m11": [1.1, 1.2]}})[0].startswith("uncertainty.m11: a relative range")
-    assert problems({"simulation": {"plant": {"m11": 0}}}) == ["simulation.plant.m11 must be >= 0.001, got 0"]
+    assert problems({"simulation": {"plant": {"m11": 0}}}) == ["simulation.plant.m11 must be >= 0.1, got 0"]
     with pytest.raises(ConfigError, match=r"simulation\.initial must have one row per vehicle"):
         replace(preset_config("paper-triangle"), simulation=SimulationConfig(initial=((0, 0, 0, 0, 0, 0),)))
     with pytest.raises(ConfigError, match="uncertainty"):
