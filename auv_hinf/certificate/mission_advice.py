@@ -119,7 +119,7 @@ CHANGE_WORDS = {
 }
 #: How each kind of change is named in a refusal that lists what was tried.
 TRIED = {
-    "design": "gains designed for the deployed loop",
+    "design": CHANGE_WORDS["design"],
     "turns": f"turns up to {TURN_FACTORS[-1]:g} times wider",
     "speed": "half and a quarter of the mission speed",
     "both": "the widest turns at the slower speeds",

@@ -301,31 +301,25 @@ def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | N
         return {f"{k}_error": v for k, v in composed.bounds.items()}, "composed"
     nominal = next((c for c in plan.checks if c.part == "closed_loop" and c.role == "certificate"), None)
     robust = plan.robust
-    if (
-        plan.implementation is None
-        and nominal is not None
+    if plan.implementation is not None:
+        c = plan.implementation.certificate
+        if not plan.implementation.covers or c is None or c.bounds is None:
+            return None, None
+        b, source = c.bounds.to_dict(), "implementation"
+    elif (
+        nominal is not None
         and not (nominal.applies and nominal.covers)
         and robust is not None
         and robust.covered
         and robust.bounds is not None
     ):
-        return {f"{k}_error": max(v, NUMERICAL_FLOOR) for k, v in robust.bounds.items()}, "robust"
-    if plan.implementation is not None:
-        c = plan.implementation.certificate
-        if not plan.implementation.covers or c is None or c.bounds is None:
-            return None, None
-        b, source = c.bounds, "implementation"
+        b, source = robust.bounds, "robust"
     elif plan.coverage is None:
         return None, None
     else:
-        b, source = plan.coverage.bounds, "closed_loop"
-    bounds = {
-        "position_error": max(b.position, NUMERICAL_FLOOR),
-        "velocity_error": max(b.velocity, NUMERICAL_FLOOR),
-        "heading_error": max(b.heading, NUMERICAL_FLOOR),
-        "yaw_rate_error": max(b.yaw_rate, NUMERICAL_FLOOR),
-    }
-    return bounds, source
+        b, source = plan.coverage.bounds.to_dict(), "closed_loop"
+    keys = ("position", "velocity", "heading", "yaw_rate")
+    return {f"{k}_error": max(b[k], NUMERICAL_FLOOR) for k in keys}, source
 
 
 def implementation_report(scn: Scenario) -> dict[str, Any]:

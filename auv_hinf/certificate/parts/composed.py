@@ -237,6 +237,11 @@ def within_actuators(point: DesignPoint) -> Callable[[DeployedProblem], Deployed
     return certify
 
 
+def _applies(cfg: FormationConfig) -> bool:
+    """The composed certificate is about ``cfg``: the formation law, sampled."""
+    return cfg.guidance is None and cfg.implementation.sampled
+
+
 def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSummary:
     """The composed certificate of ``point``'s deployed loop from its configured start (see the module docstring).
 
@@ -248,7 +253,7 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
         When it does not cover, search each declared setting's covered value (a few certificates each).
     """
     cfg = point.config
-    if cfg.guidance is not None or not cfg.implementation.sampled:
+    if not _applies(cfg):
         return ComposedSummary(False, None, True, ())
     if point.gains is None:
         return ComposedSummary(True, None, False, ("the design gives no gains to certify",))
@@ -286,7 +291,7 @@ class ComposedPart:
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The composed summary of ``ctx.point``: covers, or why not with what would certify."""
         cfg = ctx.point.config
-        if cfg.guidance is None and cfg.implementation.sampled:
+        if _applies(cfg):
             try:  # the composed certificate bounds the heading error, not the heading
                 full_heading_range(cfg.envelope)
             except DesignError as exc:

@@ -111,21 +111,9 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
     g, act, impl = cfg.guidance, cfg.actuators, cfg.implementation
     if g is None or not isinstance(act, RudderActuation):
         return "[guidance] needs an underactuated [actuators] table: a propeller and a rudder"
-    if g.sigma <= 0.0:
-        return (
-            "plain LOS has no certificate in this version (its offset in a current is in closed form): "
-            'use kind = "ilos"'
-        )
-    if impl.delay > 0.0 or not impl.noise.exact:
-        return (
-            "the cascade is certified at [implementation] sample_time without delay or noise in this version: "
-            "remove [implementation] delay and [implementation.noise]"
-        )
-    if cfg.disturbance.current_rate:
-        return (
-            "the cascade is certified in a constant current (the 3-DOF model's water-relative velocities); "
-            "remove [disturbance] current_rate"
-        )
+    unsupported = _unsupported(cfg)
+    if unsupported:
+        return unsupported[0][0]
     tube = point.tube
     speed_lo = tube.speed[:, 0]
     if float(speed_lo.min()) <= 0.0:
@@ -458,28 +446,52 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
     return None
 
 
+def _unsupported(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
+    """What of ``cfg`` this version does not certify: each reason, with the settings that remove it."""
+    g, impl = cfg.guidance, cfg.implementation
+    out: list[tuple[str, tuple[Setting, ...]]] = []
+    if g is not None and g.sigma <= 0.0:
+        out.append(
+            (
+                "plain LOS has no certificate in this version (its offset in a current is in closed form): "
+                'use kind = "ilos"',
+                (Setting("guidance", "kind", "ilos"),),
+            )
+        )
+    lag = (Setting("implementation", "delay", None),) if impl.delay > 0.0 else ()
+    noise = () if impl.noise.exact else (Setting("implementation", "noise", None),)
+    if lag or noise:
+        out.append(
+            (
+                "the cascade is certified at [implementation] sample_time without delay or noise in this version: "
+                "remove [implementation] delay and [implementation.noise]",
+                lag + noise,
+            )
+        )
+    if cfg.disturbance.current_rate:
+        out.append(
+            (
+                "the cascade is certified in a constant current (the 3-DOF model's water-relative velocities); "
+                "remove [disturbance] current_rate",
+                (Setting("disturbance", "current_rate", None),),
+            )
+        )
+    return out
+
+
 def supported_settings(cfg: FormationConfig) -> tuple[Setting, ...]:
     """The settings that turn ``cfg``'s cascade into one this version certifies (empty: nothing to change).
 
     Integral LOS for plain LOS, the sampled law without its delay and noise, a constant current
-    for a varying one.
+    for a varying one: the settings of every reason :func:`cascade_problem` gives for not
+    evaluating it.
 
     Parameters
     ----------
     cfg : FormationConfig
         A configuration with ``[guidance]``.
     """
-    g, impl = cfg.guidance, cfg.implementation
-    out: list[Setting] = []
-    if g is not None and g.sigma <= 0.0:
-        out.append(Setting("guidance", "kind", "ilos"))
-    if impl.delay > 0.0:
-        out.append(Setting("implementation", "delay", None))
-    if not impl.noise.exact:
-        out.append(Setting("implementation", "noise", None))
-    if cfg.disturbance.current_rate:
-        out.append(Setting("disturbance", "current_rate", None))
-    return tuple(out)
+    return tuple(x for _, settings in _unsupported(cfg) for x in settings)
 
 
 def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
