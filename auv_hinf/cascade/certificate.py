@@ -43,6 +43,10 @@ of the commanded thrust and rudder, and of the sway speed. The derivation is in
   :data:`FIXED_POINT_MARGIN` and checks the strict inclusion there. The commanded thrust and rudder
   are then bounded over ``B`` and checked against the limits: the law is never saturated, as the
   residuals assume.
+* **Cells.** What is constant in a run can be cut into cells, each with its own nominal loop
+  (:func:`certify_cascade`): the masses (the nominal plant is the cell's centre) and, on a mission
+  that keeps its course in a constant current, the current's component along the track (the
+  nominal surge speed through the water is ``U0`` less the cell's middle).
 
 The certificate covers the cascade at the declared sample time with no delay and exact
 measurements (what ``simulate`` runs), and ILOS guidance only: plain LOS has no integral state,
@@ -130,6 +134,9 @@ class CascadeProblem:
     nominal : VehicleParams or None
         The plant of the nominal loop: the centre of a cell of the box that ``plant.box`` has been
         narrowed to (:func:`certify_cascade`); ``None``: the controller's model.
+    current_along : tuple of float or None
+        ``[lo, hi]`` of the current's component along the track in a cell of it (m/s; on a mission
+        that keeps its course, :func:`current_cells_apply`); ``None``: every component ``[-C, C]``.
     """
 
     guidance: GuidanceConfig
@@ -143,6 +150,7 @@ class CascadeProblem:
     sample_time: float
     start: tuple[float, ...] = field(default=(0.0,) * 7)
     nominal: VehicleParams | None = None
+    current_along: tuple[float, float] | None = None
 
     @property
     def nominal_plant(self) -> VehicleParams:
@@ -151,8 +159,30 @@ class CascadeProblem:
 
     @property
     def reference_speed(self) -> float:
-        """``U0`` (m/s): the middle of the slots' speed range, the surge speed of the nominal loop."""
+        """``U0`` (m/s): the middle of the slots' speed range."""
         return 0.5 * (self.speed[0] + self.speed[1])
+
+    @property
+    def along(self) -> tuple[float, float]:
+        """``[lo, hi]`` of the current's component ``c_t`` along the track (m/s): :attr:`current_along`,
+        or ``[-C, C]``."""
+        c = self.plant.current
+        return self.current_along if self.current_along is not None else (-c, c)
+
+    @property
+    def across(self) -> float:
+        """Bound of the current's component ``|c_n|`` across the track (m/s): ``sqrt(C^2 - c_t^2)`` at the
+        smallest ``|c_t|`` of :attr:`along`."""
+        lo, hi = self.along
+        least = 0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi))
+        return math.sqrt(max(self.plant.current**2 - least**2, 0.0))
+
+    @property
+    def nominal_speed(self) -> float:
+        """``u0`` (m/s): the nominal loop's surge speed through the water, ``U0`` less the middle of
+        :attr:`along` (``U0`` when the current is not cut into cells)."""
+        lo, hi = self.along
+        return self.reference_speed - 0.5 * (lo + hi)
 
 
 @dataclass(frozen=True)
@@ -191,7 +221,7 @@ def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
     ``theta = 0``, ``omega = 0`` and the model's coefficients.
     """
     g, m, n, act = problem.guidance, problem.plant.model, problem.nominal_plant, problem.act
-    u0, delta = problem.reference_speed, g.lookahead
+    u0, delta = problem.nominal_speed, g.lookahead
     a_g, b_g = u0 / delta, g.sigma / delta
 
     def row(**terms: float) -> FloatArray:
@@ -234,7 +264,7 @@ def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
 def _law(problem: CascadeProblem) -> FloatArray:
     """The held commands' linear law on the measured state, shape (3, 7)."""
     g, m = problem.guidance, problem.plant.model
-    u0 = problem.reference_speed
+    u0 = problem.nominal_speed
     kp, kd = _gains(g)
     d_c = np.zeros((3, 7))
     d_c[0, [X_E, V_X]] = (-g.speed_gain * g.along_track_gain, -g.speed_gain)
@@ -260,7 +290,7 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
     full = np.vstack([rows[k] for k in order])
     outputs = np.vstack([np.hstack([np.eye(7), np.zeros((7, 3 + 7))]), _derived_outputs(problem, rows)])
     b_w = np.eye(7)
-    b_w[P, Y_E] = problem.reference_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
+    b_w[P, Y_E] = problem.nominal_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
     return SampledLoop(
         full[:, :7],
         full[:, 7:],
@@ -282,7 +312,7 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
 def _derived_outputs(problem: CascadeProblem, rows: dict[str, FloatArray]) -> FloatArray:
     """The loop's rows of :data:`DERIVED`, on ``(x, a_x, tau, u_i, y_used)`` (17 columns)."""
     kp, kd = _gains(problem.guidance)
-    u0 = problem.reference_speed
+    u0 = problem.nominal_speed
     out = np.zeros((len(DERIVED), 17))
     on_x_u = {
         "ydot_lin": rows["ydot"],
@@ -384,9 +414,11 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         """The smaller of a sum of the states' bounds and the derived bound (both hold)."""
         return min(crude, derived.get(name, math.inf))
 
-    u0 = problem.reference_speed
+    u0 = problem.nominal_speed
     lo_u, hi_u = problem.speed
     c, c_rate = pl.current, pl.current_rate
+    t_lo, t_hi = problem.along  # the current along the track, and across it: |c_n| <= c_n_max
+    c_n_max = problem.across
     omega, omega_dot, accel = problem.turn_rate, problem.turn_accel, problem.speed_rate  # accel: |U'|
     delta, sigma = g.lookahead, g.sigma
     a_g, b_g = u0 / delta, sigma / delta
@@ -397,9 +429,9 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     lever = abs(act.lever_arm)
     # -- the line of sight theta, |(U - c_t) sin(theta)| = |p + c_n|, the track angle beta = e - theta
     # and the surge speed through the water, u cos(beta) = U + v_x - c_t + v sin(beta)
-    if lo_u <= c:
-        return f"the current ({c:.3g} m/s) is not below the slots' slowest speed ({lo_u:.3g} m/s)"
-    sin_t = (pb + c) / (lo_u - c)
+    if lo_u <= t_hi:
+        return f"the current ({t_hi:.3g} m/s along the track) is not below the slots' slowest speed ({lo_u:.3g} m/s)"
+    sin_t = (pb + c_n_max) / (lo_u - t_hi)
     if sin_t > MAX_SIGHT_SINE:
         return f"the line of sight reaches {math.degrees(math.asin(min(sin_t, 1.0))):.3g} deg off the track"
     cos_t = math.sqrt(1.0 - sin_t * sin_t)
@@ -407,12 +439,12 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     if track > MAX_TRACK_ANGLE:
         return f"the heading reaches {math.degrees(track):.3g} deg off the track"
     sin_b, cos_b = math.sin(track), math.cos(track)
-    u_lo = lo_u - vxb - c - vb * sin_b
-    u_hi = (hi_u + vxb + c + vb * sin_b) / cos_b
+    u_lo = lo_u - vxb - t_hi - vb * sin_b
+    u_hi = (hi_u + vxb - t_lo + vb * sin_b) / cos_b
     if u_lo < MIN_RUDDER_SPEED:
         return f"the surge speed may drop to {u_lo:.3g} m/s, below the rudder's {MIN_RUDDER_SPEED} m/s"
     du = max(u_hi - u0, u0 - u_lo)
-    du_along = 0.5 * (hi_u - lo_u) + vxb + c + vb * sin_b  # |u cos(beta) - U0|
+    du_along = max(hi_u - t_lo - u0, u0 - lo_u + t_hi) + vxb + vb * sin_b  # |u cos(beta) - u0|
     # -- w3: y_e' less -p + U0 e + v
     w3 = (
         du * math.sin(eb)
@@ -515,8 +547,8 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     # -- w4: p' = (U' - c_t') sin(theta) + (U - c_t) cos(theta) theta' - c_n' less (U0/Delta)(y_e'_nominal + w3) + u_i
     w4 = (
         (accel + omega * c + c_rate) * sin_t
-        + max(hi_u + c - u0, u0 - (lo_u - c) * cos_t**3) * ydot / delta
-        + sigma / delta**2 * max(hi_u + c - u0, u0 - (lo_u - c) * cos_t**5) * yb
+        + max(hi_u - t_lo - u0, u0 - (lo_u - t_hi) * cos_t**3) * ydot / delta
+        + sigma / delta**2 * max(hi_u - t_lo - u0, u0 - (lo_u - t_hi) * cos_t**5) * yb
         + omega * c
         + c_rate
     )
@@ -584,7 +616,10 @@ class CascadeCertificate:
         Spectral radius of the nominal loop's period map (``None`` when the loop is unstable; the
         largest over the cells).
     cells : int
-        Cells of the box certified one by one (1: the whole box at once; :func:`certify_cascade`).
+        Cells certified one by one (1: the whole box and current at once; :func:`certify_cascade`).
+    current_cells : int
+        How many ranges of the current's along-track component those cells take (1: the whole
+        range ``[-C, C]``).
     """
 
     holds: bool
@@ -594,6 +629,7 @@ class CascadeCertificate:
     iterations: int = 0
     radius: float | None = None
     cells: int = 1
+    current_cells: int = 1
 
     @property
     def error_bounds(self) -> dict[str, float] | None:
@@ -628,6 +664,7 @@ class CascadeCertificate:
             "loop_radius": self.radius,
             "iterations": self.iterations,
             "cells": self.cells,
+            "current_cells": self.current_cells,
             "reason": self.reason,
         }
 
@@ -664,8 +701,8 @@ def _loop_analysis(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> t
 MAX_CELL_DEPTH = 2
 #: Most cells :func:`certify_cascade` certifies one by one before it gives up (each costs one
 #: nominal loop's peak gains, about 0.9 s for a REMUS at 10 Hz): 80 is the 8 corners of three
-#: masses and every cell of two levels of halving (8 + 64), so the depth binds first; a smaller
-#: budget bounds the time of a refusal instead.
+#: masses and every cell of two levels of halving (8 + 64); the cells of the along-track current
+#: share the budget, which bounds the time of a refusal.
 MAX_CELLS = 80
 #: The coefficients a cell is halved along: the three masses, on which the heading-sway block's
 #: nominal coefficients depend (the Coriolis ratio ``m11/m22``, the Munk coefficient ``m22 - m11``
@@ -727,8 +764,10 @@ def _centre_only(problem: CascadeProblem) -> CascadeProblem:
     return replace(problem, plant=replace(problem.plant, box=ParameterBox(centre)), nominal=centre)
 
 
-def _union(certs: list[CascadeCertificate]) -> CascadeCertificate:
-    """The certificate of a box from the certificates of the cells that cover it (all hold)."""
+def _union(cover: list[tuple[tuple[float, float], CascadeCertificate]]) -> CascadeCertificate:
+    """The certificate of a box and current from those of the cells that cover them (all hold), each with its
+    range of the current's along-track component."""
+    certs = [c for _, c in cover]
     errors = np.max(np.stack([c.errors for c in certs if c.errors is not None]), axis=0)
     acts = [c.actuation for c in certs if c.actuation is not None]
     actuation = Actuation(
@@ -738,18 +777,22 @@ def _union(certs: list[CascadeCertificate]) -> CascadeCertificate:
         max(a.yaw_rate for a in acts),
     )
     radius = max(c.radius for c in certs if c.radius is not None)
-    return CascadeCertificate(True, errors, actuation, "", sum(c.iterations for c in certs), radius, len(certs))
+    ranges = len({along for along, _ in cover})
+    return CascadeCertificate(True, errors, actuation, "", sum(c.iterations for c in certs), radius, len(certs), ranges)
 
 
 @functools.lru_cache(maxsize=256)
-def certify_cascade(problem: CascadeProblem, cells: bool = True) -> CascadeCertificate:
+def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: bool = True) -> CascadeCertificate:
     """The cascade's certificate (see the module docstring), on the whole box or else on cells of it.
 
-    When the whole box does not certify and :data:`CELL_PARAMETERS` are uncertain, the box is
-    halved along them (:func:`halves`), and each half that does not certify is halved again, at
-    most :data:`MAX_CELL_DEPTH` times and :data:`MAX_CELLS` cells in all; the box certifies when
-    every cell does, with the largest of the cells' bounds. The search gives up early when a cell's
-    centre plant alone does not certify. Otherwise the whole box's refusal is returned.
+    When the whole box and current do not certify, they are covered by cells (:func:`_cover`), each
+    certified with its own nominal loop: when the current's along-track component is a constant of
+    each run (:func:`current_cells_apply`), first cells of that component alone (halved at most
+    :data:`MAX_CURRENT_DEPTH` times); then cells of the masses (halved at most
+    :data:`MAX_CELL_DEPTH` times) and of the current, at most :data:`MAX_CELLS` cells in all. The
+    whole certifies when every cell does, with the largest of the cells' bounds. A corner of the
+    masses refused alone refuses at once, and the search gives up when a cell's centre (one plant,
+    one current along the track) is refused alone. Otherwise the whole box's refusal is returned.
 
     Parameters
     ----------
@@ -758,17 +801,121 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True) -> CascadeCerti
     cells : bool
         Try cells when the whole box does not certify (the advice's searches do not: a setting
         that certifies the whole box certifies with cells too).
+    mass_cells : bool
+        With ``cells``, cut the masses too (else only the along-track current: a few cells, for the
+        advice's search of gains; what certifies so certifies with every kind of cell too).
     """
     whole = _certify_one(problem)
-    if whole.holds or not cells or problem.nominal is not None:
+    if whole.holds or not cells or problem.nominal is not None or problem.current_along is not None:
         return whole
-    if not _split(problem):
+    if not ((mass_cells and _split(problem)) or current_cells_apply(problem)):
         return whole
     with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
-        certs = _refused_vertex(problem, bar) or _cells(problem, MAX_CELL_DEPTH, bar)
-    if isinstance(certs, list):
-        return _union(certs)
-    return replace(whole, reason=f"{whole.reason} (the box in cells of its masses does not certify either: {certs})")
+        # the along-track current's cells alone first (a few loops), so that whatever the advice's
+        # search of gains certifies with them (mass_cells=False) a re-run certifies too
+        cover: list[tuple[tuple[float, float], CascadeCertificate]] | str = ""
+        if current_cells_apply(problem):
+            cover = _cover(problem, bar, 0, MAX_CURRENT_DEPTH)
+        if isinstance(cover, str) and mass_cells and _split(problem):
+            cover = _cover(problem, bar, MAX_CELL_DEPTH, MAX_CURRENT_DEPTH)
+    if isinstance(cover, list):
+        return _union(cover)
+    what = "of the current and the masses" if current_cells_apply(problem) else "of its masses"
+    return replace(whole, reason=f"{whole.reason} (the box in cells {what} does not certify either: {cover})")
+
+
+#: How many times :func:`certify_cascade` may halve a range of the current's along-track component
+#: that does not certify (2: quarters of ``[-C, C]``, each ``C/2`` wide; a range that still fails is
+#: then cut along the masses, within the cells' budget :data:`MAX_CELLS`).
+MAX_CURRENT_DEPTH = 2
+
+
+def current_cells_apply(problem: CascadeProblem) -> bool:
+    """The current's along-track component ``c_t`` is a constant of every run, so cells of it cover the current.
+
+    On a mission that keeps its course (no turns) in a constant current, ``c_t`` and ``c_n`` never
+    change: every run lies in one cell of ``c_t`` for ever. Within the cell the nominal loop's surge
+    speed is ``U0`` less the cell's middle ``c_t`` (:attr:`CascadeProblem.nominal_speed`), which puts
+    the ILOS gain's dependence on the water speed, ``(U - c_t)/Delta``, in the nominal loop instead
+    of a residual that the integral action amplifies.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    """
+    pl = problem.plant
+    return pl.current > 0.0 and pl.current_rate == 0.0 and problem.turn_rate == 0.0
+
+
+def current_halves(problem: CascadeProblem) -> list[CascadeProblem]:
+    """``problem`` with its range of the current's along-track component (:attr:`CascadeProblem.along`) halved.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    """
+    lo, hi = problem.along
+    mid = 0.5 * (lo + hi)
+    return [replace(problem, current_along=(lo, mid)), replace(problem, current_along=(mid, hi))]
+
+
+def _current_centre(problem: CascadeProblem) -> CascadeProblem:
+    """``problem`` with its range of the along-track current narrowed to its middle (when cells of it apply)."""
+    if not current_cells_apply(problem):
+        return problem
+    mid = 0.5 * sum(problem.along)
+    return replace(problem, current_along=(mid, mid))
+
+
+def _cover(
+    problem: CascadeProblem, bar: tqdm, mass_depth: int, current_depth: int
+) -> list[tuple[tuple[float, float], CascadeCertificate]] | str:
+    """Cells that cover ``problem`` (which does not certify whole), each certified, or why there are none.
+
+    The problem is halved along the current's along-track component when its middle value alone
+    certifies with the cell's whole range of masses (then the masses' spread is not what binds),
+    else along the masses; a half that fails is covered the same way, at most ``mass_depth`` and
+    ``current_depth`` more halvings. It gives up when the cell's centre (one plant,
+    one current along the track) is refused alone: no finer cell around it would certify.
+    ``bar`` counts the cells certified against :data:`MAX_CELLS`.
+    """
+    if not _certify_one(_current_centre(_centre_only(problem)), CELL_MAX_PERIODS).holds:
+        return f"the plant at the centre of the cell {_masses(problem)} is refused alone"
+    # finer ranges of the current help only when its middle value alone certifies with this cell's masses
+    by_current = (
+        current_cells_apply(problem)
+        and current_depth > 0
+        and _certify_one(_current_centre(problem), CELL_MAX_PERIODS).holds
+    )
+    by_masses = bool(_split(problem)) and mass_depth > 0
+    if by_current:
+        parts, mass_depth, current_depth = current_halves(problem), mass_depth, current_depth - 1
+    elif by_masses:
+        # the corners' quick refusal, once, on the whole current (within a range of it, the halves' centres)
+        refused = (
+            _refused_vertex(problem, bar) if mass_depth == MAX_CELL_DEPTH and problem.current_along is None else ""
+        )
+        if refused:
+            return refused
+        parts, mass_depth, current_depth = halves(problem), mass_depth - 1, current_depth
+    else:
+        return f"the cell {_masses(problem)} is refused, and halved as often as allowed"
+    out: list[tuple[tuple[float, float], CascadeCertificate]] = []
+    for part in parts:
+        if bar.n >= MAX_CELLS:
+            return f"{MAX_CELLS} cells were tried"
+        bar.update(1)
+        cert = _certify_one(part, CELL_MAX_PERIODS)
+        if cert.holds:
+            out.append((part.along, cert))
+            continue
+        deeper = _cover(part, bar, mass_depth, current_depth)
+        if isinstance(deeper, str):
+            return deeper
+        out += deeper
+    return out
 
 
 def _mass_vertices(problem: CascadeProblem) -> list[CascadeProblem]:
@@ -788,46 +935,27 @@ def _refused_vertex(problem: CascadeProblem, bar: tqdm) -> str:
 
     A cell that holds a refused corner would have to do better than the corner's own nominal loop:
     the search does not try, and refuses at once (each corner costs one nominal loop, the smallest
-    Munk coefficient first, where the heading-sway block is weakest)."""
+    Munk coefficient first, where the heading-sway block is weakest). When cells of the along-track
+    current apply, each corner is taken at the middle of the current's range: some cell holds both."""
     for corner in _mass_vertices(problem):
         bar.update(1)
-        if not _certify_one(corner, CELL_MAX_PERIODS).holds:
-            return f"the corner {_masses(corner)} of the masses, with the box's other ranges, is refused alone"
+        single = _current_centre(corner)
+        if not _certify_one(single, CELL_MAX_PERIODS).holds:
+            return f"the corner {_masses(single)} of the masses, with the box's other ranges, is refused alone"
     return ""
 
 
 def _masses(problem: CascadeProblem) -> str:
-    """The cell's mass ranges (or values), for a refusal (kg, kg, kg m^2)."""
+    """The cell's mass ranges (or values), and its range of the along-track current when it has one, for a
+    refusal (kg, kg, kg m^2, m/s)."""
     parts = []
     for name, unit in zip(CELL_PARAMETERS, ("kg", "kg", "kg m^2"), strict=True):
         lo, hi = problem.plant.interval(name)
         parts.append(f"{name} = {lo:.4g} {unit}" if lo == hi else f"{name} in [{lo:.4g}, {hi:.4g}] {unit}")
+    if problem.current_along is not None:
+        lo, hi = problem.current_along
+        parts.append(f"c_t = {lo:.3g} m/s" if lo == hi else f"c_t in [{lo:.3g}, {hi:.3g}] m/s along the track")
     return ", ".join(parts)
-
-
-def _cells(problem: CascadeProblem, depth: int, bar: tqdm) -> list[CascadeCertificate] | str:
-    """The certificates of cells that cover ``problem``'s box (its halves, recursively), or why there are none.
-
-    ``bar`` counts the cells certified against :data:`MAX_CELLS`."""
-    out = []
-    for half in halves(problem):
-        if bar.n >= MAX_CELLS:
-            return f"{MAX_CELLS} cells were tried"
-        bar.update(1)
-        cert = _certify_one(half, CELL_MAX_PERIODS)
-        if cert.holds:
-            out.append(cert)
-            continue
-        if not _certify_one(_centre_only(half), CELL_MAX_PERIODS).holds:
-            # not even the cell's centre plant certifies: no finer cell around it will
-            return f"the plant at the centre of the cell {_masses(half)} is refused alone"
-        if depth <= 1:
-            return f"the cell {_masses(half)} is refused after {MAX_CELL_DEPTH} halvings"
-        deeper = _cells(half, depth - 1, bar)
-        if isinstance(deeper, str):
-            return deeper
-        out += deeper
-    return out
 
 
 def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> CascadeCertificate:

@@ -504,15 +504,21 @@ def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | N
 
 
 def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
-    """The first of :data:`GAIN_CANDIDATES` whose certificate holds for ``problem``'s box and current."""
+    """The first of :data:`GAIN_CANDIDATES` whose certificate holds for ``problem``'s box and current.
+
+    Each candidate is tried on the whole box first, then (when none holds so) with cells of the
+    along-track current (a few loops each): a re-run with the gains certifies either way.
+    """
     g = problem.guidance
+    candidates = []
     for bandwidth, lookahead in GAIN_CANDIDATES:
         w = g.heading_bandwidth * bandwidth
-        if w * problem.sample_time > MAX_BANDWIDTH_STEP:
-            continue
-        gains = replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead)
-        if certify_cascade(replace(problem, guidance=gains), cells=False).holds:
-            return gains
+        if w * problem.sample_time <= MAX_BANDWIDTH_STEP:
+            candidates.append(replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead))
+    for cells in (False, True):
+        for gains in candidates:
+            if certify_cascade(replace(problem, guidance=gains), cells=cells, mass_cells=False).holds:
+                return gains
     return None
 
 
@@ -636,6 +642,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
         "sample_time": None if problem is None else problem.sample_time,
         "start": None if problem is None else dict(zip(STATES, problem.start, strict=True)),
         "cells": body.get("cells"),
+        "current_cells": body.get("current_cells"),
         "largest_certifiable": {
             "current_speed": summary.current_speed,
             "box_scale": summary.box_scale,
@@ -721,8 +728,12 @@ class GuidancePart:
         b, pk, lim = f.get("error_bounds"), f.get("certified_peak"), f.get("limits")
         if not f.get("certified") or b is None or pk is None:
             return [f"{head} not certified: {f.get('reason', '')}"]
-        cells = f.get("cells") or 1
-        by = f" (the box in {cells} cells, each certified with its own nominal plant)" if cells > 1 else ""
+        cells, ranges = f.get("cells") or 1, f.get("current_cells") or 1
+        by = ""
+        if ranges > 1:
+            by = f" (in {cells} cells: {ranges} ranges of the current along the track, each with its own nominal loop)"
+        elif cells > 1:
+            by = f" (the box in {cells} cells, each certified with its own nominal plant)"
         out = [
             f"{head} certified at h = {f['sample_time']:.4g} s{by}",
             f"    errors <= along-track {b['along_track']:.4g} m, cross-track {b['cross_track']:.4g} m, "
