@@ -257,6 +257,7 @@ def test_a_current_refused_whole_is_certified_by_cells_of_its_along_track_part_a
     assert worst[STATES.index("along_track")] >= 0.2 * box[STATES.index("along_track")], (worst, box)
 
 
+@pytest.mark.slow
 def test_a_refusal_by_the_cells_names_the_cell_refused(masses):
     _, problem = masses
     strong = replace(problem, plant=replace(problem.plant, current=0.3))
