@@ -787,9 +787,9 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
 
     When the whole box and current do not certify, they are covered by cells (:func:`_cover`), each
     certified with its own nominal loop: when the current's along-track component is a constant of
-    each run (:func:`current_cells_apply`), first cells of that component alone (halved at most
-    :data:`MAX_CURRENT_DEPTH` times); then cells of the masses (halved at most
-    :data:`MAX_CELL_DEPTH` times) and of the current, at most :data:`MAX_CELLS` cells in all. The
+    each run (:func:`current_cells_apply`), cells of that component (halved at most
+    :data:`MAX_CURRENT_DEPTH` times), and where they do not suffice cells of the masses (halved at
+    most :data:`MAX_CELL_DEPTH` times), at most :data:`MAX_CELLS` cells in all. The
     whole certifies when every cell does, with the largest of the cells' bounds. A corner of the
     masses refused alone refuses at once, and the search gives up when a cell's centre (one plant,
     one current along the track) is refused alone. Otherwise the whole box's refusal is returned.
@@ -811,13 +811,10 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
     if not ((mass_cells and _split(problem)) or current_cells_apply(problem)):
         return whole
     with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
-        # the along-track current's cells alone first (a few loops), so that whatever the advice's
-        # search of gains certifies with them (mass_cells=False) a re-run certifies too
-        cover: list[tuple[tuple[float, float], CascadeCertificate]] | str = ""
-        if current_cells_apply(problem):
-            cover = _cover(problem, bar, 0, MAX_CURRENT_DEPTH)
-        if isinstance(cover, str) and mass_cells and _split(problem):
-            cover = _cover(problem, bar, MAX_CELL_DEPTH, MAX_CURRENT_DEPTH)
+        # the search prefers the current's cells wherever they apply, so without the masses' cells it
+        # takes the same halvings and stops where the masses' would start: whatever the advice's search
+        # of gains certifies so (mass_cells=False), a re-run certifies with the same cells
+        cover = _cover(problem, bar, MAX_CELL_DEPTH if mass_cells else 0, MAX_CURRENT_DEPTH)
     if isinstance(cover, list):
         return _union(cover)
     what = "of the current and the masses" if current_cells_apply(problem) else "of its masses"
@@ -891,7 +888,7 @@ def _cover(
     )
     by_masses = bool(_split(problem)) and mass_depth > 0
     if by_current:
-        parts, mass_depth, current_depth = current_halves(problem), mass_depth, current_depth - 1
+        parts, current_depth = current_halves(problem), current_depth - 1
     elif by_masses:
         # the corners' quick refusal, once, on the whole current (within a range of it, the halves' centres)
         refused = (
@@ -899,7 +896,7 @@ def _cover(
         )
         if refused:
             return refused
-        parts, mass_depth, current_depth = halves(problem), mass_depth - 1, current_depth
+        parts, mass_depth = halves(problem), mass_depth - 1
     else:
         return f"the cell {_masses(problem)} is refused, and halved as often as allowed"
     out: list[tuple[tuple[float, float], CascadeCertificate]] = []
