@@ -212,6 +212,11 @@ def _field(default: Any, description: str, unit: str = "", **kw: Any) -> Any:
     )
 
 
+def _multiplier(name: str) -> Any:
+    """The field of the simulated plant's multiplier of coefficient ``name`` (within :data:`MULTIPLIER_RANGE`)."""
+    return _field(None, f"multiplier of {name}", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+
+
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
 
 
@@ -303,17 +308,17 @@ ReferenceTable = Annotated[
 
 
 class PlantTable(_Table):
-    """``[simulation.plant]``: the true plant as multipliers (> 0) of the controller's parameters."""
+    """``[simulation.plant]``: the true plant as multipliers (0.1 to 10) of the controller's parameters."""
 
-    m11: float | None = _field(None, "multiplier of m11", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    m22: float | None = _field(None, "multiplier of m22", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    m33: float | None = _field(None, "multiplier of m33", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    d11_lin: float | None = _field(None, "multiplier of d11_lin", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    d11_quad: float | None = _field(None, "multiplier of d11_quad", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    d22_lin: float | None = _field(None, "multiplier of d22_lin", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    d22_quad: float | None = _field(None, "multiplier of d22_quad", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    d33_lin: float | None = _field(None, "multiplier of d33_lin", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
-    d33_quad: float | None = _field(None, "multiplier of d33_quad", ge=MULTIPLIER_RANGE[0], le=MULTIPLIER_RANGE[1])
+    m11: float | None = _multiplier("m11")
+    m22: float | None = _multiplier("m22")
+    m33: float | None = _multiplier("m33")
+    d11_lin: float | None = _multiplier("d11_lin")
+    d11_quad: float | None = _multiplier("d11_quad")
+    d22_lin: float | None = _multiplier("d22_lin")
+    d22_quad: float | None = _multiplier("d22_quad")
+    d33_lin: float | None = _multiplier("d33_lin")
+    d33_quad: float | None = _multiplier("d33_quad")
 
 
 class UncertaintyTable(_Table):
