@@ -11,7 +11,9 @@ until the vertices are used, in a current of the full ``[disturbance] current_sp
 random direction; the other runs are uniform in the box with a current uniform in the disc.
 Without a declared current speed every run is in the ``[simulation] current``.
 Run ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))`` alone, so a run is the same in any
-campaign. Every vehicle starts on its slot, heading into the run's current. The rudder's
+campaign; so do its measurement errors within ``[implementation.noise]`` (with ``[simulation]
+noise_pattern = "mixed"``, run ``i`` takes ``NOISE_PATTERNS[i mod 5]``). Every vehicle starts on
+its slot, heading into the run's current. The rudder's
 coefficients (``[actuators] rudder_sway`` and ``rudder_yaw``) are not in the box and are exact.
 """
 
@@ -26,6 +28,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from auv_hinf._typing import NOISE_PATTERNS
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
 from auv_hinf.certificate.document import json_safe
@@ -234,7 +237,12 @@ def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dic
     corner, mult, current = run_inputs(cfg, seed, index)
     plant = scaled_plant(cfg.vehicle, mult)
     flow = (float(current[0]), float(current[1]))
-    rep = guidance_run(cfg, horizon, plant=plant, current=flow).report()
+    pattern = cfg.simulation.noise_pattern
+    noise = (
+        int(np.random.SeedSequence(seed, spawn_key=(index,)).generate_state(1)[0]),
+        NOISE_PATTERNS[index % len(NOISE_PATTERNS)] if pattern == "mixed" else pattern,
+    )
+    rep = guidance_run(cfg, horizon, plant=plant, current=flow, noise=noise).report()
     coverage = run_coverage(cfg, rep, np.asarray(mult, dtype=float), flow, cfg.simulation.initial)
     errors, final, peak = rep["measured_errors"], rep["final_errors"], rep["commanded_peak"]
     return {

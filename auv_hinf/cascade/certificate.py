@@ -48,9 +48,15 @@ of the commanded thrust and rudder, and of the sway speed. The derivation is in
   that keeps its course in a constant current, the current's component along the track (the
   nominal surge speed through the water is ``U0`` less the cell's middle).
 
-The certificate covers the cascade at the declared sample time with no delay and exact
-measurements (what ``simulate`` runs), and ILOS guidance only: plain LOS has no integral state,
-and its cross-track error is a function of ``p``, which this loop does not express.
+* **Late and noisy measurements.** With a delay ``d`` the held commands are computed from the states
+  at ``t_k - d`` (the nominal loop carries the measurements in flight), each measured state with a
+  discrete error bounded by :func:`measurement_errors`; every residual term that pairs a value the
+  law computed at the sample with the present one uses the measurement's largest age ``h + d`` and
+  its error, and the commands are bounded on the measured states.
+
+The certificate covers the cascade at the declared sample time, fixed delay and measurement-error
+bounds (what ``simulate`` runs), and ILOS guidance only: plain LOS has no integral state, and its
+cross-track error is a function of ``p``, which this loop does not express.
 """
 
 from __future__ import annotations
@@ -68,6 +74,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.composed.loops import Plant
 from auv_hinf.guidance.law import MAX_START_CRAB, MIN_RUDDER_SPEED, GuidanceConfig, SlotMotion, integral_start
+from auv_hinf.implementation.model import MeasurementNoise
 from auv_hinf.implementation.peak import MAX_PERIODS, PeakGains, SampledLoop, free_peaks, peak_gains
 from auv_hinf.mission.fleet import wrap_angle
 from auv_hinf.models.vehicle import VehicleParams
@@ -137,6 +144,11 @@ class CascadeProblem:
     current_along : tuple of float or None
         ``[lo, hi]`` of the current's component along the track in a cell of it (m/s; on a mission
         that keeps its course, :func:`current_cells_apply`); ``None``: every component ``[-C, C]``.
+    delay : float
+        The ``[implementation]`` delay ``d`` (s): the commands held from ``t_k`` are computed from the
+        measurement taken at ``t_k - d`` (before ``t = 0``: the start).
+    noise : MeasurementNoise
+        Bounds of the measurement errors (m, m/s, rad, rad/s; default exact).
     """
 
     guidance: GuidanceConfig
@@ -151,6 +163,13 @@ class CascadeProblem:
     start: tuple[float, ...] = field(default=(0.0,) * 7)
     nominal: VehicleParams | None = None
     current_along: tuple[float, float] | None = None
+    delay: float = 0.0
+    noise: MeasurementNoise = field(default_factory=MeasurementNoise)
+
+    @property
+    def lag(self) -> float:
+        """Largest age ``h + d`` (s) of the measurement behind the commands held at any time."""
+        return self.sample_time + self.delay
 
     @property
     def nominal_plant(self) -> VehicleParams:
@@ -278,12 +297,14 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
 
     The held commands are ``a_x`` (m/s^2), ``tau`` (the yaw acceleration the rudder is asked
     for, rad/s^2: the heading feedback plus the Munk moment the law cancels, per the model's
-    inertia) and ``u_i`` (the ILOS integral's push on ``p``, m/s^2).
+    inertia) and ``u_i`` (the ILOS integral's push on ``p``, m/s^2). They are computed from the
+    measurement taken ``problem.delay`` seconds before the sample, each state measured with its own
+    discrete error (:func:`measurement_errors` bounds them).
 
     Parameters
     ----------
     problem : CascadeProblem
-        The cascade (its gains, model, rudder and reference speed).
+        The cascade (its gains, model, rudder, reference speed, sample time and delay).
     """
     rows = _rows(problem)
     order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
@@ -296,14 +317,14 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
         full[:, 7:],
         b_w,
         np.eye(7),
-        np.zeros((7, 1)),
-        np.zeros((0, 1)),
+        np.eye(7),
+        np.zeros((0, 7)),
         np.zeros((0, 0)),
         np.zeros((0, 7)),
         np.zeros((3, 0)),
         _law(problem),
         problem.sample_time,
-        0.0,
+        problem.delay,
         outputs,
         STATES + DERIVED,
     )
@@ -345,21 +366,112 @@ def _product_off(ranges: list[tuple[float, float]], divisor: tuple[float, float]
     return best
 
 
-def commands(problem: CascadeProblem, box: FloatArray) -> FloatArray:
+def commands(problem: CascadeProblem, box: FloatArray, noise: FloatArray | None = None) -> FloatArray:
     """Bounds of the nominal loop's held commands ``|a_x|, |tau|, |u_i|`` over ``box`` (m/s^2, rad/s^2, m/s^2).
 
     Parameters
     ----------
     problem : CascadeProblem
         The cascade.
-    box : ndarray, shape (7,)
-        Bounds of the states.
+    box : ndarray, shape (7,) or (NB,)
+        Bounds of the states (and of :data:`DERIVED`, whose command bounds include the noise).
+    noise : ndarray, shape (7,), optional
+        Bounds of the measured states' errors (:func:`measurement_errors`; default none).
     """
     box = np.asarray(box, dtype=float)
-    out: FloatArray = np.abs(_law(problem)) @ box[:7]
+    measured = box[:7] if noise is None else box[:7] + noise
+    out: FloatArray = np.abs(_law(problem)) @ measured
     if box.size == NB:
         out[:2] = np.minimum(out[:2], [box[7 + DERIVED.index("a_x")], box[7 + DERIVED.index("tau")]])
     return out
+
+
+#: ``max_s |d/ds (Delta^2 / (s^2 + Delta^2))| * Delta = 3 sqrt(3) / 8`` (at ``s = Delta / sqrt(3)``): the
+#: Lipschitz constant, per ``1/Delta``, of the line of sight's ``cos^2(theta)`` in ``s = y_e + sigma y_i``.
+SIGHT_SLOPE = 3.0 * math.sqrt(3.0) / 8.0
+
+
+def _integrand_gap(problem: CascadeProblem, yb: float) -> float:
+    """Bound (m) of ``|s_m - s|``: the law's ``s = y_e + sigma y_i`` less the state's at the measurement's time.
+
+    The measured cross-track error is off by at most the position noise ``n_p``; the law's own
+    ``y_i`` has moved on from the interpolated ``y_i`` at ``t_k - d`` by at most ``d`` times its
+    held rate, ``|y_m| cos^2(theta_m) / Delta <= (Y + n_p) / Delta``.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its delay, noise and ILOS gains).
+    yb : float
+        Bound of ``|y_e|`` (m).
+    """
+    g, n_p = problem.guidance, problem.noise.position
+    return n_p + g.sigma * problem.delay * (yb + n_p) / g.lookahead
+
+
+def _ilos_rate_noise(problem: CascadeProblem, yb: float) -> float:
+    """Bound (m) of ``|f(y_m, s_m) - f(y_e, s)|`` at one instant, ``f = y Delta^2 / (s^2 + Delta^2)``.
+
+    ``Delta`` times the ILOS rate is ``f``; ``|df/dy| <= 1`` and ``|df/ds| <= SIGHT_SLOPE |y| / Delta``,
+    with ``|y_m - y_e| <= n_p`` and ``|s_m - s|`` from :func:`_integrand_gap`.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    yb : float
+        Bound of ``|y_e|`` (m).
+    """
+    n_p = problem.noise.position
+    return n_p + SIGHT_SLOPE * (yb + n_p) * _integrand_gap(problem, yb) / problem.guidance.lookahead
+
+
+def measurement_errors(problem: CascadeProblem, yb: float, ydot: float, ground: float) -> FloatArray:
+    """Bounds of the seven states' errors as the law measures them: the nominal loop's discrete inputs.
+
+    The law at ``t_k`` acts on the measurement taken at ``t_k - d`` (position within ``n_p``, body
+    velocity within ``n_v``, heading within ``n_psi``, yaw rate within ``n_r``) and on its own ILOS
+    state. Against the states at ``t_k - d`` (:data:`STATES`):
+
+    * ``x_e``, ``y_e``: ``n_p``; ``v``: ``n_v``; ``p`` is not measured;
+    * ``v_x`` (the ground velocity along the track): ``n_g = n_v + n_psi G``, ``G`` the ground speed's
+      bound (the body velocity's error, turned by the heading's);
+    * ``e``: ``n_psi + |s_m - s| / Delta`` (``atan`` is 1-Lipschitz; :func:`_integrand_gap`);
+    * ``e_r``: ``n_r`` plus the line of sight's rate ``phi(s) (y' + sigma phi(s) y)``, ``phi = Delta/(s^2 +
+      Delta^2) <= 1/Delta``, ``|phi'| <= SIGHT_SLOPE / Delta^2``, evaluated on the measurement: ``y'`` is
+      off by ``n_g + omega n_p``, ``y`` by ``n_p``, ``s`` by ``|s_m - s|``.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its noise, delay, guidance and turn rate).
+    yb : float
+        Bound of ``|y_e|`` (m).
+    ydot : float
+        Bound of ``|y_e'|`` (m/s).
+    ground : float
+        Bound of the ground speed (m/s).
+
+    Returns
+    -------
+    ndarray, shape (7,)
+        In the order of :data:`STATES` (m, m/s, m, m/s, rad, rad/s, m/s).
+    """
+    nz, g = problem.noise, problem.guidance
+    if nz.exact:
+        return np.zeros(7)
+    delta, sigma, n_p = g.lookahead, g.sigma, nz.position
+    ds = _integrand_gap(problem, yb)
+    n_g = nz.velocity + nz.heading * ground
+    n_ydot = n_g + problem.turn_rate * n_p
+    n_e = nz.heading + ds / delta
+    n_er = (
+        nz.yaw_rate
+        + SIGHT_SLOPE * ds * (ydot + n_ydot) / delta**2
+        + n_ydot / delta
+        + sigma * (2.0 * SIGHT_SLOPE * ds * (yb + n_p) / delta**3 + n_p / delta**2)
+    )
+    return np.array([n_p, n_g, n_p, 0.0, n_e, n_er, nz.velocity])
 
 
 @dataclass(frozen=True)
@@ -375,11 +487,15 @@ class Residuals:
     sway : float
         The bound of ``|v|`` (m/s) that the sway's own damped equation gives over the box (``inf``
         when it is not damped): a second bound of the sway speed beside the loop's.
+    noise : ndarray, shape (7,)
+        Bounds of the errors of the seven states as the law measures them (SI units): the
+        discrete inputs of the nominal loop (:func:`measurement_errors`).
     """
 
     inputs: FloatArray
     actuation: Actuation
     sway: float
+    noise: FloatArray = field(default_factory=lambda: np.zeros(7))
 
 
 def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str:
@@ -406,7 +522,8 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     """
     g, pl, act = problem.guidance, problem.plant, problem.act
     m, n = pl.model, problem.nominal_plant
-    h = problem.sample_time
+    lag = problem.lag  # the measurement's largest age, h + d (s)
+    nz = problem.noise
     xb, vxb, yb, pb, eb, erb, vb = (float(x) for x in box[:7])
     derived = dict(zip(DERIVED, map(float, box[7:]), strict=False))
 
@@ -444,6 +561,10 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     if u_lo < MIN_RUDDER_SPEED:
         return f"the surge speed may drop to {u_lo:.3g} m/s, below the rudder's {MIN_RUDDER_SPEED} m/s"
     du = max(u_hi - u0, u0 - u_lo)
+    # -- what the law measures: u_m, v_m, r_m within the noise of the present ranges' past values
+    um_lo, um_hi, vm = u_lo - nz.velocity, u_hi + nz.velocity, vb + nz.velocity
+    if um_lo < MIN_RUDDER_SPEED:
+        return f"the measured surge speed may drop to {um_lo:.3g} m/s, below the rudder's {MIN_RUDDER_SPEED} m/s"
     du_along = max(hi_u - t_lo - u0, u0 - lo_u + t_hi) + vxb + vb * sin_b  # |u cos(beta) - u0|
     # -- w3: y_e' less -p + U0 e + v
     w3 = (
@@ -456,44 +577,61 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     )
     y_lin = tighter("ydot_lin", pb + u0 * eb + vb)
     ydot = y_lin + w3
-    sight_rate = (ydot + sigma * yb / delta) / delta  # |theta'| (held ILOS rate or not)
+    sight_rate = (ydot + sigma * (yb + nz.position) / delta) / delta  # |theta'| (held ILOS rate or not)
     sight_lin = tighter("sight_lin", (y_lin + b_g * yb) / delta)  # the nominal loop's theta'
     sight_gap = (w3 + (1.0 - cos_t**2) * y_lin + b_g * (1.0 - cos_t**4) * yb) / delta
     yaw_lin = tighter("yaw_lin", erb + sight_lin)  # |e_r - theta'_nominal|
     rel_yaw = min(erb + sight_rate, yaw_lin + sight_gap)  # |r - omega|
     r_max = omega + rel_yaw
-    # -- the commands: the law's whole yaw acceleration, the thrust and the rudder
-    a_x, tau, _ = commands(problem, box)
-    sat_x = xb / math.sqrt(1.0 + (xb / lx) ** 2)
-    a_x_sat = min(ku * (vxb + kx * sat_x), a_x + ku * kx * (xb - sat_x))
-    a_psi = tighter("a_psi", kp * eb + kd * erb)
-    d33_hat = m.d33_lin + m.d33_quad * r_max
+    rm = r_max + nz.yaw_rate
+    noise = measurement_errors(problem, yb, ydot, u_hi + vb + c)
+    # the law's line of sight: |tan(theta_m)| <= tan(theta) + |s_m - s| / Delta (:func:`_integrand_gap`)
+    tan_m = sin_t / cos_t + _integrand_gap(problem, yb) / delta
+    cos_m = 1.0 / math.sqrt(1.0 + tan_m * tan_m)
+    # -- the commands on the measurement: the law's whole yaw acceleration, the thrust and the rudder
+    a_x, tau, _ = commands(problem, box, noise)
+    xm = xb + noise[X_E]
+    sat_x = xm / math.sqrt(1.0 + (xm / lx) ** 2)
+    a_x_sat = min(ku * (vxb + noise[V_X] + kx * sat_x), a_x + ku * kx * (xm - sat_x))
+    a_psi = tighter("a_psi", kp * (eb + noise[E]) + kd * (erb + noise[E_R]))
+    d33_hat = m.d33_lin + m.d33_quad * rm
     tau_full = min(
-        a_psi + (d33_hat * r_max + abs(munk_hat) * u_hi * vb) / m.m33,
-        tau + (d33_hat * r_max + abs(munk_hat) * du * vb) / m.m33,
+        a_psi + (d33_hat * rm + abs(munk_hat) * um_hi * vm) / m.m33,
+        tau + (d33_hat * rm + abs(munk_hat) * (du + nz.velocity) * vm) / m.m33,
     )
-    thrust = m.m11 * (accel + a_x_sat) + (m.d11_lin + m.d11_quad * u_hi) * u_hi + m.m22 * vb * r_max
-    rudder = m.m33 * tau_full / (abs(act.rudder_yaw) * u_lo**2)
+    thrust = m.m11 * (accel + a_x_sat) + (m.d11_lin + m.d11_quad * um_hi) * um_hi + m.m22 * vm * rm
+    rudder = m.m33 * tau_full / (abs(act.rudder_yaw) * um_lo**2)
     actuation = Actuation(thrust, rudder, (u_lo, u_hi), r_max)
     # -- |u'|: the law's thrust less the plant's drag, or else the thrust limit (both hold); the
-    # hold's drag term slope11 h |u'| appears on both sides and is solved for
+    # lag's drag term slope11 (L |u'| + n_u) appears on both sides and is solved for (L = h + d: the
+    # measurement's largest age, n_u its noise)
     d11_lin, d11_quad = pl.interval("d11_lin")[1], pl.interval("d11_quad")[1]
     d33_lin, d33_quad = pl.interval("d33_lin")[1], pl.interval("d33_quad")[1]
-    slope11 = d11_lin + 2.0 * d11_quad * u_hi  # bound of d(d11(u) u)/du
-    slope33 = d33_lin + 2.0 * d33_quad * r_max
+    slope11 = d11_lin + 2.0 * d11_quad * um_hi  # bound of d(d11(u) u)/du, measured speeds included
+    slope33 = d33_lin + 2.0 * d33_quad * rm
     u_dot = (act.tau_x + m22[1] * vb * r_max + pl.damping("11", u_hi)[1] * u_hi) / m11[0]
-    if m11[0] > slope11 * h:
-        law = m.m11 * (accel + a_x_sat) + pl.damping_mismatch("11", u_hi) * u_hi + (m22[1] + m.m22) * vb * r_max
-        u_dot = min(u_dot, law / (m11[0] - slope11 * h))
-    if h * u_dot >= u_lo or m33[0] <= slope33 * h:
-        return "the sample time is too long for the surge speed's or the yaw drag's change over one sample"
-    rho = ((1.0 - h * u_dot / u_lo) ** 2, (1.0 + h * u_dot / u_lo) ** 2)  # (u / u_k)^2
+    if m11[0] > slope11 * lag:
+        law = (
+            m.m11 * (accel + a_x_sat)
+            + pl.damping_mismatch("11", u_hi) * u_hi
+            + slope11 * nz.velocity
+            + m22[1] * vb * r_max
+            + m.m22 * vm * rm
+        )
+        u_dot = min(u_dot, law / (m11[0] - slope11 * lag))
+    gap_u = lag * u_dot + nz.velocity  # |u - u_m|: the measurement's age and its error
+    if gap_u >= um_lo or m33[0] <= slope33 * lag:
+        return (
+            "the sample time and delay are too long for the surge speed's or the yaw drag's change over the "
+            "measurement's age"
+        )
+    rho = ((1.0 - gap_u / um_lo) ** 2, (1.0 + gap_u / um_lo) ** 2)  # (u / u_m)^2
     # -- w7: v' less its nominal; the rudder's side force and its nominal share one deflection
     inv_m22 = _off((rho[0] / m22[1], rho[1] / m22[0]), 1.0 / n.m22)  # |rho/m22' - 1/m22|
     side = (
         inv_m22 * m.m33 * a_psi
-        + rho[1] * d33_hat * r_max / m22[0]
-        + abs(munk_hat) * vb * _product_off([rho, (u_lo, u_hi)], m22, u0 / n.m22)
+        + rho[1] * d33_hat * rm / m22[0]
+        + abs(munk_hat) * vm * _product_off([rho, (um_lo, um_hi)], m22, u0 / n.m22)
     ) / lever
     w7 = (
         side
@@ -504,13 +642,14 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     )
     v_lin = tighter("vdot_lin", n.m11 * u0 / n.m22 * yaw_lin + n.d22_lin / n.m22 * vb + m.m33 / (lever * n.m22) * tau)
     v_dot = v_lin + w7
-    # -- the sway's own bound, by its damped scalar equation: m22' v' = -(d22'(v) + k_m) v + k_m (v - v_k)
-    # + (rho/l)(m33 a_psi + d33(r_k) r_k) - m11' u r, with k_m = -rho m_u u_k / l the side force of the
+    gap_v = lag * v_dot + nz.velocity  # |v - v_m|: the measurement's age and its error
+    # -- the sway's own bound, by its damped scalar equation: m22' v' = -(d22'(v) + k_m) v + k_m (v - v_m)
+    # + (rho/l)(m33 a_psi + d33(r_m) r_m) - m11' u r, with k_m = -rho m_u u_m / l the side force of the
     # rudder's Munk compensation (a damping when the rudder is aft, l < 0); |v| cannot pass the positive
     # root of d22q V^2 + (d22 + k_m) V = F while the other states stay in the box
-    k_m = [-r * munk_hat * u / act.lever_arm for r in rho for u in (u_lo, u_hi)]
+    k_m = [-r * munk_hat * u / act.lever_arm for r in rho for u in (um_lo, um_hi)]
     k_lo, k_abs = min(k_m), max(abs(k) for k in k_m)
-    force = rho[1] / lever * (m.m33 * a_psi + d33_hat * r_max) + m11[1] * u_hi * r_max + k_abs * h * v_dot
+    force = rho[1] / lever * (m.m33 * a_psi + d33_hat * rm) + m11[1] * u_hi * r_max + k_abs * gap_v
     damping = pl.interval("d22_lin")[0] + k_lo
     d22q_lo = pl.interval("d22_quad")[0]
     if d22q_lo > 0.0:
@@ -518,25 +657,27 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     else:
         sway = force / damping if damping > 0.0 else math.inf
     # -- |r'|: the law's moment against the plant's, the cancellations paired (the Munk moment on
-    # the held speeds, the yaw drag at the sample); the hold's drag term slope33 h |r'| is solved for
+    # the measured speeds, the yaw drag at the measured rate); the lag's drag term slope33 L |r'| is
+    # solved for
     mu = pl.heading_gains()
-    munk_held = vb * u_hi * (abs(munk_hat) * h * u_dot / u_lo + _off(munk, munk_hat))
-    drag_cancel = (rho[1] - 1.0) * d33_hat * r_max + pl.damping_mismatch("33", r_max) * r_max
-    munk_r = abs(munk_hat) * rho[1] * u_hi * h * v_dot + munk_held
-    r_dot = (mu[1] * rho[1] * m33[0] * a_psi + munk_r + drag_cancel) / (m33[0] - slope33 * h)
+    munk_held = vb * u_hi * (abs(munk_hat) * gap_u / um_lo + _off(munk, munk_hat))
+    drag_cancel = (rho[1] - 1.0) * d33_hat * rm + pl.damping_mismatch("33", r_max) * r_max
+    munk_r = abs(munk_hat) * rho[1] * u_hi * gap_v + munk_held
+    r_dot = (mu[1] * rho[1] * m33[0] * a_psi + munk_r + drag_cancel + slope33 * nz.yaw_rate) / (m33[0] - slope33 * lag)
+    gap_r = lag * r_dot + nz.yaw_rate  # |r - r_m|
     # -- w1: x_e' = v_x + omega y_e
     w1 = omega * yb
     # -- w2: v_x' = a_x + w2
     nu = (m.m11 / m11[1], m.m11 / m11[0])
     w2 = (
-        ku * kx * (xb - sat_x)
+        ku * kx * (xm - sat_x)
         + max(abs(nu[1] - 1.0), abs(1.0 - nu[0] * cos_b)) * (accel + a_x_sat)
-        + h * problem.speed_jerk
+        + lag * problem.speed_jerk
         + (
             pl.damping_mismatch("11", u_hi) * u_hi
-            + slope11 * h * u_dot
+            + slope11 * gap_u
             + pl.spread("m22") * vb * r_max
-            + m.m22 * h * (v_dot * r_max + vb * r_dot)
+            + m.m22 * (gap_v * rm + vb * gap_r)
         )
         / m11[0]
         + sin_b * v_dot
@@ -548,12 +689,13 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     w4 = (
         (accel + omega * c + c_rate) * sin_t
         + max(hi_u - t_lo - u0, u0 - (lo_u - t_hi) * cos_t**3) * ydot / delta
-        + sigma / delta**2 * max(hi_u - t_lo - u0, u0 - (lo_u - t_hi) * cos_t**5) * yb
+        + sigma / delta**2 * max(hi_u - t_lo - u0, u0 - (lo_u - t_hi) * cos_t**3 * cos_m**2) * (yb + nz.position)
         + omega * c
         + c_rate
     )
-    # -- w5: e' = e_r + (the held ILOS rate less the continuous one)
-    w5 = sigma * h * (ydot + 2.0 * sin_t * sight_rate * yb) / delta**2
+    # -- w5: e' = e_r + (the held ILOS rate less the continuous one): the rate's change over the
+    # measurement's age, and the measured position's error in it (:func:`_ilos_rate_noise`)
+    w5 = sigma * (lag * (ydot + 2.0 * sin_t * sight_rate * yb) + _ilos_rate_noise(problem, yb)) / delta**2
     # -- w6: e_r' = r' - omega' + theta_c'' less its nominal
     yddot_gap = (
         u_dot * sin_b
@@ -561,7 +703,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         + v_dot * (1.0 - cos_b)
         + yaw_lin * (du_along + vb * sin_b)
         + sight_gap * (u_hi + vb * sin_b)
-        + u0 * b_g * h * ydot / delta
+        + u0 * b_g * (lag * ydot + nz.position) / delta
         + omega * c
         + c_rate
         + omega_dot * xb
@@ -577,13 +719,13 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     # the Munk moments against the nominal loop's (munk_hat U0 v_k - munk_n U0 v)/m33_n: the held speeds'
     # part, then (munk_n - munk') u v/m33' + (munk_hat - munk_n) v (u/m33' - U0/m33_n)
     munk_pair = (
-        abs(munk_hat) * h * v_dot * _product_off([rho, (u_lo, u_hi)], m33, u0 / n.m33)
-        + vb * u_hi * abs(munk_hat) * h * u_dot / (u_lo * m33[0])
+        abs(munk_hat) * gap_v * _product_off([rho, (um_lo, um_hi)], m33, u0 / n.m33)
+        + vb * u_hi * abs(munk_hat) * gap_u / (um_lo * m33[0])
         + vb * _off(munk, munk_n) * u_hi / m33[0]
         + vb * abs(munk_hat - munk_n) * _product_off([(u_lo, u_hi)], m33, u0 / n.m33)
     )
     mu_n = m.m33 / n.m33
-    drag_pair = (drag_cancel + slope33 * h * r_dot) / m33[0]
+    drag_pair = (drag_cancel + slope33 * gap_r) / m33[0]
     w6 = (
         max(abs(mu[1] * rho[1] - mu_n), abs(mu_n - mu[0] * rho[0])) * a_psi
         + munk_pair
@@ -591,7 +733,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         + omega_dot
         + sight_accel_gap
     )
-    return Residuals(np.array([w1, w2, w3, w4, w5, w6, w7]), actuation, sway)
+    return Residuals(np.array([w1, w2, w3, w4, w5, w6, w7]), actuation, sway, noise)
 
 
 @dataclass(frozen=True)
@@ -675,8 +817,8 @@ def _image(problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: Flo
     if isinstance(res, str):
         return res
     w = res.inputs
-    cmds = commands(problem, box)
-    at_steps = gains.continuous @ w + free
+    cmds = commands(problem, box, res.noise)
+    at_steps = gains.continuous @ w + gains.discrete @ res.noise + free
     between = gains.step * (gains.derivative @ np.concatenate([box[:7], cmds, w]))
     out: FloatArray = at_steps + between
     out[V] = min(out[V], max(problem.start[V], res.sway))  # both bound the sway speed
@@ -960,7 +1102,7 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
     if problem.guidance.sigma <= 0.0:
         return CascadeCertificate(False, None, None, 'plain LOS is not certified in this version: use kind = "ilos"')
     model, u0 = problem.plant.model, problem.reference_speed
-    key = replace(  # what the nominal loop depends on: the gains, the model, the nominal plant, the rudder, U0, h
+    key = replace(  # what the nominal loop depends on: the gains, the model, the nominal plant, the rudder, U0, h, d
         problem,
         plant=Plant(model, ParameterBox.from_ranges(model, ())),
         speed=(u0, u0),
@@ -969,11 +1111,15 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
         turn_accel=0.0,
         speed_jerk=0.0,
         start=(0.0,) * 7,
+        noise=MeasurementNoise(),
     )
     analysis = _loop_analysis(key, max_periods)
     if analysis is None:
         return CascadeCertificate(
-            False, None, None, f"the nominal sampled cascade is unstable at h = {problem.sample_time:.4g} s"
+            False,
+            None,
+            None,
+            f"the nominal sampled cascade is unstable at h = {problem.sample_time:.4g} s, delay {problem.delay:.4g} s",
         )
     gains, fp = analysis
     start = np.asarray(problem.start, dtype=float)
@@ -1141,6 +1287,7 @@ __all__ = [
     "MAX_ITERATIONS",
     "MAX_SIGHT_SINE",
     "MAX_TRACK_ANGLE",
+    "SIGHT_SLOPE",
     "STATES",
     "Actuation",
     "CascadeCertificate",
@@ -1150,6 +1297,7 @@ __all__ = [
     "cascade_states",
     "certify_cascade",
     "into_current_start",
+    "measurement_errors",
     "residual_bounds",
     "start_states",
 ]

@@ -29,7 +29,7 @@ from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.simulation import STEP as GUIDANCE_STEP
-from auv_hinf.guidance.simulation import GuidanceRun, simulate_guidance
+from auv_hinf.guidance.simulation import GuidanceRun, Navigation, simulate_guidance
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
@@ -502,13 +502,16 @@ def guidance_run(
     plant: VehicleParams | None = None,
     current: tuple[float, float] | None = None,
     six_dof: bool = False,
+    noise: tuple[int, str] | None = None,
 ) -> GuidanceRun:
     """Simulate a ``[guidance]`` configuration: its fleet under the line-of-sight cascade.
 
     The plant is ``[simulation] plant`` applied to the vehicle, the current ``[simulation] current``,
     the start ``[simulation] initial`` (default: every vehicle on its slot, heading into the current).
     The cascade runs at ``[implementation] sample_time`` (default: the 10 Hz of
-    :data:`~auv_hinf.guidance.simulation.STEP`).
+    :data:`~auv_hinf.guidance.simulation.STEP`) on measurements ``[implementation] delay`` old, with
+    errors within ``[implementation.noise]`` drawn from ``[simulation] seed`` in its
+    ``noise_pattern`` (``mixed``: the first pattern, ``uniform``).
 
     Parameters
     ----------
@@ -523,23 +526,28 @@ def guidance_run(
     six_dof : bool
         Run the cascade on the 6-DOF REMUS 100 (:mod:`auv_hinf.guidance.six_dof`) instead of the
         3-DOF model; only for a REMUS 100 fleet, started on its slots, without ``plant``.
+    noise : tuple of (int, str), optional
+        The seed and pattern of the measurement errors instead of the ``[simulation]`` ones (a
+        campaign's run).
 
     Raises
     ------
     ConfigError
-        If the configuration has no ``[guidance]`` table, or declares an ``[implementation]`` delay or
-        noise (not modelled for the cascade).
+        If the configuration has no ``[guidance]`` table, or declares a varying ``[implementation]``
+        delay (the cascade is run, and certified, with a fixed one).
     """
     if cfg.guidance is None or not isinstance(cfg.actuators, RudderActuation):
         raise ConfigError("guidance_run: the configuration has no [guidance] table for a propeller-and-rudder vehicle")
     impl = cfg.implementation
-    if impl.delay > 0.0 or not impl.noise.exact:
+    if impl.varying_delay:
         raise ConfigError(
-            "a [guidance] fleet is simulated with [implementation] sample_time only in this version: the "
-            "cascade's delay and measurement noise are not modelled; remove [implementation] delay and noise"
+            "a [guidance] fleet is simulated with a fixed [implementation] delay in this version: set "
+            "[implementation] varying_delay = false"
         )
     step = impl.sample_time if impl.sample_time > 0.0 else GUIDANCE_STEP
     sim = cfg.simulation
+    seed, pattern = noise if noise is not None else (sim.seed, sim.noise_pattern)
+    navigation = Navigation(impl.delay, impl, seed, NOISE_PATTERNS[0] if pattern == "mixed" else pattern)
     initial = None if sim.initial is None else np.asarray(sim.initial, dtype=float)
     fleet = raw_fleet(cfg)
     if six_dof:
@@ -556,6 +564,7 @@ def guidance_run(
             sim.horizon if horizon is None else horizon,
             sim.current if current is None else current,
             step=step,
+            navigation=navigation,
         )
     return simulate_guidance(
         cfg.guidance,
@@ -567,4 +576,5 @@ def guidance_run(
         sim.current if current is None else current,
         initial,
         step,
+        navigation=navigation,
     )

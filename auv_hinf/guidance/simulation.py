@@ -1,8 +1,12 @@
 """A fleet of propeller-and-rudder vehicles under the guidance cascade, on the 3-DOF model.
 
 Every vehicle runs :func:`~auv_hinf.guidance.law.commands` on its own slot, with its own
-navigation (position, heading, body and ground velocity exact: this module does not model
-sensor noise) and a shared clock, and no link to the others. The plant is the 3-DOF model
+navigation and a shared clock, and no link to the others. Its navigation may be late and noisy
+(:class:`Navigation`): the commands held from ``t_k`` are computed from the state measured at
+``t_k - d`` (the start before ``t = 0``), against the slot at that time, with errors drawn within
+the ``[implementation.noise]`` bounds by :class:`~auv_hinf.implementation.draws.ImplementationDraws`
+(position, heading, body velocity and yaw rate; the DVL's ground velocity carries the body
+velocity's error turned to the earth). The recorded errors are the true ones. The plant is the 3-DOF model
 (:func:`~auv_hinf.models.vehicle.rhs`) with the forces the limited thrust and rudder make, in a
 constant current. The integrator is classical RK4 at a fixed step (:data:`STEP`), the forces of
 the thrust and rudder held over the step as computed at its start: the cascade as a 10 Hz
@@ -21,7 +25,9 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.guidance.law import Commands, GuidanceConfig, SlotMotion, commands, integral_start
-from auv_hinf.mission.fleet import FleetReference
+from auv_hinf.implementation.draws import ImplementationDraws
+from auv_hinf.implementation.model import Implementation
+from auv_hinf.mission.fleet import FleetReference, wrap_angle
 from auv_hinf.models.vehicle import VehicleParams, rhs
 
 #: Integration and control step (s): a 10 Hz autopilot, a tenth of the fastest time constant of
@@ -150,6 +156,65 @@ class GuidanceRun:
         }
 
 
+@dataclass(frozen=True)
+class Navigation:
+    """How late and how noisy every vehicle's measurement is (the ``[implementation]`` of a guidance fleet).
+
+    Attributes
+    ----------
+    delay : float
+        Age (s) of the measurement the commands are computed from (fixed).
+    implementation : Implementation or None
+        The noise bounds (``None`` or exact: no noise).
+    seed : int
+        Seed of the noise draws.
+    pattern : str
+        The noise pattern (:data:`~auv_hinf._typing.NOISE_PATTERNS`).
+    """
+
+    delay: float = 0.0
+    implementation: Implementation | None = None
+    seed: int = 0
+    pattern: str = "uniform"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.delay) and self.delay >= 0.0):
+            raise ParameterError(f"the navigation delay must be >= 0 s, got {self.delay!r}")
+
+    @property
+    def noisy(self) -> bool:
+        """Some measurement error bound is positive."""
+        return self.implementation is not None and not self.implementation.noise.exact
+
+
+#: Exact, undelayed navigation (what the cascade measured before ``[implementation]`` delay and noise).
+EXACT = Navigation()
+
+
+def _true_errors(view: FloatArray, slot: SlotMotion) -> FloatArray:
+    """``[ex, ey, epsi, eu, ev, er]`` of every vehicle against its slot: the ``against-error`` pattern's input.
+
+    The position error (inertial), the heading less the slot's course, the body velocity less the
+    slot's ground velocity turned into the body frame, and the yaw rate less the course rate.
+    """
+    psi = view[:, 2]
+    course = np.arctan2(slot.v[:, 1], slot.v[:, 0])
+    cs, sn = np.cos(psi), np.sin(psi)
+    du = view[:, 3] - (cs * slot.v[:, 0] + sn * slot.v[:, 1])
+    dv = view[:, 4] - (-sn * slot.v[:, 0] + cs * slot.v[:, 1])
+    return np.stack(
+        [
+            view[:, 0] - slot.p[:, 0],
+            view[:, 1] - slot.p[:, 1],
+            wrap_angle(psi - course),
+            du,
+            dv,
+            view[:, 5] - slot.course_rate,
+        ],
+        axis=-1,
+    )
+
+
 def slot_motion(ref: FleetReference, t: FloatArray) -> SlotMotion:
     """The slots' motion at times ``t (T,)`` (s), shape ``(T, N, 2)``, in one vectorised evaluation.
 
@@ -194,6 +259,7 @@ def simulate_guidance(
     initial: FloatArray | None = None,
     step: float = STEP,
     plant_act: RudderActuation | None = None,
+    navigation: Navigation = EXACT,
 ) -> GuidanceRun:
     """Simulate the fleet under the cascade for ``horizon`` s.
 
@@ -219,6 +285,8 @@ def simulate_guidance(
         Integration and control step (s).
     plant_act : RudderActuation, optional
         The true rudder derivatives (default: ``act``).
+    navigation : Navigation
+        The measurement's delay and noise (default exact and undelayed).
 
     Raises
     ------
@@ -227,7 +295,7 @@ def simulate_guidance(
     """
     true_act = act if plant_act is None else plant_act
     three_dof = ThreeDofPlant(plant, true_act, np.asarray(current, dtype=float))
-    return run_cascade(gcfg, model, act, ref, horizon, three_dof, initial, step)
+    return run_cascade(gcfg, model, act, ref, horizon, three_dof, initial, step, navigation)
 
 
 class GuidancePlant(Protocol):
@@ -376,12 +444,14 @@ def run_cascade(
     plant: GuidancePlant,
     initial: FloatArray | None = None,
     step: float = STEP,
+    navigation: Navigation = EXACT,
 ) -> GuidanceRun:
     """Run the cascade at ``step`` on ``plant``.
 
-    The controller samples the plant's horizontal view every ``step`` s (its control period) and
-    holds its thrust and rudder over the step; the plant is integrated by RK4 in substeps of at
-    most :data:`STEP`.
+    The controller acts every ``step`` s (its control period) on the plant's horizontal view
+    measured ``navigation.delay`` s earlier (the start before ``t = 0``), with the navigation's
+    errors, and holds its thrust and rudder over the step; the plant is integrated by RK4 in
+    substeps of at most :data:`STEP`, split where a late measurement is taken.
 
     Parameters
     ----------
@@ -402,6 +472,8 @@ def run_cascade(
         Horizontal start states; default on the slots, heading into the plant's current.
     step : float
         Control and integration step (s).
+    navigation : Navigation
+        The measurement's delay and noise (default exact and undelayed).
 
     Raises
     ------
@@ -412,44 +484,86 @@ def run_cascade(
         raise ParameterError(f"horizon and step must be > 0 s, got {horizon!r} and {step!r}")
     n_steps = int(np.ceil(horizon / step))
     t = np.arange(n_steps + 1) * step
-    substeps = max(1, math.ceil(step / STEP - 1e-9))  # the plant's RK4 step: at most STEP
-    h = step / substeps
     slots = slot_motion(ref, t)
+    # the measurement of sample k is taken at max(t_k - d, 0): d = lag_steps step + phase
+    delay = navigation.delay
+    lag_steps = math.floor(delay / step + 1e-9)
+    phase = max(delay - lag_steps * step, 0.0)
+    if phase <= 1e-9 * step:
+        phase = 0.0
+    seen = slot_motion(ref, np.maximum(t - delay, 0.0)) if delay > 0.0 else slots
 
-    def at(k: int) -> SlotMotion:
-        return SlotMotion(p=slots.p[k], v=slots.v[k], a=slots.a[k])
+    def at(s: SlotMotion, k: int) -> SlotMotion:
+        return SlotMotion(p=s.p[k], v=s.v[k], a=s.a[k])
 
-    slot0 = at(0)
+    slot0 = at(slots, 0)
     n = slot0.p.shape[0]
     start = slot_start(slot0, plant.current) if initial is None else np.array(initial, dtype=float)
     if start.shape != (n, 6) or not np.all(np.isfinite(start)):
         raise ParameterError(f"initial states must be finite with shape ({n}, 6), got {start.shape}")
     x = plant.start(start)
     yi = integral_start(gcfg, plant.horizontal(x), slot0)
-    keys = ("x", "yi", "tc", "rc", "th", "rd", "xe", "ye", "eh", "sl", "vt")
-    rec: dict[str, list[FloatArray]] = {k: [] for k in keys}
-    for k in range(n_steps + 1):
-        slot = at(k)
-        view = plant.horizontal(x)
-        cmd = commands(gcfg, model, act, view, yi, slot, plant.ground(x))
-        vertical = plant.vertical(x)
-        for key, val in (
-            ("x", view), ("yi", yi), ("tc", cmd.thrust_cmd), ("rc", cmd.rudder_cmd), ("th", cmd.thrust),
-            ("rd", cmd.rudder), ("xe", cmd.along_track), ("ye", cmd.cross_track), ("eh", cmd.heading_error),
-            ("sl", slot.p), ("vt", np.zeros((n, 3)) if vertical is None else vertical),
-        ):  # fmt: skip
-            rec[key].append(np.array(val, dtype=float))
-        if k == n_steps:
-            break
-        # RK4 with the forces held over the step (the autopilot's zero-order hold), in substeps of
-        # at most STEP; the ILOS state integrates its rate at the sample (Euler: it is the
-        # controller's own discrete integrator).
-        for _ in range(substeps):
+    impl = navigation.implementation
+    draws = (
+        ImplementationDraws(impl, [navigation.seed], n, [navigation.pattern])
+        if navigation.noisy and impl is not None
+        else None
+    )
+    # what each later sample measures: (view, ground velocity), by sample index
+    measured: dict[int, tuple[FloatArray, FloatArray]] = {}
+    first = (plant.horizontal(x).copy(), plant.ground(x).copy())
+
+    def rk4(x: FloatArray, cmd: Commands, span: float) -> FloatArray:
+        # RK4 with the forces held (the autopilot's zero-order hold), in substeps of at most STEP
+        parts = max(1, math.ceil(span / STEP - 1e-9))
+        h = span / parts
+        for _ in range(parts):
             k1 = plant.derivative(x, cmd)
             k2 = plant.derivative(x + 0.5 * h * k1, cmd)
             k3 = plant.derivative(x + 0.5 * h * k2, cmd)
             k4 = plant.derivative(x + h * k3, cmd)
             x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return x
+
+    keys = ("x", "yi", "tc", "rc", "th", "rd", "xe", "ye", "eh", "sl", "vt")
+    rec: dict[str, list[FloatArray]] = {k: [] for k in keys}
+    for k in range(n_steps + 1):
+        slot = at(slots, k)
+        view, ground = plant.horizontal(x), plant.ground(x)
+        if phase == 0.0:
+            measured[k + lag_steps] = (view.copy(), ground.copy())
+        truth = commands(gcfg, model, act, view, yi, slot, ground)  # the errors as they are
+        seen_view, seen_ground = measured.pop(k, first) if k * step > delay - 1e-9 * step else first
+        if delay > 0.0 or draws is not None:
+            if draws is not None:
+                noise = draws.noise(k)[0]
+                if navigation.pattern == "against-error":
+                    noise = draws.against(_true_errors(seen_view, at(seen, k))[None])[0]
+                cs, sn = np.cos(seen_view[:, 2]), np.sin(seen_view[:, 2])
+                seen_view = seen_view + noise
+                seen_ground = seen_ground + np.stack(
+                    [cs * noise[:, 3] - sn * noise[:, 4], sn * noise[:, 3] + cs * noise[:, 4]], axis=-1
+                )
+            cmd = commands(gcfg, model, act, seen_view, yi, at(seen, k), seen_ground)
+        else:
+            cmd = truth
+        vertical = plant.vertical(x)
+        for key, val in (
+            ("x", view), ("yi", yi), ("tc", cmd.thrust_cmd), ("rc", cmd.rudder_cmd), ("th", cmd.thrust),
+            ("rd", cmd.rudder), ("xe", truth.along_track), ("ye", truth.cross_track), ("eh", truth.heading_error),
+            ("sl", slot.p), ("vt", np.zeros((n, 3)) if vertical is None else vertical),
+        ):  # fmt: skip
+            rec[key].append(np.array(val, dtype=float))
+        if k == n_steps:
+            break
+        # the ILOS state integrates its rate at the sample (Euler: the controller's own discrete
+        # integrator); a late measurement's phase splits the step where it is taken
+        if phase > 0.0:
+            x = rk4(x, cmd, step - phase)
+            measured[k + 1 + lag_steps] = (plant.horizontal(x).copy(), plant.ground(x).copy())
+            x = rk4(x, cmd, phase)
+        else:
+            x = rk4(x, cmd, step)
         yi = yi + step * cmd.integral_rate
         if not np.all(np.isfinite(x)):
             raise ParameterError(f"the guidance run diverged at t = {t[k + 1]:.4g} s (a state is not finite)")
@@ -472,11 +586,13 @@ def run_cascade(
 
 
 __all__ = [
+    "EXACT",
     "REPORT_UNITS",
     "SATURATION_RTOL",
     "STEP",
     "GuidancePlant",
     "GuidanceRun",
+    "Navigation",
     "ThreeDofPlant",
     "run_cascade",
     "simulate_guidance",

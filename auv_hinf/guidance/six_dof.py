@@ -22,7 +22,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.exceptions import ParameterError, require_finite, require_positive
 from auv_hinf.guidance.law import Commands, GuidanceConfig
-from auv_hinf.guidance.simulation import STEP, GuidanceRun, run_cascade
+from auv_hinf.guidance.simulation import EXACT, STEP, GuidanceRun, Navigation, run_cascade
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.models import remus6dof as six
 from auv_hinf.models.vehicle import VehicleParams
@@ -187,6 +187,7 @@ def simulate_guidance_6dof(
     coefficients: six.Remus6Dof | None = None,
     depth: DepthAutopilot | None = None,
     step: float = STEP,
+    navigation: Navigation = EXACT,
 ) -> GuidanceRun:
     """Run the cascade, designed on the 3-DOF ``model``, on a fleet of 6-DOF REMUS 100.
 
@@ -210,6 +211,8 @@ def simulate_guidance_6dof(
         The depth autopilot (default: :class:`DepthAutopilot`, its planes at the rudder's limit).
     step : float
         Control and integration step (s).
+    navigation : Navigation
+        The measurement's delay and noise (default exact and undelayed).
 
     Returns
     -------
@@ -221,7 +224,7 @@ def simulate_guidance_6dof(
         np.asarray(current, dtype=float),
         DepthAutopilot(stern_max=act.rudder_max) if depth is None else depth,
     )
-    return run_cascade(gcfg, model, act, ref, horizon, plant, None, step)
+    return run_cascade(gcfg, model, act, ref, horizon, plant, None, step, navigation)
 
 
 __all__ = ["MIN_PLANE_SPEED", "DepthAutopilot", "SixDofPlant", "simulate_guidance_6dof"]

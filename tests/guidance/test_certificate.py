@@ -7,8 +7,8 @@ Properties asserted:
   sample, stays within the certified box; the commanded thrust and rudder within their bounds;
 * the certified start bounds the states of the configured start in every current;
 * a refused fleet's advised current (or box scale) certifies when re-run;
-* what the certificate does not cover is refused with its reason: plain LOS, a delay, a rudder
-  too small for the commands;
+* what the certificate does not cover is refused with its reason: plain LOS, a varying delay, a
+  rudder too small for the commands;
 * ``certify --json`` and ``simulate --json`` carry the interface keys.
 """
 
@@ -141,9 +141,12 @@ def test_a_refused_current_is_answered_with_one_that_certifies_on_re_run():
     ("tables", "expected"),
     [
         ({"guidance": {"kind": "los"}}, [("guidance", "kind", "ilos")]),
-        ({"implementation": {"sample_time": 0.1, "delay": 0.05}}, [("implementation", "delay", None)]),
+        (
+            {"implementation": {"sample_time": 0.1, "delay": 0.01, "varying_delay": True}},
+            [("implementation", "varying_delay", False)],
+        ),
     ],
-    ids=["plain LOS", "a delay"],
+    ids=["plain LOS", "a varying delay"],
 )
 def test_a_cascade_this_version_does_not_evaluate_is_answered_with_one_it_does_that_certifies(tables, expected):
     cert = certify(transit(**tables))
@@ -159,7 +162,7 @@ def test_a_cascade_this_version_does_not_evaluate_is_answered_with_one_it_does_t
     ("tables", "words"),
     [
         ({"guidance": {"kind": "los"}}, "plain LOS"),
-        ({"implementation": {"sample_time": 0.1, "delay": 0.05}}, "delay"),
+        ({"implementation": {"sample_time": 0.1, "delay": 0.05, "varying_delay": True}}, "fixed [implementation]"),
         # a lookahead of a nanometre: the period map overflows, which is an unstable loop, not a crash
         ({"guidance": {"lookahead": 1e-9}}, "unstable"),
         pytest.param(

@@ -1,8 +1,8 @@
 """The packages import each other in one direction: every import goes to a package listed before its own.
 
 The order is the data flow of a command (docs/modules.md): numerical building blocks, the
-physical world, the mission, the law, actuation, the controller as it runs, simulation,
-design, the certificates (the formation law's, then the guidance cascade's), configuration,
+physical world, the mission, the law, actuation, the controller as it runs, the guidance cascade,
+simulation, design, the certificates (the formation law's, then the guidance cascade's), configuration,
 the assembled certificate, deployment on vehicles, campaigns, figures, CLI.
 An import inside a function counts as much as one at the top of a module.
 """
@@ -24,8 +24,8 @@ LAYERS = (
     ("mission",),
     ("law",),
     ("actuation",),
-    ("guidance",),
     ("implementation",),
+    ("guidance",),
     ("simulation",),
     ("design",),
     ("closed_loop",),

@@ -25,8 +25,9 @@ a change of the mission is preferred only when it certifies much more of them
 a re-run computes it.
 
 The certificate covers what ``simulate`` runs: the cascade sampled every ``[implementation]
-sample_time`` (10 Hz by default), without delay or measurement noise, ILOS guidance. A declared
-delay or noise, or plain LOS, is answered "not evaluated", with the reason.
+sample_time`` (10 Hz by default), on measurements ``[implementation] delay`` seconds old with
+errors within ``[implementation.noise]``, ILOS guidance. A varying delay, or plain LOS, is
+answered "not evaluated", with the reason.
 """
 
 from __future__ import annotations
@@ -54,11 +55,14 @@ from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fle
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting, toml_line
+from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import STEP, slot_motion
+from auv_hinf.implementation.model import MeasurementNoise
+from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
 from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.numerics.progress import PROGRESS_DELAY
@@ -135,6 +139,8 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
         turn_accel=turn_accel,
         speed_jerk=0.0 if constant else float(jerk) + turn * accel,
         sample_time=impl.sample_time if impl.sample_time > 0.0 else STEP,
+        delay=impl.delay,
+        noise=impl.noise,
     )
     return _with(cfg, problem)
 
@@ -229,11 +235,15 @@ class GuidanceSummary:
         heading into the current) certifies the declared box and current: its certified distance
         to the slot (m).
     supported : tuple of Setting
-        When the cascade is not evaluated (plain LOS, a delay or noise, a varying current): the
+        When the cascade is not evaluated (plain LOS, a varying delay, a varying current): the
         settings that make it one this version certifies (:func:`supported_settings`), when the
         configuration re-run with them certifies; empty otherwise.
     supported_bound : float or None
         The certified distance to the slot (m) of that re-run.
+    lag_scale : float or None
+        When it does not hold, no gains of :data:`GAIN_CANDIDATES` certify and an ``[implementation]``
+        delay or noise is declared: the largest scale of the delay and the noise together that
+        certifies the declared box and current (``None``: none found, or none declared).
     """
 
     problem: CascadeProblem | None
@@ -248,6 +258,7 @@ class GuidanceSummary:
     start_bound: float | None = None
     supported: tuple[Setting, ...] = ()
     supported_bound: float | None = None
+    lag_scale: float | None = None
 
     @property
     def holds(self) -> bool:
@@ -338,10 +349,29 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         )
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
     gains = _certifying_gains(problem) if bounded else None
-    bare = _with(cfg, problem, current=0.0, scale=0.0)
-    binds = current is None and scale is None and gains is None and not certify_cascade(bare, cells=False).holds
-    if bool(current) or bool(scale) or gains is not None or not bounded:
-        return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds)
+    lag_scale = None
+    if gains is None and bounded and _navigates(problem):
+        with tqdm(
+            total=ADVICE_STEPS + 2, unit="certificate", desc="navigation", leave=False, delay=PROGRESS_DELAY
+        ) as bar:
+
+            def navigates(s: float) -> bool:
+                bar.update()
+                return certify_cascade(_navigation(problem, s), cells=False).holds
+
+            lag_scale = largest_holding(navigates, 1.0, steps=ADVICE_STEPS)
+        if lag_scale and _confirmed(cfg, _navigation_settings(problem, lag_scale)) is None:
+            lag_scale = None  # its rounded values, as written, are refused
+    bare = _navigation(_with(cfg, problem, current=0.0, scale=0.0), 0.0)
+    binds = (
+        current is None
+        and scale is None
+        and gains is None
+        and not lag_scale
+        and not certify_cascade(bare, cells=False).holds
+    )
+    if bool(current) or bool(scale) or gains is not None or bool(lag_scale) or not bounded:
+        return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, lag_scale=lag_scale or None)
     together = None
     if not binds and problem.plant.current > 0.0 and problem.plant.box.declared:
         together = _largest_scale(cfg, problem)
@@ -349,6 +379,41 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             together = 0.0  # its rounded values, as written, are refused
     mission = mission_answer(cfg)
     return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission, together)
+
+
+def _navigates(problem: CascadeProblem) -> bool:
+    """``problem`` declares a delay or measurement noise."""
+    return problem.delay > 0.0 or not problem.noise.exact
+
+
+def _navigation(problem: CascadeProblem, scale: float) -> CascadeProblem:
+    """``problem`` with its delay and every noise bound scaled by ``scale`` (0: exact, undelayed navigation)."""
+    n = problem.noise
+    noise = MeasurementNoise(n.position * scale, n.velocity * scale, n.heading * scale, n.yaw_rate * scale)
+    return replace(problem, delay=problem.delay * scale, noise=noise)
+
+
+def _navigation_settings(problem: CascadeProblem, scale: float) -> tuple[Setting, ...]:
+    """The declared delay and noise bounds scaled by ``scale``, as settings rounded down (the certified side)."""
+    out: list[Setting] = []
+    if problem.delay > 0.0:
+        out.append(Setting("implementation", "delay", _down(problem.delay * scale)))
+    for key, value in problem.noise.to_dict().items():
+        if value > 0.0:
+            out.append(Setting("implementation.noise", key, _down(value * scale)))
+    return tuple(out)
+
+
+def _navigation_words(figures: Mapping[str, Any]) -> str:
+    """``", delay d s, noise <= ..."`` of the figures' delay and noise (empty when exact and undelayed)."""
+    delay, noise = figures.get("delay") or 0.0, figures.get("noise") or {}
+    out = f", delay {delay:.4g} s" if delay > 0.0 else ""
+    if any(v > 0.0 for v in noise.values()):
+        out += (
+            f", noise <= {noise['position']:.3g} m, {noise['velocity']:.3g} m/s, {noise['heading']:.3g} rad, "
+            f"{noise['yaw_rate']:.3g} rad/s"
+        )
+    return out
 
 
 def _changed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[FormationConfig, CascadeProblem] | None:
@@ -458,14 +523,22 @@ def _unsupported(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
                 (Setting("guidance", "kind", "ilos"),),
             )
         )
-    lag = (Setting("implementation", "delay", None),) if impl.delay > 0.0 else ()
-    noise = () if impl.noise.exact else (Setting("implementation", "noise", None),)
-    if lag or noise:
+    if impl.varying_delay:
         out.append(
             (
-                "the cascade is certified at [implementation] sample_time without delay or noise in this version: "
-                "remove [implementation] delay and [implementation.noise]",
-                lag + noise,
+                "the cascade is certified with a fixed [implementation] delay in this version: "
+                "set [implementation] varying_delay = false (the delay's bound, every sample)",
+                (Setting("implementation", "varying_delay", False),),
+            )
+        )
+    h = impl.sample_time if impl.sample_time > 0.0 else STEP
+    if in_flight(h, impl.delay) > MAX_DELAY_SAMPLES:
+        out.append(
+            (
+                f"the delay is {in_flight(h, impl.delay)} sample times, and the cascade's certificate analyses at "
+                f"most {MAX_DELAY_SAMPLES} measurements in flight: declare [implementation] delay <= "
+                f"{MAX_DELAY_SAMPLES * h:.4g} s",
+                (Setting("implementation", "delay", MAX_DELAY_SAMPLES * h),),
             )
         )
     if cfg.disturbance.current_rate:
@@ -482,7 +555,7 @@ def _unsupported(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
 def supported_settings(cfg: FormationConfig) -> tuple[Setting, ...]:
     """The settings that turn ``cfg``'s cascade into one this version certifies (empty: nothing to change).
 
-    Integral LOS for plain LOS, the sampled law without its delay and noise, a constant current
+    Integral LOS for plain LOS, a fixed delay for a varying one, a constant current
     for a varying one: the settings of every reason :func:`cascade_problem` gives for not
     evaluating it.
 
@@ -576,6 +649,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             Setting("guidance", "lookahead", g.lookahead),
         )
         return settings, f"{toml_line(settings)} (rad/s, m) certifies the declared box and current"
+    if summary.lag_scale is not None and summary.lag_scale > 0.0:
+        settings = _navigation_settings(problem, summary.lag_scale)
+        return settings, (
+            f"a faster, more precise navigation certifies the declared box and current: the delay and the noise "
+            f"together at {summary.lag_scale:.3g} of the declared ({toml_line(settings)})"
+        )
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
         return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
@@ -640,6 +719,8 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
         "sway_speed": body.get("sway_speed"),
         "surge_speed": body.get("surge_speed"),
         "sample_time": None if problem is None else problem.sample_time,
+        "delay": None if problem is None else problem.delay,
+        "noise": None if problem is None else problem.noise.to_dict(),
         "start": None if problem is None else dict(zip(STATES, problem.start, strict=True)),
         "cells": body.get("cells"),
         "current_cells": body.get("current_cells"),
@@ -650,6 +731,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             if summary.gains is None
             else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
             "together": summary.together,
+            "navigation_scale": summary.lag_scale,
             "start_on_slots": None if summary.start_bound is None else {"position_bound": summary.start_bound},
             "mission": None if summary.mission is None else summary.mission.to_dict(),
             "supported": None
@@ -735,7 +817,7 @@ class GuidancePart:
         elif cells > 1:
             by = f" (the box in {cells} cells, each certified with its own nominal plant)"
         out = [
-            f"{head} certified at h = {f['sample_time']:.4g} s{by}",
+            f"{head} certified at h = {f['sample_time']:.4g} s{_navigation_words(f)}{by}",
             f"    errors <= along-track {b['along_track']:.4g} m, cross-track {b['cross_track']:.4g} m, "
             f"heading {b['heading']:.4g} rad; sway <= {f['sway_speed']:.4g} m/s",
         ]
