@@ -312,13 +312,16 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
     outputs = np.vstack([np.hstack([np.eye(7), np.zeros((7, 3 + 7))]), _derived_outputs(problem, rows)])
     b_w = np.eye(7)
     b_w[P, Y_E] = problem.nominal_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
+    # one error input per measured state when the measurements are noisy (the gains from them cost a
+    # quarter more), else one unused column
+    d_n = np.zeros((7, 1)) if problem.noise.exact else np.eye(7)
     return SampledLoop(
         full[:, :7],
         full[:, 7:],
         b_w,
         np.eye(7),
-        np.eye(7),
-        np.zeros((0, 7)),
+        d_n,
+        np.zeros((0, d_n.shape[1])),
         np.zeros((0, 0)),
         np.zeros((0, 7)),
         np.zeros((3, 0)),
@@ -385,6 +388,10 @@ def commands(problem: CascadeProblem, box: FloatArray, noise: FloatArray | None 
         out[:2] = np.minimum(out[:2], [box[7 + DERIVED.index("a_x")], box[7 + DERIVED.index("tau")]])
     return out
 
+
+#: The noise bounds every noisy problem's nominal loop is analysed with (the loop has one error input per
+#: measured state whatever the bounds; they scale its gains' columns in :func:`_image`).
+UNIT_NOISE = MeasurementNoise(1.0, 1.0, 1.0, 1.0)
 
 #: ``max_s |d/ds (Delta^2 / (s^2 + Delta^2))| * Delta = 3 sqrt(3) / 8`` (at ``s = Delta / sqrt(3)``): the
 #: Lipschitz constant, per ``1/Delta``, of the line of sight's ``cos^2(theta)`` in ``s = y_e + sigma y_i``.
@@ -818,7 +825,9 @@ def _image(problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: Flo
         return res
     w = res.inputs
     cmds = commands(problem, box, res.noise)
-    at_steps = gains.continuous @ w + gains.discrete @ res.noise + free
+    at_steps = gains.continuous @ w + free
+    if not problem.noise.exact:  # the loop has one error input per measured state
+        at_steps = at_steps + gains.discrete @ res.noise
     between = gains.step * (gains.derivative @ np.concatenate([box[:7], cmds, w]))
     out: FloatArray = at_steps + between
     out[V] = min(out[V], max(problem.start[V], res.sway))  # both bound the sway speed
@@ -1111,7 +1120,7 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
         turn_accel=0.0,
         speed_jerk=0.0,
         start=(0.0,) * 7,
-        noise=MeasurementNoise(),
+        noise=MeasurementNoise() if problem.noise.exact else UNIT_NOISE,
     )
     analysis = _loop_analysis(key, max_periods)
     if analysis is None:

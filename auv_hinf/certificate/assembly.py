@@ -406,7 +406,9 @@ def certify(
     for part in parts():
         by = superseded_by(part.name, verdicts)
         if law not in part_laws(part):
-            verdict = Verdict(part.name, True, False, note=LAW_IDLE[law])  # the part's law does not run
+            # the part's law does not run; a part may say what covers its concern instead
+            note = getattr(part, "idle_notes", {}).get(law, LAW_IDLE[law])
+            verdict = Verdict(part.name, True, False, note=note)
         elif by is not None:
             figures = superseded_figures(by, part.name, verdicts[by].figures)
             note = f"superseded: the {by} certificate covers the deployed loop"

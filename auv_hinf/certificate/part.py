@@ -327,6 +327,9 @@ class CertificatePart(Protocol):
         The control laws the part judges (:data:`ALL_LAWS` or :data:`FORMATION_LAW`); the assembly
         does not evaluate a part whose law the fleet does not run, and marks it with
         :data:`LAW_IDLE`. Optional: a part without it judges every law (:func:`part_laws`).
+    idle_notes : dict
+        Optional: the part's own note when its law does not run, by the law that runs instead (what
+        covers its concern then), in place of :data:`LAW_IDLE`.
     """
 
     @property

@@ -147,3 +147,6 @@ def test_a_part_is_evaluated_only_for_the_laws_it_declares():
     assert idle is not None and idle.ok and not idle.applies and idle.note == LAW_IDLE["guidance"]
     ran = guided.verdict("spacing")
     assert ran is not None and ran.applies and not ran.ok  # 1e6 m apart: evaluated, and refused
+    # a part may say what covers its concern when its law does not run: the cascade's own certificate
+    impl = guided.verdict("implementation")
+    assert impl is not None and not impl.applies and "guidance part judges" in impl.note

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -342,6 +342,10 @@ class ImplementationPart:
     key: str | None = PART
     #: The fully actuated formation law only (with ``[guidance]`` the assembly does not evaluate it).
     laws: tuple[ControlLaw, ...] = FORMATION_LAW
+    #: What covers the implementation when the part's law does not run, by the law that runs.
+    idle_notes: ClassVar[dict[ControlLaw, str]] = {
+        "guidance": "the guidance part judges the cascade at the declared sample time, delay and noise",
+    }
 
     def evaluate(self, ctx: PartContext) -> Verdict:
         """The implementation summary of ``ctx.point`` on the closed-loop part's certificate."""
