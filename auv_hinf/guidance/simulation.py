@@ -39,15 +39,60 @@ REPORT_UNITS: dict[str, Any] = {
     "delivered_peak": {"force_x": "N", "rudder": "rad"},
     "limits": {"force_x": "N", "rudder": "rad"},
     "measured_errors": {"along_track": "m", "cross_track": "m", "heading": "rad"},
+    "certified_errors": {"along_track": "m", "cross_track": "m", "heading": "rad"},
+    "certified_peak": {"force_x": "N", "rudder": "rad"},
     "final_errors": {"along_track": "m", "cross_track": "m", "heading": "rad", "after": "s"},
     "peak_sway_speed": "m/s",
     "min_separation": "m",
     "horizon": "s",
     "sample_time": "s",
+    "delay": "s",
+    "noise": {"position": "m", "velocity": "m/s", "heading": "rad", "yaw_rate": "rad/s"},
     "vertical": {"depth": "m", "peak_roll": "rad", "peak_pitch": "rad"},
 }
 #: Relative tolerance on the limits below which a command counts as saturated (rounding only).
 SATURATION_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Navigation:
+    """How late and how noisy every vehicle's measurement is (the ``[implementation]`` of a guidance fleet).
+
+    Attributes
+    ----------
+    delay : float
+        Age (s) of the measurement the commands are computed from (fixed).
+    implementation : Implementation or None
+        The noise bounds (``None`` or exact: no noise).
+    seed : int
+        Seed of the noise draws.
+    pattern : str
+        The noise pattern (:data:`~auv_hinf._typing.NOISE_PATTERNS`).
+    """
+
+    delay: float = 0.0
+    implementation: Implementation | None = None
+    seed: int = 0
+    pattern: str = "uniform"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.delay) and self.delay >= 0.0):
+            raise ParameterError(f"the navigation delay must be >= 0 s, got {self.delay!r}")
+
+    @property
+    def noisy(self) -> bool:
+        """Some measurement error bound is positive."""
+        return self.noise is not None
+
+    @property
+    def noise(self) -> dict[str, float] | None:
+        """The error bounds ``{position, velocity, heading, yaw_rate}`` (m, m/s, rad, rad/s); ``None``: exact."""
+        impl = self.implementation
+        return None if impl is None or impl.noise.exact else impl.noise.to_dict()
+
+
+#: Exact, undelayed navigation (what the cascade measured before ``[implementation]`` delay and noise).
+EXACT = Navigation()
 
 
 @dataclass(frozen=True)
@@ -73,6 +118,8 @@ class GuidanceRun:
     vertical : ndarray, shape (T, N, 3) or None
         ``[z, phi, theta]`` (m, rad, rad) of a 6-DOF plant (:mod:`auv_hinf.guidance.six_dof`);
         ``None`` on the 3-DOF model.
+    navigation : Navigation
+        The measurement's delay and noise the run used.
     """
 
     t: FloatArray
@@ -88,6 +135,7 @@ class GuidanceRun:
     slots: FloatArray
     act: RudderActuation
     vertical: FloatArray | None = None
+    navigation: Navigation = EXACT
 
     @property
     def saturated(self) -> np.ndarray:
@@ -152,43 +200,11 @@ class GuidanceRun:
             "closest_pair": list(pair),
             "horizon": float(self.t[-1]),
             "sample_time": float(self.t[1] - self.t[0]) if self.t.size > 1 else None,
+            "delay": self.navigation.delay,
+            "noise": self.navigation.noise,
+            "noise_pattern": self.navigation.pattern if self.navigation.noise is not None else None,
             **({} if self.vertical is None else {"vertical": self._vertical_report()}),
         }
-
-
-@dataclass(frozen=True)
-class Navigation:
-    """How late and how noisy every vehicle's measurement is (the ``[implementation]`` of a guidance fleet).
-
-    Attributes
-    ----------
-    delay : float
-        Age (s) of the measurement the commands are computed from (fixed).
-    implementation : Implementation or None
-        The noise bounds (``None`` or exact: no noise).
-    seed : int
-        Seed of the noise draws.
-    pattern : str
-        The noise pattern (:data:`~auv_hinf._typing.NOISE_PATTERNS`).
-    """
-
-    delay: float = 0.0
-    implementation: Implementation | None = None
-    seed: int = 0
-    pattern: str = "uniform"
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.delay) and self.delay >= 0.0):
-            raise ParameterError(f"the navigation delay must be >= 0 s, got {self.delay!r}")
-
-    @property
-    def noisy(self) -> bool:
-        """Some measurement error bound is positive."""
-        return self.implementation is not None and not self.implementation.noise.exact
-
-
-#: Exact, undelayed navigation (what the cascade measured before ``[implementation]`` delay and noise).
-EXACT = Navigation()
 
 
 def _true_errors(view: FloatArray, slot: SlotMotion) -> FloatArray:
@@ -582,6 +598,7 @@ def run_cascade(
         slots=arr["sl"],
         act=act,
         vertical=None if plant.vertical(x) is None else arr["vt"],
+        navigation=navigation,
     )
 
 

@@ -158,7 +158,8 @@ def test_cli_simulate_runs_the_late_noisy_cascade_and_judges_it_by_its_certifica
     assert main(["simulate", "--config", str(path), "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert rep["certificate_covers_run"] is True and rep["within_certified_bounds"] is True
-    assert rep["sample_time"] == pytest.approx(0.05)
+    assert rep["sample_time"] == pytest.approx(0.05) and rep["delay"] == pytest.approx(0.05)
+    assert rep["noise"]["heading"] == pytest.approx(0.002) and rep["noise_pattern"] == "bang-bang"
 
 
 def _navigation_table() -> dict:
