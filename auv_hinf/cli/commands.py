@@ -269,6 +269,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _refuse_uncertified_cascade(cfg: FormationConfig, allowed: bool, what: str) -> None:
+    """Refuse to run a guidance cascade its certificate does not hold for, unless ``--uncertified`` allows it."""
+    if allowed:
+        return
+    from auv_hinf.certificate.parts.guidance import guidance_certificate
+
+    summary = guidance_certificate(cfg)
+    if not summary.holds:
+        raise Negative(
+            f"refusing to {what} a guidance cascade that no certificate covers: {summary.reason}; `{PROG} certify` "
+            f"says why and what would certify, or rerun with --uncertified to {what} it anyway"
+        )
+
+
 def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
     """``simulate`` of a ``[guidance]`` configuration: the line-of-sight cascade on the 3-DOF model."""
     from auv_hinf.certificate.run_plan import guidance_run
@@ -276,6 +290,8 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
     if args.save is not None or args.design or args.start:
         raise BadInput("--save, --design and --start are for the fully actuated law; a [guidance] run takes none")
     from auv_hinf.certificate.parts.guidance import plant_multipliers, run_coverage
+
+    _refuse_uncertified_cascade(cfg, args.uncertified, "simulate")
 
     try:
         run = guidance_run(cfg, horizon=args.horizon, six_dof=args.six_dof)
@@ -435,6 +451,7 @@ def _campaign_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         save_guidance_campaign_figure(camp, args.out)
         return dict(summary)
 
+    _refuse_uncertified_cascade(cfg, args.uncertified, "run a campaign of")
     try:
         camp = run_guidance_campaign(cfg, args.runs, seed=args.seed, horizon=args.horizon, progress=True)
     except Interrupted as stop:

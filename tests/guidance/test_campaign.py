@@ -110,6 +110,9 @@ def test_cli_campaign_of_a_guidance_fleet(tmp_path, capsys):
     out = tmp_path / "camp"
     args = ["campaign", "--preset", "remus-survey-ilos", "--runs", "2", "--horizon", "30", "--json"]
     code = main([*args, "--out", str(out)])
+    text, _ = capsys.readouterr()
+    assert code == 1 and "refusing to run a campaign of" in text and not (out / "summary.json").exists()
+    code = main([*args, "--out", str(out), "--uncertified"])
     text, err = capsys.readouterr()
     summary = json.loads(text)
     assert code == 1 and "not certified" in err and "Traceback" not in err

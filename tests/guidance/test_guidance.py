@@ -158,7 +158,11 @@ def test_cli_simulate_and_certify_of_a_guidance_file(tmp_path, capsys):
     path = tmp_path / "torpedo.toml"
     path.write_text(to_toml(data))
     capsys.readouterr()
-    code = main(["simulate", "--config", str(path), "--json", "--out", str(tmp_path / "out")])
+    # a cascade its certificate does not hold for is run only when asked, as the formation law's gains
+    code = main(["simulate", "--config", str(path), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 1 and json.loads(out)["ok"] is False and "refusing to simulate" in out and "--uncertified" in out
+    code = main(["simulate", "--config", str(path), "--json", "--out", str(tmp_path / "out"), "--uncertified"])
     out, err = capsys.readouterr()
     assert code == 1 and "Traceback" not in err and "not certified" in err
     rep = json.loads(out)

@@ -131,7 +131,9 @@ def test_the_cascade_designed_on_3dof_runs_the_6dof_remus_in_a_current(current):
 def test_cli_simulate_six_dof(capsys):
     from auv_hinf.cli.main import main
 
-    code = main(["simulate", "--preset", "remus-survey-ilos", "--six-dof", "--horizon", "20", "--json"])
+    code = main(
+        ["simulate", "--preset", "remus-survey-ilos", "--six-dof", "--horizon", "20", "--json", "--uncertified"]
+    )
     out, err = capsys.readouterr()
     rep = json.loads(out)
     assert code == 1 and "6-DOF" in err and rep["saturation_fraction"] == 0.0
