@@ -909,6 +909,12 @@ def halves(problem: CascadeProblem) -> list[CascadeProblem]:
     return out
 
 
+def _still(problem: CascadeProblem) -> CascadeProblem:
+    """``problem`` for the controller's model alone, in still water (its start's bounds kept)."""
+    pl = problem.plant
+    return replace(problem, plant=Plant(pl.model, ParameterBox(pl.model), 0.0, 0.0), nominal=None, current_along=None)
+
+
 def _centre_only(problem: CascadeProblem) -> CascadeProblem:
     """``problem`` for its nominal plant alone (a box of one plant; the same nominal loop)."""
     centre = problem.nominal_plant
@@ -943,7 +949,9 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
     most :data:`MAX_CELL_DEPTH` times), at most :data:`MAX_CELLS` cells in all. The
     whole certifies when every cell does, with the largest of the cells' bounds. A corner of the
     masses refused alone refuses at once, and the search gives up when a cell's centre (one plant,
-    one current along the track) is refused alone. Otherwise the whole box's refusal is returned.
+    one current along the track) is refused alone; with a declared delay or noise it is not started
+    when the controller's model in still water is refused on that navigation (the cell that holds
+    it holds more). Otherwise the whole box's refusal is returned.
 
     Parameters
     ----------
@@ -961,6 +969,14 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
         return whole
     if not ((mass_cells and _split(problem)) or current_cells_apply(problem)):
         return whole
+    if (problem.delay > 0.0 or not problem.noise.exact) and not _certify_one(_still(problem)).holds:
+        # the cell holding the nominal plant in still water holds more than it: no cover certifies
+        # in practice, and the search would spend its whole budget to find that out
+        return replace(
+            whole,
+            reason=f"{whole.reason} (no cells tried: the nominal plant in still water is refused on this "
+            "navigation, its delay and noise)",
+        )
     with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
         # the search prefers the current's cells wherever they apply, so without the masses' cells it
         # takes the same halvings and stops where the masses' would start: whatever the advice's search

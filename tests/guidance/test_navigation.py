@@ -173,3 +173,17 @@ def test_a_navigation_needs_a_finite_non_negative_delay():
         Navigation(-0.1)
     assert not Navigation(0.1).noisy
     assert Navigation(0.0, Implementation(0.1, noise=MeasurementNoise(heading=0.01))).noisy
+
+
+@pytest.mark.slow
+def test_a_navigation_that_refuses_the_nominal_plant_in_still_water_tries_no_cells():
+    from auv_hinf.cascade.certificate import certify_cascade
+    from auv_hinf.certificate.design_point import design_point
+    from auv_hinf.certificate.parts.guidance import cascade_problem
+    from auv_hinf.config.presets import preset_config
+
+    noisy = [("implementation", "delay", 0.1), ("implementation.noise", "heading", 0.01)]
+    cfg = with_settings(preset_config("remus-transit-ilos"), [("implementation", "sample_time", 0.1), *noisy])
+    problem = cascade_problem(cfg, design_point(cfg))
+    cert = certify_cascade(problem)
+    assert not cert.holds and "no cells tried" in cert.reason and cert.cells == 1
