@@ -28,8 +28,7 @@ from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError
-from auv_hinf.guidance.simulation import STEP as GUIDANCE_STEP
-from auv_hinf.guidance.simulation import GuidanceRun, Navigation, simulate_guidance
+from auv_hinf.guidance.simulation import GuidanceRun, Navigation, cascade_period, simulate_guidance
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
@@ -544,7 +543,7 @@ def guidance_run(
             "a [guidance] fleet is simulated with a fixed [implementation] delay in this version: set "
             "[implementation] varying_delay = false"
         )
-    step = impl.sample_time if impl.sample_time > 0.0 else GUIDANCE_STEP
+    step = cascade_period(impl)
     sim = cfg.simulation
     seed, pattern = noise if noise is not None else (sim.seed, sim.noise_pattern)
     navigation = Navigation(impl.delay, impl, seed, NOISE_PATTERNS[0] if pattern == "mixed" else pattern)

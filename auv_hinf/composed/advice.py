@@ -24,7 +24,6 @@ from auv_hinf.composed.certificate import (
     DeployedProblem,
     certify_deployed,
 )
-from auv_hinf.implementation.model import MeasurementNoise
 from auv_hinf.numerics.bisection import bisect
 
 #: The settings :func:`largest_covered` can shrink (``together``: the noise, the delay, the
@@ -109,9 +108,7 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProble
             problem = shrunk(problem, k, scale)
         return problem
     if knob == "noise":
-        n = impl.noise
-        noise = MeasurementNoise(n.position * scale, n.velocity * scale, n.heading * scale, n.yaw_rate * scale)
-        return replace(problem, implementation=replace(impl, noise=noise))
+        return replace(problem, implementation=replace(impl, noise=impl.noise.scaled(scale)))
     if knob == "delay":
         return replace(problem, implementation=replace(impl, delay=impl.delay * scale))
     if knob == "sample_time":  # not below the floor, nor (when the declared one is within it) the delay's

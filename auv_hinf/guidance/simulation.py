@@ -33,6 +33,19 @@ from auv_hinf.models.vehicle import VehicleParams, rhs
 #: Integration and control step (s): a 10 Hz autopilot, a tenth of the fastest time constant of
 #: the default loop (the 1 s of the heading loop; the sway and surge dynamics are slower).
 STEP = 0.1
+
+
+def cascade_period(impl: Implementation) -> float:
+    """The cascade's control period (s): the ``[implementation] sample_time``, or :data:`STEP` when none is declared.
+
+    Parameters
+    ----------
+    impl : Implementation
+        The configuration's implementation.
+    """
+    return impl.sample_time if impl.sample_time > 0.0 else STEP
+
+
 #: Units of the figures of :meth:`GuidanceRun.report` (the text of ``simulate``).
 REPORT_UNITS: dict[str, Any] = {
     "commanded_peak": {"force_x": "N", "rudder": "rad"},
@@ -202,7 +215,7 @@ class GuidanceRun:
             "sample_time": float(self.t[1] - self.t[0]) if self.t.size > 1 else None,
             "delay": self.navigation.delay,
             "noise": self.navigation.noise,
-            "noise_pattern": self.navigation.pattern if self.navigation.noise is not None else None,
+            "noise_pattern": self.navigation.pattern if self.navigation.noisy else None,
             **({} if self.vertical is None else {"vertical": self._vertical_report()}),
         }
 
@@ -549,7 +562,7 @@ def run_cascade(
         if phase == 0.0:
             measured[k + lag_steps] = (view.copy(), ground.copy())
         truth = commands(gcfg, model, act, view, yi, slot, ground)  # the errors as they are
-        seen_view, seen_ground = measured.pop(k, first) if k * step > delay - 1e-9 * step else first
+        seen_view, seen_ground = measured.pop(k, first)  # none taken yet before t_k = d: the start
         if delay > 0.0 or draws is not None:
             if draws is not None:
                 noise = draws.noise(k)[0]
@@ -611,6 +624,7 @@ __all__ = [
     "GuidanceRun",
     "Navigation",
     "ThreeDofPlant",
+    "cascade_period",
     "run_cascade",
     "simulate_guidance",
     "slot_motion",

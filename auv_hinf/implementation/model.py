@@ -63,6 +63,18 @@ class MeasurementNoise:
         """JSON-safe dictionary (m, m/s, rad, rad/s)."""
         return asdict(self)
 
+    def scaled(self, scale: float) -> MeasurementNoise:
+        """Every bound times ``scale >= 0`` (0: exact measurements).
+
+        Parameters
+        ----------
+        scale : float
+            The factor (dimensionless).
+        """
+        return MeasurementNoise(
+            self.position * scale, self.velocity * scale, self.heading * scale, self.yaw_rate * scale
+        )
+
 
 @dataclass(frozen=True)
 class Implementation:

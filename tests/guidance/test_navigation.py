@@ -20,15 +20,17 @@ import numpy as np
 import pytest
 
 from auv_hinf._typing import NOISE_PATTERNS
+from auv_hinf.cascade.certificate import STATES, certify_cascade
 from auv_hinf.certificate.assembly import certify
-from auv_hinf.certificate.design_point import raw_fleet
-from auv_hinf.certificate.parts.guidance import guidance_summary
+from auv_hinf.certificate.design_point import design_point, raw_fleet
+from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary
 from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import with_settings
 from auv_hinf.guidance.law import SlotMotion, commands, integral_start
 from auv_hinf.guidance.simulation import Navigation, ThreeDofPlant, run_cascade, slot_motion, slot_start
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
-from tests.guidance.test_certificate import STATES, _states_along, transit
+from tests.guidance.test_certificate import TRANSIT, _states_along, transit
 from tests.helpers import to_toml
 
 #: The transit fleet on its nominal plant in still water, at 20 Hz on measurements 0.05 s old with
@@ -163,8 +165,6 @@ def test_cli_simulate_runs_the_late_noisy_cascade_and_judges_it_by_its_certifica
 
 
 def _navigation_table() -> dict:
-    from tests.guidance.test_certificate import TRANSIT
-
     return {**TRANSIT, **NAVIGATION}
 
 
@@ -177,13 +177,14 @@ def test_a_navigation_needs_a_finite_non_negative_delay():
 
 @pytest.mark.slow
 def test_a_navigation_that_refuses_the_nominal_plant_in_still_water_tries_no_cells():
-    from auv_hinf.cascade.certificate import certify_cascade
-    from auv_hinf.certificate.design_point import design_point
-    from auv_hinf.certificate.parts.guidance import cascade_problem
-    from auv_hinf.config.presets import preset_config
-
     noisy = [("implementation", "delay", 0.1), ("implementation.noise", "heading", 0.01)]
     cfg = with_settings(preset_config("remus-transit-ilos"), [("implementation", "sample_time", 0.1), *noisy])
     problem = cascade_problem(cfg, design_point(cfg))
     cert = certify_cascade(problem)
     assert not cert.holds and "no cells tried" in cert.reason and cert.cells == 1
+
+
+def test_the_cascade_runs_at_the_declared_sample_time_or_at_10_hz():
+    from auv_hinf.guidance.simulation import STEP, cascade_period
+
+    assert cascade_period(Implementation(0.05)) == 0.05 and cascade_period(Implementation()) == STEP == 0.1

@@ -63,3 +63,11 @@ def test_patterns_are_checked_and_mixed_cycles_through_them():
         ImplementationDraws(IMPL, [1], 2, ["sideways"])
     assert [run_pattern("mixed", i) for i in range(6)] == [*NOISE_PATTERNS, NOISE_PATTERNS[0]]
     assert run_pattern("bias", 7) == "bias"
+
+
+def test_scaled_noise_scales_every_bound_and_zero_is_exact():
+    half = NOISE.scaled(0.5)
+    assert half.to_dict() == {k: 0.5 * v for k, v in NOISE.to_dict().items()}
+    assert NOISE.scaled(0.0).exact and not half.exact
+    with pytest.raises(ParameterError):
+        NOISE.scaled(-1.0)

@@ -60,8 +60,7 @@ from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
-from auv_hinf.guidance.simulation import STEP, slot_motion
-from auv_hinf.implementation.model import MeasurementNoise
+from auv_hinf.guidance.simulation import cascade_period, slot_motion
 from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
 from auv_hinf.numerics.bisection import bisect, largest_holding
@@ -138,7 +137,7 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
         turn_rate=turn,
         turn_accel=turn_accel,
         speed_jerk=0.0 if constant else float(jerk) + turn * accel,
-        sample_time=impl.sample_time if impl.sample_time > 0.0 else STEP,
+        sample_time=cascade_period(impl),
         delay=impl.delay,
         noise=impl.noise,
     )
@@ -388,9 +387,7 @@ def _navigates(problem: CascadeProblem) -> bool:
 
 def _navigation(problem: CascadeProblem, scale: float) -> CascadeProblem:
     """``problem`` with its delay and every noise bound scaled by ``scale`` (0: exact, undelayed navigation)."""
-    n = problem.noise
-    noise = MeasurementNoise(n.position * scale, n.velocity * scale, n.heading * scale, n.yaw_rate * scale)
-    return replace(problem, delay=problem.delay * scale, noise=noise)
+    return replace(problem, delay=problem.delay * scale, noise=problem.noise.scaled(scale))
 
 
 def _navigation_settings(problem: CascadeProblem, scale: float) -> tuple[Setting, ...]:
@@ -531,7 +528,7 @@ def _unsupported(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
                 (Setting("implementation", "varying_delay", False),),
             )
         )
-    h = impl.sample_time if impl.sample_time > 0.0 else STEP
+    h = cascade_period(impl)
     if in_flight(h, impl.delay) > MAX_DELAY_SAMPLES:
         out.append(
             (
