@@ -149,6 +149,8 @@ class CascadeProblem:
         measurement taken at ``t_k - d`` (before ``t = 0``: the start).
     noise : MeasurementNoise
         Bounds of the measurement errors (m, m/s, rad, rad/s; default exact).
+    start_turn : float or None
+        Bound of every slot's course rate ``|omega(0)|`` at ``t = 0`` (rad/s); ``None``: :attr:`turn_rate`.
     """
 
     guidance: GuidanceConfig
@@ -165,6 +167,12 @@ class CascadeProblem:
     current_along: tuple[float, float] | None = None
     delay: float = 0.0
     noise: MeasurementNoise = field(default_factory=MeasurementNoise)
+    start_turn: float | None = None
+
+    @property
+    def turn_start(self) -> float:
+        """Bound of every slot's ``|omega(0)|`` (rad/s): :attr:`start_turn`, or :attr:`turn_rate`."""
+        return self.turn_rate if self.start_turn is None else self.start_turn
 
     @property
     def lag(self) -> float:
@@ -331,6 +339,65 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
         outputs,
         STATES + DERIVED,
     )
+
+
+def turn_equilibrium(problem: CascadeProblem) -> FloatArray:
+    """The nominal loop's equilibrium per unit turn rate: every output (:data:`STATES`, :data:`DERIVED`) per rad/s.
+
+    The slot's turn pushes the sway through the Coriolis force, ``-(m11 U0/m22) omega`` in ``v'``,
+    and the heading rate through the line of sight's acceleration, ``-(m11 U0/m22) omega / Delta``
+    in ``e_r'`` (:func:`turn_forcing`). On a steady turn the loop settles where the law holds that
+    push: a sideslip ``v`` that the ILOS state's crab ``p = v`` keeps off the track, with the heading
+    and cross-track errors at zero. With the held commands equal to the law at a constant state,
+    the sampled loop's equilibrium is the continuous one, ``x = -(A + B K)^-1 f``.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its nominal loop).
+
+    Returns
+    -------
+    ndarray, shape (NB,)
+        Signed outputs per unit ``omega`` (SI units per rad/s).
+    """
+    rows = _rows(problem)
+    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
+    full = np.vstack([rows[k] for k in order])
+    law = _law(problem)
+    state = -np.linalg.solve(full[:, :7] + full[:, 7:] @ law, turn_forcing(problem)[0])
+    derived = _derived_outputs(problem, rows) @ np.concatenate([state, law @ state, state])
+    out: FloatArray = np.concatenate([state, derived])
+    return out
+
+
+def turn_forcing(problem: CascadeProblem) -> tuple[FloatArray, FloatArray]:
+    """The residuals' parts that are linear in the slot's turn: per unit ``omega`` and per unit ``omega'``.
+
+    ``v' = ... - (m11' u / m22') r`` with ``r = omega + (r - omega)`` carries ``-(m11 U0/m22) omega``
+    exactly at the nominal plant and speed; the line of sight's acceleration carries ``v'/Delta``
+    into ``e_r'``, and ``e_r = r - omega + theta_c'`` carries ``-omega'``. Every other term of the
+    turn is a product with an error or with the current's or the plant's spread, and stays in the
+    residuals' bounds (:func:`residual_bounds`).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its nominal plant, speed and lookahead).
+
+    Returns
+    -------
+    tuple of ndarray, shape (7,)
+        The state derivatives' coefficients of ``omega`` (1/s per rad/s, in the units of each
+        state's rate) and of ``omega'``.
+    """
+    n = problem.nominal_plant
+    push = n.m11 * problem.nominal_speed / n.m22
+    per_rate = np.zeros(7)
+    per_rate[V], per_rate[E_R] = -push, -push / problem.guidance.lookahead
+    per_accel = np.zeros(7)
+    per_accel[E_R] = -1.0
+    return per_rate, per_accel
 
 
 def _derived_outputs(problem: CascadeProblem, rows: dict[str, FloatArray]) -> FloatArray:
@@ -505,7 +572,7 @@ class Residuals:
     noise: FloatArray = field(default_factory=lambda: np.zeros(7))
 
 
-def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str:
+def residual_bounds(problem: CascadeProblem, box: FloatArray, turn: TurnTerms | None = None) -> Residuals | str:
     """Bounds of the seven residuals ``|w_j|`` while the states stay in ``box``, and of the commands.
 
     Each residual is a state's exact derivative less the nominal loop's (:func:`_rows`). Every
@@ -517,8 +584,11 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     ----------
     problem : CascadeProblem
         The cascade.
-    box : ndarray, shape (7,)
-        Bounds of ``|x_e|, |v_x|, |y_e|, |p|, |e|, |e_r|, |v|`` (SI units).
+    box : ndarray, shape (7,) or (NB,)
+        Bounds of ``|x_e|, |v_x|, |y_e|, |p|, |e|, |e_r|, |v|`` (SI units), then of :data:`DERIVED`.
+    turn : TurnTerms or None
+        How the turn's push is carried (:func:`turn_terms`; ``None``: as residual inputs, which the
+        caller adds). The returned inputs never include it.
 
     Returns
     -------
@@ -533,6 +603,11 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     nz = problem.noise
     xb, vxb, yb, pb, eb, erb, vb = (float(x) for x in box[:7])
     derived = dict(zip(DERIVED, map(float, box[7:]), strict=False))
+    # the derived expressions of z = x - E omega about the turn's equilibrium (:func:`turn_terms`), whose
+    # rates are zero: the rates of x are those of z
+    still = dict.fromkeys(DERIVED, math.inf)
+    if turn is not None and turn.equilibrium:
+        still.update(zip(DERIVED, map(float, np.maximum(box[7:] - turn.shift[7:], 0.0)), strict=False))
 
     def tighter(name: str, crude: float) -> float:
         """The smaller of a sum of the states' bounds and the derived bound (both hold)."""
@@ -640,15 +715,20 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
         + rho[1] * d33_hat * rm / m22[0]
         + abs(munk_hat) * vm * _product_off([rho, (um_lo, um_hi)], m22, u0 / n.m22)
     ) / lever
+    # the slot's turn's own push, -(m11 U0/m22) omega, is not in w7: :func:`turn_terms` carries it, and
+    # |v'| adds it back
+    turn_push = n.m11 * u0 / n.m22 * omega
     w7 = (
         side
         + _product_off([m11, (u_lo, u_hi)], m22, n.m11 * u0 / n.m22) * r_max
-        + n.m11 * u0 / n.m22 * (omega + sight_gap)
+        + n.m11 * u0 / n.m22 * sight_gap
         + _product_off([pl.interval("d22_lin")], m22, n.d22_lin / n.m22) * vb
         + pl.interval("d22_quad")[1] * vb * vb / m22[0]
     )
     v_lin = tighter("vdot_lin", n.m11 * u0 / n.m22 * yaw_lin + n.d22_lin / n.m22 * vb + m.m33 / (lever * n.m22) * tau)
-    v_dot = v_lin + w7
+    # |v'|: the nominal expression less the turn's push is the nominal expression of z (the equilibrium's
+    # v' is zero), bounded directly by z's box
+    v_dot = min(v_lin + turn_push, still["vdot_lin"]) + w7
     gap_v = lag * v_dot + nz.velocity  # |v - v_m|: the measurement's age and its error
     # -- the sway's own bound, by its damped scalar equation: m22' v' = -(d22'(v) + k_m) v + k_m (v - v_m)
     # + (rho/l)(m33 a_psi + d33(r_m) r_m) - m11' u r, with k_m = -rho m_u u_m / l the side force of the
@@ -719,7 +799,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     yddot_lin = tighter("yddot_lin", a_g * (y_lin + b_g * yb) + u0 * erb + v_lin)
     sight_accel_gap = (
         yddot_gap
-        + (1.0 - cos_t**2) * yddot_lin
+        + (1.0 - cos_t**2) * min(yddot_lin + turn_push, still["yddot_lin"])
         + b_g * (w3 + (1.0 - cos_t**4) * y_lin)
         + 2.0 * sin_t * sight_rate * (ydot + 2.0 * b_g * yb)
     ) / delta
@@ -733,13 +813,7 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray) -> Residuals | str
     )
     mu_n = m.m33 / n.m33
     drag_pair = (drag_cancel + slope33 * gap_r) / m33[0]
-    w6 = (
-        max(abs(mu[1] * rho[1] - mu_n), abs(mu_n - mu[0] * rho[0])) * a_psi
-        + munk_pair
-        + drag_pair
-        + omega_dot
-        + sight_accel_gap
-    )
+    w6 = max(abs(mu[1] * rho[1] - mu_n), abs(mu_n - mu[0] * rho[0])) * a_psi + munk_pair + drag_pair + sight_accel_gap
     return Residuals(np.array([w1, w2, w3, w4, w5, w6, w7]), actuation, sway, noise)
 
 
@@ -818,19 +892,88 @@ class CascadeCertificate:
         }
 
 
-def _image(problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: FloatArray) -> FloatArray | str:
-    """The bound of the states implied by ``box``: free response, residuals through the gains, intersample motion."""
-    res = residual_bounds(problem, box)
+@dataclass(frozen=True)
+class TurnTerms:
+    """How the slot's turn enters one fixed point of the certificate (:func:`turn_terms`).
+
+    Attributes
+    ----------
+    shift : ndarray, shape (NB,)
+        The turn's equilibrium's largest part of every output, ``|E| omega_max`` (SI units; zero
+        when the turn's push is left in the residuals).
+    drive : ndarray, shape (7,)
+        Bounds of the residual inputs that the turn adds (SI units of each state's rate).
+    per_rate : ndarray, shape (NB,)
+        The equilibrium per unit turn rate ``E`` (signed, per rad/s; zero when not used).
+    """
+
+    shift: FloatArray
+    drive: FloatArray
+    per_rate: FloatArray
+
+    @property
+    def equilibrium(self) -> bool:
+        """The states are taken about the turn's equilibrium."""
+        return bool(np.any(self.per_rate))
+
+
+def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
+    """The turn's part of the certificate: about the turn's equilibrium, or as residual inputs.
+
+    **About the equilibrium.** The states are ``x = E omega(t) + z`` (:func:`turn_equilibrium`).
+    With ``(A + B K) E = -f`` (:func:`turn_forcing`), ``z`` runs in the same nominal loop as ``x``
+    without the turn's push, driven instead by ``(f' - E) omega'`` and by the held commands'
+    equilibrium part measured at ``t_k - d``, ``B K E (omega(t_k - d) - omega(t))``, at most
+    ``(h + d) |omega'|``: both in the residuals' coordinates (``b_w^-1``, :func:`cascade_loop`). The
+    fixed point bounds ``z``; ``x`` is within ``|E| omega_max`` more.
+
+    **As residuals.** The push ``f omega + f' omega'`` is one more residual input, bounded by
+    ``|f| omega_max + |f'| omega'_max``: the ILOS state then absorbs the push through the loop's
+    gains, which for a turn entered slowly is the tighter of the two on some states (the
+    certificate takes both, :func:`_certify_one`).
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its nominal loop, turn rate and turn acceleration).
+    equilibrium : bool
+        Take the states about the turn's equilibrium.
+    """
+    per_rate_force, per_accel = turn_forcing(problem)
+    if not equilibrium:
+        drive = np.abs(per_rate_force) * problem.turn_rate + np.abs(per_accel) * problem.turn_accel
+        return TurnTerms(np.zeros(NB), drive, np.zeros(NB))
+    per_rate = turn_equilibrium(problem)
+    state = per_rate[:7]
+    rows = _rows(problem)
+    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
+    b_cmd = np.vstack([rows[k] for k in order])[:, 7:]
+    unmix = np.eye(7)
+    unmix[P, Y_E] = -problem.nominal_speed / problem.guidance.lookahead  # b_w^-1
+    held = unmix @ (b_cmd @ (_law(problem) @ state))
+    drive = problem.turn_accel * (np.abs(unmix @ (per_accel - state)) + problem.lag * np.abs(held))
+    return TurnTerms(np.abs(per_rate) * problem.turn_rate, drive, per_rate)
+
+
+def _image(
+    problem: CascadeProblem, gains: PeakGains, free: FloatArray, box: FloatArray, turn: TurnTerms
+) -> FloatArray | str:
+    """The bound of the states implied by ``box``: the turn's equilibrium, the free response, the residuals
+    through the gains, the intersample motion (the last three of ``z = x - E omega``, :func:`turn_terms`)."""
+    res = residual_bounds(problem, box, turn)
     if isinstance(res, str):
         return res
-    w = res.inputs
-    cmds = commands(problem, box, res.noise)
+    z = np.maximum(box - turn.shift, 0.0)
+    w = res.inputs + turn.drive
+    cmds = commands(problem, z, res.noise)
     at_steps = gains.continuous @ w + free
     if not problem.noise.exact:  # the loop has one error input per measured state
         at_steps = at_steps + gains.discrete @ res.noise
-    between = gains.step * (gains.derivative @ np.concatenate([box[:7], cmds, w]))
-    out: FloatArray = at_steps + between
-    out[V] = min(out[V], max(problem.start[V], res.sway))  # both bound the sway speed
+    between = gains.step * (gains.derivative @ np.concatenate([z[:7], cmds, w]))
+    # both bound the sway speed; the sway's own bound is of v, so of z_v within the equilibrium's part more
+    z_image = at_steps + between
+    z_image[V] = min(z_image[V], max(problem.start[V], res.sway) + turn.shift[V])
+    out: FloatArray = turn.shift + z_image
     return out
 
 
@@ -1136,6 +1279,7 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
         turn_accel=0.0,
         speed_jerk=0.0,
         start=(0.0,) * 7,
+        start_turn=None,
         noise=MeasurementNoise() if problem.noise.exact else UNIT_NOISE,
     )
     analysis = _loop_analysis(key, max_periods)
@@ -1157,39 +1301,17 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
             0,
             gains.radius,
         )
-    free = np.abs(fp) @ start  # every output: the states and DERIVED
-    box = free.copy()
-    for k in range(1, MAX_ITERATIONS + 1):
-        nxt = _image(problem, gains, free, box)
-        if isinstance(nxt, str):
-            return CascadeCertificate(
-                False,
-                None,
-                None,
-                f"the small-gain bound does not close: the error bounds grow until {nxt}",
-                k,
-                gains.radius,
-            )
-        if np.all(nxt <= box * (1.0 + FIXED_POINT_RTOL) + FIXED_POINT_FLOOR):
-            break
-        box = np.maximum(box, nxt)
-    else:
-        return CascadeCertificate(
-            False, None, None, "no error box closes: the fixed point does not converge", k, gains.radius
-        )
-    # the strict inclusion, on the fixed point inflated; a component driven only by products of the
-    # others grows faster than the inflation, so the inflation is repeated on the image
-    final = box * (1.0 + FIXED_POINT_MARGIN) + FIXED_POINT_FLOOR
-    for _ in range(INFLATIONS):
-        image = _image(problem, gains, free, final)
-        if isinstance(image, str) or np.all(image < final):
-            break
-        final = np.maximum(final, image * (1.0 + FIXED_POINT_MARGIN) + FIXED_POINT_FLOOR)
-    if isinstance(image, str) or not np.all(image < final):
-        why = image if isinstance(image, str) else "the inflated box is not invariant"
-        return CascadeCertificate(False, None, None, f"no error box closes: {why}", k, gains.radius)
+    fixed = [_fixed_point(problem, gains, fp, turn_terms(problem, False))]
+    if problem.turn_rate > 0.0 or problem.turn_accel > 0.0:
+        fixed.append(_fixed_point(problem, gains, fp, turn_terms(problem, True)))
+    boxes = [f[0] for f in fixed if not isinstance(f[0], str)]
+    k = sum(f[1] for f in fixed)
+    if not boxes:
+        return CascadeCertificate(False, None, None, str(fixed[0][0]), k, gains.radius)
+    # every trajectory stays in each invariant box, so in their intersection, over which the commands are bounded
+    final: FloatArray = np.min(boxes, axis=0)
     res = residual_bounds(problem, final)
-    assert not isinstance(res, str)  # the image was computed on the same box
+    assert not isinstance(res, str)  # each box's image was computed, and the intersection is smaller
     actuation = res.actuation
     over = []
     if actuation.thrust > problem.act.tau_x:
@@ -1201,6 +1323,48 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
             False, final, actuation, "the commands exceed the limits: " + ", ".join(over), k, gains.radius
         )
     return CascadeCertificate(True, final, actuation, "", k, gains.radius)
+
+
+def _fixed_point(
+    problem: CascadeProblem, gains: PeakGains, fp: FloatArray, turn: TurnTerms
+) -> tuple[FloatArray | str, int]:
+    """An invariant box of the cascade with the turn carried as ``turn`` says, or why none closes; and the iterations.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade.
+    gains : PeakGains
+        Its nominal loop's peak gains.
+    fp : ndarray
+        Its nominal loop's free-response peaks (every output per unit start state).
+    turn : TurnTerms
+        How the turn enters (:func:`turn_terms`).
+    """
+    start = np.asarray(problem.start, dtype=float)
+    # z(0) = x(0) - E omega(0): the free response of z, with the slots' turn at the start
+    free = np.abs(fp) @ (start + np.abs(turn.per_rate[:7]) * problem.turn_start)  # every output: states and DERIVED
+    box = turn.shift + free
+    for k in range(1, MAX_ITERATIONS + 1):
+        nxt = _image(problem, gains, free, box, turn)
+        if isinstance(nxt, str):
+            return f"the small-gain bound does not close: the error bounds grow until {nxt}", k
+        if np.all(nxt <= box * (1.0 + FIXED_POINT_RTOL) + FIXED_POINT_FLOOR):
+            break
+        box = np.maximum(box, nxt)
+    else:
+        return "no error box closes: the fixed point does not converge", k
+    # the strict inclusion, on the fixed point inflated; a component driven only by products of the
+    # others grows faster than the inflation, so the inflation is repeated on the image
+    final = box * (1.0 + FIXED_POINT_MARGIN) + FIXED_POINT_FLOOR
+    for _ in range(INFLATIONS):
+        image = _image(problem, gains, free, final, turn)
+        if isinstance(image, str) or np.all(image < final):
+            break
+        final = np.maximum(final, image * (1.0 + FIXED_POINT_MARGIN) + FIXED_POINT_FLOOR)
+    if isinstance(image, str) or not np.all(image < final):
+        return f"no error box closes: {image if isinstance(image, str) else 'the inflated box is not invariant'}", k
+    return final, k
 
 
 def cascade_states(

@@ -132,6 +132,7 @@ def test_remus_with_its_rudder_refuses_the_fully_actuated_law_naming_sway(remus_
     (why,) = [r for r in cert.findings if r.part == "actuators"]
     assert why.kind == "unsupported" and why.channel == "force_y" and why.value == peak["force_y"] and why.limit == 0.0
     assert "sway actuator" in why.message and "only together" in why.message
+    assert '[guidance] kind = "ilos"' in why.message  # the law that runs on a rudder, as a setting that exists
     # what the rudder gives at the envelope's top speed, in closed form: Y = Y_uu_delta u^2 delta_max
     top = cert.config.envelope.u[1]
     auth = act["rudder_authority"]

@@ -245,7 +245,10 @@ def rudder_check(
     )
     if act.note:
         why += f" ({act.note})"
-    why += "; this version certifies no law for a propeller-and-rudder vehicle: only a vehicle with a sway actuator"
+    why += (
+        '; steer this fleet with line-of-sight guidance instead: [guidance] kind = "ilos" runs a cascade that '
+        "commands the propeller and the rudder, and certifies it (docs/guidance.md)"
+    )
     return ActuatorCheck(act, peak, "force_y", None, False, why, rudder_authority=authority)
 
 

@@ -272,7 +272,12 @@ def _with(
     pl = problem.plant
     box = pl.box if scale is None else pl.box.scaled(scale)
     other = replace(problem, plant=Plant(pl.model, box, pl.current if current is None else current, pl.current_rate))
-    return replace(other, start=tuple(float(x) for x in configured_start(cfg, other)))
+    slot = _slots_at_start(cfg)
+    v, a = slot.v, slot.a  # |omega(0)| = |v x a| / |v|^2 of every slot (it moves at t = 0: SLOT_STOPS)
+    turn = np.abs(v[:, 0] * a[:, 1] - v[:, 1] * a[:, 0]) / np.einsum("ij,ij->i", v, v)
+    return replace(
+        other, start=tuple(float(x) for x in configured_start(cfg, other)), start_turn=float(turn.max(initial=0.0))
+    )
 
 
 def _reduced(cfg: FormationConfig) -> FormationConfig:
