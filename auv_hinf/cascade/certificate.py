@@ -344,9 +344,9 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
 def turn_equilibrium(problem: CascadeProblem) -> FloatArray:
     """The nominal loop's equilibrium per unit turn rate: every output (:data:`STATES`, :data:`DERIVED`) per rad/s.
 
-    The slot's turn pushes the sway through the Coriolis force, ``-(m11 U0/m22) omega`` in ``v'``,
-    and the heading rate through the line of sight's acceleration, ``-(m11 U0/m22) omega / Delta``
-    in ``e_r'`` (:func:`turn_forcing`). On a steady turn the loop settles where the law holds that
+    The slot's turn pushes the sway (the Coriolis force and the side force of the rudder that holds
+    the yaw drag) and, through the line of sight's acceleration, the heading rate
+    (:func:`turn_forcing`). On a steady turn the loop settles where the law holds that
     push: a sideslip ``v`` that the ILOS state's crab ``p = v`` keeps off the track, with the heading
     and cross-track errors at zero. With the held commands equal to the law at a constant state,
     the sampled loop's equilibrium is the continuous one, ``x = -(A + B K)^-1 f``.
@@ -374,11 +374,14 @@ def turn_equilibrium(problem: CascadeProblem) -> FloatArray:
 def turn_forcing(problem: CascadeProblem) -> tuple[FloatArray, FloatArray]:
     """The residuals' parts that are linear in the slot's turn: per unit ``omega`` and per unit ``omega'``.
 
-    ``v' = ... - (m11' u / m22') r`` with ``r = omega + (r - omega)`` carries ``-(m11 U0/m22) omega``
-    exactly at the nominal plant and speed; the line of sight's acceleration carries ``v'/Delta``
-    into ``e_r'``, and ``e_r = r - omega + theta_c'`` carries ``-omega'``. Every other term of the
-    turn is a product with an error or with the current's or the plant's spread, and stays in the
-    residuals' bounds (:func:`residual_bounds`).
+    In ``v'``, with ``r = omega + (r - omega)`` and at the nominal plant and speed: the Coriolis force
+    ``-(m11' u / m22') r`` carries ``-(m11 U0/m22) omega``, and the side force of the rudder that holds
+    the yaw drag, ``(rho/l) d33(r_m) r_m / m22'``, carries ``d33_lin omega / (l m22)`` (the model's
+    ``d33_lin``, as the law compensates it; ``l`` the rudder's signed lever arm). The line of sight's
+    acceleration carries ``v'/Delta`` into ``e_r'``, and ``e_r = r - omega + theta_c'`` carries
+    ``-omega'``. Every other term of the turn is a product with an error, with the yaw rate's
+    quadratic drag or with the current's or the plant's spread, and stays in the residuals' bounds
+    (:func:`residual_bounds`).
 
     Parameters
     ----------
@@ -392,9 +395,10 @@ def turn_forcing(problem: CascadeProblem) -> tuple[FloatArray, FloatArray]:
         state's rate) and of ``omega'``.
     """
     n = problem.nominal_plant
-    push = n.m11 * problem.nominal_speed / n.m22
+    m, act = problem.plant.model, problem.act
+    push = -n.m11 * problem.nominal_speed / n.m22 + m.d33_lin / (act.lever_arm * n.m22)
     per_rate = np.zeros(7)
-    per_rate[V], per_rate[E_R] = -push, -push / problem.guidance.lookahead
+    per_rate[V], per_rate[E_R] = push, push / problem.guidance.lookahead
     per_accel = np.zeros(7)
     per_accel[E_R] = -1.0
     return per_rate, per_accel
@@ -710,14 +714,15 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray, turn: TurnTerms | 
     rho = ((1.0 - gap_u / um_lo) ** 2, (1.0 + gap_u / um_lo) ** 2)  # (u / u_m)^2
     # -- w7: v' less its nominal; the rudder's side force and its nominal share one deflection
     inv_m22 = _off((rho[0] / m22[1], rho[1] / m22[0]), 1.0 / n.m22)  # |rho/m22' - 1/m22|
+    # the yaw drag's compensation (rho/l) d33(r_m) r_m / m22' less its part linear in the turn,
+    # d33_lin omega / (l m22), which :func:`turn_forcing` carries: r_m = omega + q, |q| <= |r - omega| + n_r
+    drag_side = inv_m22 * d33_hat * rm + (m.d33_lin * (rel_yaw + nz.yaw_rate) + m.d33_quad * rm * rm) / n.m22
     side = (
-        inv_m22 * m.m33 * a_psi
-        + rho[1] * d33_hat * rm / m22[0]
-        + abs(munk_hat) * vm * _product_off([rho, (um_lo, um_hi)], m22, u0 / n.m22)
+        inv_m22 * m.m33 * a_psi + drag_side + abs(munk_hat) * vm * _product_off([rho, (um_lo, um_hi)], m22, u0 / n.m22)
     ) / lever
-    # the slot's turn's own push, -(m11 U0/m22) omega, is not in w7: :func:`turn_terms` carries it, and
-    # |v'| adds it back
-    turn_push = n.m11 * u0 / n.m22 * omega
+    # the slot's turn's own push on the sway (:func:`turn_forcing`) is not in w7: :func:`turn_terms` carries
+    # it, and |v'| adds it back
+    turn_push = abs(turn_forcing(problem)[0][V]) * omega
     w7 = (
         side
         + _product_off([m11, (u_lo, u_hi)], m22, n.m11 * u0 / n.m22) * r_max
