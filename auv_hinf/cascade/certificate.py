@@ -48,6 +48,12 @@ of the commanded thrust and rudder, and of the sway speed. The derivation is in
   that keeps its course in a constant current, the current's component along the track (the
   nominal surge speed through the water is ``U0`` less the cell's middle).
 
+* **Turns.** The slot's turn pushes the sway and the heading rate by a known signal
+  (:func:`turn_forcing`). The loop has an equilibrium for it (:func:`turn_equilibrium`: the
+  sideslip that the ILOS crab holds), and on a mission that turns the fixed point is also run on
+  the states about it, ``z = x - E omega(t)``, driven by the turn's acceleration instead
+  (:func:`turn_terms`); every trajectory stays in both invariant boxes, so in their intersection.
+
 * **Late and noisy measurements.** With a delay ``d`` the held commands are computed from the states
   at ``t_k - d`` (the nominal loop carries the measurements in flight), each measured state with a
   discrete error bounded by :func:`measurement_errors`; every residual term that pairs a value the
@@ -607,11 +613,13 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray, turn: TurnTerms | 
     nz = problem.noise
     xb, vxb, yb, pb, eb, erb, vb = (float(x) for x in box[:7])
     derived = dict(zip(DERIVED, map(float, box[7:]), strict=False))
-    # the derived expressions of z = x - E omega about the turn's equilibrium (:func:`turn_terms`), whose
-    # rates are zero: the rates of x are those of z
+    # the rates v' and y_e'' about the turn's equilibrium (:func:`turn_terms`): the linear expression
+    # of x less the turn's push is z's, plus the equilibrium's held part measured h + d earlier
+    # (its lagging part), so the box's entry less |E| omega_max bounds it
     still = dict.fromkeys(DERIVED, math.inf)
     if turn is not None and turn.equilibrium:
-        still.update(zip(DERIVED, map(float, np.maximum(box[7:] - turn.shift[7:], 0.0)), strict=False))
+        rest = box[7:] - (turn.shift[7:] - turn.lagging[7:])
+        still.update(zip(DERIVED, map(float, np.maximum(rest, 0.0)), strict=False))
 
     def tighter(name: str, crude: float) -> float:
         """The smaller of a sum of the states' bounds and the derived bound (both hold)."""
@@ -904,17 +912,23 @@ class TurnTerms:
     Attributes
     ----------
     shift : ndarray, shape (NB,)
-        The turn's equilibrium's largest part of every output, ``|E| omega_max`` (SI units; zero
-        when the turn's push is left in the residuals).
+        Bound of every output's part that is not ``z``'s (SI units; zero when the turn's push is left
+        in the residuals): ``|E| omega_max``, and for the derived expressions that read the held
+        commands or the measured states, :attr:`lagging` more.
     drive : ndarray, shape (7,)
         Bounds of the residual inputs that the turn adds (SI units of each state's rate).
     per_rate : ndarray, shape (NB,)
         The equilibrium per unit turn rate ``E`` (signed, per rad/s; zero when not used).
+    lagging : ndarray, shape (NB,)
+        ``|D_held E| (h + d) omega'_max``: a derived expression's part from the equilibrium measured
+        at ``t_k - d`` instead of now (``D_held`` its columns on the held commands and the measured
+        states; zero for the states).
     """
 
     shift: FloatArray
     drive: FloatArray
     per_rate: FloatArray
+    lagging: FloatArray
 
     @property
     def equilibrium(self) -> bool:
@@ -930,7 +944,9 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     without the turn's push, driven instead by ``(f' - E) omega'`` and by the held commands'
     equilibrium part measured at ``t_k - d``, ``B K E (omega(t_k - d) - omega(t))``, at most
     ``(h + d) |omega'|``: both in the residuals' coordinates (``b_w^-1``, :func:`cascade_loop`). The
-    fixed point bounds ``z``; ``x`` is within ``|E| omega_max`` more.
+    fixed point bounds ``z``; the states are within ``|E| omega_max`` more, and a derived expression
+    that reads the held commands or the measured states within ``|D_held E| (h + d) omega'_max``
+    more again (:attr:`TurnTerms.lagging`).
 
     **As residuals.** The push ``f omega + f' omega'`` is one more residual input, bounded by
     ``|f| omega_max + |f'| omega'_max``: the ILOS state then absorbs the push through the loop's
@@ -947,17 +963,19 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     per_rate_force, per_accel = turn_forcing(problem)
     if not equilibrium:
         drive = np.abs(per_rate_force) * problem.turn_rate + np.abs(per_accel) * problem.turn_accel
-        return TurnTerms(np.zeros(NB), drive, np.zeros(NB))
+        return TurnTerms(np.zeros(NB), drive, np.zeros(NB), np.zeros(NB))
     per_rate = turn_equilibrium(problem)
     state = per_rate[:7]
     rows = _rows(problem)
+    held_part = _derived_outputs(problem, rows)[:, 7:] @ np.concatenate([_law(problem) @ state, state])
+    lagging = np.concatenate([np.zeros(7), np.abs(held_part) * problem.lag * problem.turn_accel])
     order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
     b_cmd = np.vstack([rows[k] for k in order])[:, 7:]
     unmix = np.eye(7)
     unmix[P, Y_E] = -problem.nominal_speed / problem.guidance.lookahead  # b_w^-1
     held = unmix @ (b_cmd @ (_law(problem) @ state))
     drive = problem.turn_accel * (np.abs(unmix @ (per_accel - state)) + problem.lag * np.abs(held))
-    return TurnTerms(np.abs(per_rate) * problem.turn_rate, drive, per_rate)
+    return TurnTerms(np.abs(per_rate) * problem.turn_rate + lagging, drive, per_rate, lagging)
 
 
 def _image(
@@ -1487,6 +1505,7 @@ __all__ = [
     "CascadeCertificate",
     "CascadeProblem",
     "Residuals",
+    "TurnTerms",
     "cascade_loop",
     "cascade_states",
     "certify_cascade",
@@ -1494,4 +1513,7 @@ __all__ = [
     "measurement_errors",
     "residual_bounds",
     "start_states",
+    "turn_equilibrium",
+    "turn_forcing",
+    "turn_terms",
 ]

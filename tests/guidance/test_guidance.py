@@ -19,7 +19,7 @@ from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance
 from auv_hinf.mission.fleet import FleetReference, reference_from_dict
 from auv_hinf.models.vehicle import remus100
-from tests.helpers import to_toml
+from tests.helpers import preset_certificate, to_toml
 
 REMUS = remus100()
 RUDDER = vehicle_actuators("remus100")
@@ -125,8 +125,8 @@ def test_guidance_needs_a_rudder_vehicle_and_round_trips():
 
 @pytest.mark.slow
 def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
-    cfg = replace(preset_config("remus-survey-ilos"), simulation=SimulationConfig(horizon=30.0))
-    data = certify(cfg).to_dict()
+    cfg = preset_config("remus-survey-ilos")
+    data = preset_certificate("remus-survey-ilos").to_dict()  # shared with the other tests of the preset
     assert data["certified"] is False
     assert data["guidance"]["certified"] is False and data["guidance"]["error_bounds"] is None
     assert data["actuators"]["certified_peak"] == {"force_x": None, "rudder": None}

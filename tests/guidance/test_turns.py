@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from auv_hinf.cascade.certificate import (
+    DERIVED,
     E_R,
     NB,
     STATES,
@@ -61,7 +62,12 @@ def test_the_turn_equilibrium_is_the_rest_point_of_the_nominal_loop_where_the_cr
     # the two treatments of the turn: about the equilibrium the push leaves the residuals
     about, residual = turn_terms(problem, True), turn_terms(problem, False)
     assert about.equilibrium and not residual.equilibrium
-    np.testing.assert_allclose(about.shift, np.abs(per_rate) * problem.turn_rate)
+    np.testing.assert_allclose(about.shift, np.abs(per_rate) * problem.turn_rate + about.lagging)
+    # the lag term: the held commands and the measured states read the equilibrium h + d earlier
+    assert not about.lagging[:7].any() and about.lagging[7:].max() > 0.0
+    held_tau = (_law(problem) @ state)[1]  # the rudder's yaw acceleration at the equilibrium, per rad/s
+    tau = about.lagging[7 + DERIVED.index("tau")]
+    assert tau == pytest.approx(abs(held_tau) * problem.lag * problem.turn_accel, rel=1e-12)
     assert residual.drive[V] == pytest.approx(abs(turn_forcing(problem)[0][V]) * problem.turn_rate)
     assert residual.shift.shape == (NB,) and not residual.shift.any()
 
