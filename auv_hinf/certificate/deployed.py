@@ -16,10 +16,9 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.composed.certificate import DeployedProblem
 from auv_hinf.composed.loops import Errors, MissionBounds, Plant
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.implementation.lag import course_jerk_bound
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import ReferenceTube
-from auv_hinf.mission.paths import MissionReference
+from auv_hinf.mission.paths import MissionReference, course_jerk_bound
 from auv_hinf.robust.box import ParameterBox
 
 #: The start of a design: every vehicle on its slot (the composed part certifies the configured start).
@@ -29,7 +28,7 @@ ON_SLOT = Errors(0.0, 0.0, 0.0, 0.0)
 def mission_jerks(mission: MissionReference, offsets: FloatArray, frame: str) -> tuple[float, float]:
     """Bounds of every vehicle's ``|p_d'''|`` (m/s^3) and of ``|psi_d'''|`` (rad/s^3) along the raw mission.
 
-    ``psi_d`` is the course ``chi`` in both frames (:func:`~auv_hinf.implementation.lag.course_jerk_bound`).
+    ``psi_d`` is the course ``chi`` in both frames (:func:`~auv_hinf.mission.paths.course_jerk_bound`).
     In the path frame ``p_i = q + R(chi) d_i`` adds ``|d_i| (|chi'''| + 3 |chi'| |chi''| + |chi'|^3)``
     to the path's jerk.
 

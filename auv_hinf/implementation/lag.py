@@ -26,7 +26,7 @@ Every bracket is bounded here by envelope and tube quantities: the state moves a
 the drag and the Coriolis terms over the envelope), ``G = R B R^T`` is Lipschitz in the body
 velocities (``B`` is affine in ``|u|, |v|, r``) and in the heading (``2 sigma``), and the
 rotation error satisfies ``||R(a) - I|| <= |a|``. The change of the desired yaw acceleration is
-``T`` times the course jerk bound (:func:`course_jerk_bound`) when the path bounds its fourth
+``T`` times the course jerk bound (:func:`~auv_hinf.mission.paths.course_jerk_bound`) when the path bounds its fourth
 derivative, else twice its size (which does not shrink with ``T``).
 """
 
@@ -263,30 +263,6 @@ def body_rates(
     return tuple(float(min(rho, c, k)) for c, k in zip(crude, loops, strict=True))  # type: ignore[return-value]
 
 
-def course_jerk_bound(speed_min: float, accel: float, jerk: float, snap: float) -> float:
-    """Bound of ``|chi'''|`` (rad/s^3) of the course ``chi = atan2(q')`` from bounds of the path's derivatives.
-
-    With ``q' = s (cos chi, sin chi)``: ``|chi'| <= A/s``, ``|s'| <= A``, ``|s''| <= J + A^2/s``,
-    ``|chi''| <= J/s + 2 A^2/s^2``, and the normal part of ``q''''`` gives
-    ``s chi''' = n . q'''' - 3 s'' chi' + s chi'^3 - 3 s' chi''``, hence
-    ``|chi'''| <= S4/s + 6 A J/s^2 + 10 A^3/s^3`` (``s`` the smallest speed, ``A, J, S4`` the
-    bounds of ``|q''|, |q'''|, |q''''|``).
-
-    Parameters
-    ----------
-    speed_min : float
-        Smallest speed ``s`` of the path (m/s), > 0.
-    accel : float
-        Bound ``A`` of ``|q''|`` (m/s^2).
-    jerk : float
-        Bound ``J`` of ``|q'''|`` (m/s^3).
-    snap : float
-        Bound ``S4`` of ``|q''''|`` (m/s^4).
-    """
-    s = speed_min
-    return snap / s + 6.0 * accel * jerk / s**2 + 10.0 * accel**3 / s**3
-
-
 def lag_disturbance(
     params: VehicleParams,
     envelope: Envelope,
@@ -484,7 +460,6 @@ __all__ = [
     "LagDisturbance",
     "block_slopes",
     "body_rates",
-    "course_jerk_bound",
     "heading_lag_loop",
     "lag_channel_sigma",
     "lag_disturbance",

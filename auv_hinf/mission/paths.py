@@ -622,6 +622,30 @@ class LawnmowerReference(_Base):
         )
 
 
+def course_jerk_bound(speed_min: float, accel: float, jerk: float, snap: float) -> float:
+    """Bound of ``|chi'''|`` (rad/s^3) of the course ``chi = atan2(q')`` from bounds of the path's derivatives.
+
+    With ``q' = s (cos chi, sin chi)``: ``|chi'| <= A/s``, ``|s'| <= A``, ``|s''| <= J + A^2/s``,
+    ``|chi''| <= J/s + 2 A^2/s^2``, and the normal part of ``q''''`` gives
+    ``s chi''' = n . q'''' - 3 s'' chi' + s chi'^3 - 3 s' chi''``, hence
+    ``|chi'''| <= S4/s + 6 A J/s^2 + 10 A^3/s^3`` (``s`` the smallest speed, ``A, J, S4`` the
+    bounds of ``|q''|, |q'''|, |q''''|``).
+
+    Parameters
+    ----------
+    speed_min : float
+        Smallest speed ``s`` of the path (m/s), > 0.
+    accel : float
+        Bound ``A`` of ``|q''|`` (m/s^2).
+    jerk : float
+        Bound ``J`` of ``|q'''|`` (m/s^3).
+    snap : float
+        Bound ``S4`` of ``|q''''|`` (m/s^4).
+    """
+    s = speed_min
+    return snap / s + 6.0 * accel * jerk / s**2 + 10.0 * accel**3 / s**3
+
+
 def lawnmower_min_spacing(speed: float, turn_radius: float) -> float:
     """The smallest ``spacing`` a :class:`LawnmowerReference` accepts: two 90-degree turns, ``2 D`` (m).
 
@@ -659,6 +683,7 @@ __all__ = [
     "MissionBounds",
     "MissionReference",
     "SineReference",
+    "course_jerk_bound",
     "heading_from_velocity",
     "lawnmower_min_spacing",
     "poly_sup",

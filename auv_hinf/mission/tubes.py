@@ -8,6 +8,7 @@ certificate (:mod:`auv_hinf.closed_loop.nominal`) turns these into envelope marg
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -15,7 +16,7 @@ from numpy.typing import ArrayLike
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.mission.fleet import H0_SUP, H1_SUP, FleetReference, ReferenceTube, Shaping, wrap_angle
-from auv_hinf.mission.paths import MissionBounds, MissionReference, heading_from_velocity
+from auv_hinf.mission.paths import MissionBounds, MissionReference, course_jerk_bound, heading_from_velocity
 
 #: Cap on the cells per vehicle in :func:`shaped_tube` (each array holds cells x N x 2 floats).
 MAX_CELLS = 200_000
@@ -311,13 +312,104 @@ def path_frame_tube(mission: MissionReference, offsets: ArrayLike, *, cells: int
     )
 
 
+@dataclass(frozen=True)
+class SlotBounds:
+    """Sound bounds of how every slot's speed and course change, for all ``t >= 0`` (:func:`slot_bounds`).
+
+    Attributes
+    ----------
+    speed_rate : float
+        Bound of ``|U'|`` (m/s^2), ``U = |p_i'|`` a slot's speed.
+    turn_rate : float
+        Bound of a slot's course rate ``|omega| = |p_i' x p_i''| / U^2`` (rad/s).
+    turn_accel : float
+        Bound of ``|omega'|`` (rad/s^2).
+    """
+
+    speed_rate: float
+    turn_rate: float
+    turn_accel: float
+
+
+def slot_bounds(
+    mission: MissionReference, offsets: ArrayLike, frame: str, *, constant_speed: bool, cells: int = PATH_FRAME_CELLS
+) -> SlotBounds:
+    """Bounds of every slot's ``|U'|``, ``|omega|`` and ``|omega'|`` along the raw mission, in closed form.
+
+    In the inertial frame every slot moves as the centre: ``omega = chi'`` and ``U = s``, bounded by
+    the path's own :meth:`~auv_hinf.mission.paths.MissionReference.bounds`. In the path frame a
+    slot ``p_i = q + R(chi) d`` (``d = (d_x, d_y)``) has ``p_i' = (s - chi' d_y) T + chi' d_x N``
+    (``T, N`` the path's tangent and normal, ``s`` its speed), and writing out ``p_i''``:
+
+    * ``U U' = (s - chi' d_y) s' + chi'' (chi' |d|^2 - d_y s)``;
+    * ``p_i' x p_i'' = chi' U^2 + d_x (chi'' s - chi' s')``, so ``omega = chi' + d_x (chi'' s -
+      chi' s') / U^2``;
+    * ``omega' = chi'' + d_x (chi3 s - chi' s'') / U^2 - 2 d_x (chi'' s - chi' s') U' / U^3``, with
+      ``chi3`` the course's third derivative.
+
+    Each is bounded over the cells of the course rate of :func:`path_frame_tube` (affine in ``chi'``
+    and ``s``, so extreme at the corners), with ``U >= |s - chi' d_y|``, ``|chi''|``, ``|s'| <=
+    |q''|`` (0 on a path of constant speed), ``|s''| <= |q'''| + |chi'| |q''|`` and ``|chi3|``
+    (:func:`~auv_hinf.mission.paths.course_jerk_bound`) from the path's bounds. This is far
+    tighter than bounding ``|U'|`` by the whole ``|p_i''|``, the turn's centripetal part included.
+
+    Parameters
+    ----------
+    mission : MissionReference
+        The centre path.
+    offsets : array_like, shape (N, 2)
+        The slots' offsets (m).
+    frame : {"inertial", "path"}
+        The offsets' frame.
+    constant_speed : bool
+        The path's speed is constant by construction (``s' = s'' = 0``).
+    cells : int
+        Parts of the course-rate range.
+
+    Raises
+    ------
+    ParameterError
+        When a slot may stop (its speed's lower bound is not positive).
+    """
+    b = mission.bounds()
+    w_max = max(abs(b.turn_rate_min), abs(b.turn_rate_max))
+    s_rate = 0.0 if constant_speed else b.accel_max
+    s_accel = 0.0 if constant_speed else b.jerk_max + w_max * b.accel_max
+    if frame != "path":
+        return SlotBounds(s_rate, w_max, b.turn_accel_max)
+    chi3 = course_jerk_bound(b.speed_min, b.accel_max, b.jerk_max, b.snap_max)
+    off = np.asarray(offsets, dtype=float)
+    edges = np.linspace(b.turn_rate_min, b.turn_rate_max, cells + 1)
+    w = np.stack([edges[:-1], edges[1:]])[None, :, :]  # (1, 2, K): the corners of each cell's chi'
+    dx, dy = off[:, 0, None, None], off[:, 1, None, None]
+    u = np.stack([b.speed_min - w * dy, b.speed_max - w * dy])  # (2, N, 2, K): s - chi' d_y at the corners
+    speed_lo = np.where(np.all(u > 0.0, axis=(0, 2)), np.abs(u).min(axis=(0, 2)), 0.0)  # (N, K): U >= |s - chi' d_y|
+    if np.any(speed_lo <= 0.0):
+        raise ParameterError("a slot may stop on this mission: its speed's lower bound is not positive")
+    wm = np.abs(w).max(axis=1)  # (1, K)
+    along = np.abs(u).max(axis=(0, 2))
+    lever = np.abs(np.stack([w * (dx * dx + dy * dy) - dy * s for s in (b.speed_min, b.speed_max)])).max(axis=(0, 2))
+    u_rate = (along * s_rate + b.turn_accel_max * lever) / speed_lo
+    push = np.abs(dx[:, 0]) * (b.turn_accel_max * b.speed_max + wm * s_rate)  # |d_x (chi'' s - chi' s')|
+    turn = wm + push / speed_lo**2
+    turn_accel = (
+        b.turn_accel_max
+        + np.abs(dx[:, 0]) * (chi3 * b.speed_max + wm * s_accel) / speed_lo**2
+        + 2.0 * push * u_rate / speed_lo**3
+    )
+    widen = 1.0 + TUBE_RTOL
+    return SlotBounds(float(u_rate.max()) * widen, float(turn.max()) * widen, float(turn_accel.max()) * widen)
+
+
 __all__ = [
     "MAX_CELLS",
     "PATH_FRAME_CELLS",
     "TUBE_RTOL",
+    "SlotBounds",
     "default_cells",
     "fleet_tube",
     "mission_tube",
     "path_frame_tube",
     "shaped_tube",
+    "slot_bounds",
 ]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from auv_hinf.exceptions import ParameterError
 from auv_hinf.mission.fleet import FleetReference, PathFrameReference, course_jerk, shaped_start
 from auv_hinf.mission.paths import (
     CircleReference,
@@ -13,7 +14,7 @@ from auv_hinf.mission.paths import (
     SineReference,
     heading_from_velocity,
 )
-from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube
+from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube, slot_bounds
 
 #: Analytic against an independent analytic computation: round-off of a few flops on ~100 m.
 EXACT = 1e-9
@@ -133,3 +134,66 @@ def test_path_frame_tube_contains_every_sampled_desired_motion(mission):
         assert cell.any(axis=1).all()  # every sample lies in one cell (all three at once)
         assert accel[:, i].max() <= tube.accel[rows].max()
         assert np.abs(m.r_dot[:, i]).max() <= tube.yaw_accel[rows].max()
+
+
+#: Offsets (m) of a five-vehicle V and a line abreast, in the path frame (x along the track).
+SLOT_OFFSETS = {
+    "v": np.array([[0.0, 0.0], [-5.0, 10.0], [-5.0, -10.0], [-10.0, 20.0], [-10.0, -20.0]]),
+    "abreast": np.array([[0.0, -15.0], [0.0, 0.0], [0.0, 15.0]]),
+}
+
+
+@pytest.mark.parametrize("offsets", SLOT_OFFSETS.values(), ids=SLOT_OFFSETS.keys())
+@pytest.mark.parametrize(
+    "mission",
+    [
+        LawnmowerReference(speed=1.5, leg_length=300.0, spacing=400.0, turn_radius=100.0),
+        CircleReference(speed=1.5, radius=150.0),
+        SineReference(speed=1.5, amplitude=20.0, omega=0.02),
+        LineReference(speed=1.5),
+    ],
+    ids=lambda m: m.kind,
+)
+@pytest.mark.parametrize("frame", ["path", "inertial"])
+def test_slot_bounds_hold_on_every_sampled_slot_and_are_near_them_in_the_turns(mission, offsets, frame):
+    off = offsets if frame == "path" else np.zeros_like(offsets)  # inertial slots move as the centre
+    bounds = slot_bounds(
+        mission, off, frame, constant_speed=isinstance(mission, (CircleReference, LawnmowerReference, LineReference))
+    )
+    t = np.linspace(0.0, 1500.0, 150_001)
+    ref = PathFrameReference(mission, offsets) if frame == "path" else None
+
+    def slots(tt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if ref is None:
+            _, v, a, _ = mission(tt)
+            return v[:, None, :], a[:, None, :]
+        m = ref.motion(tt)
+        return m.v, m.a
+
+    v, a = slots(t)
+    speed = np.hypot(v[..., 0], v[..., 1])
+    omega = (v[..., 0] * a[..., 1] - v[..., 1] * a[..., 0]) / speed**2
+    speed_rate = np.einsum("tni,tni->tn", v, a) / speed  # U' = (p' . p'') / U
+    # omega' by central differences of the exact omega (step 1e-3 s: truncation ~1e-6 |omega'''|)
+    vp, ap = slots(t + H)
+    vm, am = slots(t - H)
+
+    def rate(vv: np.ndarray, aa: np.ndarray) -> np.ndarray:
+        return (vv[..., 0] * aa[..., 1] - vv[..., 1] * aa[..., 0]) / np.einsum("tni,tni->tn", vv, vv)
+
+    omega_dot = (rate(vp, ap) - rate(vm, am)) / (2.0 * H)
+    assert np.abs(omega).max() <= bounds.turn_rate
+    assert np.abs(speed_rate).max() <= bounds.speed_rate + 1e-12
+    assert np.abs(omega_dot).max() <= bounds.turn_accel + FD_ATOL
+    if frame == "path" and isinstance(mission, LawnmowerReference) and offsets.shape[0] == 5:
+        # on a lawn-mower's 100 m turns the closed forms are within 20 % of the sampled course rate and
+        # speed rate (the tube's |p_d''| bound of |U'| is 9.5 times the sampled one)
+        assert bounds.turn_rate <= 1.2 * np.abs(omega).max()
+        assert bounds.speed_rate <= 1.2 * np.abs(speed_rate).max()
+
+
+def test_slot_bounds_refuse_a_mission_on_which_a_slot_may_stop():
+    # a 20 m arm on 10 m turns: the inner slot's speed 1.5 (1 - 20/10) m/s would reverse
+    tight = LawnmowerReference(speed=1.5, leg_length=100.0, spacing=60.0, turn_radius=10.0)
+    with pytest.raises(ParameterError, match="may stop"):
+        slot_bounds(tight, SLOT_OFFSETS["v"], "path", constant_speed=True)

@@ -63,6 +63,7 @@ from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import cascade_period, slot_motion
 from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
+from auv_hinf.mission.tubes import slot_bounds
 from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.numerics.progress import PROGRESS_DELAY
 from auv_hinf.robust.box import PARAMETERS
@@ -123,17 +124,22 @@ def cascade_problem(cfg: FormationConfig, point: DesignPoint) -> CascadeProblem 
         return SLOT_STOPS
     jerk, _ = mission_jerks(point.mission, point.offsets, cfg.frame)
     accel = float(tube.accel.max())
-    turn = float((tube.accel / speed_lo).max())
-    turn_accel = float((jerk / speed_lo + 2.0 * tube.accel**2 / speed_lo**2).max())
     # in the inertial frame every slot moves with the centre: a centre path of constant speed by
     # construction (the line, the circle, the lawn-mower) gives U' = U'' = 0
-    constant = cfg.frame == "inertial" and isinstance(point.mission, CONSTANT_SPEED_PATHS)
+    constant_path = isinstance(point.mission, CONSTANT_SPEED_PATHS)
+    constant = cfg.frame == "inertial" and constant_path
+    # two sound bounds of each: the tube's (|U'| <= |p_d''|; the course's rate and acceleration from
+    # |p_d''| and the jerk) and the slots' closed forms (slot_bounds); both hold, the smaller is used
+    slots = slot_bounds(point.mission, point.offsets, cfg.frame, constant_speed=constant_path)
+    speed_rate = min(0.0 if constant else accel, slots.speed_rate)
+    turn = min(float((tube.accel / speed_lo).max()), slots.turn_rate)
+    turn_accel = min(float((jerk / speed_lo + 2.0 * tube.accel**2 / speed_lo**2).max()), slots.turn_accel)
     problem = CascadeProblem(
         guidance=g,
         plant=deployed_plant(cfg),
         act=act,
         speed=(float(speed_lo.min()), float(tube.speed[:, 1].max())),
-        speed_rate=0.0 if constant else accel,
+        speed_rate=speed_rate,
         turn_rate=turn,
         turn_accel=turn_accel,
         speed_jerk=0.0 if constant else float(jerk) + turn * accel,
