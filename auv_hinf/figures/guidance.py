@@ -6,6 +6,7 @@ bands (:func:`~auv_hinf.figures.simulation.per_vehicle_axes`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -50,16 +51,23 @@ def guidance_paths(run: GuidanceRun) -> Figure:
     return fig
 
 
-def guidance_errors(run: GuidanceRun) -> Figure:
+def guidance_errors(run: GuidanceRun, bounds: Mapping[str, float] | None = None) -> Figure:
     """Along-track and cross-track errors (m) and heading error (deg) against time, per vehicle.
 
     Parameters
     ----------
     run : GuidanceRun
         The simulated run.
+    bounds : mapping or None
+        The certificate's ``error_bounds`` (``along_track``, ``cross_track`` in m, ``heading`` in
+        rad; ``certify --json``'s ``guidance.error_bounds``), drawn dotted at plus and minus each.
     """
     data = np.stack([run.along_track, run.cross_track, np.degrees(run.heading_error)], axis=-1)
-    fig, _ = per_vehicle_axes(run.t, data, ("along-track [m]", "cross-track [m]", "heading error [deg]"))
+    ranges: tuple[tuple[float, float] | None, ...] = (None, None, None)
+    if bounds is not None:
+        b = (bounds["along_track"], bounds["cross_track"], float(np.degrees(bounds["heading"])))
+        ranges = tuple((-x, x) for x in b)
+    fig, _ = per_vehicle_axes(run.t, data, ("along-track [m]", "cross-track [m]", "heading error [deg]"), ranges)
     return fig
 
 
