@@ -340,3 +340,33 @@ def test_large_fleets_are_drawn_as_bands_without_warnings():
     # the median line is the fleet's median of the data
     median = next(line for line in top.get_lines() if line.get_label() == "median")
     np.testing.assert_allclose(median.get_ydata(), np.median(res.forces[:, :, 0], axis=1))
+
+
+def test_guidance_errors_draw_the_certified_bounds_in_physical_units():
+    from auv_hinf.figures.guidance import guidance_errors
+
+    t = np.linspace(0.0, 10.0, 11)
+    run = SimpleNamespace(
+        t=t,
+        along_track=np.zeros((11, 2)),
+        cross_track=np.zeros((11, 2)),
+        heading_error=np.zeros((11, 2)),
+    )
+    bounds = {"along_track": 0.03, "cross_track": 0.6, "heading": 0.001}
+    fig = guidance_errors(run, bounds)
+    levels = [
+        sorted(
+            {
+                round(float(line.get_ydata()[0]), 9)
+                for line in ax.lines
+                if len(set(line.get_ydata())) == 1 and len(line.get_ydata()) == 2
+            }
+        )
+        for ax in fig.axes
+    ]
+    # plus and minus each bound, the heading's in degrees
+    assert levels == [[-0.03, 0.03], [-0.6, 0.6], [round(-np.degrees(0.001), 9), round(np.degrees(0.001), 9)]]
+    plt.close(fig)
+    bare = guidance_errors(run)
+    assert all(len(ax.lines) == 2 for ax in bare.axes)  # one line per vehicle, no bound
+    plt.close(bare)
