@@ -4,7 +4,8 @@
 +-20 %, currents up to 0.1 m/s; the same fleet with every mass +-10 %, which the whole box's
 certificate refuses and the cells of the box certify; and the same fleet in currents up to 0.2 m/s,
 which cells of the current's along-track component certify; and the nominal fleet in still water on
-late, noisy navigation (20 Hz, 0.05 s delay, small errors), against runs in every noise pattern.
+late, noisy navigation (20 Hz, 0.05 s delay, small errors), against runs in every noise pattern;
+and the ``remus-survey-ilos`` V on a lawn-mower of 200 m turns in a 0.05 m/s current (nominal plant).
 Peers measured in the same run: one
 simulated run of the fleet (the measurement the certificate replaces) and a campaign of runs
 over the box and the currents. The user's path is ``auv-hinf certify`` on the preset's TOML file
@@ -82,6 +83,27 @@ def late_navigation() -> FormationConfig:
     return config_from_dict(data)
 
 
+#: The fifth fleet: the ``remus-survey-ilos`` V (five REMUS 100, path frame) on a lawn-mower of 200 m
+#: turns in currents up to 0.05 m/s, the nominal plant, with the ``remus-transit-ilos`` gains: what
+#: the cascade's certificate covers on turns (docs/derivations/guidance.md, "Turns").
+SURVEY_TURNS = {"turn_radius": 200.0, "spacing": 810.0}
+SURVEY_CURRENT = 0.05
+#: Its runs' horizon (s): the first leg, the first turn and part of the second leg.
+SURVEY_HORIZON = 800.0
+
+
+def survey_turns() -> FormationConfig:
+    """The V of ``remus-survey-ilos`` on the :data:`SURVEY_TURNS` lawn-mower in :data:`SURVEY_CURRENT`."""
+    data = preset_config("remus-survey-ilos").to_toml_dict()
+    data.pop("uncertainty", None)
+    data["guidance"] = {**data["guidance"], "heading_bandwidth": 2.4, "lookahead": 16.0}
+    data["reference"] = {**data["reference"], **SURVEY_TURNS}
+    data["disturbance"] = {"current_speed": SURVEY_CURRENT}
+    data["simulation"] = {**data["simulation"], "current": [0.0, SURVEY_CURRENT]}
+    data["name"] = "remus-survey-ilos V, 200 m turns, nominal plant, 0.05 m/s"
+    return config_from_dict(data)
+
+
 def _by_cells(
     cfg: FormationConfig,
 ) -> tuple[cascade.CascadeCertificate, cascade.CascadeCertificate, float, dict[str, Any]]:
@@ -138,6 +160,13 @@ def cascade_cost() -> str:
     assert nav.holds and nav.error_bounds is not None and nav.actuation is not None
     t_nav = median_seconds(lambda: _cold(nav_problem))
     nav_camp = run_guidance_campaign(nav_cfg, CAMPAIGN_RUNS, seed=0, horizon=HORIZON).summary()
+    turns_cfg = survey_turns()
+    turns_problem = guidance_summary(turns_cfg).problem
+    assert turns_problem is not None
+    turns = _cold(turns_problem)
+    assert turns.holds and turns.error_bounds is not None and turns.actuation is not None
+    t_turns = median_seconds(lambda: _cold(turns_problem))
+    turns_camp = run_guidance_campaign(turns_cfg, CAMPAIGN_RUNS, seed=0, horizon=SURVEY_HORIZON).summary()
     assert cells.actuation is not None and cells.error_bounds is not None and ranges.error_bounds is not None
     rows = [
         ["cascade certificate (cold caches: peak gains and fixed point)", f"{t_cold:.2f}", "yes"],
@@ -151,6 +180,7 @@ def cascade_cost() -> str:
             "yes",
         ],
         ["nominal fleet, 20 Hz, 0.05 s delay, measurement noise (cold caches)", f"{t_nav:.2f}", "yes"],
+        ["survey V on a lawn-mower, 200 m turns, 0.05 m/s, nominal plant (cold caches)", f"{t_turns:.2f}", "yes"],
     ]
     wa, wpeak = cells.actuation, wide_camp["worst_commanded_peak"]
     wide_ratios = _ratios(cells.error_bounds, wide_camp["worst_errors"])
@@ -179,7 +209,14 @@ def cascade_cost() -> str:
         f"{nav_camp['runs_outside_bounds']} outside their bounds): "
         f"{_ratios(nav.error_bounds, nav_camp['worst_errors'])}; "
         f"thrust {nav.actuation.thrust / nav_camp['worst_commanded_peak']['force_x']:.2f}, rudder "
-        f"{nav.actuation.rudder / nav_camp['worst_commanded_peak']['rudder']:.3g}."
+        f"{nav.actuation.rudder / nav_camp['worst_commanded_peak']['rudder']:.3g}. The survey V on a lawn-mower "
+        f"(five REMUS 100 in the path frame, 200 m turns, the transit's gains, the nominal plant, currents up to "
+        f"{SURVEY_CURRENT} m/s) against a {CAMPAIGN_RUNS}-run campaign of {SURVEY_HORIZON:.0f} s through the first "
+        f"turn, currents at the bound ({turns_camp['covered_runs']} runs covered, "
+        f"{turns_camp['runs_outside_bounds']} outside their bounds): "
+        f"{_ratios(turns.error_bounds, turns_camp['worst_errors'])}; "
+        f"thrust {turns.actuation.thrust / turns_camp['worst_commanded_peak']['force_x']:.2f}, rudder "
+        f"{turns.actuation.rudder / turns_camp['worst_commanded_peak']['rudder']:.3g}."
     )
     return table(TITLE, ["what is timed", "seconds", "certified"], rows, note)
 
