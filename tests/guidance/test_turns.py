@@ -27,8 +27,8 @@ from auv_hinf.cascade.certificate import (
     turn_forcing,
     turn_terms,
 )
-from auv_hinf.certificate.design_point import raw_fleet
-from auv_hinf.certificate.parts.guidance import guidance_summary
+from auv_hinf.certificate.design_point import design_point, raw_fleet
+from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary
 from auv_hinf.guidance.simulation import simulate_guidance
 from tests.guidance.test_certificate import _states_along, transit
 
@@ -44,7 +44,8 @@ GAINS = {"kind": "ilos", "heading_bandwidth": 2.4, "lookahead": 16.0}
 
 def test_the_turn_equilibrium_is_the_rest_point_of_the_nominal_loop_where_the_crab_holds_the_sideslip():
     cfg = transit(reference=LAWNMOWER, guidance=GAINS, uncertainty={}, disturbance={})
-    problem = guidance_summary(cfg).problem
+    problem = cascade_problem(cfg, design_point(cfg))  # the problem alone, not its certificate
+    assert not isinstance(problem, str)
     rows = _rows(problem)
     order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
     full = np.vstack([rows[k] for k in order])
