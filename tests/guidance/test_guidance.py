@@ -143,7 +143,17 @@ def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
     assert written[("reference", "turn_radius")] > cfg.reference.kwargs()["turn_radius"]
     assert 0.0 < answer["scale"] < 1.0
     assert 0.0 < written[("disturbance", "current_speed")] <= answer["scale"] * cfg.disturbance.current_speed
-    assert {t for t, _ in written} == {"reference", "disturbance", "uncertainty"}
+    # the mission, the world scaled, and the gains of the candidates that certify the largest share of it
+    assert (
+        {"reference", "disturbance", "uncertainty"}
+        <= {t for t, _ in written}
+        <= {
+            "reference",
+            "disturbance",
+            "uncertainty",
+            "guidance",
+        }
+    )
     again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
     assert again["guidance"]["certified"] is True
     assert again["guidance"]["error_bounds"]["cross_track"] <= answer["position_bound"]

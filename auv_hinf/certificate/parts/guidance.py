@@ -481,7 +481,8 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
     ladder, so a refused gentlest change ends its kind). When no kind certifies them, the answer is
     the gentlest change of the first kind (wider turns before a slower mission, before both) with
     the largest joint scale of the current and the box that certifies it, when there is one
-    (:func:`_largest_scale`). That answer, rounded towards the certified side, is certified once
+    (:func:`_largest_scale`), with the declared gains or the candidates of :data:`GAIN_CANDIDATES`
+    that certify the largest scale (the declared ones on a tie). That answer, rounded towards the certified side, is certified once
     more as written, and dropped if it is not.
 
     Parameters
@@ -511,9 +512,15 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
                 if cert.holds and cert.position_bound is not None:
                     return MissionAnswer(what, settings, 1.0, cert.position_bound)
     for what, settings, new_cfg, problem in gentlest:  # the first kind whose gentlest change certifies some
-        scale = _largest_scale(new_cfg, problem)
+        # the declared gains and the candidates: the ones that certify the largest share of the world
+        tried: list[tuple[GuidanceConfig, tuple[Setting, ...]]] = [(problem.guidance, ())]
+        tried += [(g, _gain_settings(g)) for g in _gain_variants(problem)]
+        scored = [
+            (_largest_scale(new_cfg, replace(problem, guidance=g)), k, gains) for k, (g, gains) in enumerate(tried)
+        ]
+        scale, _, gains = max(scored, key=lambda x: (x[0], -x[1]))
         if scale > 0.0:
-            written = settings + _world(new_cfg, problem, scale)
+            written = settings + gains + _world(new_cfg, problem, scale)
             bound = _confirmed(cfg, written)
             return None if bound is None else MissionAnswer(what, written, scale, bound)
     return None
@@ -584,18 +591,33 @@ def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | N
     return cert.position_bound if cert.holds else None
 
 
+def _gain_variants(problem: CascadeProblem) -> list[GuidanceConfig]:
+    """The gains of :data:`GAIN_CANDIDATES` (multiples of the declared ones) that the sample time allows
+    (:data:`MAX_BANDWIDTH_STEP`), gentlest first."""
+    g = problem.guidance
+    out = []
+    for bandwidth, lookahead in GAIN_CANDIDATES:
+        w = g.heading_bandwidth * bandwidth
+        if w * problem.sample_time <= MAX_BANDWIDTH_STEP:
+            out.append(replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead))
+    return out
+
+
+def _gain_settings(gains: GuidanceConfig) -> tuple[Setting, ...]:
+    """``gains``' heading bandwidth (rad/s) and lookahead (m), as settings."""
+    return (
+        Setting("guidance", "heading_bandwidth", gains.heading_bandwidth),
+        Setting("guidance", "lookahead", gains.lookahead),
+    )
+
+
 def _certifying_gains(problem: CascadeProblem) -> GuidanceConfig | None:
     """The first of :data:`GAIN_CANDIDATES` whose certificate holds for ``problem``'s box and current.
 
     Each candidate is tried on the whole box first, then (when none holds so) with cells of the
     along-track current (a few loops each): a re-run with the gains certifies either way.
     """
-    g = problem.guidance
-    candidates = []
-    for bandwidth, lookahead in GAIN_CANDIDATES:
-        w = g.heading_bandwidth * bandwidth
-        if w * problem.sample_time <= MAX_BANDWIDTH_STEP:
-            candidates.append(replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead))
+    candidates = _gain_variants(problem)
     for cells in (False, True):
         for gains in candidates:
             if certify_cascade(replace(problem, guidance=gains), cells=cells, mass_cells=False).holds:
@@ -623,7 +645,8 @@ def _mission_sentence(m: MissionAnswer) -> str:
         else f"the current and the box together at {m.scale:.3g} of the declared"
     )
     within = f"every vehicle within {m.position_bound:.3g} m of its slot"
-    return f"{toml_line(m.settings)} certifies ({CHANGE_WORDS[m.what]}, {world}; {within})"
+    gains = " with the heading loop's gains changed" if any(s.table == "guidance" for s in m.settings) else ""
+    return f"{toml_line(m.settings)} certifies ({CHANGE_WORDS[m.what]}{gains}, {world}; {within})"
 
 
 def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setting, ...], str]:
@@ -651,11 +674,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             f"({RESTART.toml()}; every vehicle within {summary.start_bound:.3g} m of its slot)"
         )
     if summary.gains is not None:
-        g = summary.gains
-        settings: tuple[Setting, ...] = (
-            Setting("guidance", "heading_bandwidth", g.heading_bandwidth),
-            Setting("guidance", "lookahead", g.lookahead),
-        )
+        settings: tuple[Setting, ...] = _gain_settings(summary.gains)
         return settings, f"{toml_line(settings)} (rad/s, m) certifies the declared box and current"
     if summary.lag_scale is not None and summary.lag_scale > 0.0:
         settings = _navigation_settings(problem, summary.lag_scale)
