@@ -482,8 +482,8 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
     the gentlest change of the first kind (wider turns before a slower mission, before both) with
     the largest joint scale of the current and the box that certifies it, when there is one
     (:func:`_largest_scale`), with the declared gains or the candidates of :data:`GAIN_CANDIDATES`
-    that certify the largest scale (the declared ones on a tie). That answer, rounded towards the certified side, is certified once
-    more as written, and dropped if it is not.
+    that certify the largest scale (the declared ones on a tie). That answer, rounded towards the
+    certified side, is certified once more as written, and dropped if it is not.
 
     Parameters
     ----------
