@@ -294,6 +294,15 @@ def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
     }
 
 
+#: The rows of :func:`_rows` that are the seven states' derivatives, in the order of :data:`STATES`.
+STATE_ROWS = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
+
+
+def _state_rows(rows: dict[str, FloatArray]) -> FloatArray:
+    """The nominal loop's state derivatives on ``(x, a_x, tau, u_i)``, shape (7, 10): ``[A | B]``."""
+    return np.vstack([rows[k] for k in STATE_ROWS])
+
+
 def _law(problem: CascadeProblem) -> FloatArray:
     """The held commands' linear law on the measured state, shape (3, 7)."""
     g, m = problem.guidance, problem.plant.model
@@ -321,8 +330,7 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
         The cascade (its gains, model, rudder, reference speed, sample time and delay).
     """
     rows = _rows(problem)
-    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
-    full = np.vstack([rows[k] for k in order])
+    full = _state_rows(rows)
     outputs = np.vstack([np.hstack([np.eye(7), np.zeros((7, 3 + 7))]), _derived_outputs(problem, rows)])
     b_w = np.eye(7)
     b_w[P, Y_E] = problem.nominal_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
@@ -368,8 +376,7 @@ def turn_equilibrium(problem: CascadeProblem) -> FloatArray:
         Signed outputs per unit ``omega`` (SI units per rad/s).
     """
     rows = _rows(problem)
-    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
-    full = np.vstack([rows[k] for k in order])
+    full = _state_rows(rows)
     law = _law(problem)
     state = -np.linalg.solve(full[:, :7] + full[:, 7:] @ law, turn_forcing(problem)[0])
     derived = _derived_outputs(problem, rows) @ np.concatenate([state, law @ state, state])
@@ -969,8 +976,7 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     rows = _rows(problem)
     held_part = _derived_outputs(problem, rows)[:, 7:] @ np.concatenate([_law(problem) @ state, state])
     lagging = np.concatenate([np.zeros(7), np.abs(held_part) * problem.lag * problem.turn_accel])
-    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
-    b_cmd = np.vstack([rows[k] for k in order])[:, 7:]
+    b_cmd = _state_rows(rows)[:, 7:]
     unmix = np.eye(7)
     unmix[P, Y_E] = -problem.nominal_speed / problem.guidance.lookahead  # b_w^-1
     held = unmix @ (b_cmd @ (_law(problem) @ state))

@@ -15,6 +15,7 @@ from auv_hinf.cascade.certificate import (
     DERIVED,
     E_R,
     NB,
+    STATE_ROWS,
     STATES,
     X_E,
     Y_E,
@@ -47,8 +48,7 @@ def test_the_turn_equilibrium_is_the_rest_point_of_the_nominal_loop_where_the_cr
     problem = cascade_problem(cfg, design_point(cfg))  # the problem alone, not its certificate
     assert not isinstance(problem, str)
     rows = _rows(problem)
-    order = ("xdot", "vxdot", "ydot", "pdot", "edot", "erdot", "vdot")
-    full = np.vstack([rows[k] for k in order])
+    full = np.vstack([rows[k] for k in STATE_ROWS])
     per_rate = turn_equilibrium(problem)
     state = per_rate[:7]
     a_cl = full[:, :7] + full[:, 7:] @ _law(problem)
