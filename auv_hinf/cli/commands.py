@@ -304,7 +304,8 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         from auv_hinf.figures.guidance import save_guidance_plots
 
         (args.out / "summary.json").write_text(_dump(summary))
-        save_guidance_plots(run, args.out)
+        covered = summary["certified_errors"] if summary["certificate_covers_run"] else None
+        save_guidance_plots(run, args.out, covered)  # the certified bounds drawn when they cover the run
     if args.json:
         print(_dump(summary))
     else:

@@ -90,7 +90,7 @@ def guidance_actuators(run: GuidanceRun) -> Figure:
     return fig
 
 
-def save_guidance_plots(run: GuidanceRun, out: Path) -> list[Path]:
+def save_guidance_plots(run: GuidanceRun, out: Path, bounds: Mapping[str, float] | None = None) -> list[Path]:
     """Write the path, error and actuator figures of ``run`` as PNGs into the existing folder ``out``.
 
     Parameters
@@ -99,13 +99,20 @@ def save_guidance_plots(run: GuidanceRun, out: Path) -> list[Path]:
         The simulated run.
     out : pathlib.Path
         Existing directory.
+    bounds : mapping or None
+        The certified error bounds that cover the run, drawn on the errors' figure
+        (:func:`guidance_errors`).
 
     Returns
     -------
     list of pathlib.Path
         The files written.
     """
-    figures = (("paths", guidance_paths), ("errors", guidance_errors), ("actuators", guidance_actuators))
+    figures = (
+        ("paths", guidance_paths),
+        ("errors", lambda r: guidance_errors(r, bounds)),
+        ("actuators", guidance_actuators),
+    )
     return save_pngs(figures, run, out)
 
 

@@ -290,3 +290,21 @@ def test_a_slots_track_frame_takes_its_own_velocity_along_and_its_left_normal_ac
     x, y = rng.normal(size=6), rng.normal(size=6)
     a, c = slot.along_across(x, y)
     np.testing.assert_allclose(a * a + c * c, x * x + y * y, rtol=1e-12)  # a rotation: lengths kept
+
+
+@pytest.mark.slow
+def test_simulate_out_draws_the_certified_bounds_of_a_covered_run(tmp_path, capsys, monkeypatch):
+    import auv_hinf.figures.guidance as figures
+
+    drawn = []
+    original = figures.guidance_errors
+
+    def spy(run, bounds=None):
+        drawn.append(bounds)
+        return original(run, bounds)
+
+    monkeypatch.setattr(figures, "guidance_errors", spy)
+    code = main(["simulate", "--preset", "remus-transit-ilos", "--horizon", "20", "--json", "--out", str(tmp_path)])
+    rep = json.loads(capsys.readouterr().out)
+    assert code == 0 and rep["certificate_covers_run"] is True
+    assert drawn == [rep["certified_errors"]] and (tmp_path / "errors.png").is_file()
