@@ -156,7 +156,7 @@ def _slots_at_start(cfg: FormationConfig) -> SlotMotion:
     return SlotMotion(p=s.p[0], v=s.v[0], a=s.a[0])
 
 
-def configured_start(cfg: FormationConfig, problem: CascadeProblem) -> np.ndarray:
+def configured_start(cfg: FormationConfig, problem: CascadeProblem, slot: SlotMotion | None = None) -> np.ndarray:
     """Bounds of the cascade's states at ``t = 0`` for the configured start, in any current up to the bound.
 
     Without ``[simulation] initial`` every vehicle starts on its slot heading into the current it
@@ -169,8 +169,10 @@ def configured_start(cfg: FormationConfig, problem: CascadeProblem) -> np.ndarra
         The configuration.
     problem : CascadeProblem
         Its cascade problem (start not used).
+    slot : SlotMotion or None
+        Every slot at ``t = 0`` (computed from ``cfg`` when not given).
     """
-    slot = _slots_at_start(cfg)
+    slot = _slots_at_start(cfg) if slot is None else slot
     if cfg.simulation.initial is None:
         return into_current_start(problem, slot)
     return start_states(problem, np.asarray(cfg.simulation.initial, dtype=float), slot, None)
@@ -279,11 +281,8 @@ def _with(
     box = pl.box if scale is None else pl.box.scaled(scale)
     other = replace(problem, plant=Plant(pl.model, box, pl.current if current is None else current, pl.current_rate))
     slot = _slots_at_start(cfg)
-    v, a = slot.v, slot.a  # |omega(0)| = |v x a| / |v|^2 of every slot (it moves at t = 0: SLOT_STOPS)
-    turn = np.abs(v[:, 0] * a[:, 1] - v[:, 1] * a[:, 0]) / np.einsum("ij,ij->i", v, v)
-    return replace(
-        other, start=tuple(float(x) for x in configured_start(cfg, other)), start_turn=float(turn.max(initial=0.0))
-    )
+    start = tuple(float(x) for x in configured_start(cfg, other, slot))
+    return replace(other, start=start, start_turn=float(np.abs(slot.course_rate).max(initial=0.0)))
 
 
 def _reduced(cfg: FormationConfig) -> FormationConfig:
