@@ -118,6 +118,17 @@ def _by_cells(
     return whole, cells, seconds, run_guidance_campaign(cfg, CAMPAIGN_RUNS, seed=0, horizon=HORIZON).summary()
 
 
+def _whole(cfg: FormationConfig, horizon: float) -> tuple[cascade.CascadeCertificate, float, dict[str, Any]]:
+    """``cfg``'s certificate (certified, with its bounds), its median time (s, cold caches) and the summary of a
+    campaign of ``horizon`` s on it."""
+    problem = guidance_summary(cfg).problem
+    assert problem is not None
+    cert = _cold(problem)
+    assert cert.holds and cert.error_bounds is not None and cert.actuation is not None
+    seconds = median_seconds(lambda: _cold(problem))
+    return cert, seconds, run_guidance_campaign(cfg, CAMPAIGN_RUNS, seed=0, horizon=horizon).summary()
+
+
 def _cold(problem: cascade.CascadeProblem) -> cascade.CascadeCertificate:
     """The cascade's certificate with its caches emptied (a first call: the loop's peak gains included)."""
     cascade._loop_analysis.cache_clear()
@@ -137,6 +148,13 @@ def _ratios(bounds: dict[str, float], worst: dict[str, float]) -> str:
     return ", ".join(f"{k} {bounds[k]:.3g} / {worst[k]:.3g} = {bounds[k] / worst[k]:.3g}" for k in names)
 
 
+def _command_ratios(cert: cascade.CascadeCertificate, camp: dict[str, Any]) -> str:
+    """``thrust <ratio>, rudder <ratio>``: the certified peaks over the campaign's worst commanded ones."""
+    a, worst = cert.actuation, camp["worst_commanded_peak"]
+    assert a is not None
+    return f"thrust {a.thrust / worst['force_x']:.2f}, rudder {a.rudder / worst['rudder']:.3g}"
+
+
 def cascade_cost() -> str:
     cfg = preset_config("remus-transit-ilos")
     problem = guidance_summary(cfg).problem
@@ -153,20 +171,8 @@ def cascade_cost() -> str:
     b, a = cert.error_bounds, cert.actuation
     whole, cells, t_cells, wide_camp = _by_cells(wide_masses())
     strong_whole, ranges, t_ranges, strong_camp = _by_cells(strong_current())
-    nav_cfg = late_navigation()
-    nav_problem = guidance_summary(nav_cfg).problem
-    assert nav_problem is not None
-    nav = _cold(nav_problem)
-    assert nav.holds and nav.error_bounds is not None and nav.actuation is not None
-    t_nav = median_seconds(lambda: _cold(nav_problem))
-    nav_camp = run_guidance_campaign(nav_cfg, CAMPAIGN_RUNS, seed=0, horizon=HORIZON).summary()
-    turns_cfg = survey_turns()
-    turns_problem = guidance_summary(turns_cfg).problem
-    assert turns_problem is not None
-    turns = _cold(turns_problem)
-    assert turns.holds and turns.error_bounds is not None and turns.actuation is not None
-    t_turns = median_seconds(lambda: _cold(turns_problem))
-    turns_camp = run_guidance_campaign(turns_cfg, CAMPAIGN_RUNS, seed=0, horizon=SURVEY_HORIZON).summary()
+    nav, t_nav, nav_camp = _whole(late_navigation(), HORIZON)
+    turns, t_turns, turns_camp = _whole(survey_turns(), SURVEY_HORIZON)
     assert cells.actuation is not None and cells.error_bounds is not None and ranges.error_bounds is not None
     rows = [
         ["cascade certificate (cold caches: peak gains and fixed point)", f"{t_cold:.2f}", "yes"],
@@ -207,16 +213,13 @@ def cascade_cost() -> str:
         f"plant in still water, 20 Hz, 0.05 s delay, errors up to {NAVIGATION['noise']}) against the same campaign "
         f"in the five noise patterns in turn ({nav_camp['covered_runs']} runs covered, "
         f"{nav_camp['runs_outside_bounds']} outside their bounds): "
-        f"{_ratios(nav.error_bounds, nav_camp['worst_errors'])}; "
-        f"thrust {nav.actuation.thrust / nav_camp['worst_commanded_peak']['force_x']:.2f}, rudder "
-        f"{nav.actuation.rudder / nav_camp['worst_commanded_peak']['rudder']:.3g}. The survey V on a lawn-mower "
+        f"{_ratios(nav.error_bounds, nav_camp['worst_errors'])}; {_command_ratios(nav, nav_camp)}. "
+        "The survey V on a lawn-mower "
         f"(five REMUS 100 in the path frame, 200 m turns, the transit's gains, the nominal plant, currents up to "
         f"{SURVEY_CURRENT} m/s) against a {CAMPAIGN_RUNS}-run campaign of {SURVEY_HORIZON:.0f} s through the first "
         f"turn, currents at the bound ({turns_camp['covered_runs']} runs covered, "
         f"{turns_camp['runs_outside_bounds']} outside their bounds): "
-        f"{_ratios(turns.error_bounds, turns_camp['worst_errors'])}; "
-        f"thrust {turns.actuation.thrust / turns_camp['worst_commanded_peak']['force_x']:.2f}, rudder "
-        f"{turns.actuation.rudder / turns_camp['worst_commanded_peak']['rudder']:.3g}."
+        f"{_ratios(turns.error_bounds, turns_camp['worst_errors'])}; {_command_ratios(turns, turns_camp)}."
     )
     return table(TITLE, ["what is timed", "seconds", "certified"], rows, note)
 
