@@ -1033,10 +1033,10 @@ MAX_CELLS = 80
 CELL_PARAMETERS = ("m11", "m22", "m33")
 #: Periods of a cell's nominal loop summed exactly before the tail bound is added (the whole box's
 #: loop sums up to :data:`~auv_hinf.implementation.peak.MAX_PERIODS`): the ILOS loop's slowest mode
-#: at 10 Hz contracts by about 0.997 per period, and from 8,192 periods on the added tail moves no
-#: peak gain of a REMUS 100 cascade by more than 0.6 % (a larger gain, never a smaller one), at 40 %
-#: of the cost.
-CELL_MAX_PERIODS = 8192
+#: at 10 Hz contracts by about 0.997 per period, and from 4,096 periods on the outputs' Gramian
+#: tails move no peak gain of a REMUS 100 cascade by more than 0.04 % and no free-response peak by
+#: more than 0.4 % (larger, never smaller), at 60 % of the cost of 8,192.
+CELL_MAX_PERIODS = 4096
 
 
 def _split(problem: CascadeProblem) -> list[str]:

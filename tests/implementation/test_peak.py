@@ -17,7 +17,9 @@ import pytest
 from scipy.linalg import expm
 
 from auv_hinf.exceptions import DesignError
+from auv_hinf.implementation import peak as peak_module
 from auv_hinf.implementation.peak import (
+    TAIL_RTOL,
     SampledLoop,
     free_peaks,
     peak_gains,
@@ -87,6 +89,11 @@ CASES = [
     (0.0, 0.0, 1.0, 2.0, 0.1, 0.1),
     (-1.4, 0.0, 2.0, 2.8, 0.1, 0.25),
 ]
+
+
+#: A slow loop: gentle gains (poles near -0.07 and -0.23 1/s), its period map contracting by about
+#: 0.993 per 0.1 s period, so its gains need thousands of periods of their kernel.
+SLOW = (0.0, 0.0, 0.02, 0.3, 0.1, 0.1)
 
 
 @pytest.mark.parametrize("params", CASES)
@@ -162,14 +169,14 @@ def simulate_signed(params, noise, periods):
     return np.array(out)
 
 
-@pytest.mark.parametrize("params", CASES)
-def test_disturbance_gains_bound_steps_and_switching_inputs(params):
-    """A step and randomly switching unit disturbances stay under the continuous gains."""
+@pytest.mark.parametrize(("params", "periods", "hold"), [*((c, 300, 37) for c in CASES), (SLOW, 3000, 3001)])
+def test_disturbance_gains_bound_steps_and_switching_inputs(params, periods, hold):
+    """A step and randomly switching unit disturbances stay under the continuous gains (the slow loop's
+    gains are summed only to its Gramian tail, and its switches are 7.5 s apart)."""
     gains = peak_gains(axis(*params))
     assert gains is not None
-    periods = 300
     rng = np.random.default_rng(2)
-    switches = np.repeat(rng.choice([-1.0, 1.0], periods * SUB // 37 + 1), 37)[: periods * SUB]
+    switches = np.repeat(rng.choice([-1.0, 1.0], periods * SUB // hold + 1), hold)[: periods * SUB]
     for w in (np.ones(periods * SUB), switches):
         peaks = simulate(params, w, np.zeros((periods, 2)), periods).max(axis=0)
         assert np.all(peaks <= gains.continuous[:, 0] * (1 + UNDER)), (peaks, gains.continuous[:, 0])
@@ -218,3 +225,99 @@ def test_small_gain_solves_the_least_fixed_point_and_refuses_at_radius_one():
     assert small_gain(c, np.array([[0.0, 1.0], [1.0, 0.0]])) is None
     with pytest.raises(DesignError):
         small_gain(c, -m)
+
+
+def _period_rows(loop: SampledLoop) -> tuple[np.ndarray, np.ndarray]:
+    """The period map and the outputs at every fine step's end, on the state at the period's start."""
+    _, maps, phi, out = peak_module._maps(loop)
+    rows, partial = [], np.eye(phi.shape[0])
+    for mp in maps:
+        partial = mp @ partial
+        rows.append(out @ partial)
+    return phi, np.vstack(rows)
+
+
+def test_the_gramian_tail_bounds_the_remaining_sum_and_follows_it_where_the_contraction_does_not():
+    """``sqrt(v^T W v / (1 - sigma))`` is above the exactly summed ``sum_k |l Phi^k v|``, and within a few
+    times of it, for every output row and start; the contraction's tail is orders of magnitude above."""
+    loop = axis(*SLOW)
+    phi, rows = _period_rows(loop)
+    radius = float(np.abs(np.linalg.eigvals(phi)).max())
+    assert 0.99 < radius < 1.0
+    gram = peak_module._gramians(rows, phi, radius)
+    assert gram.ok.all()
+    p, rho = peak_module._contraction(phi)
+    starts = np.random.default_rng(5).normal(size=(phi.shape[0], 6))
+    exact, x = np.zeros((rows.shape[0], starts.shape[1])), starts.copy()
+    for _ in range(40000):  # radius^40000 < 1e-100: the rest is far below round-off
+        exact += np.abs(rows @ x)
+        x = phi @ x
+    bound = peak_module._gramian_tails(gram, starts)
+    assert np.all(bound >= exact * (1 - 1e-9))
+    reached = exact > 1e-9 * exact.max()
+    assert np.median(bound[reached] / exact[reached]) < 3.0
+    contraction = peak_module._tails([rows], starts, p, rho)[0]
+    assert np.median(contraction[reached] / exact[reached]) > 100.0
+
+
+@pytest.mark.parametrize("params", [SLOW, CASES[0]])
+def test_gains_summed_to_the_gramian_tail_agree_with_the_long_exact_sum(params, monkeypatch):
+    """The gains stop at the Gramian tail (or the zero floor) yet stay above, and within TAIL_RTOL of, the
+    gains summed exactly over MAX_PERIODS periods (the tail left after them is below 1e-30)."""
+    loop = axis(*params)
+    fast = peak_gains(loop)
+    free = free_peaks(loop)
+    monkeypatch.setattr(peak_module, "GRAMIAN_AFTER", math.inf)
+    monkeypatch.setattr(peak_module, "TAIL_RTOL", 0.0)
+    peak_module._maps.cache_clear()
+    long = peak_gains(loop)
+    long_free = free_peaks(loop)
+    assert fast is not None and long is not None and free is not None and long_free is not None
+    for new, old in ((fast.continuous, long.continuous), (fast.discrete, long.discrete), (free, long_free)):
+        assert np.all(new >= old * (1 - 1e-9) - 1e-12)
+        assert np.all(new <= old * (1 + 2 * TAIL_RTOL) + 1e-9 * old.max())
+
+
+def test_a_loop_far_too_fast_for_its_fine_step_is_refused_not_an_error():
+    """``||A|| h / FINE_STEPS`` far beyond what ``exp`` can hold: every routine answers None (no overflow)."""
+    loop = axis(-1e5, 0.0, 1.0, 2.0, 0.1, 0.0)
+    assert peak_gains(loop) is None and free_peaks(loop) is None and step_bounds(loop) is None
+
+
+def test_a_slow_integrator_chain_with_a_repeated_pole_gets_finite_gains_without_warnings():
+    """A period map with a Jordan block (three integrators placed at one pole 0.995): ill-conditioned
+    Stein equations are verified, not trusted, and the gains bound a step and its sign pattern."""
+    n, h, pole = 3, 0.1, 0.995
+    a = np.diag(np.ones(n - 1), 1)
+    b = np.zeros((n, 1))
+    b[-1, 0] = 1.0
+    big = np.zeros((n + 1, n + 1))
+    big[:n, :n], big[:n, n:] = a, b
+    flow = expm(big * h)
+    ad, bd = flow[:n, :n], flow[:n, n:]
+    ctrb = np.hstack([np.linalg.matrix_power(ad, i) @ bd for i in range(n)])
+    k = np.linalg.solve(ctrb, np.eye(n))[-1:] @ np.linalg.matrix_power(ad - pole * np.eye(n), n)  # Ackermann
+    loop = SampledLoop(
+        a=a,
+        b_u=b,
+        b_w=b,
+        c_y=np.eye(n),
+        d_n=np.eye(n)[:, :1],
+        b_cn=np.zeros((0, 1)),
+        a_c=np.zeros((0, 0)),
+        b_c=np.zeros((0, n)),
+        c_c=np.zeros((1, 0)),
+        d_c=-k,
+        sample_time=h,
+        delay=0.0,
+        outputs=np.eye(2 * n + 1)[:1],
+    )
+    gains = peak_gains(loop)
+    assert gains is not None and np.isfinite(gains.continuous).all()
+    # the step response of the position settles at the DC gain 1/k_0 (the first entry of the feedback)
+    phi = np.block([[ad - bd @ k]])
+    state, peak_seen = np.zeros((n, 1)), 0.0
+    for _ in range(20000):
+        state = phi @ state + bd
+        peak_seen = max(peak_seen, abs(float(state[0, 0])))
+    assert peak_seen <= gains.continuous[0, 0] * (1 + 1e-9)
