@@ -487,17 +487,23 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
         tail_part = block[..., k:]
         rem += np.sqrt(_sumsq(tail_part)).sum(axis=2)
         periods += MIN_PERIODS
-        tails = _tails(rows, state, p, rho).reshape(steps, no, steps, cols)
+        tails = contraction_tails = _tails(rows, state, p, rho).reshape(steps, no, steps, cols)
+        own = None
         # a gain is summed to TAIL_RTOL of itself, or of ZERO_RTOL of its a-priori bound when it is
         # that small (a pair the loop does not connect is zero up to round-off)
         so_far = np.maximum(acc[..., : nw + nn].sum(axis=2).max(axis=0), ZERO_RTOL * prior)
         if gram is None and _periods_left(tails[..., : nw + nn].sum(axis=2).max(axis=0), so_far, rho) > GRAMIAN_AFTER:
             gram = _gramians(stack, phi, radius)  # a slow loop: the outputs' own Gramians pay for themselves
         if gram is not None:
-            tails = np.minimum(tails, _gramian_tails(gram, state).reshape(steps, no, steps, cols))
+            own = _gramian_tails(gram, state).reshape(steps, no, steps, cols)
+            tails = np.minimum(tails, own)
         if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= max_periods:
             acc += tails[..., :k]
-            rem += np.sqrt(_sumsq(tails[..., k:]))
+            # the remainder's tail is a norm over the unit states: each bound family's, then the smaller
+            rem_tail = np.sqrt(_sumsq(contraction_tails[..., k:]))
+            if own is not None:
+                rem_tail = np.minimum(rem_tail, np.sqrt(_sumsq(own[..., k:])))
+            rem += rem_tail
             break
     # int_0^delta |l e^{A s} B_w| ds <= delta |l B_w| + delta^2/2 |l A B_w| + |l| ||A||^2 ||B_w|| int s^2 e^{a s}/2 ds
     norm_a = float(np.linalg.norm(loop.a, 2))
@@ -735,11 +741,14 @@ GRAMIAN_POWER = 1.0
 #: Floor of ``sigma`` (a loop whose period map is nearly nilpotent keeps a finite weight).
 GRAMIAN_FLOOR = 0.05
 #: Slack added to each output's Gramian, in units of the round-off of its Stein equation
-#: (``size eps ||W||``): the verified residual ``W - A^T W A - l^T l`` must clear the eigenvalue
-#: check's own round-off margin, which is of the same order.
-GRAMIAN_SLACK = 1e4
+#: (``size eps ||W|| (1 + ||A||^2)``, the residual ``W - A^T W A - l^T l`` being assembled from terms of
+#: that size): enough to clear the eigenvalue check's margin (64 times that round-off,
+#: :data:`~auv_hinf.numerics.lmi.EIG_ROUNDOFF_FACTOR`) at the first try on the REMUS and BlueROV2
+#: loops, little enough not to loosen the tails (the ILOS loop then stops at 7,104 periods; with
+#: 256 at 7,296, with 1e4 at 8,000).
+GRAMIAN_SLACK = 128.0
 #: Attempts, each with ten times the slack, before an output falls back to the contraction's tail.
-GRAMIAN_TRIES = 3
+GRAMIAN_TRIES = 4
 #: Largest state for which every output's Stein equation is solved through one factorisation of the
 #: Kronecker operator (size^2 unknowns: 784 at 28, about 20 ms); larger states solve each on its own,
 #: which is faster from there on (0.09 s against 0.22 s for 128 rows at 40).
@@ -767,10 +776,11 @@ class _Gramians:
 def _gramians(rows: FloatArray, phi: FloatArray, radius: float) -> _Gramians:
     """Verified weighted observability Gramians of every output row of the period map.
 
-    For an output row ``l`` and ``A = Phi / sqrt(sigma)`` (:data:`GRAMIAN_POWER`), a ``W`` with
-    ``W - A^T W A - l^T l >= 0`` (checked with ``eigvalsh`` beyond its round-off margin) bounds
-    ``sum_k sigma^-k (l Phi^k v)^2 <= v^T W v`` for every ``v`` (sum the inequality along
-    ``A^k v``; ``A`` is stable), so by Cauchy-Schwarz
+    For an output row ``l`` and ``A = Phi / sqrt(sigma)`` (:data:`GRAMIAN_POWER`), a ``W >= 0`` with
+    ``W - A^T W A - l^T l >= 0`` (both checked with ``eigvalsh`` beyond their round-off margins, which
+    scale with ``||A||^2 ||W||``) bounds ``sum_k sigma^-k (l Phi^k v)^2 <= v^T W v`` for every ``v``
+    (sum the inequality along ``A^k v``: the sum telescopes to ``v^T W v`` less a term ``>= 0``), so
+    by Cauchy-Schwarz
 
         sum_{k >= 0} |l Phi^k v| <= sqrt(v^T W v / (1 - sigma)).
 
@@ -808,17 +818,24 @@ def _gramians(rows: FloatArray, phi: FloatArray, radius: float) -> _Gramians:
         return failed
     grams = 0.5 * (grams + np.swapaxes(grams, 1, 2))
     base = 0.5 * (base + base.T)  # the Gramian of the identity: the slack's shape
+    norm_a2 = float(np.linalg.norm(a, 2)) ** 2
     norms = np.linalg.norm(grams, ord=2, axis=(1, 2))
-    slack = GRAMIAN_SLACK * size * eps * np.maximum(norms, 1e-300)
+    slack = GRAMIAN_SLACK * size * eps * np.maximum(norms, 1e-300) * (1.0 + norm_a2)
     out = np.zeros_like(grams)
     ok = np.zeros(rows.shape[0], dtype=bool)
     for _ in range(GRAMIAN_TRIES):
         cand = grams + slack[:, None, None] * base
+        cand = 0.5 * (cand + np.swapaxes(cand, 1, 2))
         resid = cand - a.T @ cand @ a - loads
         resid = 0.5 * (resid + np.swapaxes(resid, 1, 2))
         low = np.linalg.eigvalsh(resid)[:, 0]
-        scale = np.maximum(np.abs(low), np.linalg.norm(cand, ord=2, axis=(1, 2)))
-        good = (low > np.array([roundoff_margin(size, float(x)) for x in scale])) & ~ok
+        eig_w = np.linalg.eigvalsh(cand)
+        # the residual is assembled from terms up to ||A||^2 ||W||: its round-off scales with that
+        scale = np.maximum(np.abs(low), np.abs(eig_w).max(axis=1) * (1.0 + norm_a2))
+        margin = np.array([roundoff_margin(size, float(x)) for x in scale])
+        # W >= 0 and the residual >= 0 bound the weighted sum for any A (telescoping), so the
+        # radius that sigma was taken from need not be exact
+        good = (low > margin) & (eig_w[:, 0] > -margin) & ~ok
         out[good], ok[good] = cand[good], True
         if ok.all():
             break
