@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
+from numpy.typing import NDArray
 from scipy.linalg import LinAlgWarning, lu_factor, lu_solve, solve_discrete_lyapunov
 
 from auv_hinf._typing import FloatArray
@@ -734,9 +735,9 @@ def _tails(offsets: Sequence[FloatArray], state: FloatArray, p: FloatArray, rho:
 
 
 #: The Gramian tail (:func:`_gramians`) weights the k-th period by ``sigma^-k`` with ``sigma`` the
-#: period map's spectral radius raised to this power (< 1, so ``sigma > radius^2`` and the weighted
-#: sum converges): 1 is exact for a loop whose slowest mode is a real pole, and the bound then
-#: charges that mode ``1/(1 - radius)`` like the true geometric sum.
+#: period map's spectral radius raised to this power (at most 1, so ``radius^2 < sigma < 1`` and the
+#: weighted sum converges): 1 is exact for a loop whose slowest mode is a real pole, whose tail the
+#: bound then charges ``1/(1 - radius)`` like the true geometric sum.
 GRAMIAN_POWER = 1.0
 #: Floor of ``sigma`` (a loop whose period map is nearly nilpotent keeps a finite weight).
 GRAMIAN_FLOOR = 0.05
@@ -768,7 +769,7 @@ class _Gramians:
     """Verified weighted Gramians of output rows (:func:`_gramians`)."""
 
     w: FloatArray  # (rows, size, size)
-    ok: FloatArray  # (rows,) bool: verified
+    ok: NDArray[np.bool_]  # (rows,): verified
     sigma: float  # the weight's base
     norms: FloatArray  # (rows,) spectral norms of w
 
