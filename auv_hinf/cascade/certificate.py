@@ -974,12 +974,13 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     per_rate = turn_equilibrium(problem)
     state = per_rate[:7]
     rows = _rows(problem)
-    held_part = _derived_outputs(problem, rows)[:, 7:] @ np.concatenate([_law(problem) @ state, state])
+    commands = _law(problem) @ state  # the held commands' equilibrium per unit turn rate
+    held_part = _derived_outputs(problem, rows)[:, 7:] @ np.concatenate([commands, state])
     lagging = np.concatenate([np.zeros(7), np.abs(held_part) * problem.lag * problem.turn_accel])
     b_cmd = _state_rows(rows)[:, 7:]
     unmix = np.eye(7)
     unmix[P, Y_E] = -problem.nominal_speed / problem.guidance.lookahead  # b_w^-1
-    held = unmix @ (b_cmd @ (_law(problem) @ state))
+    held = unmix @ (b_cmd @ commands)
     drive = problem.turn_accel * (np.abs(unmix @ (per_accel - state)) + problem.lag * np.abs(held))
     return TurnTerms(np.abs(per_rate) * problem.turn_rate + lagging, drive, per_rate, lagging)
 

@@ -773,6 +773,11 @@ class _Gramians:
     sigma: float  # the weight's base
     norms: FloatArray  # (rows,) spectral norms of w
 
+    @classmethod
+    def none(cls, shape: tuple[int, ...], sigma: float) -> _Gramians:
+        """No row verified (every row keeps the contraction's tail); ``shape`` is ``(rows, size, size)``."""
+        return cls(np.zeros(shape), np.zeros(shape[0], dtype=bool), sigma, np.zeros(shape[0]))
+
 
 def _gramians(rows: FloatArray, phi: FloatArray, radius: float) -> _Gramians:
     """Verified weighted observability Gramians of every output row of the period map.
@@ -798,7 +803,6 @@ def _gramians(rows: FloatArray, phi: FloatArray, radius: float) -> _Gramians:
     a = phi / math.sqrt(sigma)
     eps = float(np.finfo(float).eps)
     loads = rows[:, :, None] * rows[:, None, :]  # (rows, size, size)
-    failed = _Gramians(np.zeros_like(loads), np.zeros(rows.shape[0], dtype=bool), sigma, np.zeros(rows.shape[0]))
     # an ill-conditioned Stein equation is not an error here: its answer is verified below, and a
     # row whose Gramian fails the check keeps the contraction's tail
     with warnings.catch_warnings(), np.errstate(all="ignore"):
@@ -814,9 +818,9 @@ def _gramians(rows: FloatArray, phi: FloatArray, radius: float) -> _Gramians:
                 grams = np.stack([solve_discrete_lyapunov(a.T, load) for load in loads])
                 base = solve_discrete_lyapunov(a.T, np.eye(size))
         except (np.linalg.LinAlgError, ValueError):
-            return failed
+            return _Gramians.none(loads.shape, sigma)
     if not (np.all(np.isfinite(grams)) and np.all(np.isfinite(base))):
-        return failed
+        return _Gramians.none(loads.shape, sigma)
     grams = 0.5 * (grams + np.swapaxes(grams, 1, 2))
     base = 0.5 * (base + base.T)  # the Gramian of the identity: the slack's shape
     norm_a2 = float(np.linalg.norm(a, 2)) ** 2
