@@ -30,8 +30,11 @@ from auv_hinf.law.gains import Gains
 #: (``k1 = alpha^2/4``) and overdamped (``k1 = alpha^2/8``) at three velocity gains.
 POSITION_GRID: tuple[tuple[float, float], ...] = tuple((a, a * a * f) for a in (1.5, 2.5, 4.0) for f in (0.125, 0.25))
 #: Candidate heading gains ``(k1_psi (1/s^2), k2_psi (1/s))``: natural frequency ``w`` (rad/s),
-#: damping ratio 0.75.
-HEADING_GRID: tuple[tuple[float, float], ...] = tuple((w * w, 1.5 * w) for w in (1.0, 1.5, 2.0))
+#: damping ratio 0.75. The grid reaches 3 rad/s: a BlueROV2 whose surge and sway masses are each
+#: known to 10 % (so ``m22 - m11`` to about +-4 kg) in a 0.1 m/s cross current is turned 0.5-0.76 rad by
+#: the Munk moment with heading poles near -1 1/s and held within 0.05 rad with poles at -2 and
+#: -3 1/s (docs/derivations/composed.md, "How much of it is real").
+HEADING_GRID: tuple[tuple[float, float], ...] = tuple((w * w, 1.5 * w) for w in (1.0, 1.5, 2.0, 2.5, 3.0))
 #: The position gains the heading stage is searched with (the middle of :data:`POSITION_GRID`).
 HEADING_STAGE_POSITION: tuple[float, float] = (2.5, 2.5 * 2.5 * 0.25)
 #: What the search minimises.
