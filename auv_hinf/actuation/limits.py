@@ -330,9 +330,11 @@ def actuator_shortfall(actuators: Actuators, peak: tuple[float, float, float]) -
     over = [(c, p, lim) for c, p, lim in zip(CHANNELS, peak, actuators.limits()) if p > lim]
     if not over and actuators.thrusters is not None and not actuators.thrusters.contains_box(peak):
         s = actuators.thrusters.largest_box_scale(peak)
+        fx, fy, m = peak
         return (
-            f"each channel is within its limit, but the thrusters cannot deliver the whole box of peak forces "
-            f"at once (they reach {s:.3g} of it)"
+            f"the thrusters cannot deliver the certified peaks together (|tau_x| <= {fx:.4g} N, |tau_y| <= {fy:.4g} N, "
+            f"|tau_psi| <= {m:.4g} N m, each within its own limit): the largest scaled copy of that box of forces "
+            f"they can deliver at every corner is {s:.3g} of it, {100.0 * (1.0 - s):.2g} % short"
         )
     if not over:
         return "every channel is within its limit"

@@ -257,11 +257,13 @@ def _rows(
         applies = nominal & setup.certificate_applies & setup.covers_sampled_runs
     stayed = np.array([e is None for e in exits])
     starts = (np.linalg.norm(e0[0], axis=-1), np.linalg.norm(e0[1], axis=-1), np.abs(e0[2]), np.abs(e0[3]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(bound > 0, measured / bound, np.where(measured > 0, math.inf, 0.0))
-        tail = np.where(bound[..., 0] > 0, met.tail_position / bound[..., 0], math.inf)
     tol = BOUND_SLACK * max(RTOL, ATOL)
-    inside = np.all(measured <= bound * (1.0 + tol) + tol, axis=(1, 2)) & stayed
+    # every ratio is to the bound as checked, widened by the integrator's slack: a bound at round-off
+    # (a channel the mission never loads, ~1e-19) against a trajectory known to ~1e-8 is no ratio of 1e10
+    checked_bound = bound * (1.0 + tol) + tol
+    ratio = measured / checked_bound
+    tail = met.tail_position / checked_bound[..., 0]
+    inside = np.all(measured <= checked_bound, axis=(1, 2)) & stayed
     thrust = checked.thrust if checked is not None else np.array(nominal_certificate(setup).thrust.as_tuple())
     peak = met.commanded_peak  # (S, 3)
     within = np.all(peak <= thrust * (1.0 + tol) + tol, axis=1)

@@ -354,20 +354,27 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
     cov = plan.coverage
     certified, source = certified_errors_of(plan)
     cert = plan.certificate
+    covered_by = [c.part for c in plan.checks if c.role == "certificate" and c.applies and c.covers]
+    if plan.covered and cov is not None and cov.covered and "closed_loop" in covered_by:
+        why: str | None = cov.reason  # the nominal certificate's own account of what covers the start
+    elif plan.covered and covered_by:  # the certificate that covers says so, not another one's refusal
+        why = f"covered by the {' and '.join(covered_by)} certificate"
+    else:
+        why = "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None)
     out.update(
         {
             "start": plan.start,
             "blend_time": None if cov is None else cov.blend_time,
             "turn_time": None if cov is None else cov.turn_time,
             "certificate_covers_run": plan.covered,
-            "coverage_reason": "; ".join(plan.notes) if plan.notes else (cov.reason if cov is not None else None),
+            "coverage_reason": why,
             "measured_decay_rate": None if cert is None else measured_decay_rate(result, cert),
             "certified_decay_rate": None if cert is None else cert.rate,
             "measured_errors": measured,
             "measured_tail_errors": measured_errors(result, result.t.size // 2),
             "certified_errors": certified,
             "certified_errors_source": source,
-            "covered_by": [c.part for c in plan.checks if c.role == "certificate" and c.applies and c.covers],
+            "covered_by": covered_by,
             "numerical_floor": NUMERICAL_FLOOR,
             "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
             "robust_covers_run": None if plan.robust is None else plan.robust.covered,

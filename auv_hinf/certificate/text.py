@@ -41,6 +41,13 @@ def certificate_text(record: Mapping[str, Any], registered: Mapping[str, Certifi
             lines.append(f"  {name:<26}{'holds' if entry['ok'] else 'does NOT hold'} ({where})")
     lines.append(f"  CERTIFIED: {'yes' if record['certified'] else 'no'}")
     lines.extend(f"    - {r}" for r in record["reasons"])
+    failing = [n for n, e in record["parts"].items() if e["applies"] and not e["ok"]]
+    advised = [n for n in failing if any(r.get("settings") for r in record["parts"][n]["reasons"])]
+    if len(failing) > 1 and advised:
+        lines.append(
+            f"    ({len(failing)} parts refuse: {', '.join(failing)}; the values advised for one part make that part "
+            "hold, so write the advice of every part before re-running)"
+        )
     return "\n".join(lines)
 
 

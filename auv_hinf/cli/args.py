@@ -16,6 +16,9 @@ from typing import Any
 
 #: Exit codes: success, a negative verdict, bad input; and Ctrl-C outside a run's loop (128 + SIGINT).
 EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT = 0, 1, 2
+#: Exit code of a failure of the toolbox itself (a defect, not a verdict): a script tells it from "not
+#: certified" (1).
+EXIT_INTERNAL = 3
 #: Exit code after Ctrl-C (SIGINT): 128 + 2, the shell's code for a process stopped by SIGINT.
 EXIT_INTERRUPTED = 130
 #: The runtime monitor's actions (``run --on-violation``).
@@ -223,6 +226,7 @@ __all__ = [
     "ACTIONS",
     "DESIGN_MAX_N",
     "EXIT_BAD_INPUT",
+    "EXIT_INTERNAL",
     "EXIT_INTERRUPTED",
     "EXIT_NEGATIVE",
     "EXIT_OK",

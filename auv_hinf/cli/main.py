@@ -32,6 +32,7 @@ from auv_hinf.cli.args import (
     ACTIONS,
     DESIGN_MAX_N,
     EXIT_BAD_INPUT,
+    EXIT_INTERNAL,
     EXIT_INTERRUPTED,
     EXIT_NEGATIVE,
     EXIT_OK,
@@ -271,7 +272,7 @@ def _classify(exc: BaseException) -> tuple[int, str]:
         return EXIT_BAD_INPUT, "error"
     if isinstance(exc, ArithmeticError):  # overflow or division by zero from an extreme input value
         return EXIT_BAD_INPUT, "error: a value is too large or too small to compute with (check the magnitudes given)"
-    return EXIT_NEGATIVE, "internal error"
+    return EXIT_INTERNAL, "internal error"
 
 
 #: BLAS threads of a command (see :func:`main`).
@@ -323,7 +324,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         else:
             _report(kind, exc)
-        if code == EXIT_NEGATIVE and "--json" in args_list:
+        if code in (EXIT_NEGATIVE, EXIT_INTERNAL) and "--json" in args_list:
             # a negative answer is still an answer: a reader of --json gets one JSON object
             # (bad input, exit 2, stays one line on stderr only)
             message = [line for line in str(exc).splitlines() if line.strip()] or [type(exc).__name__]

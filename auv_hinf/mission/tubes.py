@@ -210,7 +210,8 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
         _, q1, q2, q3 = one.mission(tc)
         chi, chi1, _ = (x[:, None] for x in heading_from_velocity(q1, q2, q3))
         # d/dt (chi + delta - atan2(p')) and d/dt (chi' + delta') are bounded by:
-        offset_rate, rate = w + d1 + acc / slo, mb.turn_accel_max + d2
+        # per cell and vehicle, as every other quantity of the cells (the bound itself is the same in every cell)
+        offset_rate, rate = w + d1 + acc / slo, np.broadcast_to(mb.turn_accel_max + d2, slo.shape)
         heading = wrap_angle(chi + dl0 - np.arctan2(v[..., 1], v[..., 0]))
     else:  # psi_d = atan2(p') + delta: the offset is delta
         chi1 = heading_from_velocity(v, a, j)[1]

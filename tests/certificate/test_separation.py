@@ -127,6 +127,33 @@ def test_slots_closer_than_twice_the_bound_plus_the_requirement_are_refused_with
     assert certify(replace(cert.config, min_separation=1.0)).verdict("separation").ok
 
 
+@pytest.mark.slow
+def test_a_run_in_a_current_above_the_declared_bound_is_refused_for_it_and_the_advice_certifies():
+    """The configured run's current is 20 % above [disturbance] current_speed: the refusal names
+    the current (not the start, which is on the slots) and its setting, re-run, certifies."""
+    box = ("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+    bound = 0.1
+    data = {
+        "vehicle": {"preset": "paper2011"},
+        "formation": {"n": 6, "polygon_radius": 15.0},
+        "design": {"robust": True},
+        "reference": {"kind": "sine", "speed": 1.0, "amplitude": 30.0, "omega": 0.1},
+        "uncertainty": {k: [0.95, 1.05] for k in box},
+        "disturbance": {"current_speed": bound},
+        "simulation": {"current": [0.96 * bound, -0.72 * bound]},  # |c| = 1.2 x the bound
+    }
+    cert = certify(config_from_dict(data, "fast-current"))
+    assert not cert.certified
+    (why,) = cert.verdict("separation").reasons
+    assert "current" in why.message and "exceeds the declared bound" in why.message
+    assert "nearer its slots" not in why.message
+    (setting,) = why.settings
+    assert (setting.table, setting.key) == ("simulation", "current")
+    assert bound * 0.999 <= float(np.hypot(*setting.value)) <= bound
+    again = certify(with_settings(cert.config, [(setting.table, setting.key, setting.value)]))
+    assert again.certified, again.reasons
+
+
 def test_a_stored_certificate_round_trips_and_older_records_load(tmp_path):
     cert = preset_certificate("paper-hexagon")
     loaded = Certificate.load(cert.save(tmp_path / "c.json"))

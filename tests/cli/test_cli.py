@@ -122,7 +122,7 @@ def test_negative_verdict_exit_1_with_reason(tmp_path, capsys):
     assert err.count("\n") == 1 and err.startswith("auv-hinf: not certified: ") and "Theorem 1 bound" in err
 
 
-def test_internal_error_is_one_line_exit_1_and_debug_reraises(monkeypatch, capsys):
+def test_internal_error_is_one_line_exit_3_and_debug_reraises(monkeypatch, capsys):
     crosscheck_module = importlib.import_module("auv_hinf.design.crosscheck")
 
     def boom(*args, **kwargs):
@@ -131,7 +131,7 @@ def test_internal_error_is_one_line_exit_1_and_debug_reraises(monkeypatch, capsy
     monkeypatch.setattr(crosscheck_module, "crosscheck", boom)
     code, _, err = run(["design", "--lam", "-1", "--gamma", "1"], capsys)
     assert (
-        code == 1 and err.count("\n") == 1 and err.startswith("auv-hinf: internal error: KeyError") and "--debug" in err
+        code == 3 and err.count("\n") == 1 and err.startswith("auv-hinf: internal error: KeyError") and "--debug" in err
     )
     with pytest.raises(KeyError):
         main(["--debug", "design", "--lam", "-1", "--gamma", "1"])

@@ -224,3 +224,19 @@ def test_a_heading_range_narrower_than_the_circle_is_refused_with_the_full_circl
     reason = next(r for r in cert.findings if r.part == "composed")
     assert "narrower than the full circle" in reason.message
     assert [(s.table, s.key) for s in reason.settings] == [("envelope", "psi")]
+
+
+@pytest.mark.slow
+def test_a_run_in_a_current_the_composed_certificate_does_not_cover_is_not_certified():
+    """The deployed fleet, certified in still water, with its configured run in a 0.02 m/s current:
+    the composed bound is not about that run, so no separation is certified for it (before, certify
+    said yes while simulate said the run was not covered); the advice, re-run, certifies."""
+    cfg = config_from_dict({**DEPLOYED, "simulation": {"horizon": 40.0, "current": [0.02, 0.0]}}, "deployed")
+    cert = certify(cfg)
+    assert not cert.certified and cert.verdict("composed").ok
+    (why,) = cert.verdict("separation").reasons
+    assert "current 0.02 m/s exceeds the declared bound 0 m/s" in why.message
+    assert [(x.table, x.key, x.value) for x in why.settings] == [("simulation", "current", [0.0, 0.0])]
+    again = certify(with_settings(cfg, [(x.table, x.key, x.value) for x in why.settings]))
+    assert again.certified, again.reasons
+    assert not plan_run(cfg).covered

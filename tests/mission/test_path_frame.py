@@ -14,7 +14,7 @@ from auv_hinf.mission.paths import (
     SineReference,
     heading_from_velocity,
 )
-from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube, slot_bounds
+from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube, shaped_tube, slot_bounds
 
 #: Analytic against an independent analytic computation: round-off of a few flops on ~100 m.
 EXACT = 1e-9
@@ -113,6 +113,33 @@ def test_shaped_start_in_the_path_frame_starts_on_the_vehicles_and_ends_on_the_s
     np.testing.assert_allclose(m.r, init[:, 5], atol=EXACT)
     late = np.array([61.0, 150.0])
     np.testing.assert_allclose(fleet.motion(late).p, PathFrameReference(mission, off).motion(late).p, atol=EXACT)
+
+
+def test_shaped_path_frame_tube_has_one_row_per_cell_and_vehicle_and_bounds_the_blend():
+    """Every field of the shaped tube in the path frame has a row per (cell, vehicle), as in the
+    inertial frame (the yaw acceleration had one per vehicle: certify and simulate of a path-frame
+    fleet with a declared start failed on it), and each blend cell's bounds hold the sampled blend."""
+    mission = MISSIONS[2]
+    off = np.array([[0.0, 0.0], [-5.0, 10.0], [-5.0, -10.0]])
+    init = np.array(
+        [[25.0, 5.0, 0.1, 1.0, 1.0, 0.1], [-5.0, 10.0, 0.4, 1.0, 1.0, 0.1], [10.0, 8.0, 0.7, 1.0, 0.0, 0.0]]
+    )
+    fleet = shaped_start(mission, off, init, 60.0, turn_time=20.0, frame="path")
+    k = 16
+    tube = shaped_tube(fleet, cells=k)
+    rows = tube.speed.shape[0]
+    assert tube.offset.shape == tube.yaw_rate.shape == (rows, 2)
+    assert tube.accel.shape == tube.yaw_accel.shape == (rows,)
+    # the blend's cells come first, cell-major per vehicle: vehicle i's k cells are rows i k ... i k + k - 1
+    t = np.linspace(0.0, 60.0, 12_001)[:-1]
+    m = fleet.motion(t)
+    r_dot = np.gradient(m.r, t, axis=0)
+    cell = np.minimum((t / (60.0 / k)).astype(int), k - 1)
+    n = off.shape[0]
+    for i in range(n):
+        box = tube.yaw_rate[i * k + cell]
+        assert np.all(m.r[:, i] >= box[:, 0] - FD_ATOL) and np.all(m.r[:, i] <= box[:, 1] + FD_ATOL)
+        assert np.all(np.abs(r_dot[2:-2, i]) <= tube.yaw_accel[i * k + cell[2:-2]] * 1.01 + 1e-6)
 
 
 @pytest.mark.parametrize("mission", [MISSIONS[0], MISSIONS[3]], ids=lambda m: m.kind)

@@ -307,7 +307,9 @@ def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
         if declared:
             reasons.append(reason_from(PART, exc, "configured start: "))
     if declared and shaped is not None and not shaped.covered:
-        reasons.append(Reason(PART, "start", f"configured start not covered: {shaped.reason}"))
+        reasons.append(
+            Reason(PART, "start", f"configured start not covered: {shaped.reason.removeprefix('not covered: ')}")
+        )
     return ClosedLoopSummary(cert, shaped, declared, tuple(reasons), point.fit)
 
 

@@ -26,7 +26,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
-import numpy as np
 from tqdm.auto import tqdm
 
 from auv_hinf.certificate.deployed import deployed_problem
@@ -35,7 +34,7 @@ from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_advice, tr
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
-from auv_hinf.certificate.parts.robust import BOX_RTOL, plant_outside_box
+from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line
 from auv_hinf.composed.advice import TOGETHER, Advice, declared_knobs, largest_covered, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
@@ -306,6 +305,7 @@ class ComposedPart:
         if not summary.applies:
             return Verdict(self.name, True, False, (), figures, detail=summary)
         if summary.covers and c is not None and c.force is not None and c.errors is not None:
+            outside = run_outside(ctx.point, self.name, varying_current=True)  # the bound is about the declared world
             return Verdict(
                 self.name,
                 True,
@@ -315,7 +315,8 @@ class ComposedPart:
                 peaks=(c.force.as_tuple(),),
                 binding=binding,
                 detail=summary,
-                position_bound=float(c.errors.position),
+                position_bound=None if outside is not None else float(c.errors.position),
+                unbounded=outside,
             )
         settings = tuple(s for a in summary.advice for s in advice_settings(a))
         hint = "; ".join(_advice_line(a) for a in summary.advice)
@@ -422,13 +423,10 @@ class ComposedPart:
         summary = composed_summary(point, search=False)
         c = summary.certificate
         why = "; ".join(summary.reasons)
-        outside = plant_outside_box(cfg, point.box)
-        speed = float(np.hypot(*cfg.simulation.current))
-        if outside is None and speed > point.current * (1.0 + BOX_RTOL):
-            outside = f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s"
+        outside = run_outside(point, self.name, varying_current=True)
         covers = summary.covers and outside is None
         if outside is not None:
-            why = outside
+            why = outside.message
         bounds = None
         if c is not None and c.errors is not None and summary.covers:
             bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in c.errors.to_dict().items()}

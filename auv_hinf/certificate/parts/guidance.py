@@ -63,6 +63,7 @@ from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import cascade_period, slot_motion
 from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
+from auv_hinf.mission.separation import slot_separation
 from auv_hinf.mission.tubes import slot_bounds
 from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.numerics.progress import PROGRESS_DELAY
@@ -508,7 +509,7 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
                 if milder is None:
                     continue
                 cert = certify_cascade(milder[1], cells=False)  # what holds whole holds with cells
-                if cert.holds and cert.position_bound is not None:
+                if cert.holds and cert.position_bound is not None and _separated(milder[0], cert.position_bound):
                     return MissionAnswer(what, settings, 1.0, cert.position_bound)
     for what, settings, new_cfg, problem in gentlest:  # the first kind whose gentlest change certifies some
         # the declared gains and the candidates: the ones that certify the largest share of the world
@@ -582,12 +583,24 @@ def supported_settings(cfg: FormationConfig) -> tuple[Setting, ...]:
 
 
 def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
-    """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, ``None`` if refused."""
+    """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, ``None`` if refused
+    (or if that distance leaves the vehicles closer than ``[formation] min_separation``, :func:`_separated`)."""
     rerun = _changed(cfg, settings)
     if rerun is None:
         return None
     cert = certify_cascade(rerun[1], cells=False)
-    return cert.position_bound if cert.holds else None
+    bound = cert.position_bound if cert.holds else None
+    return bound if bound is not None and _separated(rerun[0], bound) else None
+
+
+def _separated(cfg: FormationConfig, bound: float) -> bool:
+    """Vehicles each within ``bound`` (m) of their slots keep ``cfg``'s ``[formation] min_separation``.
+
+    The separation part's test (:func:`~auv_hinf.certificate.parts.separation.separation_bound`): the
+    closest slots' distance less twice the bound. An answer that certifies the cascade but not this
+    is not one that certifies when re-run.
+    """
+    return slot_separation(design_point(cfg).fleet()).distance - 2.0 * bound >= cfg.min_separation
 
 
 def _gain_variants(problem: CascadeProblem) -> list[GuidanceConfig]:

@@ -443,6 +443,8 @@ def _covered_line(f: Mapping[str, Any]) -> str | None:
     h, with_this = f.get("covered_sample_time"), f"with this delay ({f['delay']:.4g} s) and noise, on this mission"
     if f["covers"] or (h is None and not f.get("searched_sample_time")):
         return None
+    if h is None and not f["sample_time"]:  # a continuous law with a delay or noise
+        return f"  covered sample time       none: not even the continuous law (no hold) is covered {with_this}"
     if h is None:
         return f"  covered sample time       none: no sample time is covered {with_this}"
     return f"  covered sample time       <= {h:.4g} s ({1.0 / h:.3g} Hz): the largest covered {with_this}"
@@ -458,7 +460,8 @@ def _verdict_line(f: Mapping[str, Any]) -> str:
     if governor is None:  # a record written before the verdicts named what governs them
         return f"  implementation covered    NO: {first}"
     stable = f["max_sample_time"] is not None and f["sample_time"] <= f["max_sample_time"]
-    within = f" (sample time {f['sample_time']:.4g} s, within the stability limit)" if stable else ""
+    held = f"sample time {f['sample_time']:.4g} s" if f["sample_time"] else "continuous law"
+    within = f" ({held}, within the stability limit)" if stable else ""
     return f"  implementation covered    NO, governed by {governor}: {first}{within}"
 
 

@@ -9,6 +9,7 @@ and gives its certified bounds. :class:`RobustPart` is the part of the certifica
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
@@ -240,14 +241,62 @@ def plant_outside_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
 
 def _run_outside(point: DesignPoint) -> str | None:
     """Why the configured run's plant or current is outside what is declared (``None``: inside)."""
+    why = run_outside(point)
+    return None if why is None else why.message
+
+
+def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = False) -> Reason | None:
+    """Why the configured run's plant or current is outside what is declared, with the ``[simulation]``
+    values that bring it inside (``None``: inside).
+
+    A multiplier outside the box is moved to the box's nearest edge; a current above the declared
+    bound is scaled down to it (rounded down to 4 digits, so that the value written stays inside).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured plant and current, declared box and bound).
+    part : str
+        The part whose certificate it is about (the reason's part).
+    varying_current : bool
+        The certificate covers a current that varies at the declared ``current_rate`` (the composed
+        one does, the robust one does not).
+    """
     cfg = point.config
-    speed = float(np.hypot(*cfg.simulation.current))
     why = plant_outside_box(cfg, point.box)
-    if why is None and speed > point.current * (1 + BOX_RTOL):
-        why = f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s"
-    if why is None and cfg.disturbance.current_rate:
-        why = "a time-varying current is not certified"
-    return why
+    if why is not None:
+        mult = dict(cfg.simulation.plant)
+        box = point.box
+        fixes = tuple(
+            Setting("simulation.plant", name, float(np.clip(m, box.lo[k], box.hi[k])))
+            for k, name in enumerate(PARAMETERS)
+            if not (box.lo[k] * (1 - BOX_RTOL) <= (m := float(mult.get(name, 1.0))) <= box.hi[k] * (1 + BOX_RTOL))
+        )
+        return Reason(
+            part,
+            "not_covered",
+            f"the configured run's {why}: move [simulation.plant] into the box, or widen the [uncertainty] box",
+            settings=fixes,
+        )
+    cur = np.asarray(cfg.simulation.current, dtype=float)
+    speed = float(np.hypot(*cur))
+    if speed > point.current * (1 + BOX_RTOL):
+        scale = point.current / speed
+        inside = [math.floor(c * scale * 1e4) / 1e4 if c >= 0.0 else -math.floor(-c * scale * 1e4) / 1e4 for c in cur]
+        return Reason(
+            part,
+            "not_covered",
+            f"the configured run's current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s: "
+            f"lower [simulation] current to the bound, or declare [disturbance] current_speed >= {speed:.4g} m/s "
+            "(the certificate is then computed for it)",
+            channel="current",
+            value=speed,
+            limit=point.current,
+            settings=(Setting("simulation", "current", inside),),
+        )
+    if cfg.disturbance.current_rate and not varying_current:
+        return Reason(part, "not_covered", "a time-varying current is not certified")
+    return None
 
 
 def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReference | None) -> float | None:
@@ -380,6 +429,7 @@ class RobustPart:
             rob,
             position_bound=bound,
             bound_reference=None if bound is None else reference,
+            unbounded=run_outside(point) if rob.declared and bound is None else None,
         )
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
@@ -446,4 +496,5 @@ __all__ = [
     "check_robust_run",
     "plant_outside_box",
     "robust_summary",
+    "run_outside",
 ]

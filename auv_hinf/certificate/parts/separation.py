@@ -73,6 +73,9 @@ class SeparationBound:
         The parts whose bounds enter it.
     missing : str or None
         Why no bound is proved (``None`` when one is).
+    cause : Reason or None
+        The bounding part's own reason for proving none, with its settings (``None``: the
+        configured start lies outside its certified set).
     decided_elsewhere : bool
         No bound because a part that bounds the errors does not hold, or none applies (the design
         gives no closed loop): that part's reasons are the verdict, and this part does not apply.
@@ -84,6 +87,7 @@ class SeparationBound:
     parts: tuple[str, ...]
     missing: str | None = None
     decided_elsewhere: bool = False
+    cause: Reason | None = None
 
     @property
     def certified(self) -> float | None:
@@ -130,6 +134,9 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
         if not v.ok:
             return SeparationBound(required, slot_separation(point.fleet()), None, (), f"{name} does not hold", True)
         if v.position_bound is None:
+            if v.unbounded is not None:
+                why = f"{name}: {v.unbounded.message}"
+                return SeparationBound(required, slot_separation(point.fleet()), None, (), why, cause=v.unbounded)
             why = f"the configured start is outside the certified set of {name}"
             return SeparationBound(required, slot_separation(point.fleet()), None, (), why)
     proving = [v for v in verdicts.values() if v.applies and v.ok and v.position_bound is not None]
@@ -192,6 +199,16 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
     """
     s = sep.slots
     i, j = s.pair
+    if sep.position_bound is None and sep.cause is not None:
+        return Reason(
+            PART,
+            "not_covered",
+            f"no certified minimum distance between the vehicles: no position-error bound for the configured run "
+            f"({sep.missing})",
+            channel="separation",
+            limit=sep.required,
+            settings=sep.cause.settings,
+        )
     if sep.position_bound is None:
         return Reason(
             PART,
