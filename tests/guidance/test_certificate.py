@@ -26,6 +26,7 @@ from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, raw_fleet
 from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary, plant_multipliers
 from auv_hinf.cli.main import main
+from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import config_from_dict, with_settings
 from auv_hinf.guidance.law import SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance, slot_motion
@@ -264,3 +265,19 @@ def test_a_current_too_strong_for_the_start_is_refused_without_a_numerical_warni
     data = certify(transit(disturbance={"current_speed": 1.5})).to_dict()
     assert data["certified"] is False and "start" in data["parts"]["guidance"]["reasons"][0]["message"]
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.slow
+def test_a_run_in_a_current_above_the_declared_bound_gets_no_separation_and_the_advice_certifies():
+    """``remus-transit-ilos`` certifies currents up to 0.1 m/s; its configured run in 0.15 m/s is outside
+    that (``simulate`` says so): certify names the run's current and its setting, re-run, certifies."""
+    base = preset_config("remus-transit-ilos")
+    cfg = replace(base, simulation=replace(base.simulation, current=(0.0, 0.15)))
+    cert = certify(cfg)
+    assert not cert.certified and cert.verdict("guidance").ok
+    (why,) = cert.verdict("separation").reasons
+    assert "current 0.15 m/s exceeds the declared bound 0.1 m/s" in why.message
+    (setting,) = why.settings
+    assert (setting.table, setting.key) == ("simulation", "current") and np.hypot(*setting.value) <= 0.1
+    again = certify(with_settings(cfg, [(setting.table, setting.key, setting.value)]))
+    assert again.certified, again.reasons
