@@ -22,6 +22,7 @@ from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.certificate.design_point import design_point, raw_fleet
 from auv_hinf.certificate.document import read_certificate, record_from_document, save_certificate
 from auv_hinf.certificate.part import LAW_IDLE, PartContext, Verdict, control_law, part_laws, reasons_of
+from auv_hinf.certificate.parts.robust import figures_kept_inside, run_kept_inside
 from auv_hinf.certificate.parts.theorem1 import DEFAULT_JACOBI_SAMPLES, Theorem1Result
 from auv_hinf.certificate.reason import Reason
 from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by, superseded_figures
@@ -415,6 +416,12 @@ def certify(
             verdict = Verdict(part.name, True, False, figures=figures, note=note)
         else:
             verdict = part.evaluate(PartContext(point, dict(verdicts), options))
+            # advice that leaves the configured run outside what it declares gets the run's values too
+            verdict = replace(
+                verdict,
+                reasons=tuple(run_kept_inside(config, r) for r in verdict.reasons),
+                figures=figures_kept_inside(config, verdict.figures),
+            )
         verdicts[part.name] = replace(verdict, part=part.name, key=part.key)
         verdicts = waived(verdicts)  # before the later parts read the verdicts
     binding = next((v.binding for v in reversed(list(verdicts.values())) if v.binding is not None), None)

@@ -86,10 +86,6 @@ class Verdict:
     bound_reference : Any
         The :class:`~auv_hinf.mission.fleet.FleetReference` ``p_d`` that ``position_bound`` is
         measured against (``None``: the raw mission, no shaped start).
-    unbounded : Reason or None
-        Why a part that holds proves no ``position_bound`` for the configured run, with the
-        settings that would give one (``None``: the start is what lies outside its certified set,
-        or it proves a bound).
     """
 
     part: str
@@ -104,7 +100,6 @@ class Verdict:
     note: str | None = None
     position_bound: float | None = None
     bound_reference: Any = field(default=None, compare=False)
-    unbounded: Reason | None = None
 
     def record(self) -> dict[str, Any]:
         """The verdict's entry in ``certify --json``'s ``parts`` object.

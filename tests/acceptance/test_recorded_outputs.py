@@ -101,6 +101,10 @@ def test_every_recorded_number_is_reproduced(key: str, tmp_path: Path) -> None:
         new = lookup(now, path)
         if path in PER_VEHICLE:  # one bool for the fleet then, one per vehicle since the path frame
             assert isinstance(new, list) and all(new) == old, f"{key}{path}: {new!r} != recorded {old!r}"
+        elif path == "/coverage_reason" and now["certificate_covers_run"] and now["covered_by"] != ["closed_loop"]:
+            # 0.2.0 gave the nominal certificate's refusal next to a run another certificate covers;
+            # the reason now names the certificate that covers
+            assert new == f"covered by the {' and '.join(now['covered_by'])} certificate", (key, new, old)
         elif isinstance(old, bool) or not isinstance(old, (int, float)):
             assert new == old, f"{key}{path}: {new!r} != recorded {old!r}"
         elif "/certified_errors/" in path and now.get("certified_errors_source") == "robust":

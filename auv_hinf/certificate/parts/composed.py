@@ -305,7 +305,6 @@ class ComposedPart:
         if not summary.applies:
             return Verdict(self.name, True, False, (), figures, detail=summary)
         if summary.covers and c is not None and c.force is not None and c.errors is not None:
-            outside = run_outside(ctx.point, self.name, varying_current=True)  # the bound is about the declared world
             return Verdict(
                 self.name,
                 True,
@@ -315,8 +314,7 @@ class ComposedPart:
                 peaks=(c.force.as_tuple(),),
                 binding=binding,
                 detail=summary,
-                position_bound=None if outside is not None else float(c.errors.position),
-                unbounded=outside,
+                position_bound=float(c.errors.position),
             )
         settings = tuple(s for a in summary.advice for s in advice_settings(a))
         hint = "; ".join(_advice_line(a) for a in summary.advice)

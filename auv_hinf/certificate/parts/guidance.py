@@ -54,7 +54,6 @@ from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting, toml_line
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
@@ -815,10 +814,7 @@ class GuidancePart:
         figures = guidance_figures(cfg, summary)
         cert = summary.certificate
         if summary.holds and cert is not None:
-            # the bound is about the declared box and current: a configured run outside them has none
-            outside = run_outside(ctx.point, self.name, varying_current=True)
-            bound = None if outside is not None else cert.position_bound
-            return Verdict(self.name, True, True, (), figures, detail=summary, position_bound=bound, unbounded=outside)
+            return Verdict(self.name, True, True, (), figures, detail=summary, position_bound=cert.position_bound)
         settings, advice = _advice(cfg, summary)
         text = f"guidance: {summary.reason}" + (
             f"; {advice}" + (" (re-run with it)" if settings else "") if advice else ""

@@ -10,7 +10,7 @@ and gives its certified bounds. :class:`RobustPart` is the part of the certifica
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -245,12 +245,18 @@ def _run_outside(point: DesignPoint) -> str | None:
     return None if why is None else why.message
 
 
-def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = False) -> Reason | None:
-    """Why the configured run's plant or current is outside what is declared, with the ``[simulation]``
-    values that bring it inside (``None``: inside).
+def _current_within(current: FloatArray, bound: float) -> list[float]:
+    """``current`` (m/s) scaled to the speed ``bound`` (m/s), each component rounded towards zero to 4 decimals."""
+    scale = bound / float(np.hypot(*current))
+    return [math.copysign(math.floor(abs(c) * scale * 1e4) / 1e4, c) for c in current]
 
-    A multiplier outside the box is moved to the box's nearest edge; a current above the declared
-    bound is scaled down to it (rounded down to 4 digits, so that the value written stays inside).
+
+def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = False) -> Reason | None:
+    """Why the configured run lies outside the declared box and current (``None``: inside it).
+
+    The reason carries the ``[simulation]`` values that bring the run inside: a multiplier outside
+    the box moved to the box's nearest edge, a current above the declared bound scaled down to it
+    (rounded towards zero to 4 decimals, so that the value written stays inside).
 
     Parameters
     ----------
@@ -281,8 +287,7 @@ def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = Fa
     cur = np.asarray(cfg.simulation.current, dtype=float)
     speed = float(np.hypot(*cur))
     if speed > point.current * (1 + BOX_RTOL):
-        scale = point.current / speed
-        inside = [math.floor(c * scale * 1e4) / 1e4 if c >= 0.0 else -math.floor(-c * scale * 1e4) / 1e4 for c in cur]
+        inside = _current_within(cur, point.current)
         return Reason(
             part,
             "not_covered",
@@ -297,6 +302,82 @@ def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = Fa
     if cfg.disturbance.current_rate and not varying_current:
         return Reason(part, "not_covered", "a time-varying current is not certified")
     return None
+
+
+def run_kept_inside(cfg: FormationConfig, reason: Reason) -> Reason:
+    """``reason`` with the ``[simulation]`` values that keep the configured run inside what its settings declare.
+
+    Advice that lowers ``[disturbance] current_speed`` below the configured run's current, or moves an
+    ``[uncertainty]`` range past the run's ``[simulation.plant]`` multiplier, would leave that run
+    outside the declared system, which no bound covers (the separation part refuses it): the run's
+    current is scaled to the advised bound and the multiplier moved into the advised range.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration the advice is about.
+    reason : Reason
+        A reason, with or without settings.
+    """
+    extra = run_settings(cfg, reason.settings)
+    if not extra:
+        return reason
+    words = ", ".join(x.toml() for x in extra)
+    return replace(
+        reason,
+        message=f"{reason.message} (with {words}, which keeps the configured run inside)",
+        settings=(*reason.settings, *extra),
+    )
+
+
+def run_settings(cfg: FormationConfig, settings: Sequence[Setting]) -> tuple[Setting, ...]:
+    """The ``[simulation]`` values that keep ``cfg``'s configured run inside what ``settings`` declare.
+
+    See :func:`run_kept_inside`; empty when the run stays inside.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration the settings are advised for.
+    settings : sequence of Setting
+        The advised values.
+    """
+    named = {(x.table, x.key): x.value for x in settings}
+    extra: list[Setting] = []
+    bound = named.get(("disturbance", "current_speed"))
+    cur = np.asarray(cfg.simulation.current, dtype=float)
+    if bound is not None and ("simulation", "current") not in named:
+        if float(np.hypot(*cur)) > float(bound) * (1 + BOX_RTOL):
+            extra.append(Setting("simulation", "current", _current_within(cur, float(bound))))
+    mult = dict(cfg.simulation.plant)
+    for name in PARAMETERS:
+        rng = named.get(("uncertainty", name))
+        m = float(mult.get(name, 1.0))
+        if rng is not None and not (rng[0] <= m <= rng[1]) and ("simulation.plant", name) not in named:
+            extra.append(Setting("simulation.plant", name, float(np.clip(m, rng[0], rng[1]))))
+    return tuple(extra)
+
+
+def figures_kept_inside(cfg: FormationConfig, figures: Any) -> Any:
+    """``figures`` (a part's JSON object) with every advised ``settings`` list completed by :func:`run_settings`.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    figures : Any
+        Nested dictionaries and lists; other values are returned as they are.
+    """
+    if isinstance(figures, list):
+        return [figures_kept_inside(cfg, x) for x in figures]
+    if not isinstance(figures, dict):
+        return figures
+    out = {k: figures_kept_inside(cfg, v) for k, v in figures.items()}
+    listed = out.get("settings")
+    if isinstance(listed, list) and listed and all(isinstance(x, dict) and {"table", "key"} <= set(x) for x in listed):
+        extra = run_settings(cfg, [Setting(x["table"], x["key"], x.get("value")) for x in listed])
+        out["settings"] = listed + [x.to_dict() for x in extra]
+    return out
 
 
 def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReference | None) -> float | None:
@@ -429,7 +510,6 @@ class RobustPart:
             rob,
             position_bound=bound,
             bound_reference=None if bound is None else reference,
-            unbounded=run_outside(point) if rob.declared and bound is None else None,
         )
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
@@ -494,7 +574,10 @@ __all__ = [
     "RobustRunCheck",
     "RobustSummary",
     "check_robust_run",
+    "figures_kept_inside",
     "plant_outside_box",
     "robust_summary",
+    "run_kept_inside",
     "run_outside",
+    "run_settings",
 ]

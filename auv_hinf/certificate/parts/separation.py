@@ -16,12 +16,14 @@ integrator's numerical floor so that a simulated run is never measured below it.
 Soundness: each part's bound holds for its own modelled system (the nominal plant, every plant
 of the declared box and current, the sampled implementation); every part of
 :data:`BOUNDING_PARTS` that applies must hold and prove a bound, and the most inclusive of them
-covers the declared system, so the maximum is a bound of the declared system. When one of them
-applies and holds without a bound (the configured start outside its certified set), the part does
-not hold: no separation is certified. When one of them does not hold, or none applies (no closed
-loop), no separation is certified either, but that part's reasons are the verdict: this part
-then does not apply (and adds no reason). The part holds when the certified separation is at least
-``[formation] min_separation``.
+covers the declared system, so the maximum is a bound of the declared system. A configured run
+outside the declared system (its plant outside the box, its current above the bound) is bounded by
+none of them: no separation is certified for it, and the refusal gives the ``[simulation]`` values
+that bring it inside. When one of them applies and holds without a bound (the configured start
+outside its certified set), the part does not hold: no separation is certified. When one of them
+does not hold, or none applies (no closed loop), no separation is certified either, but that
+part's reasons are the verdict: this part then does not apply (and adds no reason). The part
+holds when the certified separation is at least ``[formation] min_separation``.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.separation import SlotSeparation, slot_separation
@@ -74,8 +77,10 @@ class SeparationBound:
     missing : str or None
         Why no bound is proved (``None`` when one is).
     cause : Reason or None
-        The bounding part's own reason for proving none, with its settings (``None``: the
-        configured start lies outside its certified set).
+        Why the configured run has no bound although every part that bounds the errors holds: its
+        plant or current lies outside the declared box and bound
+        (:func:`~auv_hinf.certificate.parts.robust.run_outside`), with the ``[simulation]`` values that
+        bring it inside.
     decided_elsewhere : bool
         No bound because a part that bounds the errors does not hold, or none applies (the design
         gives no closed loop): that part's reasons are the verdict, and this part does not apply.
@@ -127,18 +132,22 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
         The earlier parts' verdicts, by name.
     """
     required = point.config.min_separation
+    # every bound is about the declared system: a configured run outside it (a plant outside the box,
+    # a current above the bound) is bounded by none of them
+    outside = run_outside(point, PART, varying_current=True)
+    applies = False
     for name in BOUNDING_PARTS:
         v = verdicts.get(name)
         if v is None or not v.applies:
             continue
+        applies = True
         if not v.ok:
             return SeparationBound(required, slot_separation(point.fleet()), None, (), f"{name} does not hold", True)
-        if v.position_bound is None:
-            if v.unbounded is not None:
-                why = f"{name}: {v.unbounded.message}"
-                return SeparationBound(required, slot_separation(point.fleet()), None, (), why, cause=v.unbounded)
+        if v.position_bound is None and outside is None:
             why = f"the configured start is outside the certified set of {name}"
             return SeparationBound(required, slot_separation(point.fleet()), None, (), why)
+    if applies and outside is not None:
+        return SeparationBound(required, slot_separation(point.fleet()), None, (), outside.message, cause=outside)
     proving = [v for v in verdicts.values() if v.applies and v.ok and v.position_bound is not None]
     if not proving:
         why = "no part that bounds the tracking errors applies"
