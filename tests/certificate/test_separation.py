@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from auv_hinf.certificate.assembly import Certificate, certify, load_certificate
+from auv_hinf.certificate.parts.robust import figures_kept_inside, run_kept_inside, run_settings
+from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.certificate.run_plan import plan_run, with_start
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
@@ -202,3 +204,24 @@ def test_random_starts_inside_the_certified_set_keep_the_certified_separation():
         checked += 1
         assert certified <= simulate(plan.scenario).summary()["min_separation"]
     assert checked >= 1
+
+
+def test_advice_below_the_configured_run_carries_the_runs_values():
+    """Advice that lowers the declared current below the run's, or moves a box edge past the run's
+    plant, adds the [simulation] values that keep the run inside; advice that leaves it inside adds none."""
+    data = fully_actuated("remus-line").to_toml_dict()
+    data["simulation"]["current"] = [0.12, -0.09]  # 0.15 m/s
+    data["simulation"]["plant"] = {"m11": 1.04, "d22_quad": 0.9}
+    cfg = config_from_dict(data, "run")
+    lower = (Setting("disturbance", "current_speed", 0.05), Setting("uncertainty", "m11", [0.98, 1.02]))
+    extra = run_settings(cfg, lower)
+    (cur,) = [x for x in extra if x.key == "current"]
+    assert cur.table == "simulation" and 0.0499 <= float(np.hypot(*cur.value)) <= 0.05
+    assert np.sign(cur.value).tolist() == [1.0, -1.0]
+    assert [(x.table, x.key, x.value) for x in extra if x.key != "current"] == [("simulation.plant", "m11", 1.02)]
+    assert run_settings(cfg, (Setting("disturbance", "current_speed", 0.2),)) == ()
+    why = run_kept_inside(cfg, Reason("robust", "not_covered", "shrink", settings=lower))
+    assert why.settings[:2] == lower and len(why.settings) == 4 and "keeps the configured run inside" in why.message
+    figures = {"advice": [{"settings": [x.to_dict() for x in lower], "scale": 0.5}], "other": 1}
+    kept = figures_kept_inside(cfg, figures)
+    assert len(kept["advice"][0]["settings"]) == 4 and kept["other"] == 1 and len(figures["advice"][0]["settings"]) == 2
