@@ -4,6 +4,7 @@ when the slots are too close, reported in the JSON, the text and the stored file
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -220,6 +221,12 @@ def test_advice_below_the_configured_run_carries_the_runs_values():
     assert np.sign(cur.value).tolist() == [1.0, -1.0]
     assert [(x.table, x.key, x.value) for x in extra if x.key != "current"] == [("simulation.plant", "m11", 1.02)]
     assert run_settings(cfg, (Setting("disturbance", "current_speed", 0.2),)) == ()
+    # a removed range leaves the model's coefficient: the run's multiplier goes back to 1
+    assert run_settings(cfg, (Setting("uncertainty", "d22_quad", None),)) == (
+        Setting("simulation.plant", "d22_quad", 1.0),
+    )
+    (still,) = run_settings(cfg, (Setting("disturbance", "current_speed", 0.0),))
+    assert still.value == [0.0, 0.0] and all(math.copysign(1.0, x) > 0 for x in still.value)  # no -0.0
     why = run_kept_inside(cfg, Reason("robust", "not_covered", "shrink", settings=lower))
     assert why.settings[:2] == lower and len(why.settings) == 4 and "keeps the configured run inside" in why.message
     figures = {"advice": [{"settings": [x.to_dict() for x in lower], "scale": 0.5}], "other": 1}

@@ -248,7 +248,7 @@ def _run_outside(point: DesignPoint) -> str | None:
 def _current_within(current: FloatArray, bound: float) -> list[float]:
     """``current`` (m/s) scaled to the speed ``bound`` (m/s), each component rounded towards zero to 4 decimals."""
     scale = bound / float(np.hypot(*current))
-    return [math.copysign(math.floor(abs(c) * scale * 1e4) / 1e4, c) for c in current]
+    return [math.copysign(math.floor(abs(c) * scale * 1e4) / 1e4, c) + 0.0 for c in current]  # + 0.0: no -0.0
 
 
 def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = False) -> Reason | None:
@@ -351,9 +351,11 @@ def run_settings(cfg: FormationConfig, settings: Sequence[Setting]) -> tuple[Set
             extra.append(Setting("simulation", "current", _current_within(cur, float(bound))))
     mult = dict(cfg.simulation.plant)
     for name in PARAMETERS:
-        rng = named.get(("uncertainty", name))
+        if ("uncertainty", name) not in named:
+            continue
+        rng = named[("uncertainty", name)] or (1.0, 1.0)  # a range removed: the coefficient is the model's
         m = float(mult.get(name, 1.0))
-        if rng is not None and not (rng[0] <= m <= rng[1]) and ("simulation.plant", name) not in named:
+        if not (rng[0] <= m <= rng[1]) and ("simulation.plant", name) not in named:
             extra.append(Setting("simulation.plant", name, float(np.clip(m, rng[0], rng[1]))))
     return tuple(extra)
 
