@@ -144,6 +144,7 @@ def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
     assert 0.0 < answer["scale"] < 1.0
     assert 0.0 < written[("disturbance", "current_speed")] <= answer["scale"] * cfg.disturbance.current_speed
     # the mission, the world scaled, and the gains of the candidates that certify the largest share of it
+    # (and the configured run's current, which the preset runs above the advised bound, brought inside it)
     assert (
         {"reference", "disturbance", "uncertainty"}
         <= {t for t, _ in written}
@@ -152,8 +153,11 @@ def test_the_survey_v_is_not_certified_and_its_formation_law_is_not_evaluated():
             "disturbance",
             "uncertainty",
             "guidance",
+            "simulation",
         }
     )
+    run_current = written.get(("simulation", "current"), cfg.simulation.current)
+    assert float(np.hypot(*run_current)) <= written[("disturbance", "current_speed")]
     again = certify(with_settings(cfg, [(t, k, v) for (t, k), v in written.items()])).to_dict()
     assert again["guidance"]["certified"] is True
     assert again["guidance"]["error_bounds"]["cross_track"] <= answer["position_bound"]
