@@ -281,3 +281,24 @@ def test_a_run_in_a_current_above_the_declared_bound_gets_no_separation_and_the_
     assert (setting.table, setting.key) == ("simulation", "current") and np.hypot(*setting.value) <= 0.1
     again = certify(with_settings(cfg, [(setting.table, setting.key, setting.value)]))
     assert again.certified, again.reasons
+
+
+@pytest.mark.slow
+def test_a_run_outside_in_plant_and_current_is_answered_with_both_values_at_once():
+    """Plant (m33 0.9 against [0.97, 1.03]) and current (0.22 m/s against 0.1 m/s) both outside: one
+    refusal with both values, which re-run certifies; and advice of another part (here: remove the
+    time-varying current the cascade does not certify) carries the run's values too."""
+    base = preset_config("remus-transit-ilos")
+    sim = replace(base.simulation, current=(0.2, -0.1), plant=(("m33", 0.9),))
+    cfg = replace(base, simulation=sim)
+    cert = certify(cfg)
+    (why,) = cert.verdict("separation").reasons
+    assert {(x.table, x.key) for x in why.settings} == {("simulation", "current"), ("simulation.plant", "m33")}
+    again = certify(with_settings(cfg, [(x.table, x.key, x.value) for x in why.settings]))
+    assert again.certified, again.reasons
+    varying = replace(cfg, disturbance=replace(cfg.disturbance, current_rate=0.001))
+    (advice,) = certify(varying).verdict("guidance").reasons
+    assert ("disturbance", "current_rate", None) in [(x.table, x.key, x.value) for x in advice.settings]
+    assert {("simulation", "current"), ("simulation.plant", "m33")} <= {(x.table, x.key) for x in advice.settings}
+    rerun = certify(with_settings(varying, [(x.table, x.key, x.value) for x in advice.settings]))
+    assert rerun.certified, rerun.reasons

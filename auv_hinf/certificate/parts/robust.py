@@ -269,35 +269,27 @@ def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = Fa
         one does, the robust one does not).
     """
     cfg = point.config
-    why = plant_outside_box(cfg, point.box)
-    if why is not None:
-        mult = dict(cfg.simulation.plant)
-        box = point.box
-        fixes = tuple(
-            Setting("simulation.plant", name, float(np.clip(m, box.lo[k], box.hi[k])))
-            for k, name in enumerate(PARAMETERS)
-            if not (box.lo[k] * (1 - BOX_RTOL) <= (m := float(mult.get(name, 1.0))) <= box.hi[k] * (1 + BOX_RTOL))
+    words = []
+    plant = plant_outside_box(cfg, point.box)
+    if plant is not None:
+        words.append(f"{plant}: move [simulation.plant] into the box, or widen the [uncertainty] box")
+    speed = float(np.hypot(*cfg.simulation.current))
+    fast = speed > point.current * (1 + BOX_RTOL)
+    if fast:
+        words.append(
+            f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s: lower [simulation] current "
+            f"to the bound, or declare [disturbance] current_speed >= {speed:.4g} m/s (the certificate is then "
+            "computed for it)"
         )
+    if words:  # one reason with every value that brings the run inside: one re-run certifies
         return Reason(
             part,
             "not_covered",
-            f"the configured run's {why}: move [simulation.plant] into the box, or widen the [uncertainty] box",
-            settings=fixes,
-        )
-    cur = np.asarray(cfg.simulation.current, dtype=float)
-    speed = float(np.hypot(*cur))
-    if speed > point.current * (1 + BOX_RTOL):
-        inside = _current_within(cur, point.current)
-        return Reason(
-            part,
-            "not_covered",
-            f"the configured run's current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s: "
-            f"lower [simulation] current to the bound, or declare [disturbance] current_speed >= {speed:.4g} m/s "
-            "(the certificate is then computed for it)",
-            channel="current",
-            value=speed,
-            limit=point.current,
-            settings=(Setting("simulation", "current", inside),),
+            "the configured run's " + "; and its ".join(words),
+            channel="current" if fast and plant is None else None,
+            value=speed if fast and plant is None else None,
+            limit=point.current if fast and plant is None else None,
+            settings=run_settings(cfg, ()),
         )
     if cfg.disturbance.current_rate and not varying_current:
         return Reason(part, "not_covered", "a time-varying current is not certified")
@@ -307,10 +299,11 @@ def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = Fa
 def run_kept_inside(cfg: FormationConfig, reason: Reason) -> Reason:
     """``reason`` with the ``[simulation]`` values that keep the configured run inside what its settings declare.
 
-    Advice that lowers ``[disturbance] current_speed`` below the configured run's current, or moves an
-    ``[uncertainty]`` range past the run's ``[simulation.plant]`` multiplier, would leave that run
-    outside the declared system, which no bound covers (the separation part refuses it): the run's
-    current is scaled to the advised bound and the multiplier moved into the advised range.
+    Advice (a reason with settings) that lowers ``[disturbance] current_speed`` below the configured
+    run's current, or moves an ``[uncertainty]`` range past the run's ``[simulation.plant]``
+    multiplier, or leaves a run that is already outside the declared system there, would be refused
+    when re-run for that run, which no bound covers (the separation part): the run's current is scaled
+    to the bound and the multiplier moved into the range. A reason without settings is returned as it is.
 
     Parameters
     ----------
@@ -319,21 +312,21 @@ def run_kept_inside(cfg: FormationConfig, reason: Reason) -> Reason:
     reason : Reason
         A reason, with or without settings.
     """
-    extra = run_settings(cfg, reason.settings)
+    extra = run_settings(cfg, reason.settings) if reason.settings else ()
     if not extra:
         return reason
-    words = ", ".join(x.toml() for x in extra)
-    return replace(
-        reason,
-        message=f"{reason.message} (with {words}, which keeps the configured run inside)",
-        settings=(*reason.settings, *extra),
-    )
+    words = f" (with {', '.join(x.toml() for x in extra)}, which keeps the configured run inside)"
+    tail = " (re-run with it)"
+    head = reason.message.removesuffix(tail)
+    message = head + words + (tail if head != reason.message else "")
+    return replace(reason, message=message, settings=(*reason.settings, *extra))
 
 
 def run_settings(cfg: FormationConfig, settings: Sequence[Setting]) -> tuple[Setting, ...]:
     """The ``[simulation]`` values that keep ``cfg``'s configured run inside what ``settings`` declare.
 
-    See :func:`run_kept_inside`; empty when the run stays inside.
+    The declared system after the advice: ``settings``' current bound and box ranges where they give
+    them, ``cfg``'s elsewhere. See :func:`run_kept_inside`; empty when the run stays inside.
 
     Parameters
     ----------
@@ -344,19 +337,18 @@ def run_settings(cfg: FormationConfig, settings: Sequence[Setting]) -> tuple[Set
     """
     named = {(x.table, x.key): x.value for x in settings}
     extra: list[Setting] = []
-    bound = named.get(("disturbance", "current_speed"))
+    bound = float(named.get(("disturbance", "current_speed"), cfg.disturbance.current_speed) or 0.0)
     cur = np.asarray(cfg.simulation.current, dtype=float)
-    if bound is not None and ("simulation", "current") not in named:
-        if float(np.hypot(*cur)) > float(bound) * (1 + BOX_RTOL):
-            extra.append(Setting("simulation", "current", _current_within(cur, float(bound))))
-    mult = dict(cfg.simulation.plant)
+    if ("simulation", "current") not in named and float(np.hypot(*cur)) > bound * (1 + BOX_RTOL):
+        extra.append(Setting("simulation", "current", _current_within(cur, bound)))
+    mult, declared = dict(cfg.simulation.plant), dict(cfg.uncertainty.box)
     for name in PARAMETERS:
-        if ("uncertainty", name) not in named:
-            continue
-        rng = named[("uncertainty", name)] or (1.0, 1.0)  # a range removed: the coefficient is the model's
+        # a range removed (None) or never declared: the coefficient is the model's
+        rng = named[("uncertainty", name)] if ("uncertainty", name) in named else declared.get(name)
+        lo, hi = rng or (1.0, 1.0)
         m = float(mult.get(name, 1.0))
-        if not (rng[0] <= m <= rng[1]) and ("simulation.plant", name) not in named:
-            extra.append(Setting("simulation.plant", name, float(np.clip(m, rng[0], rng[1]))))
+        if not (lo * (1 - BOX_RTOL) <= m <= hi * (1 + BOX_RTOL)) and ("simulation.plant", name) not in named:
+            extra.append(Setting("simulation.plant", name, float(np.clip(m, lo, hi))))
     return tuple(extra)
 
 
