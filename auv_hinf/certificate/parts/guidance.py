@@ -54,6 +54,7 @@ from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.separation import SeparationBound
 from auv_hinf.certificate.reason import Reason, Setting, toml_line
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
@@ -66,6 +67,7 @@ from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineRefe
 from auv_hinf.mission.separation import slot_separation
 from auv_hinf.mission.tubes import slot_bounds
 from auv_hinf.numerics.bisection import bisect, largest_holding
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.numerics.progress import PROGRESS_DELAY
 from auv_hinf.robust.box import PARAMETERS
 
@@ -596,11 +598,12 @@ def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | N
 def _separated(cfg: FormationConfig, bound: float) -> bool:
     """Vehicles each within ``bound`` (m) of their slots keep ``cfg``'s ``[formation] min_separation``.
 
-    The separation part's test (:func:`~auv_hinf.certificate.parts.separation.separation_bound`): the
-    closest slots' distance less twice the bound. An answer that certifies the cascade but not this
-    is not one that certifies when re-run.
+    The separation part's own test (:class:`~auv_hinf.certificate.parts.separation.SeparationBound`,
+    the bound raised to the numerical floor as :func:`~auv_hinf.certificate.parts.separation.separation_bound`
+    raises it): an answer that certifies the cascade but not this is not one that certifies when re-run.
     """
-    return slot_separation(design_point(cfg).fleet()).distance - 2.0 * bound >= cfg.min_separation
+    slots = slot_separation(design_point(cfg).fleet())
+    return SeparationBound(cfg.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,)).ok
 
 
 def _gain_variants(problem: CascadeProblem) -> list[GuidanceConfig]:

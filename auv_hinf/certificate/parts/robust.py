@@ -221,6 +221,11 @@ class RobustRunCheck:
         return {"covered": self.covered, "bounds": self.bounds, "reason": self.reason}
 
 
+def _within(x: float, lo: float, hi: float) -> bool:
+    """``x`` lies in ``[lo, hi]`` widened by :data:`BOX_RTOL` (a multiplier in its range, a speed below its bound)."""
+    return lo * (1 - BOX_RTOL) <= x <= hi * (1 + BOX_RTOL)
+
+
 def plant_outside_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
     """Why the simulated plant is outside the declared box, or ``None`` when it is inside.
 
@@ -234,7 +239,7 @@ def plant_outside_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
     mult = dict(cfg.simulation.plant)
     for k, name in enumerate(PARAMETERS):
         m = float(mult.get(name, 1.0))
-        if not (box.lo[k] * (1 - BOX_RTOL) <= m <= box.hi[k] * (1 + BOX_RTOL)):
+        if not _within(m, box.lo[k], box.hi[k]):
             return f"plant multiplier {name} = {m:g} is outside the declared box [{box.lo[k]:g}, {box.hi[k]:g}]"
     return None
 
@@ -274,7 +279,7 @@ def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = Fa
     if plant is not None:
         words.append(f"{plant}: move [simulation.plant] into the box, or widen the [uncertainty] box")
     speed = float(np.hypot(*cfg.simulation.current))
-    fast = speed > point.current * (1 + BOX_RTOL)
+    fast = not _within(speed, 0.0, point.current)
     if fast:
         words.append(
             f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s: lower [simulation] current "
@@ -339,7 +344,7 @@ def run_settings(cfg: FormationConfig, settings: Sequence[Setting]) -> tuple[Set
     extra: list[Setting] = []
     bound = float(named.get(("disturbance", "current_speed"), cfg.disturbance.current_speed) or 0.0)
     cur = np.asarray(cfg.simulation.current, dtype=float)
-    if ("simulation", "current") not in named and float(np.hypot(*cur)) > bound * (1 + BOX_RTOL):
+    if ("simulation", "current") not in named and not _within(float(np.hypot(*cur)), 0.0, bound):
         extra.append(Setting("simulation", "current", _current_within(cur, bound)))
     mult, declared = dict(cfg.simulation.plant), dict(cfg.uncertainty.box)
     for name in PARAMETERS:
@@ -347,7 +352,7 @@ def run_settings(cfg: FormationConfig, settings: Sequence[Setting]) -> tuple[Set
         rng = named[("uncertainty", name)] if ("uncertainty", name) in named else declared.get(name)
         lo, hi = rng or (1.0, 1.0)
         m = float(mult.get(name, 1.0))
-        if not (lo * (1 - BOX_RTOL) <= m <= hi * (1 + BOX_RTOL)) and ("simulation.plant", name) not in named:
+        if not _within(m, lo, hi) and ("simulation.plant", name) not in named:
             extra.append(Setting("simulation.plant", name, float(np.clip(m, lo, hi))))
     return tuple(extra)
 

@@ -208,25 +208,22 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
     """
     s = sep.slots
     i, j = s.pair
-    if sep.position_bound is None and sep.cause is not None:
-        return Reason(
-            PART,
-            "not_covered",
-            f"no certified minimum distance between the vehicles: no position-error bound for the configured run "
-            f"({sep.missing})",
-            channel="separation",
-            limit=sep.required,
-            settings=sep.cause.settings,
-        )
     if sep.position_bound is None:
+        # the run outside the declared system has its own values; else the start is what lies outside
+        if sep.cause is not None:
+            advice, settings = "", sep.cause.settings
+        else:
+            advice = "; start the fleet nearer its slots (without [simulation] initial it starts on them)"
+            declared = point.config.simulation.initial is not None
+            settings = (Setting("simulation", "initial", None),) if declared else ()
         return Reason(
             PART,
             "not_covered",
             f"no certified minimum distance between the vehicles: no position-error bound for the configured run "
-            f"({sep.missing}); start the fleet nearer its slots (without [simulation] initial it starts on them)",
+            f"({sep.missing}){advice}",
             channel="separation",
             limit=sep.required,
-            settings=(Setting("simulation", "initial", None),) if point.config.simulation.initial is not None else (),
+            settings=settings,
         )
     b, certified = sep.position_bound, s.distance - 2.0 * sep.position_bound
     shaped = f" less {s.shaping:.4g} m for the shaped start" if s.shaping > 0.0 else ""
