@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linprog
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError, SolverError, require_finite
@@ -48,6 +47,8 @@ def _highs(
 ) -> Any:
     """Run HiGHS on ``min c x, A_eq x = b_eq``; raise unless status 0 (or 2 when ``infeasible_ok``)."""
     opts = {"primal_feasibility_tolerance": HIGHS_FEASIBILITY}
+    from scipy.optimize import linprog  # imported here: the configuration layer imports this module
+
     res = linprog(c, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs", options=opts)
     if res.status != 0 and not (infeasible_ok and res.status == 2):
         raise SolverError(f"{what}: HiGHS status {res.status} ({res.message})")

@@ -27,7 +27,6 @@ from threadpoolctl import threadpool_limits
 
 from auv_hinf._typing import GAIN_METHODS
 from auv_hinf._version import __version__
-from auv_hinf.campaign.setup import MAX_CHUNK
 from auv_hinf.cli.args import (
     ACTIONS,
     DESIGN_MAX_N,
@@ -49,7 +48,6 @@ from auv_hinf.cli.args import (
     per_vehicle,
     vector,
 )
-from auv_hinf.cli.commands import COMMANDS
 from auv_hinf.config.presets import PRESETS
 from auv_hinf.config.schema import GAMMA_RANGE, MAX_DESIGN_RATE
 from auv_hinf.exceptions import AuvHinfError, LinkError, SolverError
@@ -167,7 +165,12 @@ def _campaign_parser(sub: Any) -> None:
     numeric(ex, "--workers", int, 1, 1024, help="local Dask cluster of W single-threaded worker processes")
     ex.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
     numeric(
-        c, "--chunk", int, 1, 10**6, help=f"scenarios per batch (default: up to {MAX_CHUNK}, fewer if memory-bound)"
+        c,
+        "--chunk",
+        int,
+        1,
+        10**6,
+        help="scenarios per batch (default: as many as the memory budget allows)",
     )
     numeric(c, "--horizon", float, 1e-6, 1e5, help="simulated time in s (default: the config's)")
     c.add_argument("--out", type=path, required=True, help="directory for runs.parquet, summary.json, PNGs")
@@ -301,6 +304,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         # the certificates multiply many small matrices: several BLAS threads per process only
         # contend for the cores (a 3x3 exponential took 15 ms instead of 11 us on a loaded 2-core
         # machine); the Dask workers of a campaign are processes of their own
+        # the commands import the certificates (python-control, SciPy, Matplotlib: about 2.5 s),
+        # which --help, --version and a bad argument do not need
+        from auv_hinf.cli.commands import COMMANDS
+
         with threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
             return COMMANDS[args.command](args)
     except KeyboardInterrupt:  # Ctrl-C before anything finished: one line, no traceback

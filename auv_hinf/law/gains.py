@@ -18,7 +18,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
-import control as ct
 import numpy as np
 
 from auv_hinf.exceptions import DesignError, require_finite
@@ -187,6 +186,8 @@ def heading_gains(params: VehicleParams, poles: tuple[float, float]) -> tuple[fl
         raise DesignError(f"heading poles must be two finite negative numbers, got {poles!r}")
     a = np.array([[0.0, 1.0], [0.0, -params.d33_lin / params.m33]])
     b = np.array([[0.0], [1.0]])
+    import control as ct  # imported here: the configuration layer imports this module, python-control costs ~1 s
+
     k = np.asarray(ct.place(a, b, list(poles))).ravel()
     return float(k[0]), float(k[1])
 

@@ -27,15 +27,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
-import control as ct
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError, require_finite
 from auv_hinf.numerics.arrays import stack_last
+
+if TYPE_CHECKING:
+    import control as ct
 
 _MASS_FIELDS = ("m11", "m22", "m33")
 
@@ -444,6 +446,8 @@ def vehicle_nlsys(params: VehicleParams, name: str = "auv") -> ct.NonlinearIOSys
     name : str
         Name of the system.
     """
+
+    import control as ct  # python-control costs about 1 s to import: the configuration layer does not need it
 
     def updfcn(t: float, x: FloatArray, u: FloatArray, p: dict[str, Any] | None) -> FloatArray:
         return rhs(params, x, u)

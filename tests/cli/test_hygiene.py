@@ -54,3 +54,17 @@ def test_design_json_answers_when_a_crosscheck_route_fails(monkeypatch, capsys):
     # with c = 1/gamma^2 - 2
     a, lam, c = data["alpha"]["stabilizing"], -1.2, 1.0 / 2.86**2 - 2.0
     assert c * a * a + 2.0 * lam * a + 1.0 == pytest.approx(0.0, abs=1e-12) and lam + c * a < 0
+
+
+def test_help_and_the_package_import_do_not_load_the_numerical_stack():
+    """``--help``, a bad argument and ``import auv_hinf`` answer without python-control, Matplotlib or CVXPY.
+
+    They cost about 2.5 s to import; the commands that certify or simulate load them when they run.
+    """
+    probe = (
+        "import sys; from auv_hinf.cli.main import main; import auv_hinf; code = main(['--help']); "
+        "heavy = [m for m in ('control', 'matplotlib', 'cvxpy', 'dask') if m in sys.modules]; "
+        "print(code, heavy, auv_hinf.PRESETS[0])"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "0 [] paper-triangle"
