@@ -61,7 +61,7 @@ coverage: $(STAMP)
 	$(PIN_BLAS) $(BIN)/python -m pytest --nbmake notebooks tests auv_hinf --doctest-modules \
 	  -n $(TEST_WORKERS) --dist loadfile --cov=auv_hinf --cov-report=term:skip-covered
 
-# The fast subset for the edit-test loop, under 90 s on 2 cores: the tests not marked slow
+# The fast subset for the edit-test loop, under 45 s on 2 cores: the tests not marked slow
 # (full simulations, large N, the recorded outputs) and the doctests; `make test` runs them all.
 quick: $(STAMP)
 	$(PIN_BLAS) $(BIN)/python -m pytest tests auv_hinf --doctest-modules -m "not slow" -q \

@@ -53,6 +53,7 @@ def _fake_rerun(covers, problem_of):
     return rerun, calls
 
 
+@pytest.mark.slow
 def test_advice_a_rerun_does_not_confirm_is_shrunk_until_one_does(boxed, monkeypatch):
     cfg, problem = boxed
     declared = problem.implementation.noise.position

@@ -54,6 +54,7 @@ def test_the_changes_are_tried_in_order_and_the_first_that_covers_is_the_answer(
     assert "[reference] speed = 0.175" in out[0].line()
 
 
+@pytest.mark.slow
 def test_nothing_covers_gives_no_answer():
     cfg = config_from_dict(SURVEY, "survey")
     assert mission_advice(design_point(cfg), lambda c, s: None) == ()
@@ -85,6 +86,7 @@ def test_a_refusal_lists_only_the_changes_that_were_tried():
     assert tried(survey).startswith("gains designed for the deployed loop, turns up to 8 times wider")
 
 
+@pytest.mark.slow
 def test_a_circle_too_tight_for_the_yaw_rate_range_is_answered_in_its_own_keys_and_re_runs():
     """The paper's fleet on a 5 m circle with yaw rates limited to 0.01 rad/s, sampled at 10 Hz.
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
+import pytest
+
 from auv_hinf.certificate.run_plan import plan_run
 from auv_hinf.cli.main import main
 from auv_hinf.composed.loops import Errors, MissionBounds, OperatingBox, Plant, position_axes
@@ -20,6 +22,7 @@ from auv_hinf.robust.box import ParameterBox
 from tests.helpers import DEPLOYED, to_toml
 
 
+@pytest.mark.slow
 def test_a_vanishing_sway_inertia_is_refused_not_an_internal_error(tmp_path, capsys):
     raw = preset_config("bluerov2-line").to_toml_dict()
     raw["vehicle"] = {**bluerov2_heavy().to_dict(), "m22": 1e-6}
@@ -48,6 +51,7 @@ def test_an_axis_without_quadratic_drag_gets_its_trim_cells():
     assert all(lo <= a <= b <= hi for a, b in surge.parts)
 
 
+@pytest.mark.slow
 def test_a_refusal_asked_for_as_json_is_one_json_object(tmp_path, capsys):
     raw = {
         **DEPLOYED,
@@ -65,6 +69,7 @@ def test_a_refusal_asked_for_as_json_is_one_json_object(tmp_path, capsys):
     assert err.splitlines()[-1].startswith("auv-hinf: not certified: ")
 
 
+@pytest.mark.slow
 def test_certified_gains_are_simulated_when_the_run_leaves_the_box():
     # the composed certificate covers the design; the simulated plant is outside the declared box:
     # the run is not covered, but the gains are certified, so nothing refuses to run them

@@ -56,6 +56,7 @@ def test_design_json_answers_when_a_crosscheck_route_fails(monkeypatch, capsys):
     assert c * a * a + 2.0 * lam * a + 1.0 == pytest.approx(0.0, abs=1e-12) and lam + c * a < 0
 
 
+@pytest.mark.slow
 def test_help_and_the_package_import_do_not_load_the_numerical_stack():
     """``--help``, a bad argument and ``import auv_hinf`` answer without python-control, Matplotlib or CVXPY.
 

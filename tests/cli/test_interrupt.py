@@ -32,11 +32,11 @@ def _last_line(err: str) -> str:
     return err.replace("\r", "\n").strip().splitlines()[-1]
 
 
-@pytest.mark.slow
 def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+@pytest.mark.slow
 def test_sigint_to_a_real_campaign_keeps_the_finished_runs(tmp_path: Path) -> None:
     runs, out = 400, tmp_path / "campaign"
     cmd = [sys.executable, "-m", "auv_hinf.cli.main", "campaign", "--preset", "paper-triangle", "--runs", str(runs)]

@@ -319,6 +319,7 @@ def test_search_of_an_uncovered_start_reports_the_full_search_best_candidate(tri
     assert_same_search(tri, x)
 
 
+@pytest.mark.slow
 def test_a_failing_region_solve_certifies_nothing_and_the_search_goes_on(monkeypatch):
     """A heading SDP whose solve fails above some start size is not the answer: the region search
     keeps the sizes whose solves succeed and verify (here: nothing of the heading, when every solve fails)."""

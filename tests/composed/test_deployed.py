@@ -213,6 +213,7 @@ def test_a_channel_the_mission_never_loads_is_certified_above_the_simulations_ro
         assert commanded <= peak[channel], (channel, commanded, peak[channel])
 
 
+@pytest.mark.slow
 def test_a_heading_range_narrower_than_the_circle_is_refused_with_the_full_circle():
     """The composed certificate bounds the heading *error*: a declared ``envelope.psi`` narrower than
     the full circle is refused (a line heading 3 rad with psi in [-0.1, 0.1] starts outside it),

@@ -30,6 +30,7 @@ def problem():
     return deployed_problem(cfg, point.mission, point.tube, point.offsets, point.gains, composed_start(point))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("h", "d"), [(0.001, 0.5), (0.002, 0.1), (0.004, 0.1)])
 def test_too_many_measurements_in_flight_are_not_evaluated_and_the_reason_names_what_is(problem, h, d):
     assert in_flight(h, d) > MAX_DELAY_SAMPLES

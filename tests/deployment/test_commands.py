@@ -76,6 +76,7 @@ HEADER = "time,vehicle,x,y,psi,u,v,r\n"
     ],
     ids=["header only", "text", "nan", "fractional vehicle", "one vehicle of two"],
 )
+@pytest.mark.slow
 def test_replay_names_what_is_wrong_with_a_log(config, tmp_path, capsys, rows, words):
     (tmp_path / "log.csv").write_text(HEADER + rows, encoding="utf-8")
     code = main(["replay", str(tmp_path / "log.csv"), "--config", str(config)])

@@ -96,6 +96,7 @@ def test_halves_cover_the_box_and_are_centred_on_their_own_nominal_plant(masses)
         assert cell.plant.model == plant.model
 
 
+@pytest.mark.slow
 def test_a_nominal_loop_at_the_model_reproduces_the_whole_box(masses):
     _, problem = masses
     problem = replace(problem, plant=replace(problem.plant, box=problem.plant.box.scaled(0.3)))

@@ -96,6 +96,7 @@ CASES = [
 SLOW = (0.0, 0.0, 0.02, 0.3, 0.1, 0.1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("params", CASES)
 def test_noise_gains_bound_every_pattern_and_the_worst_one_nearly_reaches_them(params):
     """Bang-bang, random and kernel-sign noise stay under the discrete gains; the kernel's signs reach 0.9 of them."""
@@ -169,6 +170,7 @@ def simulate_signed(params, noise, periods):
     return np.array(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("params", "periods", "hold"), [*((c, 300, 37) for c in CASES), (SLOW, 3000, 3001)])
 def test_disturbance_gains_bound_steps_and_switching_inputs(params, periods, hold):
     """A step and randomly switching unit disturbances stay under the continuous gains (the slow loop's

@@ -74,6 +74,7 @@ def test_the_propeller_balances_the_drag_at_the_models_top_speed():
     assert -0.5 * L < act.lever_arm < -0.4 * L
 
 
+@pytest.mark.slow
 def test_the_fully_actuated_law_is_refused_on_the_nps_auv2():
     raw = {
         "vehicle": {"preset": "nps-auv2"},

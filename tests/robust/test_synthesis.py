@@ -87,6 +87,7 @@ def test_synthesis_answers_without_a_covering_candidate(monkeypatch):
     assert design.gains.k1 > 0.0
 
 
+@pytest.mark.slow
 def test_a_plant_known_exactly_in_still_water_is_synthesised_without_a_solver_failure(capfd):
     """Nothing declared: no disturbance sizes the velocity cap, which is then held at VELOCITY_CAP_MAX
     (above about 1e6 Clarabel failed on every rate, and panicked with the box empty). The design
