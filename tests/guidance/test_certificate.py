@@ -302,3 +302,43 @@ def test_a_run_outside_in_plant_and_current_is_answered_with_both_values_at_once
     assert {("simulation", "current"), ("simulation.plant", "m33")} <= {(x.table, x.key) for x in advice.settings}
     rerun = certify(with_settings(varying, [(x.table, x.key, x.value) for x in advice.settings]))
     assert rerun.certified, rerun.reasons
+
+
+@pytest.mark.parametrize(
+    ("reference", "envelope", "key"),
+    [
+        ({"kind": "line", "speed": 3.0}, {"u": [0.5, 2.5], "v": [-0.3, 0.3], "r": [-0.3, 0.3]}, "u"),
+        (
+            {"kind": "circle", "speed": 1.5, "radius": 300.0},
+            {"u": [0.5, 2.5], "v": [-0.3, 0.3], "r": [-0.003, 0.003]},
+            "r",
+        ),
+    ],
+)
+def test_a_certified_motion_outside_the_envelope_is_refused_and_the_widened_envelope_certifies(
+    reference, envelope, key
+):
+    """The cascade's certified surge speed, sway speed and yaw rate lie inside the declared ``[envelope]``.
+
+    The envelope says where the vehicle model holds: a cascade certified beyond it is refused, the
+    advice widens exactly the range that binds (outwards, so that it contains the certified motion),
+    a run is not covered, and a re-run with the advice certifies.
+    """
+    cfg = transit(reference=reference, envelope=envelope, uncertainty={}, disturbance={}, simulation={"horizon": 60.0})
+    cert = certify(cfg)
+    assert not cert.certified
+    reason = next(r for r in cert.findings if r.part == "guidance")
+    assert f"[envelope] {key} =" in reason.message, reason.message
+    assert [(s.table, s.key) for s in reason.settings] == [("envelope", key)]
+    widened = reason.settings[0].value
+    motion = cert.to_dict()["guidance"]
+    certified = {
+        "u": motion["surge_speed"],
+        "r": [-motion["yaw_rate"], motion["yaw_rate"]] if "yaw_rate" in motion else None,
+    }[key]
+    if certified is not None:
+        assert widened[0] <= certified[0] and certified[1] <= widened[1]
+    assert widened[0] <= envelope[key][0] and widened[1] >= envelope[key][1]
+    assert not certify(cfg).to_dict()["guidance"]["certified"]
+    again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in reason.settings]))
+    assert again.certified, again.reasons

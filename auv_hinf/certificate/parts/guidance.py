@@ -66,6 +66,7 @@ from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
 from auv_hinf.mission.separation import slot_separation
 from auv_hinf.mission.tubes import slot_bounds
+from auv_hinf.models.envelope import Envelope
 from auv_hinf.numerics.bisection import bisect, largest_holding
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.numerics.progress import PROGRESS_DELAY
@@ -254,6 +255,9 @@ class GuidanceSummary:
         When it does not hold, no gains of :data:`GAIN_CANDIDATES` certify and an ``[implementation]``
         delay or noise is declared: the largest scale of the delay and the noise together that
         certifies the declared box and current (``None``: none found, or none declared).
+    envelope : tuple of Setting
+        When the cascade is certified but its certified motion leaves the declared ``[envelope]``
+        (:func:`envelope_gap`): the envelope's ranges widened to hold it.
     """
 
     problem: CascadeProblem | None
@@ -269,6 +273,7 @@ class GuidanceSummary:
     supported: tuple[Setting, ...] = ()
     supported_bound: float | None = None
     lag_scale: float | None = None
+    envelope: tuple[Setting, ...] = ()
 
     @property
     def holds(self) -> bool:
@@ -326,7 +331,46 @@ def _certificate(cfg: FormationConfig) -> GuidanceSummary:
     if isinstance(problem, str):
         return GuidanceSummary(None, None, problem)
     cert = certify_cascade(problem)
+    if cert.holds:
+        left, widened = envelope_gap(cfg.envelope, cert)
+        if left:
+            why = f"the certified motion leaves the declared [envelope], where the vehicle model holds: {left}"
+            return GuidanceSummary(problem, replace(cert, holds=False, reason=why), why, envelope=widened)
     return GuidanceSummary(problem, cert, "" if cert.holds else cert.reason)
+
+
+#: The envelope's ranges the cascade's certified motion is checked against: the name in words and the unit.
+ENVELOPE_WORDS = {"u": ("surge speed", "m/s"), "v": ("sway speed", "m/s"), "r": ("yaw rate", "rad/s")}
+
+
+def envelope_gap(envelope: Envelope, cert: CascadeCertificate) -> tuple[str, tuple[Setting, ...]]:
+    """What of ``cert``'s certified motion leaves ``envelope``, in words, and the ranges widened to hold it.
+
+    The certificate bounds the surge speed through the water (a range), the sway speed and the yaw
+    rate (magnitudes) of every vehicle for all time; the ``[envelope]`` declares where the vehicle
+    model holds. Each widened range is rounded outwards to :data:`ADVICE_DIGITS` decimals. Empty
+    words (and no settings) when the motion stays inside.
+
+    Parameters
+    ----------
+    envelope : Envelope
+        The declared ``[envelope]``.
+    cert : CascadeCertificate
+        A certificate that holds (its :attr:`~CascadeCertificate.actuation` and error box are set).
+    """
+    a, errors = cert.actuation, cert.errors
+    assert a is not None and errors is not None
+    sway = float(errors[STATES.index("sway")])
+    motion = {"u": a.surge, "v": (-sway, sway), "r": (-a.yaw_rate, a.yaw_rate)}
+    words, widened = [], []
+    for key, (lo, hi) in motion.items():
+        e_lo, e_hi = getattr(envelope, key)
+        if e_lo <= lo and hi <= e_hi:
+            continue
+        name, unit = ENVELOPE_WORDS[key]
+        words.append(f"{name} in [{lo:.4g}, {hi:.4g}] {unit} against [envelope] {key} = [{e_lo:.4g}, {e_hi:.4g}]")
+        widened.append(Setting("envelope", key, [_down(min(lo, e_lo)), _up(max(hi, e_hi))]))
+    return "; ".join(words), tuple(widened)
 
 
 @functools.lru_cache(maxsize=32)
@@ -340,8 +384,8 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         switch = supported_settings(cfg)
         bound = _confirmed(cfg, switch) if switch else None
         return base if bound is None else replace(base, supported=switch, supported_bound=bound)
-    if cert.holds:
-        return base
+    if cert.holds or base.envelope:
+        return base  # a motion outside the envelope is answered by the envelope alone
     if cfg.simulation.initial is not None:
         start_bound = _confirmed(cfg, (RESTART,))
         if start_bound is not None:
@@ -683,6 +727,11 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             )
         m = summary.mission
         return ((), "") if m is None else (m.settings, _mission_sentence(m))
+    if summary.envelope:
+        return summary.envelope, (
+            f"if the model holds there, widen the envelope: {toml_line(summary.envelope)} certifies; "
+            "else slow the mission"
+        )
     if summary.start_bound is not None:
         return (RESTART,), (
             f"the declared start binds: every vehicle started on its slot, heading into the current, certifies "
@@ -776,6 +825,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             "navigation_scale": summary.lag_scale,
             "start_on_slots": None if summary.start_bound is None else {"position_bound": summary.start_bound},
             "mission": None if summary.mission is None else summary.mission.to_dict(),
+            "envelope": [x.to_dict() for x in summary.envelope] or None,
             "supported": None
             if summary.supported_bound is None
             else {
