@@ -945,6 +945,7 @@ TABLES: dict[tuple[str, ...], type[BaseModel]] = {
     ("implementation",): ImplementationTable,
     ("implementation", "noise"): NoiseTable,
     ("deploy",): DeployTable,
+    ("guidance",): GuidanceTable,
     **{("reference", k): m for k, m in REFERENCE_MODELS.items()},
 }
 

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+import typing
 from dataclasses import replace
 
 import numpy as np
 import pytest
 import tomllib
+from pydantic import BaseModel
 
 from auv_hinf.config.presets import PAPER_TRIANGLE_INITIAL, PRESETS, annotated_toml, preset_config, spread_start
-from auv_hinf.config.schema import PARAMETERS, VehiclePreset, json_schema
+from auv_hinf.config.schema import PARAMETERS, TABLES, ConfigFile, VehiclePreset, json_schema
 from auv_hinf.config.settings import (
     DisturbanceConfig,
     FormationConfig,
@@ -44,12 +46,33 @@ def problems(data):
         ({"envelope": {"uu": [0, 1]}}, "envelope.uu is not a known key; did you mean 'u'?"),
         ({"reference": {"kind": "line", "headng": 1}}, "reference.headng is not a known key; did you mean 'heading'?"),
         ({"simulation": {"plant": {"m2": 1.1}}}, "simulation.plant.m2 is not a known key; did you mean 'm22'?"),
+        ({"guidance": {"lookahed": 16.0}}, "guidance.lookahed is not a known key; did you mean 'lookahead'?"),
         ({"desgin": {}}, "[desgin] is an unknown table; did you mean 'design'?"),
         ({"gamma": 0.5}, "gamma is not a known top-level key; it belongs in [design]"),
     ],
 )
 def test_unknown_keys_rejected_with_hint(data, line):
     assert line in problems(data)
+
+
+def test_every_table_of_the_format_names_its_own_unknown_keys():
+    """A misspelt key in any table is reported in that table (not as an unknown top-level key)."""
+    tables = [
+        name
+        for name, field in ConfigFile.model_fields.items()
+        if any(
+            isinstance(a, type) and issubclass(a, BaseModel)
+            for a in (typing.get_args(field.annotation) or (field.annotation,))
+        )
+    ]
+    assert "guidance" in tables and "implementation" in tables
+    for name in tables:
+        if name == "reference":  # a union by kind: its tables are keyed by the kind (the headng case above)
+            continue
+        lines = problems({name: {"zzz_not_a_key": 1.0}})
+        assert (name,) in TABLES, name
+        assert any(line.startswith(name) and "zzz_not_a_key" in line for line in lines), (name, lines)
+        assert not any("top-level" in line for line in lines), (name, lines)
 
 
 def test_whole_unknown_table_rejected():
