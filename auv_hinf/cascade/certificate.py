@@ -723,8 +723,8 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray, turn: TurnTerms | 
     gap_u = lag * u_dot + nz.velocity  # |u - u_m|: the measurement's age and its error
     if gap_u >= um_lo or m33[0] <= slope33 * lag:
         return (
-            "the sample time and delay are too long for the surge speed's or the yaw drag's change over the "
-            "measurement's age"
+            f"the measurement's age (sample time plus delay, {lag:.3g} s) is too long for the surge speed's or "
+            "the yaw drag's change over it"
         )
     rho = ((1.0 - gap_u / um_lo) ** 2, (1.0 + gap_u / um_lo) ** 2)  # (u / u_m)^2
     # -- w7: v' less its nominal; the rudder's side force and its nominal share one deflection

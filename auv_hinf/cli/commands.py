@@ -328,9 +328,21 @@ def _run_reason(plan: RunPlan) -> str:
 
 
 def _with_actuators(cfg: FormationConfig, limits: tuple[float, ...] | None) -> FormationConfig:
-    """``cfg`` with the ``--actuators`` override (N, N, N m), if given."""
+    """``cfg`` with the ``--actuators`` override (N, N, N m), if given.
+
+    Raises
+    ------
+    BadInput
+        If ``cfg`` is steered by ``[guidance]``: its vehicles have a propeller and a rudder, not the
+        three force channels the flag sets.
+    """
     if limits is None:
         return cfg
+    if cfg.guidance is not None:
+        raise BadInput(
+            "--actuators sets the three force limits of a fully actuated vehicle; this fleet is steered by "
+            "[guidance] with a propeller and a rudder: set [actuators] tau_x and rudder_max in the file instead"
+        )
     return replace(cfg, actuators=Actuators(limits[0], limits[1], limits[2]))
 
 

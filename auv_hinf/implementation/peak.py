@@ -342,10 +342,15 @@ def _contraction(phi: FloatArray) -> tuple[FloatArray, float] | None:
     r = 0.5 * (1.0 + radius)
     scaled = phi / math.sqrt(r)
     try:
-        with warnings.catch_warnings():  # an ill-conditioned solve is verified below like any other
+        # an ill-conditioned solve (SciPy warns of it: a LinAlgWarning, or a RuntimeWarning for
+        # eigenvalues near the bilinear map's pole) is verified below like any other
+        with warnings.catch_warnings():
             warnings.simplefilter("ignore", LinAlgWarning)
+            warnings.simplefilter("ignore", RuntimeWarning)
             p = solve_discrete_lyapunov(scaled.T, np.eye(phi.shape[0]))
     except (np.linalg.LinAlgError, ValueError):
+        return None
+    if not np.all(np.isfinite(p)):
         return None
     p = 0.5 * (p + p.T)
     w, v = np.linalg.eigh(p)
@@ -807,6 +812,7 @@ def _gramians(rows: FloatArray, phi: FloatArray, radius: float) -> _Gramians:
     # row whose Gramian fails the check keeps the contraction's tail
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore", LinAlgWarning)
+        warnings.simplefilter("ignore", RuntimeWarning)
         try:
             if size <= GRAMIAN_KRON:
                 op = np.eye(size * size) - np.kron(a.T, a.T)

@@ -266,3 +266,11 @@ def test_simulate_json_of_the_continuous_default_says_so(capsys):
     impl = json.loads(out)["implementation"]
     assert impl["sample_time"] == 0.0 and impl["control_period"] is None
     assert "continuous" in impl["description"]
+
+
+@pytest.mark.parametrize("command", ["certify", "simulate"])
+def test_the_force_limits_flag_on_a_guidance_fleet_is_bad_input_naming_the_rudder(command, capsys):
+    """``--actuators`` sets three force channels; a propeller-and-rudder fleet is refused it in one line (exit 2)."""
+    assert main([command, "--preset", "remus-transit-ilos", "--actuators", "10,10,10"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "[guidance]" in err[0] and "rudder_max" in err[0], err

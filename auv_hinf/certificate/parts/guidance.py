@@ -765,18 +765,28 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         lead = (
             "the mission binds (even the nominal plant in still water is refused)"
             if summary.mission_binds
-            else "no smaller current, smaller box or gains alone certify"
+            else f"no {_tried(problem, 'gains')} alone certify"
         )
         return m.settings, f"{lead}: {_mission_sentence(m)}"
     if summary.mission_binds:
         frame = " and the path-frame slots' speed changes" if problem.speed[1] > problem.speed[0] * (1.0 + 1e-9) else ""
         if problem.turn_rate > 0.0 or frame:
             return (), (
-                "no smaller current, smaller box or faster heading loop certifies it: the mission binds (its turns"
+                f"no {_tried(problem, 'faster heading loop')} certifies it: the mission binds (its turns"
                 f"{frame}; a straight line in the inertial frame certifies more easily, docs/derivations/guidance.md)"
             )
-        return (), "no smaller current, smaller box or faster heading loop certifies it, even from the slots"
+        return (), f"no {_tried(problem, 'faster heading loop')} certifies it, even from the slots"
     return (), ""
+
+
+def _tried(problem: CascadeProblem, gains: str) -> str:
+    """What a refusal's answers tried, in words: a smaller current or box only when one is declared, then ``gains``."""
+    tried = [
+        *(["smaller current"] if problem.plant.current > 0.0 else []),
+        *(["smaller box"] if problem.plant.box.declared else []),
+        gains,
+    ]
+    return ", ".join(tried[:-1]) + f" or {tried[-1]}" if len(tried) > 1 else tried[0]
 
 
 def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str, Any]:
