@@ -1024,7 +1024,11 @@ def run_coverage(
     summary = guidance_certificate(cfg)
     covered, why = covers_run(cfg, summary, multipliers, current, initial)
     if six_dof:
-        covered, why = False, f"this run is on the 6-DOF REMUS 100; the certificate is of the 3-DOF model ({why})"
+        on_3dof = "it covers the same run on the 3-DOF model" if covered else f"on the 3-DOF model: {why}"
+        covered, why = (
+            False,
+            f"not covered: this run is on the 6-DOF REMUS 100, the certificate is of the 3-DOF model ({on_3dof})",
+        )
     cert = summary.certificate
     bounds = None if cert is None or not cert.holds else cert.error_bounds
     peak = (
