@@ -232,3 +232,22 @@ def test_advice_below_the_configured_run_carries_the_runs_values():
     figures = {"advice": [{"settings": [x.to_dict() for x in lower], "scale": 0.5}], "other": 1}
     kept = figures_kept_inside(cfg, figures)
     assert len(kept["advice"][0]["settings"]) == 4 and kept["other"] == 1 and len(figures["advice"][0]["settings"]) == 2
+
+
+def test_a_spread_the_format_refuses_is_not_advised():
+    """A required separation no formation within the format's coordinates reaches is refused without settings.
+
+    The advice of a refusal is written back into the file; a spread beyond ``MAX_COORDINATE`` (found by
+    an adversarial review: a shape of -1.5e6 m) would be refused as bad input on re-run.
+    """
+    line = {"offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, 30.0]], "n": 3, "frame": "inertial"}
+    doc = preset_config("remus-transit-ilos").to_toml_dict()
+    cfg = config_from_dict({**doc, "formation": {**line, "min_separation": 1e6}, "simulation": {"horizon": 10.0}})
+    cert = certify(cfg)
+    (why,) = [r for r in cert.findings if r.part == "separation"]
+    assert not cert.certified and why.settings == () and "polygon_radius, offsets or shape" in why.message
+    # a reachable requirement still gets its re-runnable spread, within the format
+    near = certify(with_settings(cfg, [("formation", "min_separation", 40.0)]))
+    (fix,) = [r for r in near.findings if r.part == "separation"]
+    again = with_settings(near.config, [(x.table, x.key, x.value) for x in fix.settings])
+    assert fix.settings and certify(again).certified

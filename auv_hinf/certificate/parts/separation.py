@@ -38,6 +38,7 @@ from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.config.schema import MAX_COORDINATE
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.separation import SlotSeparation, slot_separation
 from auv_hinf.models.jacobi import regular_polygon
@@ -175,10 +176,14 @@ def _scale_settings(point: DesignPoint, factor: float) -> tuple[Setting, ...]:
     value: float | list[list[float]]
     if np.allclose(off, regular_polygon(n, radius), rtol=0.0, atol=POLYGON_RTOL * max(radius, 1.0)):
         key, value = "polygon_radius", float(f"{radius * factor:.4g}")
+        largest = abs(value)
     elif n <= SHAPE_ADVICE_MAX_N:
         # 7 digits: a pair's distance is a difference of the vectors, whose rounding it must not eat
         key, value = "shape", [[float(f"{x * factor:.7g}") for x in row] for row in point.config.shape]
+        largest = max(abs(x) for row in value for x in row)
     else:
+        return ()
+    if largest > MAX_COORDINATE:  # a value the configuration refuses is no answer
         return ()
     others = [k for k in FORMATION_FORMS if k != key]
     return (Setting("formation", key, value), *(Setting("formation", k, None) for k in others))
