@@ -1219,7 +1219,7 @@ def _cover(
     ``bar`` counts the cells certified against :data:`MAX_CELLS`.
     """
     if not _certify_one(_current_centre(_centre_only(problem)), CELL_MAX_PERIODS).holds:
-        return f"the plant at the centre of the cell {_masses(problem)} is refused alone"
+        return f"the plant at the centre of the cell with {_masses(problem)} is refused alone"
     # finer ranges of the current help only when its middle value alone certifies with this cell's masses
     by_current = (
         current_cells_apply(problem)

@@ -553,7 +553,7 @@ def _peaks(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[Peaks,
 #: The couplings of the small-gain system, by the perturbation channel they drive (the row) and
 #: the peak that drives it (the column's output), in words; ``{axis}`` and ``{other}`` are filled in.
 _COUPLINGS = {
-    ("q", "v"): "the {axis} drag's slope about the nominal loop's (the box's spread and the velocity error's)",
+    ("q", "v"): "the {axis} drag's slope about the nominal loop's (the velocity error's; the box's, if declared)",
     ("q", "v_m"): "the {axis} drag compensation on the measured velocity (its slope's spread)",
     ("q", "F"): "the {axis} mass ratio on the law's feedback (the box's m_hat/m)",
     ("q", "other:v"): "the body frame's turn and the Coriolis terms from the {other} velocity into the {axis} loop",

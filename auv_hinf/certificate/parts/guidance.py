@@ -92,7 +92,7 @@ GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0))
 RESTART = Setting("simulation", "initial", None)
 #: Why a mission on which a slot stops (a path-frame slot inside a turn) is not evaluated: the
 #: refusal then answers with a change of the mission (:func:`mission_answer`).
-SLOT_STOPS = "a slot stops on the mission: line-of-sight guidance needs a moving slot"
+SLOT_STOPS = "a slot stops (or runs backwards) on the mission: line-of-sight guidance needs a slot moving forwards"
 #: Bisection steps of the joint scale of the current and the box, on the declared or a changed
 #: mission (2^-6 of it): each step is one certificate, and the answer is certified once more as
 #: written.
