@@ -121,6 +121,8 @@ def _message(err: Any) -> str:
         n = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
         bound = "at least" if kind == "too_short" else "at most"
         return f"{path} must have {bound} {n} items, got {ctx.get('actual_length')}"
+    if kind == "string_too_short":
+        return f"{path} must not be empty: leave it out for the default"
     if kind == "literal_error":
         return f"{path} must be one of {ctx.get('expected')}, got {_show(value)}"
     if kind in _TYPE_NAMES or kind.endswith("_type"):

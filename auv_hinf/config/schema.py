@@ -534,7 +534,7 @@ class VehicleTable(_Table):
     """
 
     preset: VehiclePreset | None = _field(None, "built-in vehicle; excludes the nine parameters")
-    name: str | None = _field(None, "label of a custom vehicle (default: the configuration name)")
+    name: str | None = _field(None, "label of a custom vehicle (default: the configuration name)", min_length=1)
     m11: float | None = _field(
         None, "surge inertia m - X_udot", "kg", ge=MASS_RANGE[0], le=MASS_RANGE[1], examples=[200.0]
     )
@@ -853,7 +853,7 @@ DEFAULT_NOISE_PATTERN: NoisePatternSetting = schema_default(SimulationTable, "no
 class ConfigFile(_Table):
     """A whole configuration file (every table optional)."""
 
-    name: str | None = _field(None, "configuration name (default: the file stem)")
+    name: str | None = _field(None, "configuration name (default: the file stem)", min_length=1)
     vehicle: VehicleTable = Field(default_factory=lambda: VehicleTable(preset="paper2011"))
     formation: FormationTable = Field(default_factory=FormationTable)
     envelope: EnvelopeTable = Field(default_factory=EnvelopeTable)

@@ -48,6 +48,11 @@ def problems(data):
         ({"simulation": {"plant": {"m2": 1.1}}}, "simulation.plant.m2 is not a known key; did you mean 'm22'?"),
         ({"guidance": {"lookahed": 16.0}}, "guidance.lookahed is not a known key; did you mean 'lookahead'?"),
         ({"desgin": {}}, "[desgin] is an unknown table; did you mean 'design'?"),
+        ({"name": ""}, "name must not be empty: leave it out for the default"),
+        (
+            {"vehicle": {"preset": "remus100", "name": ""}},
+            "vehicle.name must not be empty: leave it out for the default",
+        ),
         ({"gamma": 0.5}, "gamma is not a known top-level key; it belongs in [design]"),
     ],
 )
