@@ -16,16 +16,18 @@ from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from auv_hinf._typing import GAIN_METHODS
 from auv_hinf.actuation.limits import Actuators
 from auv_hinf.certificate.document import json_safe
-from auv_hinf.certificate.run_plan import RunPlan
 from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative, Stopped
 from auv_hinf.config.messages import input_warnings
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError, DesignError, Interrupted, ParameterError, SolverError
+
+if TYPE_CHECKING:  # the run plan imports the certificates: each command imports what it runs
+    from auv_hinf.certificate.run_plan import RunPlan
 
 
 def _dump(obj: Any) -> str:
@@ -152,10 +154,11 @@ def _verdict(ok: bool, reason: str) -> int:
 
 
 def _cmd_certify(args: argparse.Namespace) -> int:
+    _prepare_out(args.out)
+    cfg = _with_actuators(_load(args), args.actuators)  # bad input is answered before the certificates load
+
     from auv_hinf.certificate.assembly import certify
 
-    _prepare_out(args.out)
-    cfg = _with_actuators(_load(args), args.actuators)
     if args.method:
         cfg = cfg.with_method(args.method)
     if args.design:
@@ -184,15 +187,16 @@ def _refuse_uncertified(plan: RunPlan, allowed: bool, what: str) -> None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from auv_hinf.certificate.run_plan import REPORT_UNITS, plan_run, run_report
-    from auv_hinf.simulation.engine import simulate
-
     _prepare_out(args.out)
     if args.save is not None:
         from auv_hinf.simulation.stream import parquet_path
 
         _prepare_out(parquet_path(args.save).parent, "--save", args.save)  # before any computation, as --out
-    cfg = _with_actuators(_load(args), args.actuators)
+    cfg = _with_actuators(_load(args), args.actuators)  # bad input is answered before the certificates load
+
+    from auv_hinf.certificate.run_plan import REPORT_UNITS, plan_run, run_report
+    from auv_hinf.simulation.engine import simulate
+
     if args.current is not None:
         try:
             cfg = replace(cfg, simulation=replace(cfg.simulation, current=args.current))

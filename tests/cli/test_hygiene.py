@@ -57,15 +57,28 @@ def test_design_json_answers_when_a_crosscheck_route_fails(monkeypatch, capsys):
 
 
 @pytest.mark.slow
-def test_help_and_the_package_import_do_not_load_the_numerical_stack():
-    """``--help``, a bad argument and ``import auv_hinf`` answer without python-control, Matplotlib or CVXPY.
-
-    They cost about 2.5 s to import; the commands that certify or simulate load them when they run.
-    """
+@pytest.mark.parametrize(
+    ("argv", "code"),
+    [
+        (["--help"], 0),
+        (["init"], 0),
+        (["schema"], 0),
+        (["certify", "--config", "BAD"], 2),
+        (["simulate", "--config", "BAD"], 2),
+    ],
+)
+def test_help_init_and_bad_input_do_not_load_the_numerical_stack(tmp_path, argv, code):
+    """``--help``, ``init``, ``schema``, a bad configuration and ``import auv_hinf`` answer without python-control,
+    Matplotlib or CVXPY (about 2.5 s of imports; the commands that certify or simulate load them when they run)."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[formation]\nn = 0\n", encoding="utf-8")
+    args = [str(bad) if a == "BAD" else a for a in argv]
     probe = (
-        "import sys; from auv_hinf.cli.main import main; import auv_hinf; code = main(['--help']); "
-        "heavy = [m for m in ('control', 'matplotlib', 'cvxpy', 'dask') if m in sys.modules]; "
+        "import sys, contextlib, io; from auv_hinf.cli.main import main; import auv_hinf\n"
+        "quiet = contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO())\n"
+        f"with quiet[0], quiet[1]: code = main({args!r})\n"
+        "heavy = [m for m in ('control', 'matplotlib', 'cvxpy', 'dask') if m in sys.modules]\n"
         "print(code, heavy, auv_hinf.PRESETS[0])"
     )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True)
-    assert out.stdout.strip().splitlines()[-1] == "0 [] paper-triangle"
+    assert out.stdout.strip().splitlines()[-1] == f"{code} [] paper-triangle", out.stdout
