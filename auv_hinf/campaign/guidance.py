@@ -31,6 +31,7 @@ import pandas as pd
 from auv_hinf._typing import NOISE_PATTERNS
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
+from auv_hinf.cascade.certificate import CascadeCertificate
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.certificate.parts.guidance import guidance_certificate, run_coverage
 from auv_hinf.certificate.run_plan import guidance_run
@@ -104,6 +105,8 @@ class GuidanceCampaign:
         certified = cert is not None and cert.holds
         covered = int(np.sum(t["covered"])) if done else 0
         outside = int(np.sum(~t["within_bounds"])) if done else 0
+        inside_runs = t["covered"].astype(bool) & t["within_bounds"].astype(bool) if done else t["covered"]
+        passed = inside_runs & (t["saturation_fraction"] <= 0.0) & (t["min_separation"] >= cfg.min_separation)
         return {
             "config": cfg.name,
             "law": "guidance",
@@ -132,6 +135,17 @@ class GuidanceCampaign:
             "covered_runs": covered,
             "certificate_covers_runs": done > 0 and covered == done,
             "runs_outside_bounds": outside,
+            "counts": {
+                "runs": done,
+                "certificate_applies": covered,
+                "not_applicable": done - covered,
+                "inside_bounds": int(np.sum(inside_runs)) if done else 0,
+                "outside_bounds": outside,
+                "saturated": saturated,
+                "below_min_separation": close,
+                "passed": int(np.sum(passed)) if done else 0,
+            },
+            "worst_ratio": worst_ratios(t, cert if certified else None),
             "ok": done > 0 and saturated == 0 and close == 0 and outside == 0,
             "notes": [
                 "every run is checked against the guidance certificate when it covers the run (plant in the box, "
@@ -154,6 +168,30 @@ class GuidanceCampaign:
         self.table.to_parquet(out / "runs.parquet", index=False)
         (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=2))
         return summary
+
+
+#: The measured columns a campaign holds against the certificate, and the certified figure each is held to.
+RATIO_COLUMNS = ("along_track", "cross_track", "heading", "force_x", "rudder")
+
+
+def worst_ratios(t: pd.DataFrame, cert: CascadeCertificate | None) -> dict[str, float | None]:
+    """The largest measured / certified value of each of :data:`RATIO_COLUMNS` over the covered runs of ``t``.
+
+    ``None`` for every column when no certificate holds or no run is covered. Above 1 only if a covered
+    run left its bounds (``runs_outside_bounds`` counts those runs).
+
+    Parameters
+    ----------
+    t : pandas.DataFrame
+        The campaign's run table.
+    cert : CascadeCertificate or None
+        The guidance certificate that holds (``None``: none does).
+    """
+    rows = t[t["covered"].astype(bool)] if len(t) else t
+    if cert is None or cert.error_bounds is None or cert.actuation is None or not len(rows):
+        return dict.fromkeys(RATIO_COLUMNS)
+    certified = {**cert.error_bounds, "force_x": cert.actuation.thrust, "rudder": cert.actuation.rudder}
+    return {k: float(rows[k].max() / certified[k]) if certified[k] > 0.0 else None for k in RATIO_COLUMNS}
 
 
 def _worst(t: pd.DataFrame, column: str) -> float | None:

@@ -12,6 +12,7 @@ import pytest
 from auv_hinf.campaign.guidance import run_guidance_campaign, run_inputs
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import CORNER_PERIOD
+from auv_hinf.certificate.parts.guidance import guidance_certificate
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
@@ -120,3 +121,16 @@ def test_cli_campaign_of_a_guidance_fleet(tmp_path, capsys):
     assert summary["runs"] == 2 and set(summary["worst_errors"]) >= {"along_track", "cross_track", "heading"}
     assert summary["limits"]["rudder"] == pytest.approx(preset_config("remus-survey-ilos").actuators.rudder_max)
     assert len(pd.read_parquet(out / "runs.parquet")) == 2 and (out / "runs.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_a_certified_fleet_reports_counts_and_worst_ratios_to_its_bounds():
+    """``counts`` and ``worst_ratio`` as the formation law's campaigns have them: the table's, to the bounds."""
+    cfg = preset_config("remus-transit-ilos")
+    camp = run_guidance_campaign(cfg, 3, seed=1, horizon=HORIZON)
+    s, t = camp.summary(), camp.table
+    assert s["certified"] and s["counts"]["runs"] == 3 == s["counts"]["certificate_applies"]
+    assert s["counts"]["inside_bounds"] == int(t["within_bounds"].sum()) == 3 == s["counts"]["passed"]
+    bounds = {**s["certified_errors"], **guidance_certificate(cfg).certificate.to_dict()["certified_peak"]}
+    for key, ratio in s["worst_ratio"].items():
+        assert ratio == pytest.approx(t[key].max() / bounds[key], rel=1e-12) and 0.0 <= ratio <= 1.0, key
