@@ -389,12 +389,14 @@ def certify_implementation(
         room = limits.lag - impl.delay
         # a necessary condition, not advice: the sample time that is covered (noise, envelope and
         # start included) is searched by the implementation part below this limit
-        advice = "" if room > 0.0 else f"; the delay alone uses it all: set [implementation] delay < {limits.lag:.4g} s"
-        why = (
-            f"sample_time + delay = {lag:.4g} s exceeds the certified {limits.lag:.4g} s: at delay {impl.delay:.4g} s "
-            f"the loops are certified stable for sample times <= {max(room, 0.0):.4g} s only (exact nominal limit "
-            f"{limits.exact_sample_time:.4g} s){advice}"
-        )
+        head = f"sample_time + delay = {lag:.4g} s exceeds the certified {limits.lag:.4g} s"
+        if room > 0.0:
+            why = (
+                f"{head}: at delay {impl.delay:.4g} s the loops are certified stable for sample times <= {room:.4g} s "
+                f"only (exact nominal limit {limits.exact_sample_time:.4g} s)"
+            )
+        else:
+            why = f"{head}; the delay alone uses it all: set [implementation] delay < {limits.lag:.4g} s"
         return _certificate(impl, limits, LagBounds(False, (why,), "stability"))
     first = bound_errors(prob, impl, start, True)
     return _certificate(impl, limits, first if first.covers else bound_errors(prob, impl, start, False))

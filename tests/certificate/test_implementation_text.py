@@ -103,3 +103,15 @@ def test_certify_text_continuous_and_sampled():
     assert "within the stability limit" in verdict
     assert "with this delay (0.05 s) and noise, on this mission" in text
     assert any(r.startswith("implementation not covered: the error bounds leave") for r in cert.reasons)
+
+
+@pytest.mark.slow
+def test_a_delay_that_uses_the_whole_certified_lag_prints_no_vacuous_limit():
+    """Sample time and delay each beyond the certified total lag: no ``<= 0 s`` limit, and the delay to set."""
+    doc = preset_config("paper-triangle").to_toml_dict()
+    cfg = config_from_dict({**doc, "implementation": {"sample_time": 60.0, "delay": 60.0}})
+    text = certify(cfg).summary()
+    assert "<= 0 s" not in text, text
+    line = next(x for x in text.splitlines() if x.startswith("  stability limit (LK)"))
+    assert "the delay and the sample time each reach" in line
+    assert "set [implementation] delay < " in text

@@ -396,11 +396,21 @@ class ImplementationPart:
         if f["max_sample_time"] is not None and f.get("covered_by") is None:
             ex, tight = f["exact_max_sample_time"], f["tightness"]
             vs = "" if tight is None else f"; {tight:.2f} of the exact nominal limit {ex:.4g} s"
-            out.append(
-                f"  stability limit (LK)      sample time <= {f['max_sample_time']:.4g} s, the largest at which the "
-                f"error loops alone (no noise, no envelope) are certified stable with delay {f['delay']:.4g} s{vs}; "
-                f"delay <= {f['max_delay']:.4g} s at sample time {f['sample_time']:.4g} s"
-            )
+            if f["max_sample_time"] > 0.0 and f["max_delay"] > 0.0:
+                limit = (
+                    f"sample time <= {f['max_sample_time']:.4g} s, the largest at which the error loops alone (no "
+                    f"noise, no envelope) are certified stable with delay {f['delay']:.4g} s{vs}; delay <= "
+                    f"{f['max_delay']:.4g} s at sample time {f['sample_time']:.4g} s"
+                )
+            else:  # the declared delay or sample time alone uses the certified total lag up: no vacuous '<= 0 s'
+                used_up = [f["max_sample_time"] <= 0.0, f["max_delay"] <= 0.0]
+                alone = " and ".join(x for x, up in zip(("the delay", "the sample time"), used_up, strict=True) if up)
+                each = "each reach" if all(used_up) else "alone reaches"
+                limit = (
+                    f"none with delay {f['delay']:.4g} s and sample time {f['sample_time']:.4g} s: {alone} {each} "
+                    "the total lag at which the error loops are certified stable (below)"
+                )
+            out.append(f"  stability limit (LK)      {limit}")
         b, u = f["error_bounds"], f["ultimate_bounds"]
         if declared and b is not None and u is not None:
             out.append(
