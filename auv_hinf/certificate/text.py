@@ -44,10 +44,20 @@ def certificate_text(record: Mapping[str, Any], registered: Mapping[str, Certifi
     failing = [n for n, e in record["parts"].items() if e["applies"] and not e["ok"]]
     advised = [n for n in failing if any(r.get("settings") for r in record["parts"][n]["reasons"])]
     if len(failing) > 1 and advised:
-        lines.append(
-            f"    ({len(failing)} parts refuse: {', '.join(failing)}; the values advised for one part make that part "
-            "hold, so write the advice of every part before re-running)"
+        silent = [n for n in failing if n not in advised]
+        if len(advised) > 1:
+            what = (
+                "the values advised for one part make that part hold, so write the advice of every part that gives "
+                "values before re-running"
+            )
+        else:  # a part that supersedes others (composed: robust and implementation) may be all that is needed
+            what = f"only {advised[0]} advises values: write them, re-run, and follow what still refuses"
+        none = (
+            f" ({', '.join(silent)} {'gives' if len(silent) == 1 else 'give'} none)"
+            if silent and len(advised) > 1
+            else ""
         )
+        lines.append(f"    ({len(failing)} parts refuse: {', '.join(failing)}; {what}{none})")
     return "\n".join(lines)
 
 

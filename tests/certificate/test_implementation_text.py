@@ -115,3 +115,38 @@ def test_a_delay_that_uses_the_whole_certified_lag_prints_no_vacuous_limit():
     line = next(x for x in text.splitlines() if x.startswith("  stability limit (LK)"))
     assert "the delay and the sample time each reach" in line
     assert "set [implementation] delay < " in text
+
+
+def _refusing(parts: dict[str, bool]) -> dict[str, Any]:
+    """A certificate record whose parts all refuse, each with values advised (``True``) or none."""
+    entries = {
+        name: {
+            "applies": True,
+            "ok": False,
+            "note": "",
+            "reasons": [{"settings": [{"table": "t", "key": name, "value": 1.0}] if values else []}],
+        }
+        for name, values in parts.items()
+    }
+    reasons = [f"{n}: refused" for n in parts]
+    return {"preset": "p", "n": 2, "vehicle": {}, "parts": entries, "certified": False, "reasons": reasons}
+
+
+@pytest.mark.parametrize(
+    ("parts", "says", "not_says"),
+    [
+        ({"composed": True, "robust": False, "implementation": False}, "only composed advises values", "every part"),
+        (
+            {"composed": True, "actuators": True, "robust": False},
+            "write the advice of every part that gives values",
+            "only",
+        ),
+    ],
+)
+def test_several_refusals_say_which_parts_give_values(parts, says, not_says):
+    """Several parts refuse: the text asks for the values of the parts that give some, and names the others."""
+    text = certificate_text(_refusing(parts), registered={})
+    line = text.splitlines()[-1]
+    assert says in line and not_says not in line, line
+    if "every part" in says:
+        assert "(robust gives none)" in line

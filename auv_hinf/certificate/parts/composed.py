@@ -154,18 +154,37 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
     }
 
 
+#: Significant digits of an advised value: a scale's product (0.0875 x 0.125) is written 0.0109375, not
+#: 0.010937500000000001; the re-run that confirms the advice (:func:`confirmed`) reads the written value.
+ADVICE_SIGNIFICANT = 12
+
+
 def advice_settings(a: Advice) -> tuple[Setting, ...]:
     """The configuration values of one piece of advice (the TOML tables and keys a user edits).
+
+    Every number is written with :data:`ADVICE_SIGNIFICANT` significant digits.
 
     Parameters
     ----------
     a : Advice
         A covered value of one setting.
     """
+    return tuple(Setting(s.table, s.key, _written(s.value)) for s in _advice_values(a))
+
+
+def _written(value: Any) -> Any:
+    """``value`` (a number or a list of numbers) with :data:`ADVICE_SIGNIFICANT` significant digits."""
+    if isinstance(value, list):
+        return [_written(v) for v in value]
+    return float(f"{value:.{ADVICE_SIGNIFICANT}g}") if isinstance(value, float) else value
+
+
+def _advice_values(a: Advice) -> tuple[Setting, ...]:
+    """:func:`advice_settings` before rounding."""
     p = a.problem
     impl, plant = p.implementation, p.plant
     if len(a.scaled) > 1:
-        return tuple(s for k in a.scaled for s in advice_settings(replace(a, knob=k, scaled=(k,))))
+        return tuple(s for k in a.scaled for s in _advice_values(replace(a, knob=k, scaled=(k,))))
     if a.knob == "noise":
         n = impl.noise
         return tuple(
@@ -317,17 +336,19 @@ class ComposedPart:
                 position_bound=float(c.errors.position),
             )
         settings = tuple(s for a in summary.advice for s in advice_settings(a))
-        hint = "; ".join(_advice_line(a) for a in summary.advice)
+        together = any(a.knob == "together" for a in summary.advice)
+        # each piece of advice is one answer, written whole (a knob may be several keys: the four noise bounds)
+        hint = ("; " if together else "; or ").join(_advice_line(a) for a in summary.advice)
         message = "composed certificate of the deployed loop does not cover: " + (
             "; ".join(summary.reasons) or "not certified"
         )
         if hint:
-            together = any(a.knob == "together" for a in summary.advice)
-            lead = (
-                "at the design's gains no one setting alone certifies; all of these together do (re-run)"
-                if together
-                else "each alone certifies"
-            )
+            if together:
+                lead = "at the design's gains no one setting alone certifies; all of these together do (re-run)"
+            elif len(summary.advice) == 1:
+                lead = "this certifies, every value written"
+            else:
+                lead = "any one of these answers certifies on its own, every value of it written"
             message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
             text, settings, entry = _no_advice(ctx.point, summary.problem)

@@ -171,7 +171,8 @@ def robust_summary(
             Reason(
                 PART,
                 "unsupported",
-                "a time-varying current (current_rate > 0) is not certified: the certificate assumes it constant",
+                "a time-varying current (current_rate > 0) is not certified by the robust certificate, which assumes "
+                "it constant (the composed certificate, with an [implementation] sample_time, covers a bounded rate)",
                 channel="current_rate",
                 value=cfg.disturbance.current_rate,
                 limit=0.0,
