@@ -105,8 +105,8 @@ class GuidanceCampaign:
         certified = cert is not None and cert.holds
         covered = int(np.sum(t["covered"])) if done else 0
         outside = int(np.sum(~t["within_bounds"])) if done else 0
-        inside_runs = t["covered"].astype(bool) & t["within_bounds"].astype(bool) if done else t["covered"]
-        passed = inside_runs & (t["saturation_fraction"] <= 0.0) & (t["min_separation"] >= cfg.min_separation)
+        inside = t["covered"].astype(bool) & t["within_bounds"].astype(bool)
+        passed = inside & (t["saturation_fraction"] <= 0.0) & (t["min_separation"] >= cfg.min_separation)
         return {
             "config": cfg.name,
             "law": "guidance",
@@ -139,11 +139,11 @@ class GuidanceCampaign:
                 "runs": done,
                 "certificate_applies": covered,
                 "not_applicable": done - covered,
-                "inside_bounds": int(np.sum(inside_runs)) if done else 0,
+                "inside_bounds": int(inside.sum()),
                 "outside_bounds": outside,
                 "saturated": saturated,
                 "below_min_separation": close,
-                "passed": int(np.sum(passed)) if done else 0,
+                "passed": int(passed.sum()),
             },
             "worst_ratio": worst_ratios(t, cert if certified else None),
             "ok": done > 0 and saturated == 0 and close == 0 and outside == 0,
@@ -187,7 +187,7 @@ def worst_ratios(t: pd.DataFrame, cert: CascadeCertificate | None) -> dict[str, 
     cert : CascadeCertificate or None
         The guidance certificate that holds (``None``: none does).
     """
-    rows = t[t["covered"].astype(bool)] if len(t) else t
+    rows = t[t["covered"].astype(bool)]
     if cert is None or cert.error_bounds is None or cert.actuation is None or not len(rows):
         return dict.fromkeys(RATIO_COLUMNS)
     certified = {**cert.error_bounds, "force_x": cert.actuation.thrust, "rudder": cert.actuation.rudder}

@@ -264,14 +264,7 @@ class OperatingBox:
         envelope : Envelope
             The declared envelope.
         """
-        return {
-            "u_min": self.u[0] - envelope.u[0],
-            "u_max": envelope.u[1] - self.u[1],
-            "v_min": -self.v - envelope.v[0],
-            "v_max": envelope.v[1] - self.v,
-            "r_min": -self.r - envelope.r[0],
-            "r_max": envelope.r[1] - self.r,
-        }
+        return envelope.box_margins(self.u, self.v, self.r)
 
     def within(self, envelope: Envelope) -> bool:
         """The box lies inside ``envelope`` (every margin ``>= 0``).

@@ -123,6 +123,35 @@ class Envelope:
             & (r_ <= self.r[1])
         )
 
+    def box_margins(self, u: tuple[float, float], v: float, r: float) -> dict[str, float]:
+        """Margin of each side of a box of motions inside the envelope (negative: outside).
+
+        The box is a surge speed range ``u`` and sway speed and yaw rate magnitudes ``|v| <= v``,
+        ``|r| <= r``, as the certificates bound them.
+
+        Parameters
+        ----------
+        u : tuple of float
+            ``[min, max]`` of the surge speed (m/s, body frame).
+        v : float
+            Bound of ``|v|`` (m/s).
+        r : float
+            Bound of ``|r|`` (rad/s).
+
+        Returns
+        -------
+        dict of str to float
+            ``{u_min, u_max, v_min, v_max, r_min, r_max}`` (m/s, m/s, m/s, m/s, rad/s, rad/s).
+        """
+        return {
+            "u_min": u[0] - self.u[0],
+            "u_max": self.u[1] - u[1],
+            "v_min": -v - self.v[0],
+            "v_max": self.v[1] - v,
+            "r_min": -r - self.r[0],
+            "r_max": self.r[1] - r,
+        }
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dictionary ``{"u": [min, max], ...}`` (also a valid ``[envelope]`` table)."""
         return {f.name: list(getattr(self, f.name)) for f in fields(self)}

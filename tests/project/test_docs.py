@@ -71,6 +71,12 @@ def public_objects() -> list[str]:
     return names
 
 
+def test_the_lazy_public_names_are_the_listed_ones():
+    """Every name of ``__all__`` is imported on first use from one module, and nothing else is."""
+    assert set(auv_hinf.__all__) == {"__version__", *auv_hinf._HOME}
+    assert len(auv_hinf._HOME) == sum(len(names) for names in auv_hinf._LAZY.values())  # each name in one module
+
+
 @pytest.mark.parametrize("name", public_objects())
 def test_numpydoc(name):
     obj = getattr(auv_hinf, name)

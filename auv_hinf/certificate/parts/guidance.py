@@ -362,11 +362,12 @@ def envelope_gap(envelope: Envelope, cert: CascadeCertificate) -> tuple[str, tup
     assert a is not None and errors is not None
     sway = float(errors[STATES.index("sway")])
     motion = {"u": a.surge, "v": (-sway, sway), "r": (-a.yaw_rate, a.yaw_rate)}
+    margins = envelope.box_margins(a.surge, sway, a.yaw_rate)
     words, widened = [], []
     for key, (lo, hi) in motion.items():
-        e_lo, e_hi = getattr(envelope, key)
-        if e_lo <= lo and hi <= e_hi:
+        if min(margins[f"{key}_min"], margins[f"{key}_max"]) >= 0.0:
             continue
+        e_lo, e_hi = getattr(envelope, key)
         name, unit = ENVELOPE_WORDS[key]
         words.append(f"{name} in [{lo:.4g}, {hi:.4g}] {unit} against [envelope] {key} = [{e_lo:.4g}, {e_hi:.4g}]")
         widened.append(Setting("envelope", key, [_down(min(lo, e_lo)), _up(max(hi, e_hi))]))
