@@ -473,18 +473,26 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         m[q, ix(f"{j}:F")] += dl
         m[q, ix(f"{other}:v")] += r + coriolis
         m[q, ix("h:dpsi")] += dist.misrotation[j]
-        m[ix(f"{j}:q_e"), ix(f"{other}:e")] += r
+        # the position error lives in the desired heading's frame: it turns with r_d, and its
+        # rate is the body velocity error turned by the heading error (|R(E) - I| per axis)
+        m[ix(f"{j}:q_e"), ix(f"{other}:e")] += mission.yaw_rate
+        m[ix(f"{j}:q_e"), ix(f"{j}:v")] += 1.0 - math.cos(op.heading)
+        m[ix(f"{j}:q_e"), ix(f"{other}:v")] += math.sin(op.heading)
         if integral:  # the integrator turns with the body frame: |z_b| changes by r h |z| per sample
             m[ix(f"{j}:p_z"), ix("0:z")] += r * h
             m[ix(f"{j}:p_z"), ix("1:z")] += r * h
-        # measurement errors: the noise, and the heading noise's turn of the measured position error
+        # measurement errors: the noise, and the turn of the measured position error
         ne, nv = ix(f"{j}:n_e"), ix(f"{j}:n_v")
         c[ne] += n.position
-        m[ne, ix("0:e")] += n.heading
-        m[ne, ix("1:e")] += n.heading
+        # the law measures the position error in its body frame: the desired frame's turned by the
+        # heading error and the heading noise
+        turn = op.heading + n.heading
+        m[ne, ix(f"{j}:e")] += 1.0 - math.cos(min(turn, math.pi))
+        m[ne, ix(f"{other}:e")] += math.sin(min(turn, 0.5 * math.pi))
         c[nv] += n.velocity + n.heading * (s_hi + plant.current)
         if impl.varying_delay:  # the measurement is up to d fresher than the nominal's
             m[ne, ix(f"{j}:v")] += d
+            m[ne, ix(f"{j}:q_e")] += d
             m[nv, ix(f"{j}:v")] += d * abs(a0)
             m[nv, ix(f"{j}:u")] += d
             m[nv, q] += d
@@ -558,8 +566,10 @@ _COUPLINGS = {
     ("q", "F"): "the {axis} mass ratio on the law's feedback (the box's m_hat/m)",
     ("q", "other:v"): "the body frame's turn and the Coriolis terms from the {other} velocity into the {axis} loop",
     ("q", "h:dpsi"): "the {axis} drift compensation turned by the heading's change over the lag",
-    ("q_e", "other:e"): "the body frame's turn of the {other} position error into the {axis} loop",
-    ("n_e", "e"): "the heading noise's turn of the measured {axis} position error",
+    ("q_e", "other:e"): "the desired heading's turn of the {other} position error into the {axis} loop",
+    ("q_e", "v"): "the heading error's turn of the {axis} velocity error into the {axis} position",
+    ("q_e", "other:v"): "the heading error's turn of the {other} velocity error into the {axis} position",
+    ("n_e", "e"): "the heading error's and noise's turn of the measured {axis} position error",
     ("p_z", "z"): "the integrator's turn with the body frame ({axis})",
     ("h:q", "h:v"): "the yaw drag's slope about the nominal loop's",
     ("h:q", "h:v_m"): "the yaw drag compensation on the measured yaw rate",

@@ -6,15 +6,19 @@ measurement taken at ``t_k - d`` and its command is held until ``t_{k+1}``,
 :mod:`auv_hinf.implementation.model`), on a plant anywhere in the ``[uncertainty]`` box, in a
 current ``|c| <= C``. The derivation is in ``docs/derivations/composed.md``; in short, with
 ``e = p - p_d``, ``e' = p' - p_d'`` (ground), the water-relative body velocity ``nu = R^T (p' - c)``
-and ``nu_d = R^T (p_d' - c)``, in the body frame ``epsilon = R^T e``, ``eta = R^T e' = nu - nu_d``:
+and ``nu_d = R^T (p_d' - c)``, the position error in the desired heading's frame ``epsilon =
+R(psi_d)^T e`` and the velocity error in the body frame ``eta = R^T e' = nu - nu_d``:
 
 * **Mean value in the drag.** The plant's body acceleration ``B(nu, r) nu`` and the law's drift
   compensation ``Lambda B_hat(nu_y) R_y^T p_d'`` differ from their values at ``nu_d`` by
   ``a_j eta_j`` (the plant's own slope, on the present velocity error) and ``lambda_j c_j
   eta_mj`` (the law's slope, on the *measured* one), ``a_j = -(d_lin + d_quad theta)/m_j`` and
   ``c_j = d_quad_hat s p_bj / m_hat_j`` with the mean-value slopes ``theta`` and ``s`` of
-  :func:`_slope_ranges`; the coupling between the axes is the body frame's turn ``-r S x`` and
+  :func:`_slope_ranges`; the coupling between the axes is the body frame's turn ``-r S eta`` and
   the Coriolis terms.
+* **The position's turns.** ``epsilon' = R(e_psi) eta - r_d S epsilon``: ``q_e = (R(e_psi) - I) eta -
+  r_d S epsilon`` is second order on a straight leg (the heading error times the velocity error),
+  and the law's measured body-frame error is ``epsilon`` turned by the heading error and noise.
 * **One axis.** ``epsilon' = eta + q_e``, ``eta' = a0 eta + lambda0 (c0 eta_m - F) + w + q``,
   ``F = k1 epsilon_m + alpha eta_m (+ ki z)`` the law's feedback on the measurement, held: the
   nominal loop (:func:`axis_loop`, the middle of every range) is a sampled-data LTI loop whose
@@ -207,6 +211,8 @@ class OperatingBox:
         Largest ``|v_d|`` (m/s).
     ground_speed : tuple of float
         ``[min, max]`` of the desired ground speed ``|p_d'|`` (m/s).
+    heading : float
+        Largest heading error ``|psi - psi_d|`` (rad).
     """
 
     slip: float
@@ -218,6 +224,7 @@ class OperatingBox:
     u_d: tuple[float, float]
     v_d: float
     ground_speed: tuple[float, float]
+    heading: float
 
     @classmethod
     def of(cls, mission: MissionBounds, current: float, errors: Errors) -> OperatingBox:
@@ -249,6 +256,7 @@ class OperatingBox:
             u_d=u_d,
             v_d=v_d,
             ground_speed=(s_lo, s_hi),
+            heading=errors.heading,
         )
 
     @property
