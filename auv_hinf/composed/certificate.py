@@ -476,8 +476,8 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         # the position error lives in the desired heading's frame: it turns with r_d, and its
         # rate is the body velocity error turned by the heading error (|R(E) - I| per axis)
         m[ix(f"{j}:q_e"), ix(f"{other}:e")] += mission.yaw_rate
-        m[ix(f"{j}:q_e"), ix(f"{j}:v")] += 1.0 - math.cos(op.heading)
-        m[ix(f"{j}:q_e"), ix(f"{other}:v")] += math.sin(op.heading)
+        m[ix(f"{j}:q_e"), ix(f"{j}:v")] += 1.0 - math.cos(min(op.heading, math.pi))
+        m[ix(f"{j}:q_e"), ix(f"{other}:v")] += math.sin(min(op.heading, 0.5 * math.pi))
         if integral:  # the integrator turns with the body frame: |z_b| changes by r h |z| per sample
             m[ix(f"{j}:p_z"), ix("0:z")] += r * h
             m[ix(f"{j}:p_z"), ix("1:z")] += r * h
