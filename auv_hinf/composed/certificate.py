@@ -50,6 +50,7 @@ from auv_hinf.composed.loops import (
     Plant,
     disturbances,
     nominal_loops,
+    turn_bounds,
 )
 from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.model import Implementation
@@ -475,9 +476,10 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         m[q, ix("h:dpsi")] += dist.misrotation[j]
         # the position error lives in the desired heading's frame: it turns with r_d, and its
         # rate is the body velocity error turned by the heading error (|R(E) - I| per axis)
+        own, cross = turn_bounds(op.heading)
         m[ix(f"{j}:q_e"), ix(f"{other}:e")] += mission.yaw_rate
-        m[ix(f"{j}:q_e"), ix(f"{j}:v")] += 1.0 - math.cos(min(op.heading, math.pi))
-        m[ix(f"{j}:q_e"), ix(f"{other}:v")] += math.sin(min(op.heading, 0.5 * math.pi))
+        m[ix(f"{j}:q_e"), ix(f"{j}:v")] += own
+        m[ix(f"{j}:q_e"), ix(f"{other}:v")] += cross
         if integral:  # the integrator turns with the body frame: |z_b| changes by r h |z| per sample
             m[ix(f"{j}:p_z"), ix("0:z")] += r * h
             m[ix(f"{j}:p_z"), ix("1:z")] += r * h
@@ -486,9 +488,9 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         c[ne] += n.position
         # the law measures the position error in its body frame: the desired frame's turned by the
         # heading error and the heading noise
-        turn = op.heading + n.heading
-        m[ne, ix(f"{j}:e")] += 1.0 - math.cos(min(turn, math.pi))
-        m[ne, ix(f"{other}:e")] += math.sin(min(turn, 0.5 * math.pi))
+        own, cross = turn_bounds(op.heading + n.heading)
+        m[ne, ix(f"{j}:e")] += own
+        m[ne, ix(f"{other}:e")] += cross
         c[nv] += n.velocity + n.heading * (s_hi + plant.current)
         if impl.varying_delay:  # the measurement is up to d fresher than the nominal's
             m[ne, ix(f"{j}:v")] += d

@@ -604,6 +604,21 @@ def _damping(
     return whole, tuple(cells)
 
 
+def turn_bounds(angle: float) -> tuple[float, float]:
+    """Per-axis bounds of a turn by at most ``angle`` (rad): ``(max |1 - cos t|, max |sin t|)`` over ``|t| <= angle``.
+
+    ``R(t) x - x`` has components ``(cos t - 1) x_j -+ sin t x_other``, so each is at most the first
+    value times ``|x_j|`` plus the second times ``|x_other|``. The first grows up to ``t = pi`` (to 2),
+    the second up to ``t = pi/2`` (to 1).
+
+    Parameters
+    ----------
+    angle : float
+        Bound of the turn's angle (rad, nonnegative).
+    """
+    return 1.0 - math.cos(min(angle, math.pi)), math.sin(min(angle, 0.5 * math.pi))
+
+
 def trim_drift(op: OperatingBox, current: float) -> tuple[float, float]:
     """How far ``|u_d|`` and ``|v_d|`` of one plant in one constant current move on a straight mission (m/s).
 
@@ -621,7 +636,7 @@ def trim_drift(op: OperatingBox, current: float) -> tuple[float, float]:
         Bound ``C`` of the current's speed (m/s).
     """
     big, small = op.ground_speed[1] + current, current
-    turn, tilt = 1.0 - math.cos(op.slip), math.sin(op.slip)
+    turn, tilt = turn_bounds(op.slip)
     return big * turn + 2.0 * small * tilt, 2.0 * big * tilt + small * turn
 
 
@@ -1162,4 +1177,5 @@ __all__ = [
     "misrotation_gains",
     "nominal_loops",
     "position_axes",
+    "turn_bounds",
 ]

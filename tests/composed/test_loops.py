@@ -15,6 +15,7 @@ from auv_hinf.composed.loops import (
     misrotation_gains,
     position_axes,
     residual_nominal,
+    turn_bounds,
 )
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.models.vehicle import bluerov2_heavy, body_block, remus100
@@ -156,3 +157,18 @@ def test_a_varying_current_moves_the_trim_across_the_range_so_it_gets_no_cells()
     held, _ = position_axes(Plant(mdl, box, 0.2), op, 0.0, straight=True)
     varying, _ = position_axes(Plant(mdl, box, 0.2, current_rate=0.01), op, 0.0, straight=True)
     assert len(held.parts) > 1 and varying.parts == (varying.damping,)
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3, 1.2, 2.0, 3.5])
+def test_turn_bounds_hold_every_turn_of_random_vectors_and_are_reached(angle):
+    """Each component of ``R(t) x - x`` for ``|t| <= angle`` stays under the per-axis bound, which some turn reaches."""
+    own, cross = turn_bounds(angle)
+    rng = np.random.default_rng(3)
+    t = rng.uniform(-angle, angle, 20_000)
+    x = rng.normal(size=(20_000, 2))
+    moved = np.stack([np.cos(t) * x[:, 0] - np.sin(t) * x[:, 1], np.sin(t) * x[:, 0] + np.cos(t) * x[:, 1]], 1) - x
+    for j in range(2):
+        assert np.all(np.abs(moved[:, j]) <= own * np.abs(x[:, j]) + cross * np.abs(x[:, 1 - j]) + 1e-12)
+    grid = np.linspace(0.0, angle, 10_001)
+    assert own == pytest.approx(np.max(1.0 - np.cos(grid)), abs=1e-6)
+    assert cross == pytest.approx(np.max(np.abs(np.sin(grid))), abs=1e-6)
