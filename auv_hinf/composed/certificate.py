@@ -393,6 +393,7 @@ def _dominant(gains: list[PeakGains]) -> PeakGains:
         radius=max(g.radius for g in gains),
         step=max(g.step for g in gains),
         derivative=np.max(np.stack([g.derivative for g in gains]), axis=0),
+        one_signed=np.max(np.stack([g.one_signed for g in gains]), axis=0),
     )
 
 
@@ -407,8 +408,8 @@ class _Index:
         self.names: list[str] = []
         for j in range(2):
             self.names += [f"{j}:{o}" for o in axis_outputs]
-            self.names += [f"{j}:q", f"{j}:q_e", f"{j}:p_z", f"{j}:n_e", f"{j}:n_v"]
-        self.names += [f"h:{o}" for o in HEADING_OUTPUTS] + ["h:q", "h:n_e", "h:n_v"]
+            self.names += [f"{j}:q", f"{j}:qc", f"{j}:q_e", f"{j}:p_z", f"{j}:n_e", f"{j}:n_v"]
+        self.names += [f"h:{o}" for o in HEADING_OUTPUTS] + ["h:q", "h:qc", "h:n_e", "h:n_v"]
         self.at = {n: k for k, n in enumerate(self.names)}
 
     def __call__(self, name: str) -> int:
@@ -450,6 +451,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
             deficit = min(g.continuous[k, 0] * w_c, st.bound(k, 0, w_c, dist.deficit_rate))
             c[row] += deficit + g.continuous[k, 0] * dist.residual
             m[row, ix(f"{j}:q")] += g.continuous[k, 1]
+            m[row, ix(f"{j}:qc")] += g.one_signed[k, 1]  # the drag's curvature keeps one sign
             m[row, ix(f"{j}:q_e")] += g.continuous[k, 2]
             m[row, ix(f"{j}:n_e")] += g.discrete[k, 0]
             m[row, ix(f"{j}:n_v")] += g.discrete[k, 1]
@@ -464,12 +466,14 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
                     m[row, ix(f"{j}:{src}")] += step * coef
                 c[row] += step * der[3] * w_axis
                 m[row, ix(f"{j}:q")] += step * der[4]
+                m[row, ix(f"{j}:qc")] += step * der[4]
                 m[row, ix(f"{j}:q_e")] += step * der[5]
         # perturbations into eta': the plant's deviation, the other axis's turn and Coriolis
         # terms, the heading's change since measured turning the drift compensation
         q = ix(f"{j}:q")
         c[q] += rnd.axes[j].residual or 0.0  # the drag's residual about the nominal slope (da is 0 then)
         m[q, ix(f"{j}:v")] += da
+        m[ix(f"{j}:qc"), ix(f"{j}:v")] += rnd.axes[j].curvature
         m[q, ix(f"{j}:v_m")] += dc
         m[q, ix(f"{j}:F")] += dl
         m[q, ix(f"{other}:v")] += r + coriolis
@@ -498,6 +502,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
             m[nv, ix(f"{j}:v")] += d * abs(a0)
             m[nv, ix(f"{j}:u")] += d
             m[nv, q] += d
+            m[nv, ix(f"{j}:qc")] += d
             c[nv] += d * w_axis
     # --- heading
     g = rnd.gains[2]
@@ -507,6 +512,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         row = ix(f"h:{o}")
         c[row] += g.continuous[k, 0] * dist.heading
         m[row, ix("h:q")] += g.continuous[k, 1]
+        m[row, ix("h:qc")] += g.one_signed[k, 1]
         m[row, ix("h:n_e")] += g.discrete[k, 0]
         m[row, ix("h:n_v")] += g.discrete[k, 1]
         if rnd.free is not None:
@@ -518,9 +524,11 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
                 m[row, ix(f"h:{src}")] += step * coef
             c[row] += step * der[3] * dist.heading
             m[row, ix("h:q")] += step * der[4]
+            m[row, ix("h:qc")] += step * der[4]
     q = ix("h:q")
     c[q] += rnd.axes[2].residual or 0.0
     m[q, ix("h:v")] += da
+    m[ix("h:qc"), ix("h:v")] += rnd.axes[2].curvature
     m[q, ix("h:v_m")] += dc
     m[q, ix("h:F")] += dl
     m[q, ix("0:dv")] += dist.munk[0]
@@ -532,6 +540,7 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
         m[ix("h:n_v"), ix("h:v")] += d * abs(a0)
         m[ix("h:n_v"), ix("h:u")] += d
         m[ix("h:n_v"), q] += d
+        m[ix("h:n_v"), ix("h:qc")] += d
         c[ix("h:n_v")] += d * dist.heading
     return c, m, ix
 
@@ -563,7 +572,8 @@ def _peaks(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[Peaks,
 #: The couplings of the small-gain system, by the perturbation channel they drive (the row) and
 #: the peak that drives it (the column's output), in words; ``{axis}`` and ``{other}`` are filled in.
 _COUPLINGS = {
-    ("q", "v"): "the {axis} drag's slope about the nominal loop's (the velocity error's; the box's, if declared)",
+    ("q", "v"): "the {axis} drag's steady slope about the nominal loop's (the box's and the current's, if declared)",
+    ("qc", "v"): "the {axis} drag's curvature (its quadratic part in the velocity error)",
     ("q", "v_m"): "the {axis} drag compensation on the measured velocity (its slope's spread)",
     ("q", "F"): "the {axis} mass ratio on the law's feedback (the box's m_hat/m)",
     ("q", "other:v"): "the body frame's turn and the Coriolis terms from the {other} velocity into the {axis} loop",
@@ -574,6 +584,7 @@ _COUPLINGS = {
     ("n_e", "e"): "the heading error's and noise's turn of the measured {axis} position error",
     ("p_z", "z"): "the integrator's turn with the body frame ({axis})",
     ("h:q", "h:v"): "the yaw drag's slope about the nominal loop's",
+    ("h:qc", "h:v"): "the yaw drag's curvature (its quadratic part in the yaw-rate error)",
     ("h:q", "h:v_m"): "the yaw drag compensation on the measured yaw rate",
     ("h:q", "h:F"): "the yaw inertia ratio on the heading feedback",
     ("h:q", "dv"): "the Munk moment of the {axis} velocity's change over the lag",
@@ -587,7 +598,7 @@ def _coupling(row: str, col: str) -> str | None:
     r_axis, r_name = row.split(":")
     c_axis, c_name = col.split(":")
     if r_axis == "h":
-        key = ("h:q", f"h:{c_name}" if c_axis == "h" else c_name)
+        key = (f"h:{r_name}", f"h:{c_name}" if c_axis == "h" else c_name)
         j = None if c_axis == "h" else int(c_axis)
     else:
         j = int(r_axis)

@@ -15,7 +15,9 @@ R(psi_d)^T e`` and the velocity error in the body frame ``eta = R^T e' = nu - nu
   eta_mj`` (the law's slope, on the *measured* one), ``a_j = -(d_lin + d_quad theta)/m_j`` and
   ``c_j = d_quad_hat s p_bj / m_hat_j`` with the mean-value slopes ``theta`` and ``s`` of
   :func:`_slope_ranges`; the coupling between the axes is the body frame's turn ``-r S eta`` and
-  the Coriolis terms.
+  the Coriolis terms. Where the speed keeps its sign, ``a_j`` is a steady slope (split into cells)
+  plus a curvature whose product with ``eta_j``, ``-sign(x_d) d_quad eta_j^2/m``, keeps one sign
+  (:attr:`AxisRanges.curvature`, driven through the one-signed peak gains).
 * **The position's turns.** ``epsilon' = R(e_psi) eta - r_d S epsilon``: ``q_e = (R(e_psi) - I) eta -
   r_d S epsilon`` is second order on a straight leg (the heading error times the velocity error),
   and the law's measured body-frame error is ``epsilon`` turned by the heading error and noise.
@@ -436,6 +438,10 @@ class AxisRanges:
         When set, the axis's drag is not a slope perturbation but a residual: the one cell is the
         nominal slope itself, and ``residual`` bounds ``|f(y + eta) - f(y) - a0 eta|``
         (:func:`drag_residual`; m/s^2 or rad/s^2), a direct term of the perturbation channel.
+    curvature : float
+        When the speed keeps its sign, the cells hold the drag's steady slope only, and its
+        quadratic part ``-sign(x_d) d_quad eta^2/m`` is a perturbation of one sign, at most
+        ``curvature |eta|`` (1/s; :func:`_damping`); 0 otherwise.
     """
 
     damping: tuple[float, float]
@@ -443,6 +449,7 @@ class AxisRanges:
     gain: tuple[float, float]
     cells: tuple[tuple[float, float], ...] = ()
     residual: float | None = None
+    curvature: float = 0.0
 
     @property
     def parts(self) -> tuple[tuple[float, float], ...]:
@@ -566,42 +573,46 @@ def _quotient_range(nums: list[float], masses: tuple[float, float]) -> tuple[flo
 
 def _damping(
     plant: Plant, axis: str, desired: tuple[float, float], width: float, drift: float | None
-) -> tuple[tuple[float, float], tuple[tuple[float, float], ...]]:
-    """Range of ``a = -(d_lin + d_quad theta)/m`` and its cells (see :class:`AxisRanges`).
+) -> tuple[tuple[float, float], tuple[tuple[float, float], ...], float]:
+    """Range of ``a = -(d_lin + d_quad theta)/m``, its cells and its curvature (see :class:`AxisRanges`).
 
-    ``x_d`` in ``desired``, ``|x - x_d| <= width``. With ``theta = 2 |x_d| + tw``, the trim
-    ``t = -(d_lin + 2 d_quad |x_d|)/m`` of one plant in one current on a straight mission moves
-    only as the heading error turns the body frame: ``|x_d|`` stays within ``drift`` of its value
-    at the start (:func:`trim_drift`), so the trim within ``2 d_quad drift / m``; ``drift`` is
-    ``None`` when the trim is not held (turns, a varying current) and the range gets no cells. The
-    time-varying ``a - t = -d_quad tw / m``: when ``x`` keeps the sign of ``x_d`` (``|x_d| >
-    width``), ``|tw| <= width``; across zero ``-2 |x_d| <= tw <= width``, so ``a`` may rise to
-    ``-d_lin/m``. A cell of start trims ``[t_k, t_k+1]`` holds plants with ``|x_d| >= (-t_k+1 m -
-    d_lin)/(2 d_quad) - drift`` at all times (box corners), which decides the case.
+    ``x_d`` in ``desired``, ``|x - x_d| <= width``. The first value is the whole range of the
+    mean-value slope. When ``x`` may change sign (``desired`` widened by ``width`` holds 0) that is
+    all: :func:`_axis` takes the drag's residual instead, and there are no cells and no curvature.
+
+    Otherwise ``x`` keeps the sign of ``x_d`` and ``theta = 2 |x_d| + tw`` with ``tw = |x| - |x_d| =
+    sign(x_d) eta``: the slope's part ``-d_quad tw/m`` times ``eta`` is ``-sign(x_d) d_quad eta^2/m``,
+    which keeps one sign. Its coefficient's bound, ``d_quad,max width/m_min``, is the curvature (the
+    certificate drives the loop with it through the one-signed gains); the cells split the *steady*
+    slope ``-(d_lin + 2 d_quad |x_d|)/m`` alone. On a straight mission in a constant current that is
+    one plant's trim, which moves only as the heading error turns the body frame: ``|x_d|`` stays
+    within ``drift`` of its value at the start (:func:`trim_drift`), so the trim within ``2 d_quad
+    drift/m``, and a cell of start trims ``[t_k, t_k+1]`` is widened by that. ``drift`` is ``None``
+    when the trim is not held (turns, a varying current): the one cell is the steady slope's range.
     """
-    theta, _ = _slope_ranges(desired, width)
     lins, quads, masses = plant.interval(f"d{axis}_lin"), plant.interval(f"d{axis}_quad"), plant.interval(f"m{axis}")
-    whole = _quotient_range([-dl - dq * th for dl in lins for dq in quads for th in theta], masses)
+
+    def slopes(thetas: tuple[float, float]) -> tuple[float, float]:
+        return _quotient_range([-dl - dq * th for dl in lins for dq in quads for th in thetas], masses)
+
+    whole = slopes(_slope_ranges(desired, width)[0])
+    if desired[0] - width <= 0.0 <= desired[1] + width:
+        return whole, (), 0.0
+    curvature = quads[1] * width / masses[0]
+    steady = slopes(_slope_ranges(desired, 0.0)[0])
     if drift is None:
-        return whole, ()
+        return whole, (steady,), curvature
     lo, hi = desired
-    mags = (0.0, max(abs(lo), abs(hi))) if lo <= 0.0 <= hi else (min(abs(lo), abs(hi)), max(abs(lo), abs(hi)))
+    mags = (min(abs(lo), abs(hi)), max(abs(lo), abs(hi)))
     trim = _quotient_range([-dl - 2.0 * dq * x for dl in lins for dq in quads for x in mags], masses)
-    wobble = quads[1] * (width + 2.0 * drift) / masses[0]
+    wobble = quads[1] * 2.0 * drift / masses[0]
     count = min(MAX_CELLS, max(1, math.ceil((trim[1] - trim[0]) / CELL_WIDTH)))
     edges = np.linspace(trim[0], trim[1], count + 1)
-    top = -lins[0] / masses[1]  # the least damped slope: -d_lin,min / m_max
-    cells = []
-    for t_lo, t_hi in itertools.pairwise(edges):
-        # the smallest |x_d| a plant of this cell can have (without quadratic drag the slope is
-        # the trim at every speed, so the sign does not matter)
-        same_sign = True
-        if quads[1] > 0.0:
-            least = min((-t_hi * m - dl) / (2.0 * dq) for dl in lins for dq in quads for m in masses if dq > 0.0)
-            same_sign = max(0.0, least - drift) > width
-        upper = float(t_hi) + wobble if same_sign else max(float(t_hi) + wobble, top)
-        cells.append((max(float(t_lo) - wobble, whole[0]), min(upper, whole[1])))
-    return whole, tuple(cells)
+    cells = tuple(
+        (max(float(t_lo) - wobble, steady[0]), min(float(t_hi) + wobble, steady[1]))
+        for t_lo, t_hi in itertools.pairwise(edges)
+    )
+    return whole, cells, curvature
 
 
 def turn_bounds(angle: float) -> tuple[float, float]:
@@ -700,11 +711,11 @@ def _axis(
     perturbation of half that range over-counts the drag's increment by about 3x (the increment is
     ``-k |eta| eta`` about zero speed); the residual of :func:`residual_nominal` is exact instead.
     """
-    whole, cells = _damping(plant, axis, desired, width, drift)
+    whole, cells, curvature = _damping(plant, axis, desired, width, drift)
     if desired[0] - width <= 0.0 <= desired[1] + width and width > 0.0:
         a0, residual = residual_nominal(plant, axis, desired, width, whole)
         return AxisRanges(whole, compensation, gain, ((a0, a0),), residual)
-    return AxisRanges(whole, compensation, gain, cells)
+    return AxisRanges(whole, compensation, gain, cells, curvature=curvature)
 
 
 def heading_axis(plant: Plant, op: OperatingBox, mission: MissionBounds, straight: bool = False) -> AxisRanges:

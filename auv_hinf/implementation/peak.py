@@ -30,6 +30,12 @@ a loop with several inputs the bound is ``sum_i N_i W_i``; with perturbation cha
   (:func:`_gramians`), which charges an output only with the modes it sees;
 * outputs are evaluated at the fine steps' ends; between them an output moves by at most the
   step length times a bound of its derivative, which :func:`small_gain` adds (``intersample``).
+
+An input that keeps one sign, ``0 <= w(t) <= W`` (or ``-W <= w <= 0``), drives an output to
+``int g w ds``, between ``-W int g-`` and ``W int g+`` with ``g+``, ``g-`` the kernel's positive and
+negative parts: its bound is ``W max(int g+, int g-)`` (``PeakGains.one_signed``). Each fine step's
+kernel is its value at the step's end (one sign over the step) plus the first-order and remainder
+terms above, which are added to both parts, as is the tail.
 """
 
 from __future__ import annotations
@@ -155,6 +161,11 @@ class PeakGains:
     derivative : ndarray, shape (no, n + nu + nw)
         ``|d output/dt| <= derivative @ (|x|_sup, |u|_sup, |w|_sup)``: rows ``|c_x A|, |c_x B_u|,
         |c_x B_w|`` (the held command and the used measurement are constant between samples).
+    one_signed : ndarray, shape (no, nw)
+        From each continuous input that keeps one sign (either sign, not changing; constants
+        included) to each output: ``max(int g+, int g-)`` of the kernel's positive and negative
+        parts, at most :attr:`continuous` (their sum). An output whose response to a constant
+        input settles to zero (the velocity error under a position loop's force) gets about half.
     """
 
     continuous: FloatArray
@@ -162,6 +173,7 @@ class PeakGains:
     radius: float
     step: float
     derivative: FloatArray
+    one_signed: FloatArray
 
 
 def _zoh(a: FloatArray, b: FloatArray, t: float) -> tuple[FloatArray, FloatArray]:
@@ -455,6 +467,8 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
     k = nw + nn + nw
     cols = k + n
     acc = np.zeros((steps, no, steps, k))  # output step q, output, injection step j, input
+    pos = np.zeros((steps, no, steps, nw))  # the continuous kernel's value terms: positive parts
+    neg = np.zeros((steps, no, steps, nw))  # ... and negative parts (acc holds their sum)
     rem = np.zeros((steps, no, steps))
     # every injection step's state, carried together through the rest of the period: at the end of
     # step q the injection of step j <= q has gone through the maps of steps j + 1 .. q
@@ -472,6 +486,8 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
         inj[per.plant, k:] = np.eye(n)
         resp = (out @ carried[:, : q + 1, :].reshape(size, (q + 1) * cols)).reshape(no, q + 1, cols)
         acc[q, :, : q + 1] += np.abs(resp[..., :k])
+        pos[q, :, : q + 1] += np.maximum(resp[..., :nw], 0.0)
+        neg[q, :, : q + 1] += np.maximum(-resp[..., :nw], 0.0)
         rem[q, :, : q + 1] += np.sqrt(_sumsq(resp[..., k:]))
     state = carried.reshape(size, steps * cols)
     # every gain's a-priori bound: the contraction's tail from the first period on
@@ -490,6 +506,8 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
         block = (seen @ state).reshape(steps, no, MIN_PERIODS, steps, cols)
         state = leap @ state
         acc += np.abs(block[..., :k]).sum(axis=2)
+        pos += np.maximum(block[..., :nw], 0.0).sum(axis=2)
+        neg += np.maximum(-block[..., :nw], 0.0).sum(axis=2)
         tail_part = block[..., k:]
         rem += np.sqrt(_sumsq(tail_part)).sum(axis=2)
         periods += MIN_PERIODS
@@ -505,6 +523,8 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
             tails = np.minimum(tails, own)
         if np.all(tails[..., : nw + nn].sum(axis=2).max(axis=0) <= TAIL_RTOL * so_far) or periods >= max_periods:
             acc += tails[..., :k]
+            pos += tails[..., :nw]
+            neg += tails[..., :nw]
             # the remainder's tail is a norm over the unit states: each bound family's, then the smaller
             rem_tail = np.sqrt(_sumsq(contraction_tails[..., k:]))
             if own is not None:
@@ -517,8 +537,10 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
     third = np.array([norm_a * norm_a * _third(norm_a, per.steps[j][1]) for j in range(steps)])
     if not np.all(np.isfinite(third)):
         return None  # a loop far too fast for its fine step (see _EXP_LIMIT)
-    cont = acc[..., :nw] + acc[..., nw + nn : k] + (rem * third[None, None, :])[..., None] * norm_bw
+    variation = acc[..., nw + nn : k] + (rem * third[None, None, :])[..., None] * norm_bw
+    cont = acc[..., :nw] + variation
     worst_c = cont.sum(axis=2).max(axis=0)
+    one_signed = np.maximum((pos + variation).sum(axis=2), (neg + variation).sum(axis=2)).max(axis=0)
     worst_d = acc[..., nw : nw + nn].sum(axis=2).max(axis=0)
     c_x = loop.outputs[:, :n]
     deriv = np.hstack([np.abs(c_x) @ np.abs(loop.a), np.abs(c_x) @ np.abs(loop.b_u), np.abs(c_x) @ np.abs(loop.b_w)])
@@ -528,6 +550,7 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
         radius=radius,
         step=max(s[1] for s in per.steps),
         derivative=deriv,
+        one_signed=np.minimum(one_signed, worst_c),
     )
 
 

@@ -118,8 +118,9 @@ def test_the_turned_compensation_is_bounded_per_axis_by_brute_force(vehicle, spe
 def test_one_plant_in_one_current_on_a_line_keeps_its_surge_slope_in_one_cell(current, heading):
     """Brute force: a plant of the box, in a constant current, on a straight line, with the heading
     error anywhere in ``[-E, E]`` and the surge velocity error anywhere in the box's width: every
-    mean-value slope it can have lies in one cell of the surge range (the cells are analysed as
-    constant plants, so a plant that could leave its cell would not be covered)."""
+    steady slope it can have lies in one cell of the surge range (the cells are analysed as
+    constant plants, so a plant that could leave its cell would not be covered), and the rest of
+    its mean-value slope, times the velocity error, keeps one sign and stays within the curvature."""
     mdl = bluerov2_heavy()
     box = ParameterBox.from_ranges(mdl, (("m11", (0.9, 1.1)), ("d11_lin", (0.8, 1.2)), ("d11_quad", (0.8, 1.2))))
     plant = Plant(mdl, box, current)
@@ -146,7 +147,10 @@ def test_one_plant_in_one_current_on_a_line_keeps_its_surge_slope_in_one_cell(cu
         x = u_d + eta
         theta = (np.abs(x) * x - np.abs(u_d) * u_d) / np.where(eta == 0.0, 1.0, eta)
         slopes = -(dl + dq * theta) / m
-        assert any(((slopes >= a - 1e-12) & (slopes <= b + 1e-12)).all() for a, b in cells), (mult, c)
+        steady = -(dl + 2.0 * dq * np.abs(u_d)) / m
+        assert any(((steady >= a - 1e-12) & (steady <= b + 1e-12)).all() for a, b in cells), (mult, c)
+        assert np.all(np.abs(slopes - steady) <= surge.curvature + 1e-12)
+        assert np.all((slopes - steady) * eta * np.sign(u_d) <= 1e-15)  # -d_quad eta^2/m, of one sign
 
 
 def test_a_varying_current_moves_the_trim_across_the_range_so_it_gets_no_cells():
@@ -156,7 +160,9 @@ def test_a_varying_current_moves_the_trim_across_the_range_so_it_gets_no_cells()
     op = OperatingBox.of(mission, 0.2, Errors(0.0, 0.05, 0.05, 0.0))
     held, _ = position_axes(Plant(mdl, box, 0.2), op, 0.0, straight=True)
     varying, _ = position_axes(Plant(mdl, box, 0.2, current_rate=0.01), op, 0.0, straight=True)
-    assert len(held.parts) > 1 and varying.parts == (varying.damping,)
+    assert len(held.parts) > 1 and len(varying.parts) == 1
+    (lo, hi), cells = varying.parts[0], np.array(held.parts)
+    assert lo <= cells[:, 0].min() and hi >= cells[:, 1].max()  # every trim the held cells cover
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.3, 1.2, 2.0, 3.5])

@@ -323,3 +323,29 @@ def test_a_slow_integrator_chain_with_a_repeated_pole_gets_finite_gains_without_
         state = phi @ state + bd
         peak_seen = max(peak_seen, abs(float(state[0, 0])))
     assert peak_seen <= gains.continuous[0, 0] * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("params", CASES[:2])
+def test_one_signed_gains_bound_one_signed_inputs_and_halve_an_output_that_settles(params):
+    """Inputs that keep one sign (a step, on-off switching, a random level in [0, 1], and their
+    negatives) stay under the one-signed gains, which are at most the gains. The velocity's
+    response to a constant input settles to zero (the position loop takes it up), so its kernel's
+    positive and negative parts have equal areas and its one-signed gain is half its gain (up to
+    the within-step terms); a step reaches most of it (the kernel changes sign about once)."""
+    gains = peak_gains(axis(*params))
+    assert gains is not None
+    assert np.all(gains.one_signed <= gains.continuous)
+    half = gains.one_signed[1, 0] / gains.continuous[1, 0]
+    assert 0.5 <= half <= 0.56, half
+    periods = 300
+    rng = np.random.default_rng(5)
+    switches = np.repeat(rng.choice([0.0, 1.0], periods * SUB // 37 + 1), 37)[: periods * SUB]
+    levels = np.repeat(rng.uniform(0.0, 1.0, periods * SUB // 13 + 1), 13)[: periods * SUB]
+    step = np.ones(periods * SUB)
+    worst = np.zeros(4)
+    for w in (step, switches, levels):
+        for sign in (1.0, -1.0):
+            peaks = simulate(params, sign * w, np.zeros((periods, 2)), periods).max(axis=0)
+            assert np.all(peaks <= gains.one_signed[:, 0] * (1 + UNDER)), (peaks, gains.one_signed[:, 0])
+            worst = np.maximum(worst, peaks)
+    assert worst[1] >= 0.85 * gains.one_signed[1, 0], (worst[1], gains.one_signed[1, 0])
