@@ -321,6 +321,24 @@ def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | N
     return {f"{k}_error": max(b[k], NUMERICAL_FLOOR) for k in keys}, source
 
 
+def certified_thrust_of(plan: RunPlan) -> dict[str, float] | None:
+    """The certified commanded-force bound of the run (N, N, N m), or ``None`` when none bounds it.
+
+    The deployed loop's composed certificate when it covers the run (its whole-run force bound),
+    else the nominal closed-loop certificate's over its start region.
+
+    Parameters
+    ----------
+    plan : RunPlan
+        The planned run.
+    """
+    composed = next((c for c in plan.checks if c.part == "composed" and c.covers and c.thrust is not None), None)
+    if composed is not None:
+        return dict(composed.thrust.to_dict())
+    cov = plan.coverage
+    return None if cov is None or cov.thrust is None else cov.thrust.to_dict()
+
+
 def implementation_report(scn: Scenario) -> dict[str, Any]:
     """What implementation a run simulated: the declared one, its seed, the law's period (s).
 
@@ -376,7 +394,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "certified_errors_source": source,
             "covered_by": covered_by,
             "numerical_floor": NUMERICAL_FLOOR,
-            "certified_thrust": None if cov is None or cov.thrust is None else cov.thrust.to_dict(),
+            "certified_thrust": certified_thrust_of(plan),
             "robust_covers_run": None if plan.robust is None else plan.robust.covered,
             "robust_bounds": None if plan.robust is None else plan.robust.bounds,
             "robust_reason": None if plan.robust is None else plan.robust.reason,

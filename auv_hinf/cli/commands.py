@@ -394,6 +394,9 @@ def _cmd_init(args: argparse.Namespace) -> int:
     if out is None:
         print(text, end="")
         return EXIT_OK
+    blocked = next((p for p in out.parents if p.exists() and not p.is_dir()), None)
+    if blocked is not None:  # mkdir would say "File exists" of a file where a folder must go
+        raise BadInput(f"--out {str(out)!r} cannot be written: {str(blocked)!r} is a file, not a directory")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(text, encoding="utf-8")
@@ -413,16 +416,23 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     if cfg.guidance is not None:
         return _campaign_guidance(args, cfg)
     try:
-        plan = plan_run(cfg, horizon=args.horizon, samples=2)  # the gains' verdict; the runs come later
-    except DesignError as exc:
-        raise Negative(f"no gain to run a campaign with: {exc}") from None
-    _refuse_uncertified(plan, args.uncertified, "run a campaign of")
-    try:
         with ExitStack() as stack:
+
+            def client_of(workers: int | None, scheduler: str | None) -> Any:
+                try:
+                    return stack.enter_context(dask_client(workers, scheduler))
+                except ParameterError as exc:
+                    raise BadInput(f"--scheduler {scheduler!r}: {exc}" if scheduler else str(exc)) from None
+
+            # a scheduler given by address is reached first: a wrong one fails before the certificate's work
+            client = client_of(None, args.scheduler) if args.scheduler else None
             try:
-                client = stack.enter_context(dask_client(args.workers, args.scheduler))
-            except ParameterError as exc:
-                raise BadInput(f"--scheduler {args.scheduler!r}: {exc}" if args.scheduler else str(exc)) from None
+                plan = plan_run(cfg, horizon=args.horizon, samples=2)  # the gains' verdict; the runs come later
+            except DesignError as exc:
+                raise Negative(f"no gain to run a campaign with: {exc}") from None
+            _refuse_uncertified(plan, args.uncertified, "run a campaign of")
+            if not args.scheduler:
+                client = client_of(args.workers, None)
             try:
                 camp = run_campaign(
                     cfg, args.runs, seed=args.seed, chunk=args.chunk, horizon=args.horizon, client=client, progress=True

@@ -118,6 +118,11 @@ MAX_RATE = 2.0
 #: paper's u <= 3.5 m/s; remus-line 2.5 m/s, bluerov2-line 1 m/s) and ten times the strongest ocean
 #: currents, while a cruise speed written in cm/s (50 to 250) is far above it. An error, as for angles.
 MAX_SPEED = 20.0
+#: Smallest reference speed (m/s): 1 mm/s, a hundredth of the slowest survey in the presets (0.2 m/s)
+#: and far below what a thruster holds against any current. The paths' time derivatives divide by
+#: powers of the speed (a lawn-mower's turn jerk by its cube), so a speed that is practically zero
+#: (1e-300) would overflow the mission's bounds; below this the mission is a station, not a path.
+MIN_SPEED = 1e-3
 
 
 #: A reference speed above this many times the envelope's fastest surge speed (m/s over m/s) cannot be
@@ -240,7 +245,7 @@ _KIND_TEXT = "path kind: sine, line, circle or lawnmower, each with its own keys
 
 
 class _Reference(_Table):
-    speed: float = _field(1.0, "speed of the formation centre along the path", "m/s", gt=0.0, le=MAX_SPEED)
+    speed: float = _field(1.0, "speed of the formation centre along the path", "m/s", ge=MIN_SPEED, le=MAX_SPEED)
 
 
 class SineReference(_Reference):

@@ -90,6 +90,18 @@ class ParameterBox:
         """Some parameter is uncertain."""
         return any(a < 1.0 or b > 1.0 for a, b in zip(self.lo, self.hi))
 
+    def moving(self) -> tuple[str, ...]:
+        """The coefficients the box moves: a range wider than a point on a nonzero nominal value.
+
+        A multiplier of a zero coefficient (the BlueROV2's linear sway and yaw damping) leaves it
+        zero, so advice never asks to narrow its range.
+        """
+        return tuple(
+            name
+            for name, a, b in zip(PARAMETERS, self.lo, self.hi)
+            if (a < 1.0 or b > 1.0) and float(getattr(self.nominal, name)) != 0.0
+        )
+
     @property
     def max_scale(self) -> float:
         """Largest scale for :meth:`scaled` that keeps every multiplier >= :data:`MIN_MULTIPLIER`."""

@@ -703,12 +703,21 @@ def robust_certificate(
         e_v = position_disturbance(box, env, summ, current, e_h, lam, sigma) * pos.extents[1]
         hp, head = _heading_at(box, env, summ, gains, current, e_v, e_h)
         if head is None:
-            return fail(
-                f"heading loop not robustly stable: stiffness in [{hp.stiffness[0]:.4g}, {hp.stiffness[1]:.4g}] 1/s^2, "
-                f"damping in [{hp.damping[0]:.4g}, {hp.damping[1]:.4g}] 1/s",
-                position_ellipsoid=pos,
-                heading=hp,
+            ranges = (
+                f"stiffness in [{hp.stiffness[0]:.4g}, {hp.stiffness[1]:.4g}] 1/s^2, "
+                f"damping in [{hp.damping[0]:.4g}, {hp.damping[1]:.4g}] 1/s"
             )
+            if hp.stiffness[0] > 0.0 and hp.damping[0] > 0.0:
+                # every frozen loop of the ranges is stable; the loop whose stiffness and damping move
+                # within them (they follow the sway velocity and the heading) is not proven so
+                why = (
+                    f"heading loop not proven stable: its {ranges} move with the sway velocity and the heading, and "
+                    "no invariant ellipsoid holds for every such motion (each fixed loop in the ranges is stable, "
+                    "a loop whose coefficients vary in time need not be)"
+                )
+            else:
+                why = f"heading loop not robustly stable: {ranges} (a nonpositive end is an unstable loop)"
+            return fail(why, position_ellipsoid=pos, heading=hp)
         new = hp.disturbance * head.extents[0]
         if not new < MAX_HEADING_ERROR:
             return fail(f"the heading-error bound diverges ({new:.3g} rad)", position_ellipsoid=pos, heading=hp)

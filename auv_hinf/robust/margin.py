@@ -468,8 +468,9 @@ def largest_certifiable(
         out["box_scale"], out["current_speed"] = pair
         if pair[0] is not None:
             scaled = box.scaled(pair[0])
+            moving = scaled.moving()
             out["uncertainty"] = {
-                name: [lo, hi] for name, lo, hi in zip(PARAMETERS, scaled.lo, scaled.hi) if lo < 1.0 or hi > 1.0
+                name: [lo, hi] for name, lo, hi in zip(PARAMETERS, scaled.lo, scaled.hi) if name in moving
             }
     return out
 

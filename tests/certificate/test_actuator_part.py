@@ -17,6 +17,7 @@ from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
 from auv_hinf.certificate.run_plan import plan_run, with_start
+from auv_hinf.certificate.text import certificate_text
 from auv_hinf.cli.main import main
 from auv_hinf.closed_loop.actuator_fit import actuator_fraction, mission_thrust, within_actuators
 from auv_hinf.config.presets import preset_config
@@ -189,10 +190,14 @@ def test_simulate_reports_commanded_peak_before_saturation(capsys):
 
 @pytest.mark.slow
 def test_bluerov2_line_answers_and_the_answer_certifies():
-    """Not certifiable as declared: the answer is a box scale and a current that, re-run, certify."""
+    """Not certifiable as declared: the answer is a box scale and a current that, re-run, certify.
+    The text names them as the settings a user writes (no "box scale", which is not a key)."""
     cfg = preset_config("bluerov2-line")
     cert = preset_certificate("bluerov2-line")
     act = cert.to_dict()["actuators"]
+    (line,) = [x for x in certificate_text(cert.to_dict()).splitlines() if "largest certifiable within" in x]
+    assert "[uncertainty] m11 = [" in line and "[disturbance] current_speed = " in line, line
+    assert "box scale" not in line.split("(")[0], line
     assert not cert.certified and act["certified"] is False and act["binding_ratio"] > 1.0
     best = act["largest_certifiable"]
     assert 0.0 < best["box_scale"] < 1.0 and 0.0 <= best["current_speed"] < cfg.disturbance.current_speed

@@ -98,6 +98,13 @@ def test_init_writes_loadable_config_and_refuses_overwrite(tmp_path, capsys):
     assert run(["certify", "--config", str(f), "--json"], capsys)[0] == 0
 
 
+def test_init_under_a_file_names_the_file_that_is_not_a_directory(tmp_path, capsys):
+    blocker = tmp_path / "notes"
+    blocker.write_text("x")
+    code, _, err = run(["init", "--out", str(blocker / "sub" / "start.toml")], capsys)
+    assert code == 2 and f"{str(blocker)!r} is a file, not a directory" in err and blocker.read_text() == "x"
+
+
 def test_init_to_stdout(capsys):
     code, out, _ = run(["init"], capsys)
     assert code == 0 and "[design]" in out and "# Theorem 2 position gain [1/s^2]; > 0" in out

@@ -75,6 +75,7 @@ def test_a_simulated_deployed_run_stays_inside_the_composed_bounds(deployed):
     for k, v in measured.items():
         assert v <= certified[k], (k, v, certified[k])
     peak = report["commanded_peak"]
+    assert report["certified_thrust"] == pytest.approx(bounds["certified_peak"])  # the run's own force bound
     for k in ("force_x", "force_y", "moment"):
         assert peak[k] <= bounds["certified_peak"][k]
     # not vacuous: the run's force is within 20 % of the certified peak (the drag at 0.4 m/s dominates it)

@@ -194,7 +194,8 @@ def test_reference_tables():
     assert line.startswith("reference.spacing must be >= 39.7032 m") and "turn_radius to at most 5.037 m" in line
     assert problems({"reference": {"kind": "circle"}}) == ["reference.radius is required"]
     assert problems({"reference": {"kind": "spiral"}})[0].startswith("reference.kind must be one of")
-    assert problems({"reference": {"speed": 0}}) == ["reference.speed must be > 0 [m/s], got 0"]
+    assert problems({"reference": {"speed": 0}}) == ["reference.speed must be >= 0.001 [m/s], got 0"]
+    assert problems({"reference": {"speed": 1e-300}}) == ["reference.speed must be >= 0.001 [m/s], got 1e-300"]
     with pytest.raises(ConfigError, match=r"reference\.radius must be > 0"):
         ReferenceConfig("circle", {"radius": -1.0})  # type: ignore[arg-type]
 

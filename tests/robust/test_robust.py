@@ -16,7 +16,7 @@ from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.paths import LineReference
 from auv_hinf.mission.tubes import mission_tube
 from auv_hinf.models.envelope import Envelope
-from auv_hinf.models.vehicle import body_block, paper2011, remus100
+from auv_hinf.models.vehicle import bluerov2_heavy, body_block, paper2011, remus100
 from auv_hinf.robust.bandwidth import family_gains
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary, box_lambda, box_sigma, heading_perturbation
 from auv_hinf.robust.invariant_set import (
@@ -183,6 +183,16 @@ def test_box_scaling_and_validation() -> None:
         box.scaled(box.max_scale * 1.01)
     with pytest.raises(ValueError, match="unknown uncertain parameter"):
         ParameterBox.from_ranges(box.nominal, (("mass", (0.9, 1.1)),))
+
+
+def test_a_box_moves_only_its_nonzero_coefficients_and_advice_names_only_those() -> None:
+    """The BlueROV2 has no linear sway damping: a range declared on it moves nothing, so the box's
+    moving coefficients (what an answer asks to narrow) leave it out; REMUS's nonzero one is in."""
+    ranges = (("m11", (0.9, 1.1)), ("d22_lin", (0.8, 1.2)), ("d33_quad", (1.0, 1.0)))
+    blue = ParameterBox.from_ranges(bluerov2_heavy(), ranges)
+    assert bluerov2_heavy().d22_lin == 0.0 and blue.moving() == ("m11",)
+    assert ParameterBox.from_ranges(remus100(), ranges).moving() == ("m11", "d22_lin")
+    assert blue.interval("d22_lin") == (0.0, 0.0)  # what the narrowing would not change
 
 
 def test_remembered_ellipsoids_are_the_verified_ones_and_cannot_be_changed():

@@ -355,14 +355,12 @@ class ActuatorPart:
                     "    largest certifiable within the limits: none (not even the nominal plant in still water)"
                 )
             else:
-                box = "n/a" if best.get("box_scale") is None else f"{best['box_scale']:.4g}"
+                scale = "" if best.get("box_scale") is None else f"; the box scaled by {best['box_scale']:.4g}"
                 composed = record.get("composed") or {}
                 deployed = composed.get("applies") and composed.get("covers") is False
                 use = "for the continuous law only: see composed" if deployed else "re-run with these"
-                out.append(
-                    f"    largest certifiable within the limits: box scale {box} with current "
-                    f"{best['current_speed']:.4g} m/s ({use})"
-                )
+                words = ", ".join(s.toml() for s in advice(best))
+                out.append(f"    largest certifiable within the limits: {words} ({use}{scale})")
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:

@@ -28,6 +28,7 @@ from typing import Any
 
 from tqdm.auto import tqdm
 
+from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint, design_point
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_advice, tried
@@ -207,11 +208,9 @@ def _advice_values(a: Advice) -> tuple[Setting, ...]:
             out.append(Setting("disturbance", "current_rate", plant.current_rate))
         return tuple(out)
     box = plant.box
-    declared = box if a.original is None else a.original.plant.box
+    moving = (box if a.original is None else a.original.plant.box).moving()
     return tuple(
-        Setting("uncertainty", name, [box.lo[k], box.hi[k]])
-        for k, name in enumerate(PARAMETERS)
-        if declared.lo[k] < 1.0 or declared.hi[k] > 1.0
+        Setting("uncertainty", name, [box.lo[k], box.hi[k]]) for k, name in enumerate(PARAMETERS) if name in moving
     )
 
 
@@ -446,9 +445,10 @@ class ComposedPart:
         covers = summary.covers and outside is None
         if outside is not None:
             why = outside.message
-        bounds = None
+        bounds = thrust = None
         if c is not None and c.errors is not None and summary.covers:
             bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in c.errors.to_dict().items()}
+            thrust = None if c.force is None else ThrustBounds(*c.force.as_tuple())
         notes = () if covers else (f"composed certificate: {why or 'not covered'}",)
         return RunCheck(
             self.name,
@@ -458,6 +458,7 @@ class ComposedPart:
             why or "covered",
             notes,
             bounds=bounds,
+            thrust=thrust,
             certifies_gains=summary.covers,
             detail=summary,
         )

@@ -493,7 +493,7 @@ def _world(cfg: FormationConfig, problem: CascadeProblem, scale: float) -> tuple
         out.append(Setting("disturbance", "current_speed", _down(problem.plant.current * scale)))
     if problem.plant.box.declared:
         scaled = problem.plant.box.scaled(scale)
-        declared = {name for name, _ in cfg.uncertainty.box}
+        declared = {name for name, _ in cfg.uncertainty.box} & set(problem.plant.box.moving())
         out += [
             Setting("uncertainty", name, [_up(scaled.lo[k]), _down(scaled.hi[k])])
             for k, name in enumerate(PARAMETERS)
