@@ -375,7 +375,7 @@ def _analyse(loop: SampledLoop, with_free: bool) -> tuple[PeakGains, StepBounds,
     key = _loop_key(loop, with_free)
     if key in _ANALYSED:
         return _ANALYSED[key]
-    gains, steps = peak_gains(loop), step_bounds(loop)
+    gains, steps = peak_gains(loop), step_bounds(loop, inputs=1)  # only the deficit (input 0) is slowly varying
     result = None
     if gains is not None and steps is not None:
         result = (gains, steps, free_peaks(loop) if with_free else None)

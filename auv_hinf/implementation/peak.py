@@ -596,7 +596,7 @@ def _sweep(
 
     Each column of ``start`` (an augmented state) is a response from that state, with the unit
     continuous input of its column held on when ``unit_input`` (``start`` then has one column
-    per input), none otherwise. The response is propagated exactly to the end of every fine step;
+    per input, for the first inputs), none otherwise. The response is propagated exactly to the end of every fine step;
     within a step the command and the input are constant, so ``x'' = A x'`` and ``c_x (x(t_q +
     s) - x(t_q)) = s c_x x' + s^2/2 c_x A x' + R`` with ``|R| <= |c_x| ||A||^2 |x'| s^3 e^{a s}/6``
     and ``x'`` known exactly at the step's start. A constant input takes the loop to an
@@ -617,12 +617,12 @@ def _sweep(
     norm_a = float(np.linalg.norm(loop.a, 2))
     c_x = np.abs(loop.outputs[:, :n])
     iu = slice(n + nc, n + nc + nu)
-    drive = loop.b_w if unit_input else np.zeros((n, cols))
+    drive = loop.b_w[:, :cols] if unit_input else np.zeros((n, cols))
     forced = []  # the inputs' effect over each step, in the augmented state
     for _, length in per.steps:
         f = np.zeros((size, cols))
         if unit_input:
-            f[per.plant, :] = _zoh(loop.a, loop.b_w, length)[1]
+            f[per.plant, :] = _zoh(loop.a, drive, length)[1]
         forced.append(f)
     period_input = np.zeros((size, cols))
     for mp, f in zip(maps, forced, strict=True):
@@ -704,7 +704,7 @@ def _sweep(
             return peak, area, decaying
 
 
-def step_bounds(loop: SampledLoop) -> StepBounds | None:
+def step_bounds(loop: SampledLoop, inputs: int | None = None) -> StepBounds | None:
     """Rigorous :class:`StepBounds` of ``loop``'s continuous inputs (``None`` when unstable).
 
     The response to each unit constant input from rest (:func:`_sweep`).
@@ -713,9 +713,14 @@ def step_bounds(loop: SampledLoop) -> StepBounds | None:
     ----------
     loop : SampledLoop
         The loop.
+    inputs : int, optional
+        Only the first ``inputs`` continuous inputs (the columns of the result; default all): a
+        caller that treats only some inputs as slowly varying saves the others' sweeps, each as
+        costly as the first.
     """
     size = _period(loop).size
-    swept = _sweep(loop, np.zeros((size, loop.b_w.shape[1])), True)
+    count = loop.b_w.shape[1] if inputs is None else min(inputs, loop.b_w.shape[1])
+    swept = _sweep(loop, np.zeros((size, count)), True)
     if swept is None:
         return None
     return StepBounds(peak=swept[0], area=swept[1])

@@ -11,6 +11,7 @@ input built from the kernel's signs must come close to it (the bound is nearly t
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -349,3 +350,11 @@ def test_one_signed_gains_bound_one_signed_inputs_and_halve_an_output_that_settl
             assert np.all(peaks <= gains.one_signed[:, 0] * (1 + UNDER)), (peaks, gains.one_signed[:, 0])
             worst = np.maximum(worst, peaks)
     assert worst[1] >= 0.85 * gains.one_signed[1, 0], (worst[1], gains.one_signed[1, 0])
+
+
+def test_step_bounds_of_the_first_inputs_are_those_of_all_inputs():
+    """The composed certificate sweeps only its slowly varying input: the same numbers, fewer columns."""
+    loop = replace(axis(*CASES[0]), b_w=np.array([[0.0, 1.0], [1.0, 0.0]]))  # a second input, into e'
+    full, first = step_bounds(loop), step_bounds(loop, inputs=1)
+    assert full is not None and first is not None and full.peak.shape == (4, 2) and first.peak.shape == (4, 1)
+    assert np.allclose(first.peak, full.peak[:, :1], rtol=1e-9) and np.allclose(first.area, full.area[:, :1], rtol=1e-9)
