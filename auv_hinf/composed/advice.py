@@ -5,11 +5,16 @@ When :func:`~auv_hinf.composed.certificate.certify_deployed` does not cover a pr
 delay, the sample time) is shrunk alone, the others kept, by bisection on a scale ``s`` in
 ``[0, 1]`` (:func:`largest_covered`). The value returned is one at which the certificate was
 computed and covers, so re-running with it certifies; coverage is not proven monotone in ``s``,
-so the bisection finds *a* covered value near the boundary, not necessarily the largest.
+so the bisection finds *a* covered value near the boundary, not necessarily the largest. When it
+finds only zero covered, the scale is halved down from the smallest one that failed, so that a
+small covered value is answered rather than the setting removed.
 
 A setting that is not declared (no noise, no box, no current, no delay) is never proposed, and
 neither is one whose shrinking to zero does not cover either. When no one setting certifies
-alone, the declared noise, delay, current and box are shrunk *together* by one scale.
+alone, the declared current and box (the water and the knowledge of the plant) are shrunk together
+by one scale, the implementation kept as declared (its sample time, delay and noise are the
+hardware's); when that does not certify either, the declared noise, delay, current and box are
+shrunk *together* by one scale.
 """
 
 from __future__ import annotations
@@ -26,16 +31,25 @@ from auv_hinf.composed.certificate import (
 )
 from auv_hinf.numerics.bisection import bisect
 
-#: The settings :func:`largest_covered` can shrink (``together``: the noise, the delay, the
-#: current and the box by one scale, for when no one of them alone certifies).
-Knob = Literal["noise", "box", "current", "delay", "sample_time", "together"]
+#: The settings :func:`largest_covered` can shrink (``world``: the current and the box by one
+#: scale; ``together``: the noise, the delay, the current and the box by one scale; each for when
+#: no one of them alone certifies).
+Knob = Literal["noise", "box", "current", "delay", "sample_time", "world", "together"]
 #: Their order in the advice: what a deployment changes most easily first.
-KNOBS: tuple[Knob, ...] = ("noise", "delay", "sample_time", "current", "box", "together")
+KNOBS: tuple[Knob, ...] = ("noise", "delay", "sample_time", "current", "box", "world", "together")
+#: The settings ``world`` scales: the mission's water and the plant's box, not the hardware.
+WORLD: tuple[Knob, ...] = ("current", "box")
 #: The settings ``together`` scales.
 TOGETHER: tuple[Knob, ...] = ("noise", "delay", "current", "box")
+#: The settings each joint knob scales.
+JOINT: dict[Knob, tuple[Knob, ...]] = {"world": WORLD, "together": TOGETHER}
 #: Bisection steps per setting after the end check: the answer is within 1/16 of the declared
 #: value below the boundary the bisection found (five certificates per setting in all).
 ADVICE_STEPS = 4
+#: Halvings below the smallest scale the bisection found failing, when it found none but zero
+#: covered: an answer of 2^-6 of that (about 1/1000 of the declared value) is still a value to
+#: re-run with, where zero would remove the setting (each halving is one certificate).
+ADVICE_HALVINGS = 6
 #: The sample time is shrunk down to this fraction of the declared one at most (a law 20 times
 #: faster than declared is not advice a deployment can follow).
 SAMPLE_TIME_FLOOR = 0.05
@@ -56,7 +70,7 @@ class Advice:
     certificate : DeployedCertificate
         Its certificate (it covers).
     scaled : tuple of str
-        The settings it changed (``(knob,)``, or the declared ones of :data:`TOGETHER`).
+        The settings it changed (``(knob,)``, or the declared ones of the joint knob's :data:`JOINT`).
     original : DeployedProblem or None
         The problem as declared.
     """
@@ -85,7 +99,8 @@ def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:
         "delay": impl.delay > 0.0,
         "sample_time": True,
     }
-    present["together"] = sum(present[k] for k in TOGETHER) >= 2
+    present["world"] = all(present[k] for k in WORLD)
+    present["together"] = sum(present[k] for k in TOGETHER) >= 2 and any(present[k] for k in ("noise", "delay"))
     return tuple(k for k in KNOBS if present[k])
 
 
@@ -103,8 +118,8 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProble
         at most :data:`~auv_hinf.composed.certificate.MAX_DELAY_SAMPLES` samples within the delay).
     """
     impl, plant = problem.implementation, problem.plant
-    if knob == "together":
-        for k in TOGETHER:
+    if knob in JOINT:
+        for k in JOINT[knob]:
             problem = shrunk(problem, k, scale)
         return problem
     if knob == "noise":
@@ -146,20 +161,29 @@ def largest_covered(
 
     if not covers(floor):
         return None
-    lo, _ = bisect(covers, floor, 1.0, steps=ADVICE_STEPS)
+    lo, hi = bisect(covers, floor, 1.0, steps=ADVICE_STEPS)
+    if lo == 0.0:  # below the bisection's resolution: halve down from the smallest failing scale first
+        for _ in range(ADVICE_HALVINGS):
+            hi *= 0.5
+            if covers(hi):
+                lo, _ = bisect(covers, hi, 2.0 * hi, steps=ADVICE_STEPS // 2)
+                break
     cert = found.get(lo)
     if cert is None or not cert.covers:  # bisect returns a point it evaluated as covered
         return None
     declared = declared_knobs(problem)
-    scaled = tuple(k for k in TOGETHER if k in declared) if knob == "together" else (knob,)
+    scaled = tuple(k for k in JOINT[knob] if k in declared) if knob in JOINT else (knob,)
     return Advice(knob, lo, shrunk(problem, knob, lo), cert, scaled, problem)
 
 
 __all__ = [
+    "ADVICE_HALVINGS",
     "ADVICE_STEPS",
+    "JOINT",
     "KNOBS",
     "SAMPLE_TIME_FLOOR",
     "TOGETHER",
+    "WORLD",
     "Advice",
     "Knob",
     "declared_knobs",

@@ -12,7 +12,10 @@ so the same inputs always give the same gains, and a setting shrunk by the advic
 The search is in two stages, as the loops are weakly coupled: the heading gains with the middle
 position gains first (with the other position gains in turn when none covers), then the position
 gains with the heading gains found. It states its
-objective and what binds (:class:`DeployedDesign`).
+objective and what binds (:class:`DeployedDesign`). When no candidate covers a declared box or
+current, the same search runs on the declared implementation alone (still water, the model as the
+plant): its gains run, and the advice then asks for the box and current they cover with the
+sample time, delay and noise as declared (the hardware's), rather than for all of them shrunk.
 
 The grid spans gentle gains that tolerate 0.1-0.2 s of lag (velocity gain 1.5 1/s, heading
 natural frequency 1 rad/s) to the bandwidth the sampled loops of a 10 Hz law still follow.
@@ -48,7 +51,9 @@ class DeployedDesign:
     Attributes
     ----------
     gains : Gains
-        The chosen gains: the best covering candidate, or the middle one when none covers.
+        The chosen gains: the best covering candidate; when none covers, the best for the declared
+        implementation in still water on the model (when a box or a current is declared and one
+        covers that), else the middle candidate.
     certificate : DeployedCertificate
         Their composed certificate.
     value : float or None
@@ -108,38 +113,61 @@ def synthesise_deployed(
         a, k1 = position
         return Gains(a, k1, heading, integral * a * k1)
 
-    def run(g: Gains) -> DeployedCertificate:
+    def run(candidate: DeployedProblem) -> DeployedCertificate:
         nonlocal tried, covered
-        cert = certify(replace(problem, gains=g))
+        cert = certify(candidate)
         tried += 1
-        covered += int(cert.covers)
+        covered += int(cert.covers and candidate.plant == problem.plant)  # the declared world's
         return cert
 
     middle = (
         HEADING_STAGE_POSITION if HEADING_STAGE_POSITION in position_grid else position_grid[len(position_grid) // 2]
     )
-    done: dict[tuple[tuple[float, float], tuple[float, float]], DeployedCertificate] = {}
+    done: dict[tuple[int, tuple[float, float], tuple[float, float]], DeployedCertificate] = {}
 
-    def cert_of(position: tuple[float, float], heading: tuple[float, float]) -> DeployedCertificate:
-        if (position, heading) not in done:
-            done[(position, heading)] = run(gains(position, heading))
-        return done[(position, heading)]
+    def search(world: DeployedProblem) -> tuple[tuple[float, float], tuple[Gains, DeployedCertificate] | None]:
+        """The heading gains chosen and the best covering candidate for ``world`` (``None``: none covers)."""
 
-    # stage 1: the heading gains, with the middle position gains, then (when none covers) with the others
-    heading = heading_grid[0]
-    for position in (middle, *(p for p in position_grid if p != middle)):
-        good = [(h, c) for h in heading_grid if (c := cert_of(position, h)).covers]
-        if good:
-            heading = min(good, key=lambda hc: _score(hc[1], accept))[0]
-            break
-    # stage 2: the position gains with those heading gains
-    best: tuple[Gains, DeployedCertificate] | None = None
-    for position in position_grid:
-        cert = cert_of(position, heading)
-        if cert.covers and (best is None or _score(cert, accept) < _score(best[1], accept)):
-            best = (gains(position, heading), cert)
-    if best is None:  # the middle candidate runs, and the composed certificate says what would certify it
-        g, cert = gains(middle, heading), cert_of(middle, heading)
+        def cert_of(position: tuple[float, float], heading: tuple[float, float]) -> DeployedCertificate:
+            key = (id(world), position, heading)
+            if key not in done:
+                done[key] = run(replace(world, gains=gains(position, heading)))
+            return done[key]
+
+        # stage 1: the heading gains, with the middle position gains, then (when none covers) with the others
+        heading = heading_grid[0]
+        for position in (middle, *(p for p in position_grid if p != middle)):
+            good = [(h, c) for h in heading_grid if (c := cert_of(position, h)).covers]
+            if good:
+                heading = min(good, key=lambda hc: _score(hc[1], accept))[0]
+                break
+        # stage 2: the position gains with those heading gains
+        best: tuple[Gains, DeployedCertificate] | None = None
+        for position in position_grid:
+            cert = cert_of(position, heading)
+            if cert.covers and (best is None or _score(cert, accept) < _score(best[1], accept)):
+                best = (gains(position, heading), cert)
+        return heading, best
+
+    heading, best = search(problem)
+    if best is None:
+        plant = problem.plant
+        calm = replace(plant, box=plant.box.scaled(0.0), current=0.0, current_rate=0.0)
+        if calm != plant:  # the implementation alone: gains that hold it, whose certificate then says how
+            # much of the box and current they cover (the advice shrinks only those, the hardware kept)
+            _, held = search(replace(problem, plant=calm))
+            if held is not None:
+                g = held[0]
+                cert = run(replace(problem, gains=g))
+                why = (
+                    f"none of the candidate gains is certified for the deployed loop with the declared box and "
+                    f"current ({tried} certificates in all): the gains with the smallest position bound for the "
+                    "declared implementation in still water on the model run (the composed certificate says how much "
+                    "of the box and current they cover)"
+                )
+                return DeployedDesign(g, cert, None, why, tried, covered)
+        g = gains(middle, heading)
+        cert = run(replace(problem, gains=g))
         why = (
             f"none of the {tried} candidate gains is certified for the deployed loop: the middle candidate runs "
             "(the composed certificate says which setting would certify it)"

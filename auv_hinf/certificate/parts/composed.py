@@ -37,7 +37,7 @@ from auv_hinf.certificate.parts.closed_loop import full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line
-from auv_hinf.composed.advice import TOGETHER, Advice, declared_knobs, largest_covered, shrunk
+from auv_hinf.composed.advice import JOINT, TOGETHER, Advice, declared_knobs, largest_covered, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.composed.reach import Reach, reach
@@ -283,8 +283,8 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
         if not cert.covers and search:
             found: list[Advice] = []
             for knob in declared_knobs(problem):
-                if knob == "together" and found:
-                    break  # one setting alone certifies: no need to shrink them all
+                if knob in JOINT and found:
+                    break  # one setting alone (or the current and box together) certifies: no need for more
                 a = largest_covered(problem, knob, certify)
                 if a is not None:
                     found.append(a)
@@ -335,7 +335,7 @@ class ComposedPart:
                 position_bound=float(c.errors.position),
             )
         settings = tuple(s for a in summary.advice for s in advice_settings(a))
-        together = any(a.knob == "together" for a in summary.advice)
+        together = any(a.knob in JOINT for a in summary.advice)
         # each piece of advice is one answer, written whole (a knob may be several keys: the four noise bounds)
         hint = ("; " if together else "; or ").join(_advice_line(a) for a in summary.advice)
         message = "composed certificate of the deployed loop does not cover: " + (
@@ -343,7 +343,8 @@ class ComposedPart:
         )
         if hint:
             if together:
-                lead = "at the design's gains no one setting alone certifies; all of these together do (re-run)"
+                kept = "" if summary.advice[0].knob == "together" else ", the implementation as declared"
+                lead = f"at the design's gains no one setting alone certifies; all of these together do{kept} (re-run)"
             elif len(summary.advice) == 1:
                 lead = "this certifies, every value written"
             else:
@@ -424,7 +425,7 @@ class ComposedPart:
         for a in f.get("advice") or []:
             values = toml_line(Setting.from_dict(s) for s in a["settings"])
             what = a["setting"]
-            if what == "together":
+            if what in JOINT:
                 what = ", ".join(a.get("scaled") or []) + " together"
             if a.get("scale") is None:  # a change of the design or the mission, not a declared value shrunk
                 out.append(f"    certifies with          {values} (a change of the {what})")

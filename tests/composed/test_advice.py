@@ -1,0 +1,96 @@
+"""The composed certificate's advice searches and the deployed synthesis's fallback, with fake certificates.
+
+A fake certificate covers exactly where the test says, so each search's answer is known: the
+bisection's answer below its resolution, the knobs a configuration declares, and the gains the
+synthesis runs when no candidate covers the declared box and current.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from auv_hinf.certificate.deployed import deployed_problem
+from auv_hinf.certificate.design_point import design_point
+from auv_hinf.certificate.parts.composed import composed_start
+from auv_hinf.composed.advice import (
+    ADVICE_HALVINGS,
+    WORLD,
+    declared_knobs,
+    largest_covered,
+    shrunk,
+)
+from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, ForceBound
+from auv_hinf.composed.loops import Errors
+from auv_hinf.composed.synthesis import HEADING_GRID, POSITION_GRID, synthesise_deployed
+from auv_hinf.config.settings import config_from_dict
+from tests.helpers import DEPLOYED_BOXED
+
+
+@pytest.fixture(scope="module")
+def boxed() -> DeployedProblem:
+    cfg = config_from_dict(DEPLOYED_BOXED, "boxed")
+    point = design_point(cfg)
+    return deployed_problem(cfg, point.mission, point.tube, point.offsets, point.gains, composed_start(point))
+
+
+def _world_scale(problem: DeployedProblem, declared: DeployedProblem) -> float:
+    """The current's fraction of the declared one (the world knob scales box and current alike)."""
+    return problem.plant.current / declared.plant.current
+
+
+def test_a_box_and_current_declared_with_the_hardware_get_the_world_knob_before_everything_together(boxed):
+    knobs = declared_knobs(boxed)
+    assert WORLD == ("current", "box") and knobs.index("world") < knobs.index("together")
+    calm = replace(
+        boxed, implementation=replace(boxed.implementation, delay=0.0, noise=boxed.implementation.noise.scaled(0))
+    )
+    assert "together" not in declared_knobs(calm)  # with no noise or delay, "together" would be the world again
+    world = shrunk(boxed, "world", 0.25)
+    assert world.plant.current == pytest.approx(0.25 * boxed.plant.current)
+    assert world.implementation == boxed.implementation  # the hardware as declared
+
+
+@pytest.mark.parametrize("edge", [0.03, 0.004])
+def test_a_covered_scale_below_the_bisection_is_found_by_halving_not_answered_as_zero(boxed, edge):
+    """Covered up to ``edge`` of the declared world: the answer is covered, positive and within 2x of it."""
+    calls = []
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        s = _world_scale(problem, boxed)
+        calls.append(s)
+        return DeployedCertificate(s <= edge, None, ())
+
+    got = largest_covered(boxed, "world", certify)
+    assert got is not None and 0.5 * edge < got.scale <= edge
+    assert got.scaled == ("current", "box") and got.certificate.covers
+    assert len(calls) <= 1 + 4 + ADVICE_HALVINGS + 2
+
+
+def test_no_covered_scale_above_the_halvings_is_answered_as_zero(boxed):
+    got = largest_covered(boxed, "world", lambda p: DeployedCertificate(_world_scale(p, boxed) == 0.0, None, ()))
+    assert got is not None and got.scale == 0.0
+
+
+def test_with_no_candidate_for_the_box_and_current_the_gains_for_the_hardware_alone_run(boxed):
+    """The synthesis falls back to the best gains of the declared implementation in still water on the model."""
+    chosen = (POSITION_GRID[1], HEADING_GRID[2])
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        calm = problem.plant.current == 0.0 and not problem.plant.box.declared
+        g = problem.gains
+        ours = ((g.alpha, g.k1), g.k_psi) == chosen
+        return DeployedCertificate(calm and ours, None, ())
+
+    def covering(problem: DeployedProblem) -> DeployedCertificate:
+        cert = certify(problem)
+        if not cert.covers:
+            return cert
+        force = ForceBound(1.0, 1.0, 0.1, (1.0, 1.0, 0.1), (0.0, 0.0, 0.0))
+        return DeployedCertificate(True, None, (), errors=Errors(0.1, 0.1, 0.01, 0.01), force=force)
+
+    design = synthesise_deployed(boxed, certify=covering)
+    assert ((design.gains.alpha, design.gains.k1), design.gains.k_psi) == chosen
+    assert design.value is None and design.covered == 0 and "still water on the model" in design.binding
+    assert not design.certificate.covers  # its certificate is the declared world's
