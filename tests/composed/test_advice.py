@@ -13,10 +13,11 @@ import pytest
 
 from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import design_point
-from auv_hinf.certificate.parts.composed import composed_start
+from auv_hinf.certificate.parts.composed import JOINT_ENOUGH, composed_start
 from auv_hinf.composed.advice import (
     ADVICE_HALVINGS,
     WORLD,
+    Advice,
     declared_knobs,
     largest_covered,
     shrunk,
@@ -94,3 +95,31 @@ def test_with_no_candidate_for_the_box_and_current_the_gains_for_the_hardware_al
     assert ((design.gains.alpha, design.gains.k1), design.gains.k_psi) == chosen
     assert design.value is None and design.covered == 0 and "still water on the model" in design.binding
     assert not design.certificate.covers  # its certificate is the declared world's
+
+
+@pytest.mark.parametrize(("world_scale", "answers"), [(0.01, ("world", "together")), (0.1, ("world",))])
+def test_a_small_world_answer_is_given_beside_everything_together_and_a_large_one_alone(
+    boxed, monkeypatch, world_scale, answers
+):
+    """The hardware kept leaves little of the box and current: the answer that shrinks the noise and
+    delay with them is searched too, and both are given; from JOINT_ENOUGH of the declared, one."""
+    import auv_hinf.certificate.parts.composed as composed_part
+
+    assert JOINT_ENOUGH == 1.0 / 16.0 and (world_scale < JOINT_ENOUGH) == (len(answers) == 2)
+    cfg = config_from_dict(DEPLOYED_BOXED, "boxed")
+    point = design_point(cfg)
+    searched = []
+
+    def fake_largest(problem, knob, certify):
+        searched.append(knob)
+        scale = {"world": world_scale, "together": 0.125}.get(knob)
+        if scale is None:
+            return None
+        return Advice(knob, scale, shrunk(problem, knob, scale), DeployedCertificate(True, None, ()), (knob,), problem)
+
+    monkeypatch.setattr(composed_part, "within_actuators", lambda p: lambda q: DeployedCertificate(False, None, ("x",)))
+    monkeypatch.setattr(composed_part, "largest_covered", fake_largest)
+    monkeypatch.setattr(composed_part, "confirmed", lambda c, p, advice: advice)
+    summary = composed_part.composed_summary(point)
+    assert tuple(a.knob for a in summary.advice) == answers
+    assert searched[-1] == answers[-1]  # nothing is searched after the last answer kept

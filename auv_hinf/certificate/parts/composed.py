@@ -155,6 +155,10 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
     }
 
 
+#: The share of the declared current and box (``world``) kept by an answer at which the answer that
+#: shrinks the noise and delay with them is not searched too: below it the hardware kept as declared
+#: leaves little of the box and current, and the other answer says what a faster, quieter loop buys.
+JOINT_ENOUGH = 1.0 / 16.0
 #: Significant digits of an advised value: a scale's product (0.0875 x 0.125) is written 0.0109375, not
 #: 0.010937500000000001; the re-run that confirms the advice (:func:`confirmed`) reads the written value.
 ADVICE_SIGNIFICANT = 12
@@ -283,7 +287,7 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
         if not cert.covers and search:
             found: list[Advice] = []
             for knob in declared_knobs(problem):
-                if knob in JOINT and found:
+                if knob in JOINT and any(a.knob not in JOINT or a.scale >= JOINT_ENOUGH for a in found):
                     break  # one setting alone (or the current and box together) certifies: no need for more
                 a = largest_covered(problem, knob, certify)
                 if a is not None:
@@ -337,14 +341,19 @@ class ComposedPart:
         settings = tuple(s for a in summary.advice for s in advice_settings(a))
         together = any(a.knob in JOINT for a in summary.advice)
         # each piece of advice is one answer, written whole (a knob may be several keys: the four noise bounds)
-        hint = ("; " if together else "; or ").join(_advice_line(a) for a in summary.advice)
+        hint = "; or ".join(_advice_line(a) for a in summary.advice)
         message = "composed certificate of the deployed loop does not cover: " + (
             "; ".join(summary.reasons) or "not certified"
         )
         if hint:
-            if together:
+            if together and len(summary.advice) == 1:
                 kept = "" if summary.advice[0].knob == "together" else ", the implementation as declared"
                 lead = f"at the design's gains no one setting alone certifies; all of these together do{kept} (re-run)"
+            elif together:
+                lead = (
+                    "at the design's gains no one setting alone certifies; each of these answers does, every value "
+                    "of it written (re-run)"
+                )
             elif len(summary.advice) == 1:
                 lead = "this certifies, every value written"
             else:
@@ -686,6 +695,7 @@ def _seconds(x: float | None) -> str:
 
 __all__ = [
     "CONFIRM_FRACTIONS",
+    "JOINT_ENOUGH",
     "PART",
     "RERUN_SAMPLE_TIME",
     "RERUN_TOGETHER",
