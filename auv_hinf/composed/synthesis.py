@@ -117,48 +117,49 @@ def synthesise_deployed(
         nonlocal tried, covered
         cert = certify(candidate)
         tried += 1
-        covered += int(cert.covers and candidate.plant == problem.plant)  # the declared world's
+        covered += int(cert.covers and candidate.plant == problem.plant)  # the declared world's only
         return cert
 
     middle = (
         HEADING_STAGE_POSITION if HEADING_STAGE_POSITION in position_grid else position_grid[len(position_grid) // 2]
     )
-    done: dict[tuple[int, tuple[float, float], tuple[float, float]], DeployedCertificate] = {}
+    plant = problem.plant
+    worlds = {"declared": problem}
+    calm = replace(plant, box=plant.box.scaled(0.0), current=0.0, current_rate=0.0)
+    if calm != plant:  # the declared implementation alone: still water, the model as the plant
+        worlds["calm"] = replace(problem, plant=calm)
+    done: dict[tuple[str, tuple[float, float], tuple[float, float]], DeployedCertificate] = {}
 
-    def search(world: DeployedProblem) -> tuple[tuple[float, float], tuple[Gains, DeployedCertificate] | None]:
-        """The heading gains chosen and the best covering candidate for ``world`` (``None``: none covers)."""
+    def cert_of(world: str, position: tuple[float, float], heading: tuple[float, float]) -> DeployedCertificate:
+        if (world, position, heading) not in done:
+            done[(world, position, heading)] = run(replace(worlds[world], gains=gains(position, heading)))
+        return done[(world, position, heading)]
 
-        def cert_of(position: tuple[float, float], heading: tuple[float, float]) -> DeployedCertificate:
-            key = (id(world), position, heading)
-            if key not in done:
-                done[key] = run(replace(world, gains=gains(position, heading)))
-            return done[key]
-
+    def search(world: str) -> tuple[tuple[float, float], tuple[Gains, DeployedCertificate] | None]:
+        """The heading gains chosen and the best covering candidate in ``world`` (``None``: none covers)."""
         # stage 1: the heading gains, with the middle position gains, then (when none covers) with the others
         heading = heading_grid[0]
         for position in (middle, *(p for p in position_grid if p != middle)):
-            good = [(h, c) for h in heading_grid if (c := cert_of(position, h)).covers]
+            good = [(h, c) for h in heading_grid if (c := cert_of(world, position, h)).covers]
             if good:
                 heading = min(good, key=lambda hc: _score(hc[1], accept))[0]
                 break
         # stage 2: the position gains with those heading gains
         best: tuple[Gains, DeployedCertificate] | None = None
         for position in position_grid:
-            cert = cert_of(position, heading)
+            cert = cert_of(world, position, heading)
             if cert.covers and (best is None or _score(cert, accept) < _score(best[1], accept)):
                 best = (gains(position, heading), cert)
         return heading, best
 
-    heading, best = search(problem)
+    heading, best = search("declared")
     if best is None:
-        plant = problem.plant
-        calm = replace(plant, box=plant.box.scaled(0.0), current=0.0, current_rate=0.0)
-        if calm != plant:  # the implementation alone: gains that hold it, whose certificate then says how
-            # much of the box and current they cover (the advice shrinks only those, the hardware kept)
-            _, held = search(replace(problem, plant=calm))
+        if "calm" in worlds:  # gains that hold the hardware, whose certificate then says how much of the box
+            # and current they cover (the advice shrinks only those, the hardware kept)
+            _, held = search("calm")
             if held is not None:
                 g = held[0]
-                cert = run(replace(problem, gains=g))
+                cert = cert_of("declared", (g.alpha, g.k1), g.k_psi)
                 why = (
                     f"none of the candidate gains is certified for the deployed loop with the declared box and "
                     f"current ({tried} certificates in all): the gains with the smallest position bound for the "
@@ -166,8 +167,7 @@ def synthesise_deployed(
                     "of the box and current they cover)"
                 )
                 return DeployedDesign(g, cert, None, why, tried, covered)
-        g = gains(middle, heading)
-        cert = run(replace(problem, gains=g))
+        g, cert = gains(middle, heading), cert_of("declared", middle, heading)
         why = (
             f"none of the {tried} candidate gains is certified for the deployed loop: the middle candidate runs "
             "(the composed certificate says which setting would certify it)"

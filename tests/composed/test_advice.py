@@ -105,7 +105,7 @@ def test_a_small_world_answer_is_given_beside_everything_together_and_a_large_on
     delay with them is searched too, and both are given; from JOINT_ENOUGH of the declared, one."""
     import auv_hinf.certificate.parts.composed as composed_part
 
-    assert JOINT_ENOUGH == 1.0 / 16.0 and (world_scale < JOINT_ENOUGH) == (len(answers) == 2)
+    assert JOINT_ENOUGH == 1.0 / 32.0 and (world_scale < JOINT_ENOUGH) == (len(answers) == 2)
     cfg = config_from_dict(DEPLOYED_BOXED, "boxed")
     point = design_point(cfg)
     searched = []

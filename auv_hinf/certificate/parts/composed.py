@@ -158,7 +158,9 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
 #: The share of the declared current and box (``world``) kept by an answer at which the answer that
 #: shrinks the noise and delay with them is not searched too: below it the hardware kept as declared
 #: leaves little of the box and current, and the other answer says what a faster, quieter loop buys.
-JOINT_ENOUGH = 1.0 / 16.0
+#: A thirtysecond: the second answer's search and re-runs cost about 30 s on a refused BlueROV2 line
+#: (48 s against 18 s), worth it when the first answer keeps almost nothing.
+JOINT_ENOUGH = 1.0 / 32.0
 #: Significant digits of an advised value: a scale's product (0.0875 x 0.125) is written 0.0109375, not
 #: 0.010937500000000001; the re-run that confirms the advice (:func:`confirmed`) reads the written value.
 ADVICE_SIGNIFICANT = 12
