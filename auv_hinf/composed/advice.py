@@ -100,7 +100,8 @@ def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:
         "sample_time": True,
     }
     present["world"] = all(present[k] for k in WORLD)
-    present["together"] = sum(present[k] for k in TOGETHER) >= 2 and any(present[k] for k in ("noise", "delay"))
+    # "together" beside "world" only when it shrinks some of the hardware too
+    present["together"] = sum(present[k] for k in TOGETHER) >= 2 and any(present[k] for k in TOGETHER if k not in WORLD)
     return tuple(k for k in KNOBS if present[k])
 
 

@@ -113,13 +113,6 @@ def synthesise_deployed(
         a, k1 = position
         return Gains(a, k1, heading, integral * a * k1)
 
-    def run(candidate: DeployedProblem) -> DeployedCertificate:
-        nonlocal tried, covered
-        cert = certify(candidate)
-        tried += 1
-        covered += int(cert.covers and candidate.plant == problem.plant)  # the declared world's only
-        return cert
-
     middle = (
         HEADING_STAGE_POSITION if HEADING_STAGE_POSITION in position_grid else position_grid[len(position_grid) // 2]
     )
@@ -131,9 +124,13 @@ def synthesise_deployed(
     done: dict[tuple[str, tuple[float, float], tuple[float, float]], DeployedCertificate] = {}
 
     def cert_of(world: str, position: tuple[float, float], heading: tuple[float, float]) -> DeployedCertificate:
-        if (world, position, heading) not in done:
-            done[(world, position, heading)] = run(replace(worlds[world], gains=gains(position, heading)))
-        return done[(world, position, heading)]
+        nonlocal tried, covered
+        key = (world, position, heading)
+        if key not in done:
+            done[key] = certify(replace(worlds[world], gains=gains(position, heading)))
+            tried += 1
+            covered += int(done[key].covers and world == "declared")  # the declared world's only
+        return done[key]
 
     def search(world: str) -> tuple[tuple[float, float], tuple[Gains, DeployedCertificate] | None]:
         """The heading gains chosen and the best covering candidate in ``world`` (``None``: none covers)."""
