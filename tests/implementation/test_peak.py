@@ -358,3 +358,91 @@ def test_step_bounds_of_the_first_inputs_are_those_of_all_inputs():
     full, first = step_bounds(loop), step_bounds(loop, inputs=1)
     assert full is not None and first is not None and full.peak.shape == (4, 2) and first.peak.shape == (4, 1)
     assert np.allclose(first.peak, full.peak[:, :1], rtol=1e-9) and np.allclose(first.area, full.area[:, :1], rtol=1e-9)
+
+
+def _two_axes(first: SampledLoop, second: SampledLoop) -> SampledLoop:
+    """Two loops side by side with nothing between them (the same sample time and delay)."""
+    from scipy.linalg import block_diag
+
+    def cols(loop: SampledLoop) -> tuple[np.ndarray, ...]:
+        n, nu, _, _ = loop.sizes
+        o = loop.outputs
+        return o[:, :n], o[:, n : n + nu], o[:, n + nu :]
+
+    (x1, u1, y1), (x2, u2, y2) = cols(first), cols(second)
+    return SampledLoop(
+        a=block_diag(first.a, second.a),
+        b_u=block_diag(first.b_u, second.b_u),
+        b_w=block_diag(first.b_w, second.b_w),
+        c_y=block_diag(first.c_y, second.c_y),
+        d_n=block_diag(first.d_n, second.d_n),
+        b_cn=np.zeros((0, 4)),
+        a_c=np.zeros((0, 0)),
+        b_c=np.zeros((0, 4)),
+        c_c=np.zeros((2, 0)),
+        d_c=block_diag(first.d_c, second.d_c),
+        sample_time=first.sample_time,
+        delay=first.delay,
+        outputs=np.hstack([block_diag(x1, x2), block_diag(u1, u2), block_diag(y1, y2)]),
+    )
+
+
+def test_inputs_the_structure_does_not_connect_have_zero_gains_and_the_rest_are_each_axis_own(monkeypatch):
+    """Two axes side by side: the graph of the loop's nonzero entries links each axis's inputs to its own
+    outputs only; the gains across are exactly zero (their tail bounds are round-off, not summed); every
+    other gain is within TAIL_RTOL of the same loop's gains summed over MAX_PERIODS, and at least the
+    axis's own (within 1 %: the within-step remainder takes the whole loop's ``||A||``, so the slow axis
+    beside a faster one gets a slightly larger one)."""
+    first, second = axis(*CASES[0]), axis(*SLOW)
+    both = _two_axes(first, second)
+    linked = peak_module._linked(both)
+    own = np.kron(np.eye(2, dtype=bool), np.ones((4, 1), dtype=bool))  # (outputs, inputs of one kind)
+    assert np.array_equal(linked[:, :2], own) and np.array_equal(linked[:, 2:], np.repeat(own, 2, axis=1))
+    g, g1, g2 = peak_gains(both), peak_gains(first), peak_gains(second)
+    assert g is not None and g1 is not None and g2 is not None
+    assert np.all(g.continuous[:4, 1] == 0.0) and np.all(g.continuous[4:, 0] == 0.0)
+    assert np.all(g.discrete[:4, 2:] == 0.0) and np.all(g.discrete[4:, :2] == 0.0)
+    for got, alone in (
+        (g.continuous[:4, :1], g1.continuous),
+        (g.continuous[4:, 1:], g2.continuous),
+        (g.discrete[:4, :2], g1.discrete),
+        (g.discrete[4:, 2:], g2.discrete),
+        (g.one_signed[:4, :1], g1.one_signed),
+        (g.one_signed[4:, 1:], g2.one_signed),
+    ):
+        assert np.all(got >= alone * (1 - 1e-9)) and np.all(got <= alone * 1.01)
+    monkeypatch.setattr(peak_module, "GRAMIAN_AFTER", math.inf)
+    monkeypatch.setattr(peak_module, "TAIL_RTOL", 0.0)
+    peak_module._maps.cache_clear()
+    long = peak_gains(both)
+    assert long is not None
+    for got, exact in ((g.continuous, long.continuous), (g.discrete, long.discrete), (g.one_signed, long.one_signed)):
+        assert np.all(got >= exact * (1 - 1e-9)) and np.all(got <= exact * (1 + 2 * TAIL_RTOL))
+
+
+def test_the_signed_remaining_sum_bounds_the_tail_from_below_and_splits_it_into_its_signs():
+    """``|S| - err`` is at most the exact ``sum_k |l Phi^k v|``, and ``(T + S + err)/2`` and ``(T - S + err)/2``
+    (``T`` the exact sum) are at least the sums of its positive and negative terms, for every output row
+    of the slow loop and random starts; on that loop, dominated by one slow real mode, the lower bound
+    is within a few percent of the sum for most pairs."""
+    loop = axis(*SLOW)
+    phi, rows = _period_rows(loop)
+    p, rho = peak_module._contraction(phi)
+    gap = np.eye(phi.shape[0]) - phi
+    starts = np.random.default_rng(11).normal(size=(phi.shape[0], 6))
+    starts = np.linalg.matrix_power(phi, 200) @ starts  # two hundred periods on: the slow mode leads
+    total, pos, neg, x = (np.zeros((rows.shape[0], starts.shape[1])) for _ in range(4))
+    x = starts.copy()
+    for _ in range(40000):
+        z = rows @ x
+        total += np.abs(z)
+        pos += np.maximum(z, 0.0)
+        neg += np.maximum(-z, 0.0)
+        x = phi @ x
+    signed, err = peak_module._signed_tails(peak_module.lu_factor(gap), gap, rows, starts, p, rho)
+    scale = total.max()
+    assert np.all(np.abs(signed) - err <= total * (1 + 1e-9) + 1e-12 * scale)
+    assert np.all(0.5 * (total + signed + err) >= pos * (1 - 1e-9) - 1e-12 * scale)
+    assert np.all(0.5 * (total - signed + err) >= neg * (1 - 1e-9) - 1e-12 * scale)
+    reached = total > 1e-6 * scale
+    assert np.median(((np.abs(signed) - err) / total)[reached]) > 0.95
