@@ -49,6 +49,26 @@ def _number(v: float) -> str:
     return short if float(short) == v else repr(v)
 
 
+def apart(value: float, bound: float, digits: int = 4) -> tuple[str, str]:
+    """``value`` and ``bound`` printed with the fewest significant digits (at least ``digits``) that tell them apart.
+
+    A value just above its bound (0.0300001 m/s against 0.03 m/s) printed at four digits reads as
+    equal to it; more digits are used until the two differ (up to 17, where equal floats print equal).
+
+    Parameters
+    ----------
+    value, bound : float
+        The two numbers.
+    digits : int
+        The fewest significant digits.
+    """
+    for d in range(digits, 18):
+        a, b = f"{value:.{d}g}", f"{bound:.{d}g}"
+        if a != b:
+            return a, b
+    return f"{value:.17g}", f"{bound:.17g}"
+
+
 @dataclass(frozen=True)
 class Setting:
     """A value of the configuration that would change a verdict.
@@ -211,4 +231,4 @@ def reason_from(part: str, exc: Exception, prefix: str = "") -> Reason:
     return Reason(part, "solver" if isinstance(exc, SolverError) else "not_covered", message)
 
 
-__all__ = ["REASON_KINDS", "Reason", "ReasonKind", "Setting", "reason_from", "toml_line"]
+__all__ = ["REASON_KINDS", "Reason", "ReasonKind", "Setting", "apart", "reason_from", "toml_line"]

@@ -756,6 +756,12 @@ class DesignTable(_Table):
                 "integral = true needs robust = true: integral action is designed and certified by the robust "
                 "design (add an [uncertainty] box or a [disturbance] current, or leave them empty)"
             )
+        if self.synthesis != "bandwidth" and not self.robust:
+            # without robust the nominal Theorem 1 gains run, and the synthesis would be silently unused
+            raise ValueError(
+                f'synthesis = "{self.synthesis}" needs robust = true: the synthesis chooses the robust design\'s '
+                "gains, and without it the nominal Theorem 1 gains run (the box and the current may be left empty)"
+            )
         return self
 
 

@@ -35,7 +35,9 @@ a loop with several inputs the bound is ``sum_i N_i W_i``; with perturbation cha
   periods instead of 7,100). The signed sum also splits the tail between the kernel's positive
   and negative parts;
 * an input that no path of nonzero entries of the loop's matrices leads to an output has a zero
-  kernel to it (:func:`_linked`): its gain is 0 exactly, where its tail bounds would leave round-off;
+  kernel to it (:func:`_linked`): its gain is 0 exactly, where its tail bounds would leave round-off
+  (likewise a free response, :func:`free_peaks`); every other gain is inflated by ``SUM_ROUNDOFF``
+  for the round-off of its floating-point sum;
 * outputs are evaluated at the fine steps' ends; between them an output moves by at most the
   step length times a bound of its derivative, which :func:`small_gain` adds (``intersample``).
 
@@ -79,6 +81,12 @@ TAIL_RTOL = 1e-4
 ZERO_RTOL = 1e-9
 #: Largest number of periods summed exactly (a loop this slow gets a larger tail bound).
 MAX_PERIODS = 20000
+#: Relative inflation of every summed gain for the round-off of its floating-point sum: a sum of ``m``
+#: nonnegative terms is off by at most ``m eps`` of itself, and a gain sums at most
+#: ``MAX_PERIODS x (FINE_STEPS + 1)`` period-step terms of the kernel (with the within-step terms and
+#: the tail, about 2e5 of them: 4e-11), so 1e-10 covers it (an independent sum of a pure feedthrough
+#: gain came out 1e-15 above it without this).
+SUM_ROUNDOFF = 1e-10
 #: The outputs' Gramian tails (:func:`_gramians`) are computed beside the contraction's when the
 #: contraction's would need more than this many further periods to meet :data:`TAIL_RTOL`: the
 #: Gramians cost one Stein equation per output row and step, which a fast loop does not repay.
@@ -440,18 +448,16 @@ def _row_norms(m: FloatArray) -> FloatArray:
     return out
 
 
-def _linked(loop: SampledLoop) -> NDArray[np.bool_]:
-    """Which input can reach which output at all, ``(no, nw + nn)``: False where the kernel is identically zero.
+def _reached(loop: SampledLoop, seeds: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Which outputs a signal entering at ``seeds`` can reach at all, ``(no, columns)``.
 
     A directed graph on the plant states, the law's states, the held commands and the measurements
-    has an edge wherever an entry of the loop's matrices is not zero (the measurement is ``C_y x``
-    taken earlier plus its error, so the delay and the hold add no edges). An input from whose
-    entry nodes no nonzero column of an output's row is reachable has a zero kernel to that output
-    for every value of the nonzero entries: its gain is 0 exactly, and its tail bounds (which
-    cannot know that) are not summed.
+    (``seeds`` has a row for each, in that order, and a column per signal) has an edge wherever an
+    entry of the loop's matrices is not zero (the measurement is ``C_y x`` taken earlier plus its
+    error, so the delay and the hold add no edges). An output none of whose nonzero columns is
+    reachable from a signal's seeds does not respond to it, for every value of the nonzero entries.
     """
     n, nu, ny, nc = loop.sizes
-    nw = loop.b_w.shape[1]
     size = n + nc + nu + ny
     ix, ixi = slice(0, n), slice(n, n + nc)
     iu, iy = slice(n + nc, n + nc + nu), slice(n + nc + nu, size)
@@ -460,14 +466,10 @@ def _linked(loop: SampledLoop) -> NDArray[np.bool_]:
     adj[ix, iu] = loop.b_u != 0.0
     adj[iy, ix] = loop.c_y != 0.0
     adj[iu, iy] = loop.d_c != 0.0
-    seeds = np.zeros((size, nw + loop.d_n.shape[1]), dtype=bool)
-    seeds[ix, :nw] = loop.b_w != 0.0
-    seeds[iy, nw:] = loop.d_n != 0.0
     if nc:
         adj[ixi, ixi] = loop.a_c != 0.0
         adj[ixi, iy] = loop.b_c != 0.0
         adj[iu, ixi] = loop.c_c != 0.0
-        seeds[ixi, nw:] = loop.b_cn != 0.0
     step = adj.astype(np.int64)
     reach = seeds
     while True:
@@ -477,6 +479,24 @@ def _linked(loop: SampledLoop) -> NDArray[np.bool_]:
         reach = grown
     out: NDArray[np.bool_] = ((loop.outputs != 0.0).astype(np.int64) @ reach.astype(np.int64)) > 0
     return out
+
+
+def _linked(loop: SampledLoop) -> NDArray[np.bool_]:
+    """Which input can reach which output at all, ``(no, nw + nn)``: False where the kernel is identically zero.
+
+    The continuous inputs enter the plant states through ``B_w``, the measurement errors the
+    measurements through ``D_n`` and the law's state through ``B_cn`` (:func:`_reached`). A pair not
+    linked has a zero kernel: its gain is 0 exactly, and its tail bounds (which cannot know that)
+    are not summed.
+    """
+    n, nu, ny, nc = loop.sizes
+    nw = loop.b_w.shape[1]
+    seeds = np.zeros((n + nc + nu + ny, nw + loop.d_n.shape[1]), dtype=bool)
+    seeds[:n, :nw] = loop.b_w != 0.0
+    seeds[n + nc + nu :, nw:] = loop.d_n != 0.0
+    if nc:
+        seeds[n : n + nc, nw:] = loop.b_cn != 0.0
+    return _reached(loop, seeds)
 
 
 def _signed_tails(
@@ -653,8 +673,9 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
     c_x = loop.outputs[:, :n]
     deriv = np.hstack([np.abs(c_x) @ np.abs(loop.a), np.abs(c_x) @ np.abs(loop.b_u), np.abs(c_x) @ np.abs(loop.b_w)])
     # a pair the loop's structure does not connect has a zero kernel: its bounds are round-off
-    worst_c = np.where(linked[:, :nw], worst_c, 0.0)
-    worst_d = np.where(linked[:, nw:], worst_d, 0.0)
+    worst_c = np.where(linked[:, :nw], worst_c, 0.0) * (1.0 + SUM_ROUNDOFF)
+    worst_d = np.where(linked[:, nw:], worst_d, 0.0) * (1.0 + SUM_ROUNDOFF)
+    one_signed = one_signed * (1.0 + SUM_ROUNDOFF)
     return PeakGains(
         continuous=worst_c,
         discrete=worst_d,
@@ -868,7 +889,15 @@ def free_peaks(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> FloatArray 
     # only the peaks are used: a free response decays to zero, and its peak is exact as soon as
     # the tail's envelope is below it (rtol 1)
     swept = _sweep(loop, state, False, max_periods, rtol=1.0)
-    return None if swept is None else swept[0]
+    if swept is None:
+        return None
+    # a start in plant state i enters at x_i and, through the measurements taken before t = 0, at
+    # the measurements of x_i: an output that neither reaches does not move (its bound is round-off)
+    seeds = np.zeros((n + nc + nu + ny, n), dtype=bool)
+    seeds[:n, :] = np.eye(n, dtype=bool)
+    seeds[n + nc + nu :, :] = loop.c_y != 0.0
+    out: FloatArray = np.where(_reached(loop, seeds), swept[0], 0.0)
+    return out
 
 
 def _tails(offsets: Sequence[FloatArray], state: FloatArray, p: FloatArray, rho: float) -> FloatArray:
@@ -1066,6 +1095,7 @@ __all__ = [
     "MAX_PERIODS",
     "MIN_PERIODS",
     "SMALL_GAIN_LIMIT",
+    "SUM_ROUNDOFF",
     "TAIL_RTOL",
     "PeakGains",
     "SampledLoop",

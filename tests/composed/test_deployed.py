@@ -271,3 +271,21 @@ def test_the_preset_noise_with_a_small_box_and_current_certifies_and_its_corners
             assert v <= report["certified_errors"][k], (corner, k, v)
         for k in ("force_x", "force_y", "moment"):
             assert report["commanded_peak"][k] <= c["certified_peak"][k], (corner, k)
+
+
+def test_a_declared_start_that_alone_binds_is_answered_with_the_start_on_the_slots():
+    """One vehicle starts turned 0.3 rad off its course: the composed certificate does not cover that start
+    and no declared setting, shrunk, covers it either; the answer removes ``[simulation] initial`` (every
+    vehicle on its slot), keeping the hardware and the world as declared, and re-run it certifies."""
+    initial = [[0.0, -6.0, 0.3, 0.4, 0.0, 0.0]] + [[0.0, y, 0.0, 0.4, 0.0, 0.0] for y in (-2.0, 2.0, 6.0)]
+    cfg = config_from_dict({**DEPLOYED, "simulation": {"horizon": 40.0, "initial": initial}}, "turned")
+    cert = certify(cfg)
+    assert not cert.certified
+    reason = next(r for r in cert.findings if r.part == "composed")
+    assert [(s.table, s.key, s.value) for s in reason.settings] == [("simulation", "initial", None)]
+    assert "the declared start binds" in reason.message
+    [entry] = cert.to_dict()["composed"]["advice"]
+    assert entry["setting"] == "start"
+    again = certify(with_settings(cfg, [("simulation", "initial", None)]))
+    assert again.certified
+    assert again.to_dict()["composed"]["error_bounds"]["position"] == pytest.approx(entry["position_bound"])

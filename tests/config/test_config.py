@@ -353,3 +353,13 @@ def test_annotated_toml_writes_a_declared_implementation_and_loads_it_back(tmp_p
     f = tmp_path / "deployed.toml"
     f.write_text(text)
     assert load_config(f).implementation == impl
+
+
+@pytest.mark.parametrize("kind", ["lmi", "deployed"])
+def test_a_synthesis_without_the_robust_design_is_refused_not_ignored(kind):
+    """Without ``robust = true`` the nominal Theorem 1 gains run, so a declared synthesis would go unused:
+    the file is refused, naming the key that is missing; with it, or with the baseline, it is read."""
+    (line,) = problems({"design": {"synthesis": kind}})
+    assert f'synthesis = "{kind}" needs robust = true' in line and line.startswith("design")
+    config_from_dict({"design": {"synthesis": kind, "robust": True}, "implementation": {"sample_time": 0.1}})
+    config_from_dict({"design": {"synthesis": "bandwidth"}})

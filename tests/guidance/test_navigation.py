@@ -188,3 +188,20 @@ def test_the_cascade_runs_at_the_declared_sample_time_or_at_10_hz():
     from auv_hinf.guidance.simulation import STEP, cascade_period
 
     assert cascade_period(Implementation(0.05)) == 0.05 and cascade_period(Implementation()) == STEP == 0.1
+
+
+def test_a_sample_time_too_long_for_the_cascade_is_answered_with_a_shorter_one_that_certifies_on_re_run():
+    """At 2 s the nominal sampled cascade is unstable; the answer is the longest sample time between the
+    default 0.1 s and the declared one that certifies (nothing else is declared to shrink), and it does."""
+    cfg = transit(uncertainty={}, disturbance={}, simulation={"horizon": 60.0}, implementation={"sample_time": 2.0})
+    data = certify(cfg).to_dict()
+    assert data["certified"] is False
+    why = data["parts"]["guidance"]["reasons"][0]
+    assert [(s["table"], s["key"]) for s in why["settings"]] == [("implementation", "sample_time")]
+    h = why["settings"][0]["value"]
+    assert 0.1 <= h < 2.0 and h == data["guidance"]["largest_certifiable"]["sample_time"]
+    assert "delay and noise" not in why["message"]  # neither is declared
+    again = certify(with_settings(cfg, [("implementation", "sample_time", h)])).to_dict()
+    assert again["certified"] is True
+    longer = certify(with_settings(cfg, [("implementation", "sample_time", 1.1 * 1.07 * h)])).to_dict()
+    assert longer["certified"] is False  # within the bisection's resolution (6 %) of the longest

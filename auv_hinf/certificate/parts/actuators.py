@@ -160,7 +160,7 @@ def check_actuators(
         return ActuatorCheck(act, None, None, None, False, "no certificate bounds the commanded force")
     channel, ratio = act.binding(peak)
     if act.admits(peak):
-        why = f"the certified peak force fits the limits (binding: {channel}, {ratio:.3g} of its limit)"
+        why = f"the certified peak force fits the limits (binding: {channel}, {ratio:.3g} times its limit)"
         return ActuatorCheck(act, peak, channel, ratio, True, why)
     why = actuator_shortfall(act, peak)
     if act.note:
@@ -209,7 +209,7 @@ def guided_check(
     why = (
         f"the guidance cascade's certified thrust {guided['force_x']:.4g} N and rudder {guided['rudder']:.4g} rad "
         f"{'fit' if ok else 'exceed'} the limits {act.tau_x:.4g} N and {act.rudder_max:.4g} rad "
-        f"(binding: {channel}, {ratios[channel]:.3g} of its limit)"
+        f"(binding: {channel}, {ratios[channel]:.3g} times its limit)"
     )
     return ActuatorCheck(
         act, None, channel, ratios[channel], ok, why, rudder_authority=authority, guided_peak=dict(guided)
@@ -281,7 +281,7 @@ class ActuatorPart:
             return Verdict(self.name, True, False, (), act.to_dict(), detail=act)
         binding = None
         if act.binding is not None and act.binding_ratio is not None and act.binding_ratio >= ACTUATOR_BINDING_RATIO:
-            binding = f"actuators ({act.binding}, {act.binding_ratio:.3g} of its limit)"
+            binding = f"actuators ({act.binding}, {act.binding_ratio:.3g} times its limit)"
         if act.certified:
             return Verdict(self.name, True, True, (), act.to_dict(), binding=binding, detail=act)
         peak = act.certified_peak

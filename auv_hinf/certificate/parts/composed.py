@@ -253,7 +253,7 @@ def within_actuators(point: DesignPoint) -> Callable[[DeployedProblem], Deployed
         why = (
             f"the certified force (|tau_x| <= {cert.force.force_x:.4g} N, |tau_y| <= {cert.force.force_y:.4g} N, "
             f"|tau_psi| <= {cert.force.moment:.4g} N m) does not fit the actuators "
-            f"({channel} at {ratio:.3g} of its limit)"
+            f"({channel} at {ratio:.3g} times its limit)"
         )
         return replace(cert, covers=False, governed_by="actuators", reasons=(why,))
 
@@ -644,15 +644,37 @@ def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | N
     return None
 
 
-def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...], dict[str, Any] | None]:
-    """What certifies when no declared setting does at the design's gains: the design, the mission, or a re-run.
+#: The answer that starts every vehicle on its slot: the declared ``[simulation] initial`` removed.
+START_ON_SLOTS = Setting("simulation", "initial", None)
 
-    The design or mission changes of :func:`~auv_hinf.certificate.mission_advice.mission_advice`
+
+def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...], dict[str, Any] | None]:
+    """What certifies when no declared setting does at the design's gains: the start, design, mission or a re-run.
+
+    A declared ``[simulation] initial`` off the slots is tried first, removed (every vehicle on its
+    slot). The design or mission changes of :func:`~auv_hinf.certificate.mission_advice.mission_advice`
     come first; when none covers, the declared settings shrunk together with the gains a re-run
     designs (:func:`rerun_together`). Returns the sentence, the settings, and the entry of the
-    ``composed.advice`` list of ``certify --json`` (``setting`` is ``design``, ``turns``, ``speed``
-    or ``together``; ``None`` when nothing certifies).
+    ``composed.advice`` list of ``certify --json`` (``setting`` is ``start``, ``design``, ``turns``,
+    ``speed`` or ``together``; ``None`` when nothing certifies).
     """
+    if point.config.simulation.initial is not None:
+        # a declared start off the slots may be all that binds: the hardware and the world stay as declared
+        bound = covered_position_bound(point.config, (START_ON_SLOTS,))
+        if bound is not None:
+            entry = {
+                "setting": "start",
+                "scaled": [],
+                "scale": None,
+                "settings": [START_ON_SLOTS.to_dict()],
+                "position_bound": bound,
+            }
+            return (
+                f"the declared start binds: every vehicle started on its slot certifies ({START_ON_SLOTS.toml()}; "
+                f"certified |e| <= {bound:.3g} m)",
+                (START_ON_SLOTS,),
+                entry,
+            )
     found = mission_advice(point, covered_position_bound)
     if found:
         a = found[0]

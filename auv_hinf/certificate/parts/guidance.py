@@ -54,14 +54,15 @@ from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.robust import run_settings
 from auv_hinf.certificate.parts.separation import SeparationBound
-from auv_hinf.certificate.reason import Reason, Setting, toml_line
+from auv_hinf.certificate.reason import Reason, Setting, apart, toml_line
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
-from auv_hinf.guidance.simulation import cascade_period, slot_motion
+from auv_hinf.guidance.simulation import STEP, cascade_period, slot_motion
 from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
 from auv_hinf.mission.separation import slot_separation
@@ -101,6 +102,9 @@ MISSION_SCALE_STEPS = 6
 #: together on the declared mission only when it certifies the declared ones, or more than this
 #: many times the joint scale.
 MISSION_OVER_TOGETHER = 2.0
+#: Bisection steps of the advised sample time between the default period :data:`~auv_hinf.guidance.simulation.STEP`
+#: and a longer declared one, geometric: 2^-6 of the ratio's logarithm (6 % between 0.1 s and 5 s).
+PERIOD_STEPS = 6
 #: Largest heading bandwidth times sample time tried: the sampled heading loop keeps a tenth of a
 #: period per radian of its bandwidth's phase (0.4 rad at 10 Hz and 4 rad/s).
 MAX_BANDWIDTH_STEP = 0.4
@@ -255,6 +259,10 @@ class GuidanceSummary:
         When it does not hold, no gains of :data:`GAIN_CANDIDATES` certify and an ``[implementation]``
         delay or noise is declared: the largest scale of the delay and the noise together that
         certifies the declared box and current (``None``: none found, or none declared).
+    sample_time : float or None
+        When none of the above certifies and the declared sample time is longer than the default
+        period :data:`~auv_hinf.guidance.simulation.STEP`: the longest sample time (s) that certifies
+        the declared box and current with the declared delay and noise (``None``: not even the default).
     envelope : tuple of Setting
         When the cascade is certified but its certified motion leaves the declared ``[envelope]``
         (:func:`envelope_gap`): the envelope's ranges widened to hold it.
@@ -274,6 +282,7 @@ class GuidanceSummary:
     supported_bound: float | None = None
     lag_scale: float | None = None
     envelope: tuple[Setting, ...] = ()
+    sample_time: float | None = None
 
     @property
     def holds(self) -> bool:
@@ -419,16 +428,22 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             lag_scale = largest_holding(navigates, 1.0, steps=ADVICE_STEPS)
         if lag_scale and _confirmed(cfg, _navigation_settings(problem, lag_scale)) is None:
             lag_scale = None  # its rounded values, as written, are refused
+    period = None
+    if gains is None and bounded and not lag_scale and problem.sample_time > STEP:
+        period = _longest_period(cfg, problem)
     bare = _navigation(_with(cfg, problem, current=0.0, scale=0.0), 0.0)
     binds = (
         current is None
         and scale is None
         and gains is None
         and not lag_scale
+        and period is None
         and not certify_cascade(bare, cells=False).holds
     )
-    if bool(current) or bool(scale) or gains is not None or bool(lag_scale) or not bounded:
-        return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, lag_scale=lag_scale or None)
+    if bool(current) or bool(scale) or gains is not None or bool(lag_scale) or period is not None or not bounded:
+        return GuidanceSummary(
+            problem, cert, cert.reason, current, scale, gains, binds, lag_scale=lag_scale or None, sample_time=period
+        )
     together = None
     if not binds and problem.plant.current > 0.0 and problem.plant.box.declared:
         together = _largest_scale(cfg, problem)
@@ -436,6 +451,20 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             together = 0.0  # its rounded values, as written, are refused
     mission = mission_answer(cfg)
     return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission, together)
+
+
+def _longest_period(cfg: FormationConfig, problem: CascadeProblem) -> float | None:
+    """The longest sample time (s) between :data:`~auv_hinf.guidance.simulation.STEP` and the declared one that
+    certifies the declared box and current, with the declared delay and noise; ``None`` when the default
+    period does not (a geometric bisection of :data:`PERIOD_STEPS` steps, rounded down and confirmed as written)."""
+
+    def holds(h: float) -> bool:
+        return certify_cascade(replace(problem, sample_time=h), cells=False).holds
+
+    if not holds(STEP):
+        return None
+    h = _down(bisect(holds, STEP, problem.sample_time, steps=PERIOD_STEPS, geometric=True)[0])
+    return h if _confirmed(cfg, (Setting("implementation", "sample_time", h),)) is not None else None
 
 
 def _navigates(problem: CascadeProblem) -> bool:
@@ -557,7 +586,9 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
                     continue
                 cert = certify_cascade(milder[1], cells=False)  # what holds whole holds with cells
                 if cert.holds and cert.position_bound is not None and _separated(milder[0], cert.position_bound):
-                    return MissionAnswer(what, settings, 1.0, cert.position_bound)
+                    # a slower mission may move slower than the declared envelope allows: its range comes along
+                    wider = envelope_gap(milder[0].envelope, cert)[1]
+                    return MissionAnswer(what, settings + wider, 1.0, cert.position_bound)
     for what, settings, new_cfg, problem in gentlest:  # the first kind whose gentlest change certifies some
         # the declared gains and the candidates: the ones that certify the largest share of the world
         tried: list[tuple[GuidanceConfig, tuple[Setting, ...]]] = [(problem.guidance, ())]
@@ -568,8 +599,11 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
         scale, _, gains = max(scored, key=lambda x: (x[0], -x[1]))
         if scale > 0.0:
             written = settings + gains + _world(new_cfg, problem, scale)
-            bound = _confirmed(cfg, written)
-            return None if bound is None else MissionAnswer(what, written, scale, bound)
+            got = _rerun(cfg, written)
+            if got is None:
+                return None
+            bound, wider = got
+            return MissionAnswer(what, written + wider, scale, bound)
     return None
 
 
@@ -629,15 +663,26 @@ def supported_settings(cfg: FormationConfig) -> tuple[Setting, ...]:
     return tuple(x for _, settings in _unsupported(cfg) for x in settings)
 
 
-def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
-    """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, ``None`` if refused
-    (or if that distance leaves the vehicles closer than ``[formation] min_separation``, :func:`_separated`)."""
+def _rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[float, tuple[Setting, ...]] | None:
+    """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, and the ``[envelope]``
+    ranges widened to hold its certified motion (empty when it stays inside); ``None`` if refused (or if
+    that distance leaves the vehicles closer than ``[formation] min_separation``, :func:`_separated`)."""
     rerun = _changed(cfg, settings)
     if rerun is None:
         return None
     cert = certify_cascade(rerun[1], cells=False)
     bound = cert.position_bound if cert.holds else None
-    return bound if bound is not None and _separated(rerun[0], bound) else None
+    if bound is None or not _separated(rerun[0], bound):
+        return None
+    return bound, envelope_gap(rerun[0].envelope, cert)[1]
+
+
+def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
+    """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``; ``None`` if refused, if
+    that distance leaves the vehicles closer than ``[formation] min_separation``, or if the certified
+    motion leaves the declared ``[envelope]`` (:func:`_rerun`)."""
+    got = _rerun(cfg, settings)
+    return None if got is None or got[1] else got[0]
 
 
 def _separated(cfg: FormationConfig, bound: float) -> bool:
@@ -731,7 +776,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     if summary.envelope:
         return summary.envelope, (
             f"if the model holds there, widen the envelope: {toml_line(summary.envelope)} certifies; "
-            "else slow the mission"
+            f"else {_envelope_remedy(cfg.envelope, summary.envelope)}"
         )
     if summary.start_bound is not None:
         return (RESTART,), (
@@ -747,6 +792,11 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             f"a faster, more precise navigation certifies the declared box and current: the delay and the noise "
             f"together at {summary.lag_scale:.3g} of the declared ({toml_line(settings)})"
         )
+    if summary.sample_time is not None:
+        period = Setting("implementation", "sample_time", summary.sample_time)
+        kept = " with the declared delay and noise" if _navigates(problem) else ""
+        return (period,), f"a shorter sample time certifies the declared box and current{kept}: {period.toml()} (s)"
+
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
         return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
@@ -757,7 +807,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     s0 = summary.together or 0.0
     if s0 > 0.0 and (m is None or (m.scale < 1.0 and m.scale <= MISSION_OVER_TOGETHER * s0)):
         world = _world(cfg, problem, s0)
-        other = "" if m is None else f"; or, with a change of the mission, {toml_line(m.settings)}"
+        world += run_settings(cfg, world)  # the configured run kept inside, written with the answer
+        other = (
+            ""
+            if m is None
+            else f"; or, with a change of the mission, {toml_line(m.settings + run_settings(cfg, m.settings))}"
+        )
         return world, (
             f"no smaller current or smaller box alone certifies: the current and the box together at {s0:.3g} of "
             f"the declared do, on the declared mission ({toml_line(world)}){other}"
@@ -780,6 +835,26 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     return (), ""
 
 
+def _envelope_remedy(envelope: Envelope, widened: tuple[Setting, ...]) -> str:
+    """The change of the mission that keeps its motion in ``envelope``, in words.
+
+    Surge below the envelope's range asks for a faster mission; surge above it, or sway and yaw rates
+    beyond theirs (which grow with the speed and the turns), for a slower one.
+    """
+    slower = faster = False
+    for x in widened:
+        lo, hi = getattr(envelope, x.key)
+        if x.key == "u" and x.value[0] < lo:
+            faster = True
+        if x.key != "u" or x.value[1] > hi:
+            slower = True
+    if faster and not slower:
+        return "a faster mission (the surge speed through the water falls below the envelope)"
+    if slower and not faster:
+        return "slow the mission"
+    return "a mission whose surge speed stays inside the envelope"
+
+
 def _tried(problem: CascadeProblem, gains: str) -> str:
     """What a refusal's answers tried, in words: a smaller current or box only when one is declared, then ``gains``."""
     tried = [
@@ -797,8 +872,8 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
     heading}`` (m, m, rad), ``certified_peak{force_x, rudder}`` (N, rad), ``limits``, ``states``
     (the whole certified box), ``sample_time`` (s), ``start`` (the certified start's bounds),
     ``cells`` (the cells of the box certified one by one, 1 for the whole box at once),
-    ``largest_certifiable{current_speed, box_scale, gains, together, start_on_slots, mission,
-    supported}`` and ``reason``.
+    ``largest_certifiable{current_speed, box_scale, gains, together, navigation_scale, sample_time,
+    start_on_slots, mission, envelope, supported}`` and ``reason``.
 
     Parameters
     ----------
@@ -834,6 +909,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
             "together": summary.together,
             "navigation_scale": summary.lag_scale,
+            "sample_time": summary.sample_time,
             "start_on_slots": None if summary.start_bound is None else {"position_bound": summary.start_bound},
             "mission": None if summary.mission is None else summary.mission.to_dict(),
             "envelope": [x.to_dict() for x in summary.envelope] or None,
@@ -979,11 +1055,9 @@ def covers_run(
             return False, "the run's plant is outside the [uncertainty] box"
     speed = math.hypot(*current)
     if speed > problem.plant.current * (1.0 + 1e-12):
-        return (
-            False,
-            f"the run's current ({speed:.4g} m/s) exceeds [disturbance] current_speed "
-            f"({problem.plant.current:.4g} m/s)",
-        )
+        run, bound = apart(speed, problem.plant.current)
+        return False, f"the run's current ({run} m/s) exceeds [disturbance] current_speed ({bound} m/s)"
+
     if initial is not None:
         start = start_states(problem, np.asarray(initial, dtype=float), _slots_at_start(cfg), np.asarray(current))
         if np.any(start > np.asarray(problem.start) * (1.0 + 1e-9) + 1e-12):

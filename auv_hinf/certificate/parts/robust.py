@@ -21,7 +21,7 @@ from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
-from auv_hinf.certificate.reason import Reason, Setting, reason_from
+from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
@@ -282,10 +282,11 @@ def run_outside(point: DesignPoint, part: str = PART, varying_current: bool = Fa
     speed = float(np.hypot(*cfg.simulation.current))
     fast = not _within(speed, 0.0, point.current)
     if fast:
+        run, bound = apart(speed, point.current)
+        need = run if float(run) >= speed else repr(speed)  # a bound written as printed covers the run
         words.append(
-            f"current {speed:.4g} m/s exceeds the declared bound {point.current:g} m/s: lower [simulation] current "
-            f"to the bound, or declare [disturbance] current_speed >= {speed:.4g} m/s (the certificate is then "
-            "computed for it)"
+            f"current {run} m/s exceeds the declared bound {bound} m/s: lower [simulation] current to the bound, "
+            f"or declare [disturbance] current_speed >= {need} m/s (the certificate is then computed for it)"
         )
     if words:  # one reason with every value that brings the run inside: one re-run certifies
         return Reason(
