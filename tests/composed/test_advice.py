@@ -123,3 +123,25 @@ def test_a_small_world_answer_is_given_beside_everything_together_and_a_large_on
     summary = composed_part.composed_summary(point)
     assert tuple(a.knob for a in summary.advice) == answers
     assert searched[-1] == answers[-1]  # nothing is searched after the last answer kept
+
+
+def test_an_advised_sample_time_climbs_to_the_longest_a_re_run_covers(boxed, monkeypatch):
+    """The advice at the design's gains covered 5 % of the declared sample time; re-runs (their own gains)
+    cover up to 30 %: the climb (geometric middles towards 1) stops at the last covered one, 22 %, in
+    two re-runs, and every answer it gives is a covering re-run."""
+    from auv_hinf.certificate.parts import composed as part
+
+    runs = []
+
+    def as_rerun(cfg, a: Advice) -> Advice | None:
+        runs.append(a.scale)
+        if a.scale > 0.3:
+            return None
+        return replace(a, certificate=DeployedCertificate(True, None, ()))
+
+    monkeypatch.setattr(part, "_as_rerun", as_rerun)
+    first = Advice("sample_time", 0.05, shrunk(boxed, "sample_time", 0.05), DeployedCertificate(True, None, ()))
+    got = part._climbed(None, first, boxed)
+    assert got.scale == pytest.approx(0.05**0.5) and got.certificate.covers
+    assert runs == pytest.approx([0.05**0.5, 0.05**0.25])
+    assert got.problem.implementation.sample_time == pytest.approx(0.05**0.5 * boxed.implementation.sample_time)

@@ -554,6 +554,11 @@ RERUN_TOGETHER = (0.5, 0.25, 0.125, 0.0625, 0.0)
 #: Fractions of the declared sample time tried, each re-run with the noise, delay, current and box
 #: at nothing, when none of :data:`RERUN_TOGETHER` covers.
 RERUN_SAMPLE_TIME = (0.5, 0.25)
+#: Re-runs at a longer sample time tried after an advised one covers, each at the geometric middle
+#: of the last covered scale and 1: the advice is found with the design's gains, and a re-run designs
+#: its gains for the shorter sample time, which may hold a longer one (a 5 Hz fleet advised 100 Hz
+#: at the design's gains certified at 8 Hz with its own).
+SAMPLE_TIME_CLIMBS = 3
 
 
 def _as_rerun(cfg: FormationConfig, a: Advice) -> Advice | None:
@@ -597,9 +602,23 @@ def confirmed(cfg: FormationConfig, problem: DeployedProblem, advice: tuple[Advi
             for scale in dict.fromkeys((a.scale, *(a.scale * f for f in CONFIRM_FRACTIONS))):
                 got = _as_rerun(cfg, a if scale == a.scale else _scaled(a, original, scale))
                 if got is not None:
-                    out.append(got)
+                    out.append(_climbed(cfg, got, original) if a.knob == "sample_time" else got)
                     break
     return tuple(out)
+
+
+def _climbed(cfg: FormationConfig, a: Advice, original: DeployedProblem) -> Advice:
+    """``a`` (a covering re-run) at the longest sample time of :data:`SAMPLE_TIME_CLIMBS` re-runs that still covers.
+
+    Each re-run is at the geometric middle of the last covered scale and the declared one (1), which
+    is refused; the first that does not cover ends the climb.
+    """
+    for _ in range(SAMPLE_TIME_CLIMBS):
+        got = _as_rerun(cfg, _scaled(a, original, math.sqrt(a.scale)))
+        if got is None:
+            break
+        a = got
+    return a
 
 
 def _scaled(a: Advice, original: DeployedProblem, scale: float) -> Advice:
@@ -723,6 +742,7 @@ __all__ = [
     "PART",
     "RERUN_SAMPLE_TIME",
     "RERUN_TOGETHER",
+    "SAMPLE_TIME_CLIMBS",
     "SUPERSEDES",
     "ComposedSummary",
     "advice_settings",
