@@ -153,20 +153,28 @@ def _warm(problem: cascade.CascadeProblem) -> cascade.CascadeCertificate:
 SUMS = ("signed", "gramian", "contraction")
 
 
-def _no_lower_bound(*args: Any) -> tuple[Any, Any]:
-    """A stand-in of the signed sum that gives no lower bound (err = inf): the tail must itself be small,
-    and both signs of the kernel get the whole tail, as before the signed sum."""
-    stack, state = args[2], args[3]
-    shape = (stack.shape[0], state.shape[1])
-    return np.zeros(shape), np.full(shape, np.inf)
+class _NoLowerBound:
+    """A stand-in of the signed sums that gives no lower bound (err = inf): the tail must itself be small,
+    and both signs of the kernel get the whole tail, as before the signed sums."""
+
+    def __init__(self, rows: int) -> None:
+        self.rows = rows
+
+    @classmethod
+    def of(cls, stack: Any, *_: Any) -> _NoLowerBound:
+        return cls(stack.shape[0])
+
+    def __call__(self, state: Any) -> tuple[Any, Any]:
+        shape = (self.rows, state.shape[1])
+        return np.zeros(shape), np.full(shape, np.inf)
 
 
 def _peak_gains(problem: cascade.CascadeProblem, how: str) -> peak_module.PeakGains:
     """The cascade's nominal loop's peak gains, cold, summed as ``how`` says (:data:`SUMS`)."""
     loop = cascade.cascade_loop(problem)
-    saved = peak_module.GRAMIAN_AFTER, peak_module.ZERO_RTOL, peak_module._signed_tails
+    saved = peak_module.GRAMIAN_AFTER, peak_module.ZERO_RTOL, peak_module._SignedSums
     if how != "signed":
-        peak_module._signed_tails = _no_lower_bound
+        peak_module._SignedSums = _NoLowerBound  # type: ignore[misc,assignment]
     if how == "contraction":
         peak_module.GRAMIAN_AFTER, peak_module.ZERO_RTOL = math.inf, 0.0
     try:
@@ -174,7 +182,7 @@ def _peak_gains(problem: cascade.CascadeProblem, how: str) -> peak_module.PeakGa
         peak_module._period.cache_clear()
         gains = peak_module.peak_gains(loop)
     finally:
-        peak_module.GRAMIAN_AFTER, peak_module.ZERO_RTOL, peak_module._signed_tails = saved
+        peak_module.GRAMIAN_AFTER, peak_module.ZERO_RTOL, peak_module._SignedSums = saved  # type: ignore[misc]
     assert gains is not None
     return gains
 

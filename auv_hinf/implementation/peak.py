@@ -30,7 +30,7 @@ a loop with several inputs the bound is ``sum_i N_i W_i``; with perturbation cha
   (:func:`_gramians`), which charges an output only with the modes it sees. ``K`` is where that
   tail bound exceeds the exact remaining sum by at most ``TAIL_RTOL`` of the gain, which a lower
   bound of the remaining sum shows: the absolute value of its *signed* sum, ``|l (I - Phi)^-1 x|``
-  (:func:`_signed_tails`). Once a slow mode of one sign carries what is left, bound and lower bound
+  (:class:`_SignedSums`). Once a slow mode of one sign carries what is left, bound and lower bound
   meet, thousands of periods before the tail itself is small (the ILOS cascade at 20 Hz: 2,900
   periods instead of 7,100). The signed sum also splits the tail between the kernel's positive
   and negative parts;
@@ -72,7 +72,7 @@ FINE_STEPS = 8
 MIN_PERIODS = 64
 #: The exact sum stops once the tail bound it adds exceeds the exact remaining sum by at most this
 #: fraction of the gain so far (the excess is bounded through a lower bound of the remaining sum,
-#: :func:`_signed_tails`), so every gain is within this fraction of the exact peak-to-peak gain.
+#: :class:`_SignedSums`), so every gain is within this fraction of the exact peak-to-peak gain.
 TAIL_RTOL = 1e-4
 #: A gain below this fraction of its a-priori bound (the contraction's tail from the first period)
 #: is summed only to :data:`TAIL_RTOL` of that fraction: a gain that is nearly zero for the loop's
@@ -499,43 +499,64 @@ def _linked(loop: SampledLoop) -> NDArray[np.bool_]:
     return _reached(loop, seeds)
 
 
-def _signed_tails(
-    lu: tuple[FloatArray, NDArray[np.intp]],
-    gap: FloatArray,
-    stack: FloatArray,
-    state: FloatArray,
-    p: FloatArray,
-    rho: float,
-) -> tuple[FloatArray, FloatArray]:
-    """The signed remaining sums ``S = sum_{k >= 0} l Phi^k v`` and bounds of their solve's error.
+@dataclass(frozen=True)
+class _SignedSums:
+    """The signed remaining sums ``S = sum_{k >= 0} l Phi^k v`` of a loop's output rows, and bounds of their error.
 
-    ``l`` runs over the output rows of ``stack``, ``v`` over the columns of ``state``.
-
-    ``S = l (I - Phi)^-1 v`` is solved through the factorisation ``lu`` of ``gap = I - Phi``. With
-    ``z`` the computed solution and ``r = (I - Phi) z - v`` its residual (inflated by its own
-    round-off), ``l (I - Phi)^-1 v = l z - sum_k l Phi^k r``, and the sum is bounded by the
-    contraction ``|Phi x|_P <= rho |x|_P``: ``|l|_{P^-1} |r|_P / (1 - rho)``, plus the round-off of ``l z``.
+    ``S = l (I - Phi)^-1 v`` is solved through one factorisation of ``I - Phi``. With ``z`` the computed
+    solution and ``r = (I - Phi) z - v`` its residual (inflated by its own round-off),
+    ``l (I - Phi)^-1 v = l z - sum_k l Phi^k r``, and the sum is bounded by the contraction
+    ``|Phi x|_P <= rho |x|_P``: ``|l|_{P^-1} |r|_P / (1 - rho)``, plus the round-off of ``l z``.
     ``|S| - err`` is a lower bound of ``sum_k |l Phi^k v|`` (the sum of the terms' absolute values is
     at least the absolute value of their sum), and ``S`` splits the tail between the kernel's
-    positive and negative parts.
-
-    Returns
-    -------
-    signed, err : ndarray, shape (rows, columns)
-        ``l z`` and the bound of ``|S - l z|``.
+    positive and negative parts. Everything that does not depend on ``v`` is computed once
+    (:meth:`of`).
     """
-    eps = float(np.finfo(float).eps)
-    size = state.shape[0]
-    z = lu_solve(lu, state)
-    res = gap @ z - state
-    z_norm = _col_norms(z)
-    res_norm = _col_norms(res) + 4.0 * size * eps * (float(np.linalg.norm(gap, 2)) * z_norm + _col_norms(state))
-    w, v = np.linalg.eigh(p)
-    inv = v @ np.diag(1.0 / w) @ v.T
-    rows_p = _row_quad(stack, inv)
-    err = np.outer(rows_p, res_norm) * (math.sqrt(float(w.max())) / (1.0 - rho))
-    err += 4.0 * size * eps * np.outer(_row_norms(stack), z_norm)
-    return stack @ z, err
+
+    lu: tuple[FloatArray, NDArray[np.intp]]  # factorisation of I - Phi
+    gap: FloatArray  # I - Phi
+    gap_norm: float  # ||I - Phi||_2
+    stack: FloatArray  # the output rows l
+    row_err: FloatArray  # |l|_{P^-1} sqrt(lambda_max(P)) / (1 - rho) per row
+    row_norm: FloatArray  # |l|_2 per row
+
+    @classmethod
+    def of(cls, stack: FloatArray, phi: FloatArray, p: FloatArray, rho: float) -> _SignedSums:
+        """The factorisation and the rows' weights for output rows ``stack`` of the period map ``phi``.
+
+        Parameters
+        ----------
+        stack : ndarray, shape (rows, size)
+            The output rows.
+        phi : ndarray, shape (size, size)
+            The period map.
+        p, rho : ndarray, float
+            A verified contraction ``Phi^T P Phi <= rho^2 P``.
+        """
+        gap = np.eye(phi.shape[0]) - phi
+        w, v = np.linalg.eigh(p)
+        inv = v @ np.diag(1.0 / w) @ v.T
+        weight = math.sqrt(float(w.max())) / (1.0 - rho)
+        return cls(
+            lu_factor(gap), gap, float(np.linalg.norm(gap, 2)), stack, _row_quad(stack, inv) * weight, _row_norms(stack)
+        )
+
+    def __call__(self, state: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``(l z, err)`` for every row ``l`` and column ``v`` of ``state``, each ``(rows, columns)``.
+
+        Parameters
+        ----------
+        state : ndarray, shape (size, columns)
+            The states the sums start from.
+        """
+        eps = float(np.finfo(float).eps)
+        size = state.shape[0]
+        z = lu_solve(self.lu, state)
+        res = self.gap @ z - state
+        z_norm = _col_norms(z)
+        res_norm = _col_norms(res) + 4.0 * size * eps * (self.gap_norm * z_norm + _col_norms(state))
+        err = np.outer(self.row_err, res_norm) + 4.0 * size * eps * np.outer(self.row_norm, z_norm)
+        return self.stack @ z, err
 
 
 def _col_norms(m: FloatArray) -> FloatArray:
@@ -569,8 +590,6 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
     p, rho = contraction
     radius = float(np.abs(np.linalg.eigvals(phi)).max())
     linked = _linked(loop)
-    gap = np.eye(size) - phi
-    lu = lu_factor(gap)
     # the outputs at the end of every step q, on the state at the period's start
     rows = []
     partial = np.eye(size)
@@ -578,6 +597,7 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
         partial = mp @ partial
         rows.append(out @ partial)
     stack = np.vstack(rows)  # (steps * no, size)
+    sums = _SignedSums.of(stack, phi, p, rho)
     # per injection step j: the continuous inputs over the step (their kernel's value at its end,
     # times its length), the discrete inputs at its event, the first-order term of the continuous
     # kernel over the step, and unit plant states (for the second-order remainder)
@@ -642,7 +662,7 @@ def peak_gains(loop: SampledLoop, max_periods: int = MAX_PERIODS) -> PeakGains |
         # the tail bound exceeds the exact remaining sum by at most itself less a lower bound of
         # that sum, |S| - err (S the signed remaining sum): once a slow mode of one sign carries
         # what is left, the two meet long before the tail itself is small
-        signed, err = _signed_tails(lu, gap, stack, state, p, rho)
+        signed, err = sums(state)
         signed, err = signed.reshape(steps, no, steps, cols), err.reshape(steps, no, steps, cols)
         lower = np.maximum(np.abs(signed) - err, 0.0)
         excess = np.maximum(tails - lower, 0.0)[..., : nw + nn].sum(axis=2).max(axis=0)

@@ -428,7 +428,6 @@ def test_the_signed_remaining_sum_bounds_the_tail_from_below_and_splits_it_into_
     loop = axis(*SLOW)
     phi, rows = _period_rows(loop)
     p, rho = peak_module._contraction(phi)
-    gap = np.eye(phi.shape[0]) - phi
     starts = np.random.default_rng(11).normal(size=(phi.shape[0], 6))
     starts = np.linalg.matrix_power(phi, 200) @ starts  # two hundred periods on: the slow mode leads
     total, pos, neg, x = (np.zeros((rows.shape[0], starts.shape[1])) for _ in range(4))
@@ -439,7 +438,7 @@ def test_the_signed_remaining_sum_bounds_the_tail_from_below_and_splits_it_into_
         pos += np.maximum(z, 0.0)
         neg += np.maximum(-z, 0.0)
         x = phi @ x
-    signed, err = peak_module._signed_tails(peak_module.lu_factor(gap), gap, rows, starts, p, rho)
+    signed, err = peak_module._SignedSums.of(rows, phi, p, rho)(starts)
     scale = total.max()
     assert np.all(np.abs(signed) - err <= total * (1 + 1e-9) + 1e-12 * scale)
     assert np.all(0.5 * (total + signed + err) >= pos * (1 - 1e-9) - 1e-12 * scale)
