@@ -119,29 +119,35 @@ def test_a_small_world_answer_is_given_beside_everything_together_and_a_large_on
 
     monkeypatch.setattr(composed_part, "within_actuators", lambda p: lambda q: DeployedCertificate(False, None, ("x",)))
     monkeypatch.setattr(composed_part, "largest_covered", fake_largest)
-    monkeypatch.setattr(composed_part, "confirmed", lambda c, p, advice: advice)
+    monkeypatch.setattr(composed_part, "confirmed", lambda c, p, advice, certify: advice)
     summary = composed_part.composed_summary(point)
     assert tuple(a.knob for a in summary.advice) == answers
     assert searched[-1] == answers[-1]  # nothing is searched after the last answer kept
 
 
-def test_an_advised_sample_time_climbs_to_the_longest_a_re_run_covers(boxed, monkeypatch):
-    """The advice at the design's gains covered 5 % of the declared sample time; re-runs (their own gains)
-    cover up to 30 %: the climb (geometric middles towards 1) stops at the last covered one, 22 %, in
-    two re-runs, and every answer it gives is a covering re-run."""
+def test_an_advised_sample_time_climbs_to_near_the_longest_the_re_runs_gains_cover(boxed, monkeypatch):
+    """The advice at the design's gains covered 5 % of the declared sample time; the re-run's own gains cover
+    up to 30 %: a geometric bisection with those gains finds a scale within its resolution below 30 %, and
+    one re-run there (which covers) is the answer; had that re-run not covered, the first answer stays."""
     from auv_hinf.certificate.parts import composed as part
 
-    runs = []
+    edge, runs, certified = 0.3, [], []
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        scale = problem.implementation.sample_time / boxed.implementation.sample_time
+        certified.append(scale)
+        return DeployedCertificate(scale <= edge * (1 + 1e-12), None, ())
 
     def as_rerun(cfg, a: Advice) -> Advice | None:
         runs.append(a.scale)
-        if a.scale > 0.3:
-            return None
-        return replace(a, certificate=DeployedCertificate(True, None, ()))
+        return replace(a, certificate=DeployedCertificate(True, None, ())) if a.scale <= edge else None
 
     monkeypatch.setattr(part, "_as_rerun", as_rerun)
     first = Advice("sample_time", 0.05, shrunk(boxed, "sample_time", 0.05), DeployedCertificate(True, None, ()))
-    got = part._climbed(None, first, boxed)
-    assert got.scale == pytest.approx(0.05**0.5) and got.certificate.covers
-    assert runs == pytest.approx([0.05**0.5, 0.05**0.25])
-    assert got.problem.implementation.sample_time == pytest.approx(0.05**0.5 * boxed.implementation.sample_time)
+    got = part._climbed(None, first, boxed, certify)
+    resolution = (1.0 / 0.05) ** (1.0 / 2**part.SAMPLE_TIME_CLIMBS)
+    assert edge / resolution <= got.scale <= edge and got.certificate.covers
+    assert len(certified) == part.SAMPLE_TIME_CLIMBS and runs == [got.scale]
+    assert got.problem.implementation.sample_time == pytest.approx(got.scale * boxed.implementation.sample_time)
+    monkeypatch.setattr(part, "_as_rerun", lambda cfg, a: None)  # the re-run's own design does not cover
+    assert part._climbed(None, first, boxed, certify) is first
