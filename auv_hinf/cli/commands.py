@@ -543,6 +543,33 @@ def _runtime_law(cert: Any, uncertified: bool) -> Any:
         raise Negative(f"no law to run: {exc}") from None
 
 
+#: The MAVLink connection kinds ``run`` and ``fleet-sim`` take, with a port (``kind:host:port``).
+URL_KINDS = ("udpin", "udpout", "udp", "tcp", "tcpin")
+
+
+def _check_urls(urls: list[str], flag: str) -> None:
+    """Refuse connection strings that are not ``kind:host:port`` with a port in 0-65535, or that repeat.
+
+    Two vehicles on one connection would each get the other's commands; a serial device
+    (``/dev/...``) is taken as given, and port 0 (a listener on an ephemeral port) may repeat.
+    """
+    seen: set[str] = set()
+    for url in urls:
+        if not url.startswith("/"):
+            parts = url.split(":")
+            port = parts[-1] if len(parts) == 3 else ""
+            if parts[0] not in URL_KINDS or not port.isdigit() or not 0 <= int(port) <= 65535:
+                raise BadInput(
+                    f"{flag} {url!r} is not a MAVLink connection string: use kind:host:port with kind one of "
+                    f"{', '.join(URL_KINDS)} and a port in 0-65535 (udpout:127.0.0.1:14550), or a serial device"
+                )
+            if int(port) == 0:  # a listener on an ephemeral port: each gets its own
+                continue
+        if url in seen:
+            raise BadInput(f"{flag} {url!r} is given twice: each vehicle needs its own connection")
+        seen.add(url)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from auv_hinf.deployment.ardusub import ArduSubMapping
     from auv_hinf.deployment.link import VehicleLink
@@ -556,6 +583,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     n = cfg.n
     if len(urls) != n:
         raise BadInput(f"give one --connect URL per vehicle ({n}; or [deploy] connect), got {len(urls)}")
+    _check_urls(urls, "--connect")
     cert = _certified(cfg, cert)
     law = _runtime_law(cert, args.uncertified)
     if law.sample_time <= 0.0:
@@ -598,9 +626,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
             print(f"{key:>16}: {_short(summary[key])}")
     steps, count = summary["steps"], summary["violation_count"]
     covered = "yes" if summary["covered"] else f"no ({count} violation(s))"
-    if summary["stopped_by"] in ("sigint", "stop_event"):
+    if summary["stopped_by"] in ("sigint", "sigterm", "sighup", "stop_event"):
         print(
-            f"{PROG}: interrupted after {steps} steps: neutral sent to {n} vehicle(s); covered so far: {covered}",
+            f"{PROG}: interrupted ({summary['stopped_by'].upper()}) after {steps} steps: neutral sent to {n} "
+            f"vehicle(s); covered so far: {covered}",
             file=sys.stderr,
         )
         return EXIT_OK
@@ -612,6 +641,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if first is None
         else f"; first: {first['assumption']} on vehicle {first['vehicle']} at t = {first['time']:.3g} s"
     )
+    if summary["stopped_by"] == "start":
+        return _verdict(
+            False,
+            f"the fleet starts outside the certified bounds{what}: only neutral was sent to the {n} vehicle(s); "
+            "bring the vehicles to their slots at the mission's start (the certified start region), then run",
+        )
     if summary["stopped_by"] == "monitor":
         return _verdict(False, f"stopped by the monitor after {steps} steps, neutral sent to {n} vehicle(s){what}")
     if count == 0:
@@ -631,6 +666,7 @@ def _cmd_fleet_sim(args: argparse.Namespace) -> int:
     n = len(args.listen)
     if n != cfg.n:
         raise BadInput(f"give one --listen URL per vehicle of {cfg.name!r} ({cfg.n}), got {n}")
+    _check_urls(list(args.listen), "--listen")
 
     def each(values: tuple[float, ...], flag: str) -> tuple[float, ...]:
         if len(values) not in (1, n):
@@ -686,6 +722,14 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
     if args.plot is not None:
         _prepare_out(args.plot.parent, "--plot", args.plot)  # before the log is read and replayed
+        from matplotlib.backend_bases import FigureCanvasBase
+
+        kinds = FigureCanvasBase.get_supported_filetypes()
+        if args.plot.suffix.lower().lstrip(".") not in kinds:
+            raise BadInput(
+                f"--plot {str(args.plot)!r}: the file's extension names the image format; use one of "
+                f"{', '.join('.' + k for k in sorted(kinds))}"
+            )
     cfg, cert, _ = _deploy_source(args)
     data = read_log(args.log)
     law = _runtime_law(_certified(cfg, cert), uncertified=True)

@@ -19,8 +19,11 @@ sample time, one step:
 Between the steps the loop waits in ``select`` on every vehicle's socket and reads each message as it
 arrives, so that messages are time-stamped on arrival. A step that overruns by more than a period
 skips the missed ticks and keeps the phase (the monitor's ``period`` check reports it). Every exit
-(the duration, Ctrl-C or ``stop_event``, a ``stop`` action, an exception) sends a neutral command to
-every vehicle :data:`NEUTRAL_REPEATS` times, :data:`NEUTRAL_SPACING` apart (UDP may drop one).
+(the duration, Ctrl-C, SIGTERM or SIGHUP, or ``stop_event``, a ``stop`` action, an exception) sends a
+neutral command to every vehicle :data:`NEUTRAL_REPEATS` times, :data:`NEUTRAL_SPACING` apart (UDP may
+drop one). A fleet whose first measurement is outside the certified bounds (the invariant checks of
+:data:`START_ASSUMPTIONS`) gets neutral only, whatever the configured actions: the certificate does not
+cover a start there, and the law could ask for full force.
 The run is **covered** when the certificate holds and no assumption was violated at any step.
 """
 
@@ -58,6 +61,15 @@ NEUTRAL_REPEATS, NEUTRAL_SPACING = 3, 0.02
 WAIT_PING, WAIT_SYSTEM_TIME = 0.2, 1.0
 #: Violations kept in the summary (every one is in the log).
 SUMMARY_VIOLATIONS = 10_000
+#: The signals that end a run as Ctrl-C does (neutral sent, summary, log closed): SIGINT, SIGTERM (what
+#: ``timeout``, systemd and docker send) and SIGHUP (a closed terminal), where the platform has them.
+STOP_SIGNALS: tuple[int, ...] = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+#: The assumptions whose violation at the first step refuses the run before any command but neutral
+#: is sent: a fleet that starts outside the certified bounds is not covered by the certificate from
+#: there, and the law may command full force towards the mission.
+START_ASSUMPTIONS = ("invariant_position", "invariant_velocity", "invariant_heading", "invariant_yaw_rate")
 
 
 @dataclass
@@ -78,6 +90,8 @@ class RunStats:
         Every violation.
     action : Action or None
         The most severe action taken.
+    start_refused : bool
+        The first step's measurement was outside the certified bounds: only neutral was sent.
     """
 
     steps: int = 0
@@ -86,6 +100,7 @@ class RunStats:
     violations: list[dict[str, Any]] = field(default_factory=list)
     violation_count: int = 0
     action: Action | None = None
+    start_refused: bool = False
 
     def record(self, found: list[Violation], action: Action | None) -> None:
         """Count one step's violations and action.
@@ -202,7 +217,8 @@ def run(
     duration : float
         Length of the run (s, > 0).
     log_path : str or Path
-        The Parquet log (its folder must exist).
+        The Parquet log (its folder must exist); written once every vehicle has answered, so a run
+        that never starts leaves an earlier file there as it was.
     config : MonitorConfig, optional
         The action of each assumption (default: :class:`MonitorConfig`'s).
     wait_timeout : float
@@ -210,7 +226,7 @@ def run(
     stop_event : threading.Event, optional
         Set it to stop the loop as Ctrl-C does.
     install_sigint : bool
-        Stop on SIGINT during the run (main thread only).
+        Stop on SIGINT, SIGTERM and SIGHUP during the run (:data:`STOP_SIGNALS`; main thread only).
     metadata : dict of str to str, optional
         More key-value metadata for the log.
     realtime : bool
@@ -222,8 +238,9 @@ def run(
     dict
         ``steps``, ``covered``, ``violations`` (``[{time, vehicle, assumption, value, bound}]``),
         ``max_age``, ``max_period`` (s), ``mean_period``, ``std_period`` (s), ``violation_count``,
-        ``certified``, ``stopped_by`` (``"duration"``, ``"sigint"``, ``"stop_event"`` or
-        ``"monitor"``), ``action``, ``priority`` (what the scheduler granted) and ``log``.
+        ``certified``, ``stopped_by`` (``"duration"``, ``"sigint"``, ``"sigterm"``, ``"sighup"``,
+        ``"stop_event"``, ``"monitor"`` or ``"start"``: the first measurement outside the certified
+        bounds), ``action``, ``priority`` (what the scheduler granted) and ``log``.
 
     Raises
     ------
@@ -258,27 +275,34 @@ def run(
         "n_vehicles": str(n),
         **(metadata or {}),
     }
-    log = RunLog(log_path, meta)
-    old_handler: Any = None
+    old_handlers: dict[int, Any] = {}
+    received: list[str] = []
     if install_sigint and threading.current_thread() is threading.main_thread():
 
         def _interrupt(signum: int, frame: FrameType | None) -> None:
+            received.append(signal.Signals(signum).name.lower())
             stop.set()
 
-        old_handler = signal.signal(signal.SIGINT, _interrupt)
+        # a supervisor (timeout, systemd, docker) stops a process with SIGTERM, a closed terminal with
+        # SIGHUP: each ends the run as Ctrl-C does, with neutral sent and the log closed
+        for sig in STOP_SIGNALS:
+            old_handlers[sig] = signal.signal(sig, _interrupt)
     stats = RunStats()
     stopped_by, priority = "duration", "normal"
+    log: RunLog | None = None
     try:
         wait_for_vehicles(links, wait_timeout, stop)
+        log = RunLog(log_path, meta)  # after the link is up: a run that never starts keeps an earlier log
         with realtime_priority(realtime) as priority:
             stopped_by = _loop(law, links, duration, cfg, monitor, log, stats, stop)
         if stopped_by == "interrupted":
-            stopped_by = "sigint" if stop_event is None else "stop_event"
+            stopped_by = (received[0] if received else "sigint") if stop_event is None else "stop_event"
     finally:
         _send_neutral(links)
-        if old_handler is not None:
-            signal.signal(signal.SIGINT, old_handler)
-        log.close()
+        for sig, old in old_handlers.items():
+            signal.signal(sig, old)
+        if log is not None:
+            log.close()
     periods = np.asarray(stats.periods)
     return {
         "steps": stats.steps,
@@ -355,6 +379,10 @@ def _loop(
         step = StepInput(t_s, period, states, ages, nav_gap, beat_gap, commanded, saturated, reference, modes, gains)
         found = monitor.check(step)
         action = cfg.most_severe(found)
+        if k == 0 and any(v.assumption in START_ASSUMPTIONS for v in found):
+            # the first measurement is outside the certified bounds: the law is not certified from
+            # there, and it may ask for full force; nothing but neutral is sent
+            action, stats.start_refused = Action.STOP, True
         stats.record(found, action)
         name = active.name
         if action is Action.STOP:
@@ -373,7 +401,7 @@ def _loop(
         if np.any(np.isfinite(ages)):
             stats.max_age = max(stats.max_age, float(np.nanmax(ages)))
         if name == "neutral":
-            return "monitor"
+            return "start" if stats.start_refused else "monitor"
         if (tick - last_ping) * 1e-9 >= HEARTBEAT_INTERVAL:
             for ln in links:
                 ln.send_heartbeat()

@@ -39,6 +39,36 @@ def test_run_needs_one_connection_per_vehicle(config, tmp_path, capsys):
     assert code == 2 and len(err.splitlines()) == 1 and "one --connect URL per vehicle (2" in err and "got 1" in err
 
 
+@pytest.mark.parametrize(
+    ("urls", "words"),
+    [
+        (["udpout:127.0.0.1:14550", "udpout:127.0.0.1:14550"], "is given twice"),
+        (["udpout:127.0.0.1:14550", "foo"], "is not a MAVLink connection string"),
+        (["udpout:127.0.0.1:14550", "udpout:127.0.0.1:99999"], "a port in 0-65535"),
+    ],
+)
+def test_run_refuses_connections_that_repeat_or_are_not_mavlink_urls(config, tmp_path, capsys, urls, words):
+    """Two vehicles on one connection would each get the other's commands; a string pymavlink would read as
+    a serial device or a port out of range fails late: all are bad input, before any certification."""
+    log = tmp_path / "r.parquet"
+    code = main(
+        ["run", "--config", str(config), "--duration", "1", "--log", str(log)]
+        + [a for u in urls for a in ("--connect", u)]
+    )
+    err = _err(capsys)
+    assert code == 2 and words in err and len(err.splitlines()) == 1 and not log.exists()
+    code = main(
+        ["fleet-sim", "--config", str(config), "--duration", "0.1"] + [a for u in urls for a in ("--listen", u)]
+    )
+    assert code == 2 and words in _err(capsys)
+
+
+def test_replay_refuses_a_plot_file_whose_extension_is_no_image_format_before_reading_the_log(config, tmp_path, capsys):
+    code = main(["replay", str(tmp_path / "none.parquet"), "--config", str(config), "--plot", str(tmp_path / "r.txt")])
+    err = _err(capsys)
+    assert code == 2 and "--plot" in err and ".png" in err and "none.parquet" not in err
+
+
 def test_deploy_table_is_validated(tmp_path, capsys):
     path = tmp_path / "bad.toml"
     path.write_text(TOML + "\n[deploy]\npilot_gain = 2.0\nvoltag = 16.0\n", encoding="utf-8")

@@ -321,3 +321,54 @@ def test_ctrl_c_sends_neutral_and_exits_0(certificate, tmp_path):
     for vehicle in json.loads(report.read_text())["vehicles"]:
         assert vehicle["commands"][-1][1:] == NEUTRAL_STICKS
     assert len(pd.read_parquet(log)) == 4 * summary["steps"]
+
+
+def test_a_fleet_that_starts_outside_the_certified_bounds_gets_neutral_only(certificate, capsys, tmp_path):
+    """A second run on the same loopback fleet starts where the first left the vehicles, metres from the
+    mission's slots at t = 0: the first step sees the start outside the certified bounds and sends nothing
+    but neutral, whatever the configured actions (the default warns), and the run exits 1 saying so."""
+    _, cert_file = certificate
+    report = tmp_path / "fleet.json"
+    with fleet(cert_file, report) as urls:
+        code, first, _ = _run_cli(capsys, cert_file, urls, tmp_path / "first.parquet")
+        assert code == 0 and first["covered"], first
+        code, again, err = _run_cli(capsys, cert_file, urls, tmp_path / "again.parquet")
+    assert code == 1 and again["stopped_by"] == "start" and again["steps"] == 1
+    assert "starts outside the certified bounds" in err and "only neutral" in err
+    assert _names(again["violations"]) <= {
+        "invariant_position",
+        "invariant_velocity",
+        "invariant_heading",
+        "invariant_yaw_rate",
+    }
+    for vehicle in json.loads(report.read_text())["vehicles"]:
+        assert vehicle["commands"][-1][1:] == NEUTRAL_STICKS
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_end_a_run_as_ctrl_c_does(certificate, tmp_path, sig):
+    """What ``timeout``, systemd or a closed terminal send: neutral to every vehicle, the summary, the log
+    closed and readable, exit 0."""
+    _, cert_file = certificate
+    report, log = tmp_path / "fleet.json", tmp_path / "term.parquet"
+    with fleet(cert_file, report) as urls:
+        cmd = _cli("run", "--certificate", str(cert_file), "--duration", "60", "--log", str(log), "--json")
+        cmd += [a for u in urls for a in ("--connect", u)]
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + START_BOUND
+            while not log.exists() and time.monotonic() < deadline and proc.poll() is None:
+                time.sleep(0.1)
+            time.sleep(1.5)
+            proc.send_signal(sig)
+            out, err = proc.communicate(timeout=20)
+        finally:
+            _stop(proc, signal.SIGKILL)
+        time.sleep(0.3)
+    assert proc.returncode == 0, err
+    summary = json.loads(out.strip().splitlines()[-1])
+    assert summary["stopped_by"] == signal.Signals(sig).name.lower() and summary["steps"] >= 3
+    assert "interrupted" in err and "neutral sent to 4 vehicle(s)" in err
+    for vehicle in json.loads(report.read_text())["vehicles"]:
+        assert vehicle["commands"][-1][1:] == NEUTRAL_STICKS
+    assert len(pd.read_parquet(log)) == 4 * summary["steps"]
