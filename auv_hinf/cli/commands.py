@@ -25,6 +25,7 @@ from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative, 
 from auv_hinf.config.messages import input_warnings
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError, DesignError, Interrupted, ParameterError, SolverError
+from auv_hinf.files import write_text
 
 if TYPE_CHECKING:  # the run plan imports the certificates: each command imports what it runs
     from auv_hinf.certificate.run_plan import RunPlan
@@ -238,7 +239,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.out:
         from auv_hinf.figures.simulation import save_simulation_plots
 
-        (args.out / "summary.json").write_text(_dump(summary))
+        write_text(args.out / "summary.json", _dump(summary))
         result.save_npz(args.out / "trajectory.npz")
         cov, rob = plan.coverage, plan.robust  # the bound that applies to this run (None when it is not covered)
         thrust = rob.thrust if rob is not None and rob.covered else (None if cov is None else cov.thrust)
@@ -307,7 +308,7 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
     if args.out:
         from auv_hinf.figures.guidance import save_guidance_plots
 
-        (args.out / "summary.json").write_text(_dump(summary))
+        write_text(args.out / "summary.json", _dump(summary))
         covered = summary["certified_errors"] if summary["certificate_covers_run"] else None
         save_guidance_plots(run, args.out, covered)  # the certified bounds drawn when they cover the run
     if args.json:

@@ -525,7 +525,8 @@ def _optional_table(
     lines = _table(name, model, data.get(name, {}), examples)
     if name in data:
         return lines
-    return [line if not line.startswith("[") else f"# {line}  ({absent})" for line in lines]
+    # the note after a comment sign of its own: uncommenting the header leaves valid TOML
+    return [line if not line.startswith("[") else f"# {line}  # {absent}" for line in lines]
 
 
 __all__ = [

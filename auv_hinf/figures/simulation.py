@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import colorsys
 import functools
+import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -33,6 +34,7 @@ from matplotlib.patches import Patch
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
+from auv_hinf.files import written
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
 if TYPE_CHECKING:
@@ -138,7 +140,26 @@ def _snapshot_indices(t: np.ndarray, every: float) -> list[int]:
     return sorted({int(np.argmin(np.abs(t - tm))) for tm in times})
 
 
-def trajectories(res: SimulationResult, marker_every: float = 50.0) -> Figure:
+#: Formation snapshots drawn on a trajectory figure by default, about: the interval between them is the
+#: horizon over this, rounded to 1, 2 or 5 times a power of ten seconds (a fixed 50 s drew 60 merged
+#: snapshots on a 3000 s run).
+SNAPSHOTS = 8
+
+
+def snapshot_interval(horizon: float) -> float:
+    """The time between formation snapshots (s): ``horizon / SNAPSHOTS`` rounded to 1, 2 or 5 times a power of ten.
+
+    Parameters
+    ----------
+    horizon : float
+        The run's length (s).
+    """
+    raw = max(horizon, 1e-9) / SNAPSHOTS
+    power = 10.0 ** math.floor(math.log10(raw))
+    return next((m * power for m in (1.0, 2.0, 5.0, 10.0) if m * power >= raw * (1.0 - 1e-12)), 10.0 * power)
+
+
+def trajectories(res: SimulationResult, marker_every: float | None = None) -> Figure:
     """Paths of the vehicles, the desired centre path and the formation every ``marker_every`` s.
 
     At each snapshot the formation polygon is drawn and every vehicle's heading ``psi``
@@ -153,8 +174,9 @@ def trajectories(res: SimulationResult, marker_every: float = 50.0) -> Figure:
     ----------
     res : SimulationResult
         A simulation result (see the module docstring for the attributes read).
-    marker_every : float
-        Time between formation snapshots, s (a large fleet has none: its density shows the shape).
+    marker_every : float, optional
+        Time between formation snapshots, s (default :func:`snapshot_interval` of the run's length; a
+        large fleet has none: its density shows the shape).
 
     Returns
     -------
@@ -162,6 +184,8 @@ def trajectories(res: SimulationResult, marker_every: float = 50.0) -> Figure:
         One axes, in m; for a large fleet a second one, the slot errors (m) against t (s).
     """
     t = np.asarray(res.t, dtype=float)
+    if marker_every is None:
+        marker_every = snapshot_interval(float(t[-1] - t[0]) if t.size else 0.0)
     states = np.asarray(res.states, dtype=float)
     xy = states[..., 0:2]
     centre = np.asarray(res.desired_center, dtype=float)
@@ -491,7 +515,8 @@ def save_pngs(figures: Sequence[tuple[str, Callable[[Any], Figure]]], data: Any,
     for name, figure_of in figures:
         fig = figure_of(data)
         path = Path(out) / f"{name}.png"
-        fig.savefig(path, dpi=PNG_DPI)
+        with written(path) as tmp:  # an interrupted write leaves no truncated image
+            fig.savefig(tmp, dpi=PNG_DPI)
         plt.close(fig)
         paths.append(path)
     return paths
@@ -511,6 +536,7 @@ __all__ = [
     "PNG_DPI",
     "RED_HUE_WIDTH",
     "REFERENCE_COLOUR",
+    "SNAPSHOTS",
     "TRAJECTORY_MARGIN",
     "VEHICLE_COLOURS",
     "WORST_VEHICLES",
@@ -520,6 +546,7 @@ __all__ = [
     "per_vehicle_axes",
     "save_pngs",
     "save_simulation_plots",
+    "snapshot_interval",
     "trajectories",
     "velocities",
 ]

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNELS
+from auv_hinf.files import written
 from auv_hinf.law.formation_law import saturate
 from auv_hinf.mission.fleet import Motion
 from auv_hinf.mission.separation import closest_approach
@@ -163,7 +164,9 @@ class SimulationResult:
         path : str or Path
             The file (``np.savez_compressed`` appends ``.npz`` when missing).
         """
-        np.savez_compressed(path, t=self.t, states=self.states, forces=self.forces, jacobi=self.jacobi)
+        target = Path(path) if str(path).endswith(".npz") else Path(f"{path}.npz")
+        with written(target) as tmp:  # an interrupted write leaves no truncated file
+            np.savez_compressed(tmp, t=self.t, states=self.states, forces=self.forces, jacobi=self.jacobi)
 
 
 def build_result(

@@ -150,3 +150,24 @@ def test_a_part_is_evaluated_only_for_the_laws_it_declares():
     # a part may say what covers its concern when its law does not run: the cascade's own certificate
     impl = guided.verdict("implementation")
     assert impl is not None and not impl.applies and "guidance part judges" in impl.note
+
+
+def test_a_box_the_nominal_design_does_not_cover_is_answered_with_the_robust_design():
+    """Without ``robust = true`` the nominal Theorem 1 gains run: a box and a current they do not cover are
+    refused naming what is declared (a current alone is not called a box) and the key that designs for them."""
+    from auv_hinf.config.settings import config_from_dict
+
+    base = {
+        "vehicle": {"preset": "paper2011"},
+        "formation": {"n": 3, "polygon_radius": 15.0},
+        "reference": {"kind": "sine", "speed": 1.5, "amplitude": 30.0, "omega": 0.1},
+        "uncertainty": {"m11": [0.9, 1.1], "m22": [0.9, 1.1], "d11_quad": [0.9, 1.1], "d22_quad": [0.9, 1.1]},
+        "disturbance": {"current_speed": 0.1},
+    }
+    cert = certify(config_from_dict(base))
+    [why] = [r for r in cert.findings if r.part == "robust"]
+    assert "the declared [uncertainty] box and [disturbance] current" in why.message
+    assert "[design] robust = true" in why.message
+    current_only = certify(config_from_dict({**base, "uncertainty": {}}))
+    for r in (r for r in current_only.findings if r.part == "robust"):
+        assert "box" not in r.message.split(":")[0]

@@ -363,3 +363,13 @@ def test_a_synthesis_without_the_robust_design_is_refused_not_ignored(kind):
     assert f'synthesis = "{kind}" needs robust = true' in line and line.startswith("design")
     config_from_dict({"design": {"synthesis": kind, "robust": True}, "implementation": {"sample_time": 0.1}})
     config_from_dict({"design": {"synthesis": "bandwidth"}})
+
+
+def test_uncommenting_an_optional_table_header_of_the_annotated_file_leaves_valid_toml():
+    """``init`` writes absent optional tables with their header commented out and a note after it; a user
+    who uncomments the header (and a key) must get TOML that parses, the note staying a comment."""
+    text = annotated_toml(preset_config("paper-triangle"))
+    headers = [line for line in text.splitlines() if line.startswith(("# [actuators]", "# [guidance]"))]
+    assert len(headers) == 2, "the preset leaves both optional tables out"
+    for header in headers:
+        tomllib.loads(text.replace(header, header.removeprefix("# "), 1))

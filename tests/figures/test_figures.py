@@ -370,3 +370,11 @@ def test_guidance_errors_draw_the_certified_bounds_in_physical_units():
     bare = guidance_errors(run)
     assert all(len(ax.lines) == 2 for ax in bare.axes)  # one line per vehicle, no bound
     plt.close(bare)
+
+
+@pytest.mark.parametrize(("horizon", "every"), [(30.0, 5.0), (300.0, 50.0), (900.0, 200.0), (3000.0, 500.0)])
+def test_the_default_snapshots_follow_the_run_length(horizon, every):
+    """About SNAPSHOTS formation snapshots whatever the horizon, at a round interval (1, 2 or 5 x 10^k s)."""
+    got = plots.snapshot_interval(horizon)
+    assert got == pytest.approx(every)
+    assert plots.SNAPSHOTS / 2.5 <= horizon / got <= plots.SNAPSHOTS

@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "auv_hinf"
 
 #: The packages from the bottom up; the private modules and ``exceptions`` are the ground.
 LAYERS = (
-    ("_typing", "_version", "exceptions"),
+    ("_typing", "_version", "exceptions", "files"),
     ("numerics",),
     ("models",),
     ("mission",),

@@ -487,11 +487,27 @@ class RobustPart:
         if design_failed:  # the robust design gave no gains: that is the verdict
             return Verdict(self.name, False, True, tuple(design_failed), figures, peaks, binding, rob)
         if rob.declared and not rob.covers:
+            cfg = point.config
+            declared = " and ".join(
+                what
+                for what, there in (
+                    ("[uncertainty] box", cfg.uncertainty.box),
+                    ("[disturbance] current", cfg.disturbance.current_speed),
+                )
+                if there
+            )
+            hint = (
+                "; the gains are the nominal Theorem 1 design: [design] robust = true designs them for the box "
+                "and the current"
+                if not cfg.robust
+                else ""
+            )
             why = Reason(
                 self.name,
                 "not_covered",
-                "robust certificate does not cover the declared [uncertainty] box and [disturbance] current: "
-                + ("; ".join(figures["reasons"]) or "see robust"),
+                f"robust certificate does not cover the declared {declared or '[uncertainty] box and current'}: "
+                + ("; ".join(figures["reasons"]) or "see robust")
+                + hint,
             )
             return Verdict(self.name, False, True, (why,), figures, peaks, binding, rob)
         earlier = ctx.verdicts.get("closed_loop")
