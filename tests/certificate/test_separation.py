@@ -251,3 +251,28 @@ def test_a_spread_the_format_refuses_is_not_advised():
     (fix,) = [r for r in near.findings if r.part == "separation"]
     again = with_settings(near.config, [(x.table, x.key, x.value) for x in fix.settings])
     assert fix.settings and certify(again).certified
+
+
+def test_a_start_in_a_current_outside_the_certified_set_is_answered_with_a_current_that_starts_inside():
+    """Without ``[simulation] initial`` the vehicles start on their slots at the mission's velocity through
+    the water: the configured current is the start's velocity error. When that puts the start outside the
+    robust certificate's start set, the answer is a smaller configured current, and re-run it certifies."""
+    data = {
+        "vehicle": {"preset": "paper2011"},
+        "formation": {"n": 5, "polygon_radius": 15.0, "min_separation": 1.0},
+        "envelope": {"u": [0.0, 3.5], "v": [-1.5, 1.5], "r": [-0.5, 0.5]},
+        "design": {"robust": True},
+        "reference": {"kind": "sine", "speed": 1.5, "amplitude": 30.0, "omega": 0.1},
+        "simulation": {"current": [0.05, 0.05]},
+        "disturbance": {"current_speed": 0.1},
+        "actuators": {"tau_x": 2000.0, "tau_y": 800.0, "tau_psi": 600.0},
+    }
+    cfg = config_from_dict(data)
+    cert = certify(cfg)
+    assert not cert.certified and cert.verdict("robust").ok
+    [why] = [r for r in cert.findings if r.part == "separation"]
+    assert "start's velocity error" in why.message
+    [setting] = why.settings
+    assert (setting.table, setting.key) == ("simulation", "current")
+    assert 0.0 < np.hypot(*setting.value) < np.hypot(0.05, 0.05)
+    assert certify(with_settings(cfg, [(setting.table, setting.key, setting.value)])).certified

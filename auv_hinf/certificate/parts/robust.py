@@ -30,6 +30,7 @@ from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import FleetReference, ReferenceTube
 from auv_hinf.mission.margins import ErrorBounds
 from auv_hinf.mission.tubes import fleet_tube
+from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.bandwidth import RobustDesign
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
@@ -413,6 +414,46 @@ def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReferenc
     return float(c.bounds.position) if c.start_inside(e, de, epsi, depsi, cur) else None
 
 
+#: Bisection steps of the configured current at which an on-slot start lies in the certified start set.
+START_CURRENT_STEPS = 10
+
+
+def start_current(point: DesignPoint, rob: RobustSummary) -> Setting | None:
+    """A smaller configured ``[simulation] current`` whose on-slot start lies in the certified start set.
+
+    Without ``[simulation] initial`` the vehicles start on their slots at the mission's velocity
+    through the water, so the configured current is their start's ground-velocity error. When that
+    error puts the start outside the robust certificate's start set while the certificate covers the
+    declared box and current, the largest fraction of the configured current (a bisection of
+    :data:`START_CURRENT_STEPS` steps, rounded towards zero) that starts inside is the answer;
+    ``None`` when a start is declared, nothing binds there, or not even still water starts inside.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured start and current).
+    rob : RobustSummary
+        Its robust summary.
+    """
+    c = rob.certificate
+    cur = np.asarray(point.config.simulation.current, dtype=float)
+    speed = float(np.hypot(*cur))
+    if point.config.simulation.initial is not None or speed == 0.0 or c is None or not c.covers or rob.reasons:
+        return None
+    fleet, initial = point.fleet(), initial_states(point)
+
+    def inside(scale: float) -> bool:
+        now = cur * scale
+        e, de, epsi, depsi = initial_errors(fleet, initial, now)
+        return c.start_inside(e, de, epsi, depsi, now)
+
+    if inside(1.0) or not inside(0.0):
+        return None
+    lo = bisect(inside, 0.0, 1.0, steps=START_CURRENT_STEPS)[0]
+    value = _current_within(cur, lo * speed)
+    return Setting("simulation", "current", value) if inside(math.hypot(*value) / speed) else None
+
+
 def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatArray) -> RobustRunCheck:
     """Whether the robust certificate covers the run of the design's configuration tracking ``fleet`` from ``initial``.
 
@@ -588,6 +629,7 @@ class RobustPart:
 __all__ = [
     "BOX_RTOL",
     "RUN_TUBE_MAX_N",
+    "START_CURRENT_STEPS",
     "RobustRunCheck",
     "RobustSummary",
     "check_robust_run",
@@ -597,4 +639,5 @@ __all__ = [
     "run_kept_inside",
     "run_outside",
     "run_settings",
+    "start_current",
 ]

@@ -36,7 +36,7 @@ import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.parts.robust import run_outside
+from auv_hinf.certificate.parts.robust import RobustSummary, run_outside, start_current
 from auv_hinf.certificate.reason import Reason, Setting
 from auv_hinf.config.schema import MAX_COORDINATE
 from auv_hinf.mission.fleet import FleetReference
@@ -201,7 +201,7 @@ def _bound_levers(point: DesignPoint) -> str:
     return ", ".join(levers) or "other gains, or a slower mission"
 
 
-def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
+def refusal(point: DesignPoint, sep: SeparationBound, robust: RobustSummary | None = None) -> Reason:
     """The reason of a separation that is not certified: the pair, the distances, the bound, what to change.
 
     Parameters
@@ -210,6 +210,10 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
         The design point.
     sep : SeparationBound
         Its separation (not ``ok``).
+    robust : RobustSummary, optional
+        The robust part's summary: when the start on the slots in the configured current is what lies
+        outside its start set, the smaller configured current that starts inside is the answer
+        (:func:`~auv_hinf.certificate.parts.robust.start_current`).
     """
     s = sep.slots
     i, j = s.pair
@@ -221,6 +225,15 @@ def refusal(point: DesignPoint, sep: SeparationBound) -> Reason:
             advice = "; start the fleet nearer its slots (without [simulation] initial it starts on them)"
             declared = point.config.simulation.initial is not None
             settings = (Setting("simulation", "initial", None),) if declared else ()
+            current = None if declared or robust is None else start_current(point, robust)
+            if current is not None:
+                speed = float(np.hypot(*point.config.simulation.current))
+                advice = (
+                    f"; the vehicles start on their slots at the mission's velocity through the water, so the "
+                    f"configured current ({speed:.4g} m/s) is their start's velocity error, outside the certified "
+                    f"start set: {current.toml()} (m/s) starts inside it"
+                )
+                settings = (current,)
         return Reason(
             PART,
             "not_covered",
@@ -289,7 +302,7 @@ class SeparationPart:
         sep = separation_bound(ctx.point, ctx.verdicts)
         if sep.decided_elsewhere:  # the failing part's reasons are the verdict
             return Verdict(self.name, True, False, (), sep.to_dict(), detail=sep)
-        reasons = () if sep.ok else (refusal(ctx.point, sep),)
+        reasons = () if sep.ok else (refusal(ctx.point, sep, ctx.detail("robust")),)
         return Verdict(self.name, sep.ok, True, reasons, sep.to_dict(), detail=sep)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:

@@ -268,8 +268,8 @@ class Theorem1Part:
         robust = gains is not None and gains.get("source") == "robust"
         lines = [
             f"  lambda (envelope)         {fmt(f['lambda'])} 1/s",
-            f"  sigma vehicle  [lo, up]   [{fmt(sig['lower'])}, {fmt(sig['upper'])}]  <- used",
-            f"  sigma Jacobi   [lo, up]   [{fmt(sj['lower'])}, {fmt(sj['upper'])}]",
+            f"  sigma vehicle  [lo, up]   [{fmt(sig['lower'])}, {fmt(sig['upper'])}] 1/s  <- used",
+            f"  sigma Jacobi   [lo, up]   [{fmt(sj['lower'])}, {fmt(sj['upper'])}] 1/s",
             f"  {'gamma (configured)' if f.get('gamma_configured') else 'gamma = 1/sigma':<26}"
             f"{fmt(f['gamma'])} s  (Theorem 1 minimum {fmt(f['theorem1']['gamma_min'])} s)",
         ]
@@ -278,12 +278,12 @@ class Theorem1Part:
             if m == "used":
                 continue
             mark = " <- used" if m == f["method"] and not robust else ""
-            lines.append(f"  alpha[{m:<11}]        {fmt(a)}{mark}")
+            lines.append(f"  alpha[{m:<11}]        {fmt(a)}{'' if a is None else ' 1/s'}{mark}")
             if a is not None:
                 lines.extend(f"      ! {flag}" for flag in flags.get(m, []))
         lines += [
             f"  small-gain margin         {fmt(f['small_gain_margin'])} 1/s",
-            f"  position loop ||T||       {fmt(f['position_loop_hinf'])} (Theorem 2, k1={f['k1']:g})",
+            f"  position loop ||T||       {fmt(f['position_loop_hinf'])} s (Theorem 2, k1 = {f['k1']:g} 1/s^2)",
             f"  cross-check               {'ok' if f['crosscheck_ok'] else 'DISAGREES'} "
             f"(max rel {f['crosscheck_max_rel_diff']:.2g})",
             f"  gains that run            {'none' if gains is None else Gains.from_dict(gains).describe()}"
