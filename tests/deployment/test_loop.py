@@ -250,9 +250,10 @@ def _run_cli(capsys, cert_file: Path, urls: list[str], log: Path, *extra: str) -
     return code, json.loads(captured.out.strip().splitlines()[-1]), captured.err
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def faulty_fleet(certificate, tmp_path_factory) -> Iterator[tuple[list[str], Path]]:
-    """One loopback fleet with :data:`FAULTS`, shared by the fault tests."""
+    """A loopback fleet with :data:`FAULTS`, started on its slots for each fault test (a run leaves the vehicles
+    where it ends, and the next run from there would start outside the certified bounds)."""
     report = tmp_path_factory.mktemp("faults") / "fleet.json"
     with fleet(certificate[1], report, *FAULTS) as urls:
         yield urls, report
