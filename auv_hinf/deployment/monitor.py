@@ -451,7 +451,7 @@ class Monitor:
             out.append(Violation(t, int(vehicle), name, float(value), float(bound)))
 
         lag_bound = a.max_lag - a.command_latency
-        if a.sample_time > 0.0 and math.isfinite(step.period) and step.period > lag_bound:
+        if a.timed and math.isfinite(step.period) and step.period > lag_bound:
             add(-1, "period", step.period, lag_bound)
         lags = self._last_ages + step.period
         self._last_ages = np.asarray(step.ages, dtype=float).copy()
@@ -501,14 +501,11 @@ class Monitor:
         add: Any,
     ) -> None:
         a = self.assumptions
-        # a certificate of the continuous law (no sample time) certifies no timing: a replayed
-        # simulation of it has sample spacings, not a loop period, and they are not checked
-        timed = a.sample_time > 0.0
-        if timed and math.isfinite(lags[i]) and lags[i] > a.max_lag - a.command_latency:
+        if a.timed and math.isfinite(lags[i]) and lags[i] > a.max_lag - a.command_latency:
             add(i, "lag", lags[i], a.max_lag - a.command_latency)
         if not have:
             add(i, "missing", math.inf, 0.0)
-        elif timed:
+        elif a.timed:  # the continuous law's certificate certifies no timing (Assumptions.timed)
             age = float(step.ages[i])
             if math.isfinite(age) and age > a.measurement_age_bound:
                 add(i, "delay", age, a.measurement_age_bound)

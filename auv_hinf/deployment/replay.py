@@ -30,10 +30,10 @@ from auv_hinf.exceptions import LogError
 VALUE_TOLERANCE = 1e-9
 #: Violations kept in the result, and mismatches.
 RESULT_VIOLATIONS, RESULT_MISMATCHES = 10_000, 100
-#: The checks a log may lack the columns of, and those columns.
 #: The checks about the loop's timing, which a certificate of the continuous law (no sample time) does
 #: not make: listed under ``unchecked`` when such a certificate replays a log (a simulated run).
 TIMING_CHECKS = ("period", "lag", "delay", "stale")
+#: The checks a log may lack the columns of, and those columns.
 OPTIONAL_CHECKS = (
     ("delay", ("age",)),
     ("stale", ("nav_gap",)),
@@ -123,7 +123,7 @@ def replay(data: LogData, law: RuntimeLaw) -> ReplayResult:
     monitor = Monitor(assumptions, n, law.law.params)
     has_log = {"violations", "fleet_violations"} <= set(frame.columns) and data.is_run_log
     unchecked = [name for name, cols in OPTIONAL_CHECKS if not all(c in frame.columns for c in cols)]
-    if law.sample_time <= 0.0:  # the continuous law's certificate has no timing to check (Monitor)
+    if not assumptions.timed:  # the continuous law's certificate has no timing to check (Monitor)
         unchecked += [name for name in TIMING_CHECKS if name not in unchecked]
     found_all: list[dict[str, Any]] = []
     count, mismatches = 0, list[dict[str, Any]]()

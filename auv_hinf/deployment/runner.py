@@ -46,7 +46,15 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.deployment.ardusub import NEUTRAL, ManualCommand
 from auv_hinf.deployment.link import VehicleLink, now_ns
 from auv_hinf.deployment.log import RunLog
-from auv_hinf.deployment.monitor import Action, Monitor, MonitorConfig, StepInput, Violation, violations_json
+from auv_hinf.deployment.monitor import (
+    ASSUMPTIONS,
+    Action,
+    Monitor,
+    MonitorConfig,
+    StepInput,
+    Violation,
+    violations_json,
+)
 from auv_hinf.deployment.priority import realtime_priority
 from auv_hinf.deployment.runtime import RuntimeLaw
 from auv_hinf.exceptions import LinkError, ParameterError
@@ -69,7 +77,7 @@ STOP_SIGNALS: tuple[int, ...] = tuple(
 #: The assumptions whose violation at the first step refuses the run before any command but neutral
 #: is sent: a fleet that starts outside the certified bounds is not covered by the certificate from
 #: there, and the law may command full force towards the mission.
-START_ASSUMPTIONS = ("invariant_position", "invariant_velocity", "invariant_heading", "invariant_yaw_rate")
+START_ASSUMPTIONS = tuple(name for name in ASSUMPTIONS if name.startswith("invariant_"))
 
 
 @dataclass

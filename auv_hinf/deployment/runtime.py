@@ -135,6 +135,15 @@ class Assumptions:
         return self.delay - self.command_latency
 
     @property
+    def timed(self) -> bool:
+        """The certificate is about a sampled loop (a sample time is declared): its timing is checked.
+
+        A certificate of the continuous law certifies no loop period, measurement age or staleness,
+        so the monitor does not check them (a replayed simulation has sample spacings, not a period).
+        """
+        return self.sample_time > 0.0
+
+    @property
     def stale_after(self) -> float:
         """A vehicle is stale when no navigation message arrived for one sample time (s)."""
         return self.sample_time

@@ -689,6 +689,17 @@ def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | N
 START_ON_SLOTS = Setting("simulation", "initial", None)
 
 
+def _change_entry(what: str, settings: tuple[Setting, ...], bound: float) -> dict[str, Any]:
+    """The ``composed.advice`` entry of a change that is not a declared value shrunk (``scale`` None)."""
+    return {
+        "setting": what,
+        "scaled": [],
+        "scale": None,
+        "settings": [s.to_dict() for s in settings],
+        "position_bound": bound,
+    }
+
+
 def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...], dict[str, Any] | None]:
     """What certifies when no declared setting does at the design's gains: the start, design, mission or a re-run.
 
@@ -703,33 +714,19 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
         # a declared start off the slots may be all that binds: the hardware and the world stay as declared
         bound = covered_position_bound(point.config, (START_ON_SLOTS,))
         if bound is not None:
-            entry = {
-                "setting": "start",
-                "scaled": [],
-                "scale": None,
-                "settings": [START_ON_SLOTS.to_dict()],
-                "position_bound": bound,
-            }
             return (
                 f"the declared start binds: every vehicle started on its slot certifies ({START_ON_SLOTS.toml()}; "
                 f"certified |e| <= {bound:.3g} m)",
                 (START_ON_SLOTS,),
-                entry,
+                _change_entry("start", (START_ON_SLOTS,), bound),
             )
     found = mission_advice(point, covered_position_bound)
     if found:
         a = found[0]
-        entry = {
-            "setting": a.what,
-            "scaled": [],
-            "scale": None,
-            "settings": [s.to_dict() for s in a.settings],
-            "position_bound": a.position_bound,
-        }
         return (
             f"no declared setting certifies when shrunk, even all together; {CHANGE_WORDS[a.what]} certify: {a.line()}",
             a.settings,
-            entry,
+            _change_entry(a.what, a.settings, a.position_bound),
         )
     together = rerun_together(point.config, problem)
     if together is not None and together.certificate.errors is not None:

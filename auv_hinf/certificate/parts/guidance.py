@@ -796,7 +796,6 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         period = Setting("implementation", "sample_time", summary.sample_time)
         kept = " with the declared delay and noise" if _navigates(problem) else ""
         return (period,), f"a shorter sample time certifies the declared box and current{kept}: {period.toml()} (s)"
-
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
         return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
@@ -1057,7 +1056,6 @@ def covers_run(
     if speed > problem.plant.current * (1.0 + 1e-12):
         run, bound = apart(speed, problem.plant.current)
         return False, f"the run's current ({run} m/s) exceeds [disturbance] current_speed ({bound} m/s)"
-
     if initial is not None:
         start = start_states(problem, np.asarray(initial, dtype=float), _slots_at_start(cfg), np.asarray(current))
         if np.any(start > np.asarray(problem.start) * (1.0 + 1e-9) + 1e-12):
