@@ -146,7 +146,8 @@ class GuidanceCampaign:
                 "passed": int(passed.sum()),
             },
             "worst_ratio": worst_ratios(t, cert if certified else None),
-            "ok": done > 0 and saturated == 0 and close == 0 and outside == 0,
+            # every run passed: covered by the certificate and inside its bounds, unsaturated, separated
+            "ok": done > 0 and bool(passed.all()),
             "notes": [
                 "every run is checked against the guidance certificate when it covers the run (plant in the box, "
                 "current within the bound, certified start); runs_outside_bounds counts covered runs whose measured "

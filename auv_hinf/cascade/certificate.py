@@ -53,6 +53,10 @@ of the commanded thrust and rudder, and of the sway speed. The derivation is in
   sideslip that the ILOS crab holds), and on a mission that turns the fixed point is also run on
   the states about it, ``z = x - E omega(t)``, driven by the turn's acceleration instead
   (:func:`turn_terms`); every trajectory stays in both invariant boxes, so in their intersection.
+  The turn's scalar signals (``omega``, ``omega'``, the equilibrium's lag in the held commands) enter
+  the loop along fixed directions, each through its own peak gain (:func:`turn_directions`), and the
+  nominal loop carries the quadratic sway drag linearised at the steady turn's sideslip
+  (:func:`turn_sway_slope`).
 
 * **Late and noisy measurements.** With a delay ``d`` the held commands are computed from the states
   at ``t_k - d`` (the nominal loop carries the measurements in flight), each measured state with a
@@ -157,6 +161,10 @@ class CascadeProblem:
         Bounds of the measurement errors (m, m/s, rad, rad/s; default exact).
     start_turn : float or None
         Bound of every slot's course rate ``|omega(0)|`` at ``t = 0`` (rad/s); ``None``: :attr:`turn_rate`.
+    sway_slope : float
+        The slope ``s`` (kg/s) at which the nominal loop carries the quadratic sway drag
+        ``d22q |v| v``: its sway damping is ``d22 + s`` and the residual ``w7`` holds the rest,
+        ``|d22q' |v|/m22' - s/m22| |v|`` (any ``s >= 0`` is sound; :func:`turn_sway_slope` chooses it).
     """
 
     guidance: GuidanceConfig
@@ -174,6 +182,7 @@ class CascadeProblem:
     delay: float = 0.0
     noise: MeasurementNoise = field(default_factory=MeasurementNoise)
     start_turn: float | None = None
+    sway_slope: float = 0.0
 
     @property
     def turn_start(self) -> float:
@@ -275,7 +284,9 @@ def _rows(problem: CascadeProblem) -> dict[str, FloatArray]:
     yaw_rate = row(e_r=1.0) - sight_rate
     # the plant's coefficients are the nominal plant's; the rudder is commanded through the model's m33
     vdot = (
-        -n.m11 * u0 / n.m22 * yaw_rate - n.d22_lin / n.m22 * row(v=1.0) + m.m33 / (act.lever_arm * n.m22) * row(tau=1.0)
+        -n.m11 * u0 / n.m22 * yaw_rate
+        - (n.d22_lin + problem.sway_slope) / n.m22 * row(v=1.0)
+        + m.m33 / (act.lever_arm * n.m22) * row(tau=1.0)
     )
     sight_accel = (-pdot + u0 * row(e_r=1.0) + vdot + b_g * ydot) / delta
     munk = (n.m22 - n.m11) * u0 / n.m33
@@ -334,6 +345,8 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
     outputs = np.vstack([np.hstack([np.eye(7), np.zeros((7, 3 + 7))]), _derived_outputs(problem, rows)])
     b_w = np.eye(7)
     b_w[P, Y_E] = problem.nominal_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
+    # then the turn's scalar signals along their directions (:data:`TURN_CHANNELS`)
+    b_w = np.hstack([b_w, turn_directions(problem)])
     # one error input per measured state when the measurements are noisy (the gains from them cost a
     # quarter more), else one unused column
     d_n = np.zeros((7, 1)) if problem.noise.exact else np.eye(7)
@@ -415,6 +428,49 @@ def turn_forcing(problem: CascadeProblem) -> tuple[FloatArray, FloatArray]:
     per_accel = np.zeros(7)
     per_accel[E_R] = -1.0
     return per_rate, per_accel
+
+
+def turn_sway_slope(problem: CascadeProblem) -> float:
+    """The quadratic sway drag's slope for the nominal loop (kg/s): ``d22q`` at the sideslip the turn holds.
+
+    On a steady turn the vehicle slips sideways at ``|E_v| omega_max`` (:func:`turn_equilibrium`,
+    at zero slope), and the sway's bound is about twice that: ``d22q |E_v| omega_max`` is near the
+    middle of the drag's incremental range ``[0, d22q |v|_max]``, which halves the residual the
+    quadratic drag leaves and damps the nominal loop's sway as the drag does. Zero on a mission that
+    keeps its course.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its nominal plant and turn rate).
+    """
+    if problem.turn_rate <= 0.0:
+        return 0.0
+    sideslip = abs(float(turn_equilibrium(replace(problem, sway_slope=0.0))[V])) * problem.turn_rate
+    return problem.nominal_plant.d22_quad * sideslip
+
+
+def sway_drag_gap(slope: float, quad: tuple[float, float], sway: float) -> float:
+    """The quadratic sway drag's acceleration less the nominal loop's linear part of it: its supremum (m/s^2).
+
+    The supremum of ``|q |v| v - s v|`` over ``|v| <= V`` and every plant's ``q = d22q'/m22'`` in
+    ``[q_lo, q_hi]``: ``q_hi V^2 - s V`` where the drag exceeds the slope, and where it falls short
+    ``max_v (s v - q_lo v^2)``, which is ``s^2/(4 q_lo)`` at ``v = s/(2 q_lo)`` inside the range and
+    ``s V - q_lo V^2`` beyond it.
+
+    Parameters
+    ----------
+    slope : float
+        The nominal loop's slope per unit mass, ``s/m22_n`` (1/s).
+    quad : tuple of float
+        ``[q_lo, q_hi]``: the box's range of ``d22q'/m22'`` (1/m).
+    sway : float
+        The sway speed's bound ``V`` (m/s).
+    """
+    q_lo, q_hi = quad
+    above = q_hi * sway * sway - slope * sway
+    below = slope * slope / (4.0 * q_lo) if slope < 2.0 * q_lo * sway else slope * sway - q_lo * sway * sway
+    return max(above, below, 0.0)
 
 
 def _derived_outputs(problem: CascadeProblem, rows: dict[str, FloatArray]) -> FloatArray:
@@ -743,9 +799,14 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray, turn: TurnTerms | 
         + _product_off([m11, (u_lo, u_hi)], m22, n.m11 * u0 / n.m22) * r_max
         + n.m11 * u0 / n.m22 * sight_gap
         + _product_off([pl.interval("d22_lin")], m22, n.d22_lin / n.m22) * vb
-        + pl.interval("d22_quad")[1] * vb * vb / m22[0]
+        + sway_drag_gap(
+            problem.sway_slope / n.m22, (pl.interval("d22_quad")[0] / m22[1], pl.interval("d22_quad")[1] / m22[0]), vb
+        )
     )
-    v_lin = tighter("vdot_lin", n.m11 * u0 / n.m22 * yaw_lin + n.d22_lin / n.m22 * vb + m.m33 / (lever * n.m22) * tau)
+    v_lin = tighter(
+        "vdot_lin",
+        n.m11 * u0 / n.m22 * yaw_lin + (n.d22_lin + problem.sway_slope) / n.m22 * vb + m.m33 / (lever * n.m22) * tau,
+    )
     # |v'|: the nominal expression less the turn's push is the nominal expression of z (the equilibrium's
     # v' is zero), bounded directly by z's box
     v_dot = min(v_lin + turn_push, still["vdot_lin"]) + w7
@@ -912,6 +973,36 @@ class CascadeCertificate:
         }
 
 
+#: The turn's scalar signals, each entering the nominal loop along one fixed direction
+#: (:func:`turn_directions`): about the equilibrium, ``omega'`` and the held commands' lag
+#: ``omega(t_k - d) - omega(t)``; as residuals, ``omega`` and ``omega'``.
+TURN_CHANNELS = ("eq_accel", "eq_held", "push_rate", "push_accel")
+
+
+def turn_directions(problem: CascadeProblem) -> FloatArray:
+    """The directions along which the turn's scalar signals (:data:`TURN_CHANNELS`) drive the nominal loop.
+
+    Each signal enters every state's rate through one fixed vector, so its response is one kernel:
+    its peak gain keeps the cancellations between the states' channels that a sum of the channels'
+    gains loses.
+
+    Parameters
+    ----------
+    problem : CascadeProblem
+        The cascade (its nominal loop).
+
+    Returns
+    -------
+    ndarray, shape (7, 4)
+        Per unit signal, each state's rate (SI units per rad/s^2, per rad/s): ``f' - E``, ``B K E``,
+        ``f`` and ``f'`` (:func:`turn_terms`).
+    """
+    per_rate_force, per_accel = turn_forcing(problem)
+    state = turn_equilibrium(problem)[:7]
+    held = _state_rows(_rows(problem))[:, 7:] @ (_law(problem) @ state)
+    return np.column_stack([per_accel - state, held, per_rate_force, per_accel])
+
+
 @dataclass(frozen=True)
 class TurnTerms:
     """How the slot's turn enters one fixed point of the certificate (:func:`turn_terms`).
@@ -922,8 +1013,9 @@ class TurnTerms:
         Bound of every output's part that is not ``z``'s (SI units; zero when the turn's push is left
         in the residuals): ``|E| omega_max``, and for the derived expressions that read the held
         commands or the measured states, :attr:`lagging` more.
-    drive : ndarray, shape (7,)
-        Bounds of the residual inputs that the turn adds (SI units of each state's rate).
+    amplitudes : ndarray, shape (4,)
+        Bounds of the turn's scalar signals (:data:`TURN_CHANNELS`; rad/s^2, rad/s), zero for the
+        channels not used.
     per_rate : ndarray, shape (NB,)
         The equilibrium per unit turn rate ``E`` (signed, per rad/s; zero when not used).
     lagging : ndarray, shape (NB,)
@@ -933,7 +1025,7 @@ class TurnTerms:
     """
 
     shift: FloatArray
-    drive: FloatArray
+    amplitudes: FloatArray
     per_rate: FloatArray
     lagging: FloatArray
 
@@ -950,15 +1042,15 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     With ``(A + B K) E = -f`` (:func:`turn_forcing`), ``z`` runs in the same nominal loop as ``x``
     without the turn's push, driven instead by ``(f' - E) omega'`` and by the held commands'
     equilibrium part measured at ``t_k - d``, ``B K E (omega(t_k - d) - omega(t))``, at most
-    ``(h + d) |omega'|``: both in the residuals' coordinates (``b_w^-1``, :func:`cascade_loop`). The
-    fixed point bounds ``z``; the states are within ``|E| omega_max`` more, and a derived expression
-    that reads the held commands or the measured states within ``|D_held E| (h + d) omega'_max``
-    more again (:attr:`TurnTerms.lagging`).
+    ``(h + d) |omega'|``: two scalar signals along fixed directions (:func:`turn_directions`), each
+    through its own peak gain. The fixed point bounds ``z``; the states are within ``|E| omega_max``
+    more, and a derived expression that reads the held commands or the measured states within
+    ``|D_held E| (h + d) omega'_max`` more again (:attr:`TurnTerms.lagging`).
 
-    **As residuals.** The push ``f omega + f' omega'`` is one more residual input, bounded by
-    ``|f| omega_max + |f'| omega'_max``: the ILOS state then absorbs the push through the loop's
-    gains, which for a turn entered slowly is the tighter of the two on some states (the
-    certificate takes both, :func:`_certify_one`).
+    **As residuals.** The push ``f omega + f' omega'`` drives the loop as two more scalar signals,
+    ``omega`` and ``omega'``: the ILOS state then absorbs the push through the loop's gains, which
+    for a turn entered slowly is the tighter of the two on some states (the certificate takes both,
+    :func:`_certify_one`).
 
     Parameters
     ----------
@@ -967,22 +1059,17 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     equilibrium : bool
         Take the states about the turn's equilibrium.
     """
-    per_rate_force, per_accel = turn_forcing(problem)
     if not equilibrium:
-        drive = np.abs(per_rate_force) * problem.turn_rate + np.abs(per_accel) * problem.turn_accel
-        return TurnTerms(np.zeros(NB), drive, np.zeros(NB), np.zeros(NB))
+        amplitudes = np.array([0.0, 0.0, problem.turn_rate, problem.turn_accel])
+        return TurnTerms(np.zeros(NB), amplitudes, np.zeros(NB), np.zeros(NB))
     per_rate = turn_equilibrium(problem)
     state = per_rate[:7]
     rows = _rows(problem)
     commands = _law(problem) @ state  # the held commands' equilibrium per unit turn rate
     held_part = _derived_outputs(problem, rows)[:, 7:] @ np.concatenate([commands, state])
     lagging = np.concatenate([np.zeros(7), np.abs(held_part) * problem.lag * problem.turn_accel])
-    b_cmd = _state_rows(rows)[:, 7:]
-    unmix = np.eye(7)
-    unmix[P, Y_E] = -problem.nominal_speed / problem.guidance.lookahead  # b_w^-1
-    held = unmix @ (b_cmd @ commands)
-    drive = problem.turn_accel * (np.abs(unmix @ (per_accel - state)) + problem.lag * np.abs(held))
-    return TurnTerms(np.abs(per_rate) * problem.turn_rate + lagging, drive, per_rate, lagging)
+    amplitudes = np.array([problem.turn_accel, problem.lag * problem.turn_accel, 0.0, 0.0])
+    return TurnTerms(np.abs(per_rate) * problem.turn_rate + lagging, amplitudes, per_rate, lagging)
 
 
 def _image(
@@ -994,7 +1081,7 @@ def _image(
     if isinstance(res, str):
         return res
     z = np.maximum(box - turn.shift, 0.0)
-    w = res.inputs + turn.drive
+    w = np.concatenate([res.inputs, turn.amplitudes])
     cmds = commands(problem, z, res.noise)
     at_steps = gains.continuous @ w + free
     if not problem.noise.exact:  # the loop has one error input per measured state
@@ -1296,9 +1383,11 @@ def _masses(problem: CascadeProblem) -> str:
 
 
 def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> CascadeCertificate:
-    """The certificate of one box, with the nominal loop at ``problem.nominal_plant``."""
+    """The certificate of one box, with the nominal loop at ``problem.nominal_plant`` and its quadratic sway drag
+    at the turn's slope (:func:`turn_sway_slope`)."""
     if problem.guidance.sigma <= 0.0:
         return CascadeCertificate(False, None, None, 'plain LOS is not certified in this version: use kind = "ilos"')
+    problem = replace(problem, sway_slope=turn_sway_slope(problem))
     model, u0 = problem.plant.model, problem.reference_speed
     key = replace(  # what the nominal loop depends on: the gains, the model, the nominal plant, the rudder, U0, h, d
         problem,
@@ -1508,6 +1597,7 @@ __all__ = [
     "MAX_TRACK_ANGLE",
     "SIGHT_SLOPE",
     "STATES",
+    "TURN_CHANNELS",
     "Actuation",
     "CascadeCertificate",
     "CascadeProblem",
@@ -1520,7 +1610,10 @@ __all__ = [
     "measurement_errors",
     "residual_bounds",
     "start_states",
+    "sway_drag_gap",
+    "turn_directions",
     "turn_equilibrium",
     "turn_forcing",
+    "turn_sway_slope",
     "turn_terms",
 ]

@@ -72,9 +72,8 @@ def test_rows_are_the_runs_and_the_summary_is_their_worst():
     assert s["worst_commanded_peak"]["force_x"] == t["force_x"].max()
     assert s["min_separation"] == t["min_separation"].min() and s["vertex_runs"] == 2
     assert s["certified"] is False and s["certificate_covers_runs"] is False
-    assert s["ok"] == (
-        s["saturated_runs"] == 0 and s["runs_below_min_separation"] == 0 and s["runs_outside_bounds"] == 0
-    )
+    # an uncertified fleet's campaign is not ok, however its runs went: no run is covered
+    assert s["counts"]["passed"] == 0 and s["ok"] is False
 
 
 def test_bad_inputs_are_refused():
@@ -118,6 +117,7 @@ def test_cli_campaign_of_a_guidance_fleet(tmp_path, capsys):
     summary = json.loads(text)
     assert code == 1 and "not certified" in err and "Traceback" not in err
     assert summary == json.loads((out / "summary.json").read_text())
+    assert summary["ok"] is False and summary["certified"] is False
     assert summary["runs"] == 2 and set(summary["worst_errors"]) >= {"along_track", "cross_track", "heading"}
     assert summary["limits"]["rudder"] == pytest.approx(preset_config("remus-survey-ilos").actuators.rudder_max)
     assert len(pd.read_parquet(out / "runs.parquet")) == 2 and (out / "runs.png").stat().st_size > 10_000
@@ -131,6 +131,7 @@ def test_a_certified_fleet_reports_counts_and_worst_ratios_to_its_bounds():
     s, t = camp.summary(), camp.table
     assert s["certified"] and s["counts"]["runs"] == 3 == s["counts"]["certificate_applies"]
     assert s["counts"]["inside_bounds"] == int(t["within_bounds"].sum()) == 3 == s["counts"]["passed"]
+    assert s["ok"] is True
     bounds = {**s["certified_errors"], **guidance_certificate(cfg).certificate.to_dict()["certified_peak"]}
     for key, ratio in s["worst_ratio"].items():
         assert ratio == pytest.approx(t[key].max() / bounds[key], rel=1e-12) and 0.0 <= ratio <= 1.0, key

@@ -23,9 +23,15 @@ from auv_hinf.cascade.certificate import (
     P,
     V,
     _law,
+    _loop_analysis,
     _rows,
+    _state_rows,
+    cascade_loop,
+    sway_drag_gap,
+    turn_directions,
     turn_equilibrium,
     turn_forcing,
+    turn_sway_slope,
     turn_terms,
 )
 from auv_hinf.certificate.design_point import design_point, raw_fleet
@@ -69,8 +75,56 @@ def test_the_turn_equilibrium_is_the_rest_point_of_the_nominal_loop_where_the_cr
     held_tau = (_law(problem) @ state)[1]  # the rudder's yaw acceleration at the equilibrium, per rad/s
     tau = about.lagging[7 + DERIVED.index("tau")]
     assert tau == pytest.approx(abs(held_tau) * problem.lag * problem.turn_accel, rel=1e-12)
-    assert residual.drive[V] == pytest.approx(abs(turn_forcing(problem)[0][V]) * problem.turn_rate)
+    # each treatment drives the loop by its own two scalar signals: omega' and the lag about the
+    # equilibrium, omega and omega' as residuals
+    np.testing.assert_array_equal(about.amplitudes, [problem.turn_accel, problem.lag * problem.turn_accel, 0.0, 0.0])
+    np.testing.assert_array_equal(residual.amplitudes, [0.0, 0.0, problem.turn_rate, problem.turn_accel])
     assert residual.shift.shape == (NB,) and not residual.shift.any()
+
+
+def test_each_turn_signal_drives_the_loop_along_its_direction_through_its_own_peak_gain():
+    cfg = transit(reference=LAWNMOWER, guidance=GAINS, uncertainty={}, disturbance={})
+    problem = cascade_problem(cfg, design_point(cfg))
+    assert not isinstance(problem, str)
+    force, accel = turn_forcing(problem)
+    state = turn_equilibrium(problem)[:7]
+    held = _state_rows(_rows(problem))[:, 7:] @ (_law(problem) @ state)
+    directions = turn_directions(problem)
+    np.testing.assert_allclose(directions, np.column_stack([accel - state, held, force, accel]), atol=1e-15)
+    loop = cascade_loop(problem)
+    np.testing.assert_array_equal(loop.b_w[:, 7:], directions)
+    # one kernel per signal: its gain is at most the sum of the channels' gains it combines (the
+    # triangle inequality, with the sum's tolerance), and strictly below it where the channels cancel
+    gains, _ = _loop_analysis(problem)
+    unmix = np.linalg.inv(loop.b_w[:, :7])  # the residuals' coordinates of each direction
+    summed = gains.continuous[:, :7] @ np.abs(unmix @ directions)
+    joint = gains.continuous[:, 7:]
+    assert np.all(joint <= summed * (1.0 + 1e-3) + 1e-12)
+    assert np.any(joint[:7] < 0.9 * summed[:7])
+
+
+def test_the_sway_drag_slope_is_the_drag_at_the_turns_sideslip_and_its_residual_covers_every_plant():
+    cfg = transit(reference=LAWNMOWER, guidance=GAINS, uncertainty={"d22_quad": [0.8, 1.2]}, disturbance={})
+    problem = cascade_problem(cfg, design_point(cfg))
+    assert not isinstance(problem, str) and problem.turn_rate > 0.0
+    sideslip = abs(turn_equilibrium(problem)[V]) * problem.turn_rate
+    slope = turn_sway_slope(problem)
+    assert slope == pytest.approx(problem.nominal_plant.d22_quad * sideslip, rel=1e-12) and slope > 0.0
+    line = transit(guidance=GAINS, uncertainty={}, disturbance={})
+    straight = cascade_problem(line, design_point(line))
+    assert not isinstance(straight, str) and turn_sway_slope(straight) == 0.0
+    # brute force: every plant's quadratic drag less the nominal slope, over |v| <= V
+    m22 = problem.plant.interval("m22")
+    m22, d22q = problem.plant.interval("m22"), problem.plant.interval("d22_quad")
+    quads = np.linspace(*d22q, 7)[:, None, None] / np.linspace(*m22, 5)[None, :, None]
+    quad = (d22q[0] / m22[1], d22q[1] / m22[0])
+    for sway in (0.5 * sideslip, sideslip, 2.0 * sideslip, 8.0 * sideslip):
+        v = np.linspace(-sway, sway, 4001)[None, None, :]
+        for s in (0.0, slope, 4.0 * slope):
+            gap = np.abs(quads * np.abs(v) * v - s / problem.nominal_plant.m22 * v).max()
+            bound = sway_drag_gap(s / problem.nominal_plant.m22, quad, sway)
+            assert gap <= bound * (1.0 + 1e-12)
+            assert gap >= 0.999 * bound  # the supremum: the sampled plants include the extreme ones
 
 
 @pytest.mark.slow

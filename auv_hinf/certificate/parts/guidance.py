@@ -403,16 +403,12 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
     current = None
     if problem.plant.current > 0.0:
         current = largest_holding(
-            lambda c: certify_cascade(_with(cfg, problem, current=c), cells=False).holds,
-            problem.plant.current,
-            steps=ADVICE_STEPS,
+            lambda c: _kept_apart(cfg, _with(cfg, problem, current=c)), problem.plant.current, steps=ADVICE_STEPS
         )
     scale = None
     if problem.plant.box.declared:
         top = min(1.0, problem.plant.box.max_scale)
-        scale = largest_holding(
-            lambda s: certify_cascade(_with(cfg, problem, scale=s), cells=False).holds, top, steps=ADVICE_STEPS
-        )
+        scale = largest_holding(lambda s: _kept_apart(cfg, _with(cfg, problem, scale=s)), top, steps=ADVICE_STEPS)
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
     gains = _certifying_gains(problem) if bounded else None
     lag_scale = None
@@ -683,6 +679,15 @@ def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | N
     motion leaves the declared ``[envelope]`` (:func:`_rerun`)."""
     got = _rerun(cfg, settings)
     return None if got is None or got[1] else got[0]
+
+
+def _kept_apart(cfg: FormationConfig, problem: CascadeProblem) -> bool:
+    """``problem`` (``cfg``'s cascade with a smaller current or box) certifies, with a bound that keeps the
+    vehicles ``[formation] min_separation`` apart (:func:`_separated`): both shrink with the current and the
+    box, so the largest value that certifies is found by bisection."""
+    cert = certify_cascade(problem, cells=False)
+    bound = cert.position_bound
+    return cert.holds and bound is not None and _separated(cfg, bound)
 
 
 def _separated(cfg: FormationConfig, bound: float) -> bool:
