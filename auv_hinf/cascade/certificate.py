@@ -190,6 +190,11 @@ class CascadeProblem:
         return self.turn_rate if self.start_turn is None else self.start_turn
 
     @property
+    def turns(self) -> bool:
+        """The slots turn: their course rate or its rate of change is bounded away from zero."""
+        return self.turn_rate > 0.0 or self.turn_accel > 0.0
+
+    @property
     def lag(self) -> float:
         """Largest age ``h + d`` (s) of the measurement behind the commands held at any time."""
         return self.sample_time + self.delay
@@ -326,7 +331,7 @@ def _law(problem: CascadeProblem) -> FloatArray:
     return d_c
 
 
-def cascade_loop(problem: CascadeProblem) -> SampledLoop:
+def cascade_loop(problem: CascadeProblem, turns: bool = True) -> SampledLoop:
     """The nominal sampled loop of one vehicle (see the module docstring), outputs the seven states.
 
     The held commands are ``a_x`` (m/s^2), ``tau`` (the yaw acceleration the rudder is asked
@@ -339,14 +344,17 @@ def cascade_loop(problem: CascadeProblem) -> SampledLoop:
     ----------
     problem : CascadeProblem
         The cascade (its gains, model, rudder, reference speed, sample time and delay).
+    turns : bool
+        Give the loop the turn's scalar signals as four more inputs (:data:`TURN_CHANNELS`): a
+        mission that keeps its course has none, and its gains cost a third less without them.
     """
     rows = _rows(problem)
     full = _state_rows(rows)
     outputs = np.vstack([np.hstack([np.eye(7), np.zeros((7, 3 + 7))]), _derived_outputs(problem, rows)])
     b_w = np.eye(7)
     b_w[P, Y_E] = problem.nominal_speed / problem.guidance.lookahead  # the cross-track rate's residual moves p too
-    # then the turn's scalar signals along their directions (:data:`TURN_CHANNELS`)
-    b_w = np.hstack([b_w, turn_directions(problem)])
+    if turns:  # then the turn's scalar signals along their directions (:data:`TURN_CHANNELS`)
+        b_w = np.hstack([b_w, turn_directions(problem)])
     # one error input per measured state when the measurements are noisy (the gains from them cost a
     # quarter more), else one unused column
     d_n = np.zeros((7, 1)) if problem.noise.exact else np.eye(7)
@@ -1013,9 +1021,9 @@ class TurnTerms:
         Bound of every output's part that is not ``z``'s (SI units; zero when the turn's push is left
         in the residuals): ``|E| omega_max``, and for the derived expressions that read the held
         commands or the measured states, :attr:`lagging` more.
-    amplitudes : ndarray, shape (4,)
+    amplitudes : ndarray, shape (4,) or (0,)
         Bounds of the turn's scalar signals (:data:`TURN_CHANNELS`; rad/s^2, rad/s), zero for the
-        channels not used.
+        channels not used; none on a mission that keeps its course (:attr:`CascadeProblem.turns`).
     per_rate : ndarray, shape (NB,)
         The equilibrium per unit turn rate ``E`` (signed, per rad/s; zero when not used).
     lagging : ndarray, shape (NB,)
@@ -1059,6 +1067,8 @@ def turn_terms(problem: CascadeProblem, equilibrium: bool) -> TurnTerms:
     equilibrium : bool
         Take the states about the turn's equilibrium.
     """
+    if not problem.turns:
+        return TurnTerms(np.zeros(NB), np.zeros(0), np.zeros(NB), np.zeros(NB))
     if not equilibrium:
         amplitudes = np.array([0.0, 0.0, problem.turn_rate, problem.turn_accel])
         return TurnTerms(np.zeros(NB), amplitudes, np.zeros(NB), np.zeros(NB))
@@ -1095,10 +1105,13 @@ def _image(
 
 
 @functools.lru_cache(maxsize=64)
-def _loop_analysis(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> tuple[PeakGains, FloatArray] | None:
+def _loop_analysis(
+    problem: CascadeProblem, max_periods: int = MAX_PERIODS, turns: bool = True
+) -> tuple[PeakGains, FloatArray] | None:
     """The nominal loop's peak gains and free response (``None`` when unstable): the costly part, shared by
-    every box and current (the caller passes the problem without its current and start)."""
-    loop = cascade_loop(problem)
+    every box and current (the caller passes the problem without its current and start); with the turn's
+    inputs when ``turns`` (:func:`cascade_loop`)."""
+    loop = cascade_loop(problem, turns)
     gains = peak_gains(loop, max_periods)
     fp = free_peaks(loop, max_periods)
     return None if gains is None or fp is None else (gains, fp)
@@ -1401,7 +1414,7 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
         start_turn=None,
         noise=MeasurementNoise() if problem.noise.exact else UNIT_NOISE,
     )
-    analysis = _loop_analysis(key, max_periods)
+    analysis = _loop_analysis(key, max_periods, problem.turns)
     if analysis is None:
         return CascadeCertificate(
             False,
@@ -1421,7 +1434,7 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
             gains.radius,
         )
     fixed = [_fixed_point(problem, gains, fp, turn_terms(problem, False))]
-    if problem.turn_rate > 0.0 or problem.turn_accel > 0.0:
+    if problem.turns:
         fixed.append(_fixed_point(problem, gains, fp, turn_terms(problem, True)))
     boxes = [f[0] for f in fixed if not isinstance(f[0], str)]
     k = sum(f[1] for f in fixed)
