@@ -794,8 +794,10 @@ def residual_bounds(problem: CascadeProblem, box: FloatArray, turn: TurnTerms | 
     # -- w7: v' less its nominal; the rudder's side force and its nominal share one deflection
     inv_m22 = _off((rho[0] / m22[1], rho[1] / m22[0]), 1.0 / n.m22)  # |rho/m22' - 1/m22|
     # the yaw drag's compensation (rho/l) d33(r_m) r_m / m22' less its part linear in the turn,
-    # d33_lin omega / (l m22), which :func:`turn_forcing` carries: r_m = omega + q, |q| <= |r - omega| + n_r
-    drag_side = inv_m22 * d33_hat * rm + (m.d33_lin * (rel_yaw + nz.yaw_rate) + m.d33_quad * rm * rm) / n.m22
+    # d33_lin omega / (l m22), which :func:`turn_forcing` carries: r_m = omega(t) + q with the measurement
+    # taken up to h + d earlier, |q| <= |r - omega| + n_r + (h + d) |omega'|
+    drift = rel_yaw + nz.yaw_rate + lag * omega_dot
+    drag_side = inv_m22 * d33_hat * rm + (m.d33_lin * drift + m.d33_quad * rm * rm) / n.m22
     side = (
         inv_m22 * m.m33 * a_psi + drag_side + abs(munk_hat) * vm * _product_off([rho, (um_lo, um_hi)], m22, u0 / n.m22)
     ) / lever
