@@ -637,11 +637,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if summary["covered"]:
         return EXIT_OK
     first = summary["violations"][0] if summary["violations"] else None
-    what = (
-        ""
-        if first is None
-        else f"; first: {first['assumption']} on vehicle {first['vehicle']} at t = {first['time']:.3g} s"
-    )
+    where = "" if first is None else ("the fleet" if first["vehicle"] < 0 else f"vehicle {first['vehicle'] + 1}")
+    what = "" if first is None else f"; first: {first['assumption']} on {where} at t = {first['time']:.3g} s"
     if summary["stopped_by"] == "start":
         return _verdict(
             False,

@@ -170,7 +170,7 @@ class VehicleLink:
                 autoreconnect=False,
             )
         except Exception as exc:  # pymavlink raises assorted OSError and ValueError types
-            raise LinkError(f"vehicle {index}: cannot open {url!r}: {exc}") from None
+            raise LinkError(f"vehicle {index + 1}: cannot open {url!r}: {exc}") from None
         self.clock = ClockSync()
         self._pending: dict[int, int] = {}
         self.local_position: Stamped | None = None
@@ -353,7 +353,7 @@ class VehicleLink:
         try:
             self.conn.mav.send(msg)
         except OSError as exc:
-            raise LinkError(f"vehicle {self.index} ({self.url}): send failed: {exc}") from None
+            raise LinkError(f"vehicle {self.index + 1} ({self.url}): send failed: {exc}") from None
 
     def send_heartbeat(self) -> None:
         """A GCS HEARTBEAT (type GCS, autopilot INVALID, active)."""

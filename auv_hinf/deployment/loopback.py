@@ -208,7 +208,7 @@ class LoopbackFleet:
                     url, source_system=sysid + i, source_component=1, dialect="ardupilotmega"
                 )
             except Exception as exc:  # pymavlink raises assorted OSError and ValueError types
-                raise LinkError(f"loopback vehicle {i}: cannot open {url!r}: {exc}") from None
+                raise LinkError(f"loopback vehicle {i + 1}: cannot open {url!r}: {exc}") from None
             bound = url
             if url.startswith("udpin:"):
                 host, port = conn.port.getsockname()[:2]

@@ -175,7 +175,7 @@ def wait_for_vehicles(links: list[VehicleLink], timeout: float, stop: threading.
                     if not ok
                 ]
                 if gone:
-                    missing.append(f"vehicle {ln.index} ({ln.url}): no {' and no '.join(gone)}")
+                    missing.append(f"vehicle {ln.index + 1} ({ln.url}): no {' and no '.join(gone)}")
             raise LinkError(
                 f"no answer within {timeout:g} s: {'; '.join(missing)} "
                 "(navigation is LOCAL_POSITION_NED with ATTITUDE, or ODOMETRY)"

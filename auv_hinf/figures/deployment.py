@@ -35,12 +35,12 @@ def replay_figure(result: ReplayResult, assumptions: Assumptions, title: str = "
     for k, (name, unit) in enumerate(ERROR_CHANNELS):
         ax = axes[k]
         for i in range(n):
-            ax.plot(result.times, result.errors[:, i, k], lw=1.0, label=f"vehicle {i}")
+            ax.plot(result.times, result.errors[:, i, k], lw=1.0, label=f"vehicle {i + 1}")
         if result.allowed is not None:
             ax.axhline(float(result.allowed[k]), color="k", ls="--", lw=1.0, label="certified bound + noise")
         ax.set_ylabel(f"{name.replace('_', ' ')} error [{unit}]")
     for i in range(n):
-        axes[4].plot(result.times, result.ages[:, i], lw=1.0, label=f"vehicle {i}")
+        axes[4].plot(result.times, result.ages[:, i], lw=1.0, label=f"vehicle {i + 1}")
     axes[4].axhline(assumptions.measurement_age_bound, color="k", ls="--", lw=1.0, label="certified delay")
     axes[4].set(ylabel="measurement age [s]", xlabel="time [s]")
     for ax in axes:

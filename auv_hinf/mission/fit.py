@@ -130,7 +130,7 @@ class ReferenceFit:
             return ""
         unit = "rad/s" if b.channel == "yaw_rate" else "m/s"
         who = (
-            f"vehicle {b.vehicle} (path frame)"
+            f"vehicle {b.vehicle + 1} (path frame)"
             if self.frame == "path"
             else "every vehicle (inertial frame: each moves as the centre path)"
         )

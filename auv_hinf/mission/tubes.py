@@ -196,7 +196,7 @@ def _blend_cells(one: FleetReference, tb: float, k: int, consts: tuple[FloatArra
     if not np.all(slo > 0):
         kk, i = np.unravel_index(int(np.argmin(slo)), slo.shape)
         raise _SpeedVanishes(
-            f"desired speed of vehicle {i} (scenario {b}) cannot be bounded away from 0 (m/s) "
+            f"desired speed of vehicle {i + 1} (scenario {b}) cannot be bounded away from 0 (m/s) "
             f"near t = {tc[kk]:.6g} s (lower bound {slo.min():.3g}) with {k} cells: the heading "
             "reference may be undefined; lengthen blend_time or start closer to the mission velocity"
         )

@@ -40,7 +40,7 @@ def test_too_tight_turn_names_the_outer_vehicle_the_first_turn_and_a_tight_small
     assert reference_fit(mower(r * (1 + RADIUS_RTOL)), LINE_ABREAST, "path", ENVELOPE).ok
     assert not reference_fit(mower(r * (1 - RADIUS_RTOL)), LINE_ABREAST, "path", ENVELOPE).ok
     assert fit.largest_offset == pytest.approx(25.0 * 30.0 / CLOSED_FORM_RADIUS, rel=RADIUS_RTOL)
-    assert "vehicle 2" in fit.reason() and "smallest turn radius that fits: 37.5" in fit.reason()
+    assert "vehicle 3" in fit.reason() and "smallest turn radius that fits: 37.5" in fit.reason()
 
 
 def test_sideslip_of_a_vehicle_ahead_binds_the_sway_channel():
