@@ -171,7 +171,7 @@ class _NoLowerBound:
 
 def _peak_gains(problem: cascade.CascadeProblem, how: str) -> peak_module.PeakGains:
     """The cascade's nominal loop's peak gains, cold, summed as ``how`` says (:data:`SUMS`)."""
-    loop = cascade.cascade_loop(problem)
+    loop = cascade.cascade_loop(problem, problem.turns)
     saved = peak_module.GRAMIAN_AFTER, peak_module.ZERO_RTOL, peak_module._SignedSums
     if how != "signed":
         peak_module._SignedSums = _NoLowerBound  # type: ignore[misc,assignment]

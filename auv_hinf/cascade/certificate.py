@@ -346,7 +346,7 @@ def cascade_loop(problem: CascadeProblem, turns: bool = True) -> SampledLoop:
         The cascade (its gains, model, rudder, reference speed, sample time and delay).
     turns : bool
         Give the loop the turn's scalar signals as four more inputs (:data:`TURN_CHANNELS`): a
-        mission that keeps its course has none, and its gains cost a third less without them.
+        mission that keeps its course has none, and its gains cost about a quarter less without them.
     """
     rows = _rows(problem)
     full = _state_rows(rows)
