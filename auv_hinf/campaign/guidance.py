@@ -33,7 +33,7 @@ from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
 from auv_hinf.cascade.certificate import CascadeCertificate
 from auv_hinf.certificate.document import json_safe
-from auv_hinf.certificate.parts.guidance import guidance_certificate, run_coverage
+from auv_hinf.certificate.parts.guidance import fleet_refusal, guidance_certificate, run_coverage
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, Interrupted, ParameterError
@@ -101,8 +101,9 @@ class GuidanceCampaign:
         saturated = int(np.sum(t["saturation_fraction"] > 0.0))
         close = int(np.sum(t["min_separation"] < cfg.min_separation))
         done = len(t)
-        cert = guidance_certificate(cfg).certificate
-        certified = cert is not None and cert.holds
+        summary = guidance_certificate(cfg)
+        cert = summary.certificate
+        certified = cert is not None and not fleet_refusal(cfg, summary)  # the cascade, and the separation it keeps
         covered = int(np.sum(t["covered"])) if done else 0
         outside = int(np.sum(~t["within_bounds"])) if done else 0
         inside = t["covered"].astype(bool) & t["within_bounds"].astype(bool)

@@ -278,12 +278,12 @@ def _refuse_uncertified_cascade(cfg: FormationConfig, allowed: bool, what: str) 
     """Refuse to run a guidance cascade its certificate does not hold for, unless ``--uncertified`` allows it."""
     if allowed:
         return
-    from auv_hinf.certificate.parts.guidance import guidance_certificate
+    from auv_hinf.certificate.parts.guidance import fleet_refusal
 
-    summary = guidance_certificate(cfg)
-    if not summary.holds:
+    refused = fleet_refusal(cfg)
+    if refused:
         raise Negative(
-            f"refusing to {what} a guidance cascade that no certificate covers: {summary.reason}; `{PROG} certify` "
+            f"refusing to {what} a guidance fleet that no certificate covers: {refused}; `{PROG} certify` "
             f"says why and what would certify, or rerun with --uncertified to {what} it anyway"
         )
 

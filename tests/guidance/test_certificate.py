@@ -21,10 +21,17 @@ from itertools import product
 import numpy as np
 import pytest
 
+from auv_hinf.campaign.guidance import run_guidance_campaign
 from auv_hinf.cascade.certificate import STATES, cascade_states, start_states
 from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, raw_fleet
-from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary, plant_multipliers
+from auv_hinf.certificate.parts.guidance import (
+    cascade_problem,
+    fleet_refusal,
+    guidance_certificate,
+    guidance_summary,
+    plant_multipliers,
+)
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import config_from_dict, with_settings
@@ -235,7 +242,10 @@ def test_gains_that_certify_the_declared_world_are_advised_first_and_certify_on_
     data = certify(cfg).to_dict()
     assert data["certified"] is False
     settings = {(s["table"], s["key"]): s["value"] for s in data["parts"]["guidance"]["reasons"][0]["settings"]}
-    assert set(settings) == {("guidance", "heading_bandwidth"), ("guidance", "lookahead")}
+    # only the gains that change are named
+    assert settings and set(settings) <= {("guidance", "heading_bandwidth"), ("guidance", "lookahead")}
+    declared = cfg.guidance
+    assert all(v != getattr(declared, k) for (_, k), v in settings.items())
     gains = {k: v for (t, k), v in settings.items()}
     again = certify(transit(disturbance={"current_speed": 0.2}, guidance={"kind": "ilos", **gains})).to_dict()
     assert again["certified"] is True
@@ -342,3 +352,27 @@ def test_a_certified_motion_outside_the_envelope_is_refused_and_the_widened_enve
     assert not certify(cfg).to_dict()["guidance"]["certified"]
     again = certify(with_settings(cfg, [(s.table, s.key, s.value) for s in reason.settings]))
     assert again.certified, again.reasons
+
+
+def test_a_fleet_whose_certified_bound_leaves_it_too_close_is_not_run_as_certified(tmp_path, capsys):
+    """The cascade certifies, but its bound leaves two slots 6 m apart closer than min_separation: ``certify``
+    refuses the fleet, and so do ``simulate`` and ``campaign`` (they used to run it as certified)."""
+    offsets = {"n": 3, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 6.0], [0.0, -6.0]]}
+    free = transit(formation=offsets, uncertainty={})
+    summary = guidance_certificate(free)
+    assert summary.holds and fleet_refusal(free) == ""  # the default separation is met
+    bound = summary.certificate.position_bound
+    # certified at least 6 - 2 x bound apart: a requirement between that and 6 m is refused
+    cfg = transit(formation={**offsets, "min_separation": 6.0 - bound}, uncertainty={})
+    assert guidance_certificate(cfg).holds and "min_separation" in fleet_refusal(cfg)
+    assert not certify(cfg).certified
+    path = tmp_path / "close.toml"
+    path.write_text(to_toml(cfg.to_toml_dict()))
+    capsys.readouterr()
+    assert main(["simulate", "--config", str(path), "--horizon", "20", "--json"]) == 1
+    assert "refusing to simulate" in capsys.readouterr()[0]
+    assert main(["simulate", "--config", str(path), "--horizon", "20", "--json", "--uncertified"]) == 1
+    report = json.loads(capsys.readouterr()[0])
+    assert report["certificate_covers_run"] is False and "min_separation" in report["coverage_reason"]
+    camp = run_guidance_campaign(cfg, 1, seed=0, horizon=20.0).summary()
+    assert camp["certified"] is False and camp["ok"] is False

@@ -588,7 +588,7 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
     for what, settings, new_cfg, problem in gentlest:  # the first kind whose gentlest change certifies some
         # the declared gains and the candidates: the ones that certify the largest share of the world
         tried: list[tuple[GuidanceConfig, tuple[Setting, ...]]] = [(problem.guidance, ())]
-        tried += [(g, _gain_settings(g)) for g in _gain_variants(problem)]
+        tried += [(g, _gain_settings(g, problem.guidance)) for g in _gain_variants(problem)]
         scored = [
             (_largest_scale(new_cfg, replace(problem, guidance=g)), k, gains) for k, (g, gains) in enumerate(tried)
         ]
@@ -681,6 +681,33 @@ def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | N
     return None if got is None or got[1] else got[0]
 
 
+def fleet_refusal(cfg: FormationConfig, summary: GuidanceSummary | None = None) -> str:
+    """Why a ``[guidance]`` fleet is not certified (empty when it is): its cascade, or the separation it leaves.
+
+    What ``simulate`` and ``campaign`` hold a run to, as ``certify`` does: the cascade's certificate,
+    and its bound of every vehicle's distance to its slot keeping every pair ``[formation]
+    min_separation`` apart (the separation part's test, :func:`_separated`).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration (with ``[guidance]``).
+    summary : GuidanceSummary or None
+        Its :func:`guidance_certificate` (computed when not given).
+    """
+    summary = guidance_certificate(cfg) if summary is None else summary
+    if summary.certificate is None or not summary.certificate.holds:
+        return "the guidance cascade is not certified" + (f": {summary.reason}" if summary.reason else "")
+    bound = summary.certificate.position_bound
+    if bound is None or not _separated(cfg, bound):
+        return (
+            f"each vehicle is certified within {bound or math.inf:.4g} m of its slot, which leaves a pair of vehicles "
+            f"closer than [formation] min_separation = {cfg.min_separation:g} m (certify names the pair and the "
+            "spread of the formation that keeps them apart)"
+        )
+    return ""
+
+
 def _kept_apart(cfg: FormationConfig, problem: CascadeProblem) -> bool:
     """``problem`` (``cfg``'s cascade with a smaller current or box) certifies, with a bound that keeps the
     vehicles ``[formation] min_separation`` apart (:func:`_separated`): both shrink with the current and the
@@ -713,11 +740,16 @@ def _gain_variants(problem: CascadeProblem) -> list[GuidanceConfig]:
     return out
 
 
-def _gain_settings(gains: GuidanceConfig) -> tuple[Setting, ...]:
-    """``gains``' heading bandwidth (rad/s) and lookahead (m), as settings."""
-    return (
-        Setting("guidance", "heading_bandwidth", gains.heading_bandwidth),
-        Setting("guidance", "lookahead", gains.lookahead),
+#: The gains an answer may change, and their units.
+GAIN_UNITS = {"heading_bandwidth": "rad/s", "lookahead": "m"}
+
+
+def _gain_settings(gains: GuidanceConfig, declared: GuidanceConfig) -> tuple[Setting, ...]:
+    """``gains``' heading bandwidth (rad/s) and lookahead (m) that differ from the ``declared`` ones, as settings."""
+    return tuple(
+        Setting("guidance", key, getattr(gains, key))
+        for key in GAIN_UNITS
+        if getattr(gains, key) != getattr(declared, key)
     )
 
 
@@ -789,8 +821,9 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             f"({RESTART.toml()}; every vehicle within {summary.start_bound:.3g} m of its slot)"
         )
     if summary.gains is not None:
-        settings: tuple[Setting, ...] = _gain_settings(summary.gains)
-        return settings, f"{toml_line(settings)} (rad/s, m) certifies the declared box and current"
+        settings: tuple[Setting, ...] = _gain_settings(summary.gains, problem.guidance)
+        units = ", ".join(GAIN_UNITS[x.key] for x in settings)
+        return settings, f"{toml_line(settings)} ({units}) certifies the declared box and current"
     if summary.lag_scale is not None and summary.lag_scale > 0.0:
         settings = _navigation_settings(problem, summary.lag_scale)
         return settings, (
@@ -1031,7 +1064,8 @@ def covers_run(
 ) -> tuple[bool, str]:
     """Whether the cascade's certificate covers one run, and why (one line).
 
-    The run is covered when the certificate holds, its plant is in the box (``multipliers``:
+    The run is covered when the certificate holds and keeps the vehicles ``[formation]
+    min_separation`` apart (:func:`fleet_refusal`), its plant is in the box (``multipliers``:
     the nine parameter multipliers, ``None`` for the nominal plant), its current within the bound,
     and its start within the certified start's bounds (``initial``: ``None`` for the default start,
     on the slots heading into the current).
@@ -1050,8 +1084,9 @@ def covers_run(
         The run's start.
     """
     problem, cert = summary.problem, summary.certificate
-    if problem is None or cert is None or not cert.holds:
-        return False, "the guidance cascade is not certified" + (f": {summary.reason}" if summary.reason else "")
+    refused = fleet_refusal(cfg, summary)
+    if problem is None or cert is None or refused:
+        return False, refused or "the guidance cascade is not certified"
     box = problem.plant.box
     if multipliers is not None:
         m = np.asarray(multipliers, dtype=float)
@@ -1144,6 +1179,7 @@ __all__ = [
     "ADVICE_STEPS",
     "CONSTANT_SPEED_PATHS",
     "GAIN_CANDIDATES",
+    "GAIN_UNITS",
     "KEY",
     "MAX_BANDWIDTH_STEP",
     "PART",
@@ -1152,6 +1188,7 @@ __all__ = [
     "cascade_problem",
     "configured_start",
     "covers_run",
+    "fleet_refusal",
     "guidance_certificate",
     "guidance_figures",
     "guidance_summary",
