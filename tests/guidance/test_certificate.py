@@ -376,3 +376,21 @@ def test_a_fleet_whose_certified_bound_leaves_it_too_close_is_not_run_as_certifi
     assert report["certificate_covers_run"] is False and "min_separation" in report["coverage_reason"]
     camp = run_guidance_campaign(cfg, 1, seed=0, horizon=20.0).summary()
     assert camp["certified"] is False and camp["ok"] is False
+
+
+@pytest.mark.slow
+def test_a_spread_of_a_path_frame_formation_is_answered_certified_as_written():
+    """In the path frame the outer slots are faster in the turns, so spreading the formation raises the bound:
+    the spread answered is the one whose re-run keeps the vehicles apart."""
+    offsets = {"n": 3, "frame": "path", "offsets": [[0.0, 0.0], [0.0, 6.0], [0.0, -6.0]]}
+    mission = {"kind": "lawnmower", "speed": 1.5, "leg_length": 300.0, "spacing": 600.0, "turn_radius": 150.0}
+    free = transit(formation=offsets, reference=mission, uncertainty={})
+    bound = guidance_certificate(free).certificate.position_bound
+    cfg = transit(formation={**offsets, "min_separation": 6.0 - bound}, reference=mission, uncertainty={})
+    cert = certify(cfg)
+    assert not cert.certified
+    (why,) = cert.verdict("separation").reasons
+    assert why.settings and "(re-run with it" in why.message
+    again = certify(with_settings(cert.config, [(x.table, x.key, x.value) for x in why.settings]))
+    assert again.certified, again.reasons
+    assert again.to_dict()["formation"]["min_separation_certified"] >= 6.0 - bound

@@ -55,7 +55,7 @@ from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fle
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.robust import run_settings
-from auv_hinf.certificate.parts.separation import SeparationBound
+from auv_hinf.certificate.parts.separation import ADVICE_MARGIN, SeparationBound, spread_factor, spread_settings
 from auv_hinf.certificate.reason import Reason, Setting, apart, toml_line
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
@@ -266,6 +266,10 @@ class GuidanceSummary:
     envelope : tuple of Setting
         When the cascade is certified but its certified motion leaves the declared ``[envelope]``
         (:func:`envelope_gap`): the envelope's ranges widened to hold it.
+    spread : tuple of Setting
+        When the cascade is certified but its bound leaves two vehicles closer than ``[formation]
+        min_separation``: a spread of the formation re-certified as written (:func:`_spread`; the
+        separation part answers with it); empty otherwise.
     """
 
     problem: CascadeProblem | None
@@ -283,6 +287,7 @@ class GuidanceSummary:
     lag_scale: float | None = None
     envelope: tuple[Setting, ...] = ()
     sample_time: float | None = None
+    spread: tuple[Setting, ...] = ()
 
     @property
     def holds(self) -> bool:
@@ -394,7 +399,9 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         switch = supported_settings(cfg)
         bound = _confirmed(cfg, switch) if switch else None
         return base if bound is None else replace(base, supported=switch, supported_bound=bound)
-    if cert.holds or base.envelope:
+    if cert.holds and not base.envelope:
+        return replace(base, spread=_spread(cfg, cert))
+    if base.envelope:
         return base  # a motion outside the envelope is answered by the envelope alone
     if cfg.simulation.initial is not None:
         start_bound = _confirmed(cfg, (RESTART,))
@@ -706,6 +713,40 @@ def fleet_refusal(cfg: FormationConfig, summary: GuidanceSummary | None = None) 
             "spread of the formation that keeps them apart)"
         )
     return ""
+
+
+#: Most spreads of a formation :func:`_spread` re-certifies: in the path frame the bound grows with the
+#: spread (the outer slots are faster in the turns), and each try takes the last re-run's bound.
+SPREAD_TRIES = 4
+
+
+def _spread(cfg: FormationConfig, cert: CascadeCertificate) -> tuple[Setting, ...]:
+    """A spread of ``cfg``'s formation whose re-run keeps every pair ``min_separation`` apart (empty: the
+    certified bound already does, or no spread of :data:`SPREAD_TRIES` does).
+
+    The spread is the separation part's (:func:`~auv_hinf.certificate.parts.separation.spread_factor`)
+    for the last bound, and each is certified as written (:func:`_rerun`).
+    """
+    bound = cert.position_bound
+    if bound is None or _separated(cfg, bound):
+        return ()
+    point = design_point(cfg)
+    slots = slot_separation(point.fleet())
+    for _ in range(SPREAD_TRIES):
+        sep = SeparationBound(cfg.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,))
+        settings = spread_settings(point, spread_factor(sep) * (1.0 + ADVICE_MARGIN))
+        changed = _changed(cfg, settings) if settings else None
+        if changed is None:
+            return ()
+        got = _rerun(cfg, settings)
+        if got is not None and not got[1]:
+            return settings
+        rerun = certify_cascade(changed[1], cells=False)
+        again = rerun.position_bound if rerun.holds else None
+        if again is None or again <= bound:  # refused, or not for its bound: a wider spread will not help
+            return ()
+        bound = again
+    return ()
 
 
 def _kept_apart(cfg: FormationConfig, problem: CascadeProblem) -> bool:
@@ -1183,6 +1224,7 @@ __all__ = [
     "KEY",
     "MAX_BANDWIDTH_STEP",
     "PART",
+    "SPREAD_TRIES",
     "GuidancePart",
     "GuidanceSummary",
     "cascade_problem",

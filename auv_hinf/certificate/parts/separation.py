@@ -162,7 +162,25 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
     return SeparationBound(required, slots, bound, tuple(v.part for v in proving))
 
 
-def _scale_settings(point: DesignPoint, factor: float) -> tuple[Setting, ...]:
+def spread_factor(sep: SeparationBound) -> float:
+    """How many times the formation must be spread for ``sep``'s bound to keep its closest pair apart.
+
+    Every slot distance scales with the formation, so the closest pair's distance (its slots' less
+    the shaped start's) is at least ``min_separation`` plus twice the bound once its slots are
+    ``(min_separation + 2 bound + shaping) / slot distance`` times as far apart, as long as the
+    bound does not grow with the spread (it does in the path frame, where wider slots are faster
+    in the turns: re-certify).
+
+    Parameters
+    ----------
+    sep : SeparationBound
+        A separation with a position bound.
+    """
+    s, b = sep.slots, sep.position_bound or 0.0
+    return (sep.required + 2.0 * b + s.shaping) / s.slot_distance
+
+
+def spread_settings(point: DesignPoint, factor: float) -> tuple[Setting, ...]:
     """The ``[formation]`` value that spreads the formation by ``factor``, and the removal of the other forms.
 
     A regular polygon gets its ``polygon_radius``; any other formation its Jacobi ``shape`` (what
@@ -201,7 +219,22 @@ def _bound_levers(point: DesignPoint) -> str:
     return ", ".join(levers) or "other gains, or a slower mission"
 
 
-def refusal(point: DesignPoint, sep: SeparationBound, robust: RobustSummary | None = None) -> Reason:
+def _written_factor(point: DesignPoint, settings: tuple[Setting, ...]) -> float:
+    """The spread (times) that ``settings`` (of :func:`spread_settings`) write: the new size over the old."""
+    first = settings[0]
+    off = point.offsets
+    if first.key == "polygon_radius":
+        return float(first.value) / float(np.hypot(off[:, 0], off[:, 1]).mean())
+    old = np.asarray(point.config.shape, dtype=float)
+    return float(np.abs(np.asarray(first.value, dtype=float)).max() / np.abs(old).max())
+
+
+def refusal(
+    point: DesignPoint,
+    sep: SeparationBound,
+    robust: RobustSummary | None = None,
+    spread: tuple[Setting, ...] | None = None,
+) -> Reason:
     """The reason of a separation that is not certified: the pair, the distances, the bound, what to change.
 
     Parameters
@@ -214,6 +247,9 @@ def refusal(point: DesignPoint, sep: SeparationBound, robust: RobustSummary | No
         The robust part's summary: when the start on the slots in the configured current is what lies
         outside its start set, the smaller configured current that starts inside is the answer
         (:func:`~auv_hinf.certificate.parts.robust.start_current`).
+    spread : tuple of Setting, optional
+        A spread of the formation that the part bounding the errors has re-certified as written (the
+        guidance part's, whose bound grows with the spread in the path frame); empty: none found.
     """
     s = sep.slots
     i, j = s.pair
@@ -245,9 +281,12 @@ def refusal(point: DesignPoint, sep: SeparationBound, robust: RobustSummary | No
         )
     b, certified = sep.position_bound, s.distance - 2.0 * sep.position_bound
     shaped = f" less {s.shaping:.4g} m for the shaped start" if s.shaping > 0.0 else ""
-    factor = (sep.required + 2.0 * b + s.shaping) / s.slot_distance
-    settings = _scale_settings(point, factor * (1.0 + ADVICE_MARGIN))
-    spread = (
+    factor = spread_factor(sep)
+    settings = spread_settings(point, factor * (1.0 + ADVICE_MARGIN))
+    confirmed = bool(spread)
+    if spread:  # re-certified as written by the part that bounds the errors
+        settings, factor = spread, _written_factor(point, spread)
+    words = (
         f"[formation] {settings[0].key} = {settings[0].value}, in place of " + " or ".join(x.key for x in settings[1:])
         if settings
         else "[formation] polygon_radius, offsets or shape"
@@ -258,10 +297,12 @@ def refusal(point: DesignPoint, sep: SeparationBound, robust: RobustSummary | No
         f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below "
         f"[formation] min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped}, "
         f"and each vehicle's position error is certified <= {b:.4g} m (certified = slot distance - 2 x bound); "
-        f"spread the formation about {factor:.3g} times ({spread}), or reduce the certified error bound "
+        f"spread the formation about {factor:.3g} times ({words}), or reduce the certified error bound "
         f"({_bound_levers(point)})"
         + (
-            "; in the path frame wider slots are faster in the turns, which may raise the bound: re-run to check"
+            " (re-run with it: the spread formation's bound is certified)"
+            if confirmed
+            else "; in the path frame wider slots are faster in the turns, which may raise the bound: re-run to check"
             if point.config.frame == "path"
             else ""
         ),
@@ -302,7 +343,9 @@ class SeparationPart:
         sep = separation_bound(ctx.point, ctx.verdicts)
         if sep.decided_elsewhere:  # the failing part's reasons are the verdict
             return Verdict(self.name, True, False, (), sep.to_dict(), detail=sep)
-        reasons = () if sep.ok else (refusal(ctx.point, sep, ctx.detail("robust")),)
+        guided = ctx.detail("guidance")
+        spread = getattr(guided, "spread", None)  # a guidance fleet's spread, re-certified as written
+        reasons = () if sep.ok else (refusal(ctx.point, sep, ctx.detail("robust"), spread),)
         return Verdict(self.name, sep.ok, True, reasons, sep.to_dict(), detail=sep)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
@@ -354,4 +397,6 @@ __all__ = [
     "SeparationPart",
     "refusal",
     "separation_bound",
+    "spread_factor",
+    "spread_settings",
 ]
