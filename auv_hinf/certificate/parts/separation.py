@@ -186,7 +186,15 @@ def spread_settings(point: DesignPoint, factor: float) -> tuple[Setting, ...]:
     A regular polygon gets its ``polygon_radius``; any other formation its Jacobi ``shape`` (what
     ``init`` and a configuration's TOML form write). The table accepts exactly one of ``shape``,
     ``offsets`` and ``polygon_radius``, so the other two are removed (``None``): re-running with the
-    settings works whichever form the file used.
+    settings works whichever form the file used. Empty when the spread formation would not be a
+    valid configuration (too many vehicles for a written shape, or coordinates beyond its limit).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its offsets and its configuration's shape).
+    factor : float
+        How many times to spread the formation (> 0).
     """
     off = point.offsets
     n = off.shape[0]
