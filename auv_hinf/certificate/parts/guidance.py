@@ -588,10 +588,11 @@ def mission_answer(cfg: FormationConfig) -> MissionAnswer | None:
                 if milder is None:
                     continue
                 cert = certify_cascade(milder[1], cells=False)  # what holds whole holds with cells
-                if cert.holds and cert.position_bound is not None and _separated(milder[0], cert.position_bound):
+                bound = _apart(milder[0], cert)
+                if bound is not None:
                     # a slower mission may move slower than the declared envelope allows: its range comes along
                     wider = envelope_gap(milder[0].envelope, cert)[1]
-                    return MissionAnswer(what, settings + wider, 1.0, cert.position_bound)
+                    return MissionAnswer(what, settings + wider, 1.0, bound)
     for what, settings, new_cfg, problem in gentlest:  # the first kind whose gentlest change certifies some
         # the declared gains and the candidates: the ones that certify the largest share of the world
         tried: list[tuple[GuidanceConfig, tuple[Setting, ...]]] = [(problem.guidance, ())]
@@ -674,8 +675,8 @@ def _rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[float, 
     if rerun is None:
         return None
     cert = certify_cascade(rerun[1], cells=False)
-    bound = cert.position_bound if cert.holds else None
-    if bound is None or not _separated(rerun[0], bound):
+    bound = _apart(rerun[0], cert)
+    if bound is None:
         return None
     return bound, envelope_gap(rerun[0].envelope, cert)[1]
 
@@ -705,8 +706,8 @@ def fleet_refusal(cfg: FormationConfig, summary: GuidanceSummary | None = None) 
     summary = guidance_certificate(cfg) if summary is None else summary
     if summary.certificate is None or not summary.certificate.holds:
         return "the guidance cascade is not certified" + (f": {summary.reason}" if summary.reason else "")
-    bound = summary.certificate.position_bound
-    if bound is None or not _separated(cfg, bound):
+    if _apart(cfg, summary.certificate) is None:
+        bound = summary.certificate.position_bound
         return (
             f"each vehicle is certified within {bound or math.inf:.4g} m of its slot, which leaves a pair of vehicles "
             f"closer than [formation] min_separation = {cfg.min_separation:g} m (certify names the pair and the "
@@ -725,7 +726,7 @@ def _spread(cfg: FormationConfig, cert: CascadeCertificate) -> tuple[Setting, ..
     certified bound already does, or no spread of :data:`SPREAD_TRIES` does).
 
     The spread is the separation part's (:func:`~auv_hinf.certificate.parts.separation.spread_factor`)
-    for the last bound, and each is certified as written (:func:`_rerun`).
+    for the last bound, and each is certified as written, as :func:`_rerun` certifies an answer.
     """
     bound = cert.position_bound
     if bound is None or _separated(cfg, bound):
@@ -738,10 +739,9 @@ def _spread(cfg: FormationConfig, cert: CascadeCertificate) -> tuple[Setting, ..
         changed = _changed(cfg, settings) if settings else None
         if changed is None:
             return ()
-        got = _rerun(cfg, settings)
-        if got is not None and not got[1]:
+        rerun = certify_cascade(changed[1], cells=False)  # the re-run as written, once (:func:`_rerun`'s test)
+        if _apart(changed[0], rerun) is not None and not envelope_gap(changed[0].envelope, rerun)[1]:
             return settings
-        rerun = certify_cascade(changed[1], cells=False)
         again = rerun.position_bound if rerun.holds else None
         if again is None or again <= bound:  # refused, or not for its bound: a wider spread will not help
             return ()
@@ -753,9 +753,14 @@ def _kept_apart(cfg: FormationConfig, problem: CascadeProblem) -> bool:
     """``problem`` (``cfg``'s cascade with a smaller current or box) certifies, with a bound that keeps the
     vehicles ``[formation] min_separation`` apart (:func:`_separated`): both shrink with the current and the
     box, so the largest value that certifies is found by bisection."""
-    cert = certify_cascade(problem, cells=False)
-    bound = cert.position_bound
-    return cert.holds and bound is not None and _separated(cfg, bound)
+    return _apart(cfg, certify_cascade(problem, cells=False)) is not None
+
+
+def _apart(cfg: FormationConfig, cert: CascadeCertificate) -> float | None:
+    """``cert``'s certified distance to the slot (m) when it holds with a bound that keeps ``cfg``'s vehicles
+    ``[formation] min_separation`` apart (:func:`_separated`); ``None`` otherwise."""
+    bound = cert.position_bound if cert.holds else None
+    return bound if bound is not None and _separated(cfg, bound) else None
 
 
 def _separated(cfg: FormationConfig, bound: float) -> bool:
