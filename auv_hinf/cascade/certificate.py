@@ -1259,8 +1259,10 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
         cover = _cover(problem, bar, MAX_CELL_DEPTH if mass_cells else 0, MAX_CURRENT_DEPTH)
     if isinstance(cover, list):
         return _union(cover)
-    what = "of the current and the masses" if current_cells_apply(problem) else "of its masses"
-    return replace(whole, reason=f"{whole.reason} (the box in cells {what} does not certify either: {cover})")
+    cut = (("the current", current_cells_apply(problem)), ("the masses", mass_cells and bool(_split(problem))))
+    split = [x for x, on in cut if on]
+    what = " and ".join(split)
+    return replace(whole, reason=f"{whole.reason} (cells of {what} do not certify either: {cover})")
 
 
 #: How many times :func:`certify_cascade` may halve a range of the current's along-track component

@@ -105,6 +105,22 @@ def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:
     return tuple(k for k in KNOBS if present[k])
 
 
+def physical(scale: float, scaled: tuple[Knob, ...]) -> bool:
+    """Settings ``scaled`` at ``scale`` of their declared values are something hardware can be: not noise at zero.
+
+    Exact measurements are no navigation's: an answer that needs them says only that no noise the
+    vehicle can have certifies, and another answer (a delay, a sample time, the mission) is sought.
+
+    Parameters
+    ----------
+    scale : float
+        The fraction of the declared values.
+    scaled : tuple of str
+        The settings scaled (:attr:`Advice.scaled`).
+    """
+    return scale > 0.0 or "noise" not in scaled
+
+
 def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProblem:
     """``problem`` with the setting ``knob`` at ``scale`` times its declared value.
 
@@ -189,5 +205,6 @@ __all__ = [
     "Knob",
     "declared_knobs",
     "largest_covered",
+    "physical",
     "shrunk",
 ]

@@ -389,7 +389,10 @@ def certify_implementation(
         room = limits.lag - impl.delay
         # a necessary condition, not advice: the sample time that is covered (noise, envelope and
         # start included) is searched by the implementation part below this limit
-        head = f"sample_time + delay = {lag:.4g} s exceeds the certified {limits.lag:.4g} s"
+        head = (
+            f"sample_time + delay = {lag:.4g} s exceeds the certified {limits.lag:.4g} s (this certificate's "
+            "Lyapunov-Krasovskii lag)"
+        )
         if room > 0.0:
             why = (
                 f"{head}: at delay {impl.delay:.4g} s the loops are certified stable for sample times <= {room:.4g} s "

@@ -25,6 +25,7 @@ from auv_hinf.certificate.parts.composed import (
     confirmed,
     rerun_together,
 )
+from auv_hinf.certificate.reason import Setting
 from auv_hinf.composed.advice import Advice, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate
 from auv_hinf.config.settings import config_from_dict, with_settings
@@ -176,3 +177,20 @@ def test_with_everything_else_gone_a_faster_law_is_rerun(boxed, monkeypatch):
     values = {(s.table, s.key): s.value for s in advice_settings(got)}
     assert values[key] == pytest.approx(max(f for f in RERUN_SAMPLE_TIME if f <= 0.3) * h)
     assert values[("disturbance", "current_speed")] == 0.0 and values[("implementation", "delay")] == 0.0
+
+
+@pytest.mark.slow
+def test_a_rerun_whose_bound_breaks_min_separation_is_not_an_answer():
+    # the deployed fleet covers; its certified bound leaves the closest slots (4 m apart) 4 - 2|e| apart
+    cfg = config_from_dict(DEPLOYED, "deployed")
+    got = composed_part.rerun(cfg, ())
+    assert got is not None and got.certificate is not None and got.certificate.errors is not None
+    bound = float(got.certificate.errors.position)
+    certified = 4.0 - 2.0 * bound
+    # required just below what the bound keeps: still an answer; just above: the composed part covers,
+    # but the fleet is refused for its separation, so a re-run with these settings would not certify
+    below = composed_part.rerun(cfg, (Setting("formation", "min_separation", 0.99 * certified),))
+    above = composed_part.rerun(cfg, (Setting("formation", "min_separation", 1.01 * certified),))
+    assert below is not None
+    assert above is None
+    assert not certify(with_settings(cfg, [("formation", "min_separation", 1.01 * certified)])).certified

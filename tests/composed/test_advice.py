@@ -151,3 +151,12 @@ def test_an_advised_sample_time_climbs_to_near_the_longest_the_re_runs_gains_cov
     assert got.problem.implementation.sample_time == pytest.approx(got.scale * boxed.implementation.sample_time)
     monkeypatch.setattr(part, "_as_rerun", lambda cfg, a: None)  # the re-run's own design does not cover
     assert part._climbed(None, first, boxed, certify) is first
+
+
+def test_noise_at_zero_is_not_a_physical_answer():
+    from auv_hinf.composed.advice import TOGETHER, physical
+
+    assert not physical(0.0, ("noise",))
+    assert not physical(0.0, TOGETHER)  # the noise shrunk with the others to nothing
+    assert physical(0.0, ("delay",)) and physical(0.0, ("current", "box"))  # removable in the world or hardware
+    assert physical(1e-3, ("noise",))  # a small noise is a navigation to buy

@@ -40,7 +40,7 @@ from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summar
 from auv_hinf.config.settings import config_from_dict
 from auv_hinf.guidance.law import SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance, slot_motion
-from auv_hinf.robust.box import PARAMETERS
+from auv_hinf.robust.box import PARAMETERS, ParameterBox
 
 #: Three REMUS 100 on a transit with every mass +-10 % and the drag uncertain: the whole box is
 #: refused, its cells certify.
@@ -264,5 +264,16 @@ def test_a_refusal_by_the_cells_names_the_cell_refused(masses):
     strong = replace(problem, plant=replace(problem.plant, current=0.3))
     cert = certify_cascade(strong)
     assert not cert.holds and cert.cells == 1
-    assert "cells of the current and the masses does not certify either" in cert.reason
+    assert "cells of the current and the masses do not certify either" in cert.reason
     assert "m11 " in cert.reason and "kg" in cert.reason and "refused" in cert.reason
+
+
+@pytest.mark.slow
+def test_a_refusal_by_the_cells_names_only_what_was_cut(masses):
+    # no box declared: the cells are the current's alone, and the refusal does not speak of masses
+    _, problem = masses
+    exact = replace(problem, plant=replace(problem.plant, box=ParameterBox(problem.plant.model), current=0.45))
+    cert = certify_cascade(exact)
+    assert not cert.holds
+    assert "cells of the current do not certify either" in cert.reason
+    assert "masses" not in cert.reason.split("cells of")[1].split(":")[0]

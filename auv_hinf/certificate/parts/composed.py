@@ -36,8 +36,9 @@ from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, Ru
 from auv_hinf.certificate.parts.closed_loop import full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import run_outside
+from auv_hinf.certificate.parts.separation import keeps_separation
 from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line
-from auv_hinf.composed.advice import JOINT, TOGETHER, Advice, declared_knobs, largest_covered, shrunk
+from auv_hinf.composed.advice import JOINT, TOGETHER, Advice, declared_knobs, largest_covered, physical, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.composed.reach import Reach, reach
@@ -75,6 +76,10 @@ class ComposedSummary:
         the velocity error: ``problem.initial``, reported as ``start``).
     problem : DeployedProblem or None
         The problem it certifies.
+    exact : tuple of Advice
+        Answers that certify only with exact measurements (the noise at zero,
+        :func:`~auv_hinf.composed.advice.physical`): kept out of ``advice``, and given, said so, only
+        when no other answer is found.
     """
 
     applies: bool
@@ -84,6 +89,7 @@ class ComposedSummary:
     advice: tuple[Advice, ...] = ()
     start: Errors | None = None
     problem: DeployedProblem | None = None
+    exact: tuple[Advice, ...] = ()
 
     @functools.cached_property
     def timing(self) -> Reach | None:
@@ -298,7 +304,9 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
             advice = confirmed(cfg, problem, tuple(found), certify)
     except AuvHinfError as exc:
         return ComposedSummary(True, None, False, (f"composed certificate not computed: {exc}",), start=start)
-    return ComposedSummary(True, cert, cert.covers, cert.reasons, advice, start, problem)
+    real = tuple(a for a in advice if physical(a.scale, a.scaled))
+    exact = tuple(a for a in advice if not physical(a.scale, a.scaled))
+    return ComposedSummary(True, cert, cert.covers, cert.reasons, real, start, problem, exact)
 
 
 @dataclass(frozen=True)
@@ -363,7 +371,7 @@ class ComposedPart:
                 lead = "any one of these answers certifies on its own, every value of it written"
             message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
-            text, settings, entry = _no_advice(ctx.point, summary.problem)
+            text, settings, entry = _no_advice(ctx.point, summary.problem, summary.exact)
             message += f" ({text})"
             if entry is not None:  # the JSON's advice lists every answer the text gives
                 figures["advice"] = [entry]
@@ -509,7 +517,9 @@ def rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> ComposedSummar
 
     The configuration is rewritten (:func:`~auv_hinf.config.settings.with_settings`), designed and
     certified from its configured start, as a re-run with those settings is: a robust or deployed
-    design chooses its gains again for the new settings.
+    design chooses its gains again for the new settings. A re-run whose certified position bound
+    leaves two vehicles closer than ``[formation] min_separation`` is not one that certifies, and
+    counts as not covering (:func:`~auv_hinf.certificate.parts.separation.keeps_separation`).
 
     Parameters
     ----------
@@ -525,6 +535,8 @@ def rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> ComposedSummar
         return None
     c = summary.certificate
     if not summary.covers or c is None or c.errors is None or summary.problem is None:
+        return None
+    if not keeps_separation(point, float(c.errors.position)):
         return None
     return summary
 
@@ -700,7 +712,9 @@ def _change_entry(what: str, settings: tuple[Setting, ...], bound: float) -> dic
     }
 
 
-def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple[Setting, ...], dict[str, Any] | None]:
+def _no_advice(
+    point: DesignPoint, problem: DeployedProblem, exact: tuple[Advice, ...] = ()
+) -> tuple[str, tuple[Setting, ...], dict[str, Any] | None]:
     """What certifies when no declared setting does at the design's gains: the start, design, mission or a re-run.
 
     A declared ``[simulation] initial`` off the slots is tried first, removed (every vehicle on its
@@ -708,7 +722,9 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
     come first; when none covers, the declared settings shrunk together with the gains a re-run
     designs (:func:`rerun_together`). Returns the sentence, the settings, and the entry of the
     ``composed.advice`` list of ``certify --json`` (``setting`` is ``start``, ``design``, ``turns``,
-    ``speed`` or ``together``; ``None`` when nothing certifies).
+    ``speed`` or ``together``; ``None`` when nothing certifies). An answer that needs exact
+    measurements (``exact``: the search's answers with the noise at zero, or the re-run's settings
+    shrunk together to nothing) comes last, said so (:data:`EXACT_ONLY`).
     """
     if point.config.simulation.initial is not None:
         # a declared start off the slots may be all that binds: the hardware and the world stay as declared
@@ -724,11 +740,15 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
     if found:
         a = found[0]
         return (
-            f"no declared setting certifies when shrunk, even all together; {CHANGE_WORDS[a.what]} certify: {a.line()}",
+            "at the design's gains no declared setting certifies when shrunk, even all together; "
+            f"{CHANGE_WORDS[a.what]} certify: {a.line()}",
             a.settings,
             _change_entry(a.what, a.settings, a.position_bound),
         )
     together = rerun_together(point.config, problem)
+    if together is not None and not physical(together.scale, together.scaled):
+        exact = (*exact, together)
+        together = None
     if together is not None and together.certificate.errors is not None:
         bound = together.certificate.errors.position
         return (
@@ -738,13 +758,30 @@ def _no_advice(point: DesignPoint, problem: DeployedProblem) -> tuple[str, tuple
             advice_settings(together),
             _advice_dict(together),
         )
+    if exact:  # the last resort: exact measurements, said so
+        first = exact[0]
+        return (
+            f"at the design's gains no declared setting certifies when shrunk to a value a vehicle can have, and "
+            f"neither do {tried(point.config)}; {EXACT_ONLY}: {_advice_line(first)}",
+            advice_settings(first),
+            _advice_dict(first),
+        )
     return (
-        f"no declared setting certifies when shrunk, even all together, and neither do {tried(point.config)}: "
+        f"at the design's gains no declared setting certifies when shrunk, even all together, and neither do "
+        f"{tried(point.config)}: "
         "nothing tried certifies this loop (a faster [implementation] sample_time with a shorter delay, or other "
         "gains, may; none was found)",
         (),
         None,
     )
+
+
+#: How an answer that needs exact measurements is introduced: it certifies on re-run, but no
+#: navigation measures without error.
+EXACT_ONLY = (
+    "only exact measurements certify, which no navigation gives (the bounds are then those of a loop that never "
+    "leaves its slot): better navigation, a faster sample time or a shorter delay is needed; with exact ones"
+)
 
 
 def _advice_line(a: Advice) -> str:
@@ -757,6 +794,7 @@ def _seconds(x: float | None) -> str:
 
 __all__ = [
     "CONFIRM_FRACTIONS",
+    "EXACT_ONLY",
     "JOINT_ENOUGH",
     "PART",
     "RERUN_SAMPLE_TIME",

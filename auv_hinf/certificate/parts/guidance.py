@@ -55,7 +55,13 @@ from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fle
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.robust import run_settings
-from auv_hinf.certificate.parts.separation import ADVICE_MARGIN, SeparationBound, spread_factor, spread_settings
+from auv_hinf.certificate.parts.separation import (
+    ADVICE_MARGIN,
+    SeparationBound,
+    keeps_separation,
+    spread_factor,
+    spread_settings,
+)
 from auv_hinf.certificate.reason import Reason, Setting, apart, toml_line
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
@@ -764,14 +770,9 @@ def _apart(cfg: FormationConfig, cert: CascadeCertificate) -> float | None:
 
 
 def _separated(cfg: FormationConfig, bound: float) -> bool:
-    """Vehicles each within ``bound`` (m) of their slots keep ``cfg``'s ``[formation] min_separation``.
-
-    The separation part's own test (:class:`~auv_hinf.certificate.parts.separation.SeparationBound`,
-    the bound raised to the numerical floor as :func:`~auv_hinf.certificate.parts.separation.separation_bound`
-    raises it): an answer that certifies the cascade but not this is not one that certifies when re-run.
-    """
-    slots = slot_separation(design_point(cfg).fleet())
-    return SeparationBound(cfg.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,)).ok
+    """Vehicles each within ``bound`` (m) of their slots keep ``cfg``'s ``[formation] min_separation``
+    (:func:`~auv_hinf.certificate.parts.separation.keeps_separation`)."""
+    return keeps_separation(design_point(cfg), bound)
 
 
 def _gain_variants(problem: CascadeProblem) -> list[GuidanceConfig]:
@@ -885,7 +886,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
-        return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies"
+        return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies: {toml_line(settings)}"
     m = summary.mission
     s0 = summary.together or 0.0
     if s0 > 0.0 and (m is None or (m.scale < 1.0 and m.scale <= MISSION_OVER_TOGETHER * s0)):

@@ -367,10 +367,13 @@ class ImplementationPart:
                 self.name, True, declared, (), impl.to_dict(), binding=binding, detail=impl, position_bound=bound
             )
         covered = impl.covered_sample_time
+        # a sampled formation law is judged by the composed certificate first: this one only stands in for it
+        # when it does not cover, and its own limits are not the deployed loop's
+        own = " by its own certificate (the composed certificate judges the deployed loop)" if run.sampled else ""
         why = Reason(
             self.name,
             "not_covered",
-            "implementation not covered: " + "; ".join(impl.reasons),
+            f"implementation not covered{own}: " + "; ".join(impl.reasons),
             channel="sample_time",
             value=run.sample_time,
             limit=None if c is None else c.max_sample_time,

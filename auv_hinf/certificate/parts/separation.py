@@ -162,6 +162,24 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
     return SeparationBound(required, slots, bound, tuple(v.part for v in proving))
 
 
+def keeps_separation(point: DesignPoint, bound: float) -> bool:
+    """Vehicles each within ``bound`` (m) of their slots keep ``point``'s ``[formation] min_separation``.
+
+    The separation part's own test (:class:`SeparationBound`, the bound raised to the numerical floor
+    as :func:`separation_bound` raises it): an answer that certifies the tracking errors but not this
+    is not one that certifies when re-run.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its slots and required separation).
+    bound : float
+        The certified bound of every vehicle's distance to its slot (m).
+    """
+    slots = slot_separation(point.fleet())
+    return SeparationBound(point.config.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,)).ok
+
+
 def spread_factor(sep: SeparationBound) -> float:
     """How many times the formation must be spread for ``sep``'s bound to keep its closest pair apart.
 
@@ -403,6 +421,7 @@ __all__ = [
     "SHAPE_ADVICE_MAX_N",
     "SeparationBound",
     "SeparationPart",
+    "keeps_separation",
     "refusal",
     "separation_bound",
     "spread_factor",
