@@ -331,9 +331,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
         else:
             _report(kind, exc)
-        if code in (EXIT_NEGATIVE, EXIT_INTERNAL) and "--json" in args_list:
-            # a negative answer is still an answer: a reader of --json gets one JSON object
-            # (bad input, exit 2, stays one line on stderr only)
+        if "--json" in args_list:
+            # every failure is still an answer: a reader of --json gets one JSON object on stdout (a
+            # negative answer, bad input, an internal error), beside the same line on stderr
             message = [line for line in str(exc).splitlines() if line.strip()] or [type(exc).__name__]
             print(json.dumps({"ok": False, "error": kind, "message": "; ".join(message), "exit_code": code}))
         return code

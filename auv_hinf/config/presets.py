@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
-from auv_hinf.actuation.limits import vehicle_actuators
+from auv_hinf.actuation.limits import RudderActuation, vehicle_actuators
 from auv_hinf.config.schema import (
     REFERENCE_MODELS,
     ActuatorsTable,
@@ -502,16 +502,31 @@ def annotated_toml(cfg: FormationConfig) -> str:
         {"position": 0.1, "velocity": 0.02, "heading": 0.02, "yaw_rate": 0.01},
     )
     lines += _optional_table(
-        "actuators",
-        ActuatorsTable,
-        data,
-        {"tau_x": 86.0, "tau_y": 86.0, "tau_psi": 23.0},
-        "none declared: unlimited thrust",
+        "actuators", ActuatorsTable, data, _actuator_examples(cfg), "none declared: unlimited thrust"
     )
     lines += _optional_table(
         "guidance", GuidanceTable, data, {"kind": "ilos"}, "none declared: the fully actuated formation law"
     )
     return "\n".join(lines) + "\n"
+
+
+def _actuator_examples(cfg: FormationConfig) -> dict[str, Any]:
+    """The ``[actuators]`` example values: the declared actuation's own (a rudder's keys for a vehicle that
+    has one, never a sway force for it), else a BlueROV2 Heavy's thruster set (N, N, N m)."""
+    act = cfg.actuators
+    if isinstance(act, RudderActuation):
+        return {
+            "kind": "underactuated",
+            "tau_x": act.tau_x,
+            "rudder_max": act.rudder_max,
+            "rudder_sway": act.rudder_sway,
+            "rudder_yaw": act.rudder_yaw,
+            "tau_y": None,
+            "tau_psi": None,
+        }
+    if act is not None:
+        return {"tau_x": act.tau_x, "tau_y": act.tau_y, "tau_psi": act.tau_psi}
+    return {"tau_x": 86.0, "tau_y": 86.0, "tau_psi": 23.0}
 
 
 def _optional_table(

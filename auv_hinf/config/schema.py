@@ -140,6 +140,11 @@ _LIKELY_UNIT = {
 }
 
 
+#: Smallest magnitude a value must have for :func:`unit_slip` to name another unit: an angle of a degree
+#: or two, a rate of a few deg/s or a speed of a few cm/s is not what a setting of these vehicles means.
+MIN_SLIP = 2.0
+
+
 def _numbers(value: float | Sequence[float], scale: float = 1.0) -> str:
     """``value`` (a number or a list) times ``scale``, with 4 significant digits."""
     if isinstance(value, (int, float)):
@@ -158,6 +163,9 @@ def unit_slip(unit: str, value: float | Sequence[float]) -> str:
         The value as written.
     """
     if unit not in _LIKELY_UNIT:
+        return ""
+    values = [value] if isinstance(value, (int, float)) else list(value)
+    if max((abs(v) for v in values), default=0.0) < MIN_SLIP:  # 0.9 degrees is no likelier than 0.9 rad
         return ""
     likely, factor = _LIKELY_UNIT[unit]
     return f": it looks like {likely}; {_numbers(value)} {likely} is {_numbers(value, factor)} {unit}"

@@ -138,7 +138,8 @@ def test_remus_with_its_rudder_refuses_the_fully_actuated_law_naming_sway(remus_
     top = cert.config.envelope.u[1]
     auth = act["rudder_authority"]
     assert auth["speed"] == top
-    assert auth["force_y"] == pytest.approx(9.64 * top**2 * math.radians(13.6), rel=1e-12)
+    assert "force_y" not in auth  # a rudder has no sway force: its side force comes with its moment
+    assert auth["side_force"] == pytest.approx(9.64 * top**2 * math.radians(13.6), rel=1e-12)
     assert auth["moment"] == pytest.approx(6.15 * top**2 * math.radians(13.6), rel=1e-12)
     # saved and loaded with its actuator verdict
     path = cert.save(tmp_path / "c.json")

@@ -25,8 +25,11 @@ def test_cli_refuses_degrees_with_one_line_naming_the_key(tmp_path, capsys):
     path.write_text('[reference]\nkind = "line"\nspeed = 1.0\nheading = 90.0\n', encoding="utf-8")
     assert main(["certify", "--config", str(path), "--json"]) == 2
     out, err = capsys.readouterr()
-    assert out == "" and len(err.splitlines()) == 1
+    assert len(err.splitlines()) == 1
     assert "error" in err and "reference.heading" in err and "degrees" in err and "1.571 rad" in err
+    # with --json the same answer is one JSON object on stdout, for a reader that parses only that
+    record = json.loads(out)
+    assert record["ok"] is False and record["exit_code"] == 2 and "reference.heading" in record["message"]
 
 
 @pytest.mark.slow

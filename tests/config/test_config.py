@@ -373,3 +373,26 @@ def test_uncommenting_an_optional_table_header_of_the_annotated_file_leaves_vali
     assert len(headers) == 2, "the preset leaves both optional tables out"
     for header in headers:
         tomllib.loads(text.replace(header, header.removeprefix("# "), 1))
+
+
+@pytest.mark.parametrize("name", ["remus-transit-ilos", "remus-survey-ilos", "bluerov2-line"])
+def test_annotated_actuators_show_the_vehicles_own_actuation(name):
+    cfg = preset_config(name)
+    text = annotated_toml(cfg)
+    table = text.split("\n[actuators]\n", 1)[1].split("\n\n", 1)[0]
+    act = cfg.actuators
+    assert f"# tau_x = {act.tau_x!r}" in table  # the vehicle's own thrust, not a stand-in
+    if name.startswith("remus"):  # a torpedo: its rudder, and no sway force or yaw moment to copy
+        assert '# kind = "underactuated"' in table and f"# rudder_yaw = {act.rudder_yaw!r}" in table
+        assert "tau_y =" not in table and "tau_psi =" not in table
+    else:
+        assert f"# tau_y = {act.tau_y!r}" in table
+
+
+def test_a_unit_slip_is_named_only_where_the_other_unit_is_plausible():
+    from auv_hinf.config.schema import MIN_SLIP, unit_slip
+
+    assert unit_slip("rad", 13.6) == ": it looks like degrees; 13.6 degrees is 0.2374 rad"
+    assert unit_slip("rad", 0.9) == ""  # a rudder of 0.9 rad is too large, but 0.9 degrees is no likelier
+    assert unit_slip("rad/s", [0.5, MIN_SLIP]).startswith(": it looks like deg/s")
+    assert unit_slip("m", 90.0) == ""  # no other unit is likely for a length

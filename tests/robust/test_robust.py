@@ -237,3 +237,20 @@ def test_a_run_only_the_robust_certificate_covers_is_compared_with_its_bounds():
     assert report["certified_errors"] == {f"{k}_error": v for k, v in report["robust_bounds"].items()}
     for k, v in report["measured_errors"].items():
         assert v <= report["certified_errors"][k], (k, v)
+
+
+def test_a_run_outside_the_box_names_every_multiplier_outside():
+    from dataclasses import replace as _replace
+
+    from auv_hinf.certificate.parts.robust import plant_outside_box
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.robust.box import ParameterBox as _Box
+
+    cfg = preset_config("bluerov2-line")
+    box = _Box.from_ranges(cfg.vehicle, cfg.uncertainty.box)
+    inside = _replace(cfg, simulation=_replace(cfg.simulation, plant=(("m11", 1.1), ("d11_quad", 0.8))))
+    assert plant_outside_box(inside, box) is None  # the edges are inside
+    two = _replace(cfg, simulation=_replace(cfg.simulation, plant=(("m11", 1.3), ("d11_quad", 1.5), ("m22", 1.0))))
+    why = plant_outside_box(two, box)
+    assert why is not None and why.startswith("plant multipliers ")
+    assert "m11 = 1.3 (box [0.9, 1.1])" in why and "d11_quad = 1.5 (box [0.8, 1.2])" in why and "m22" not in why

@@ -76,8 +76,9 @@ class ActuatorCheck:
         them, with the scaled ``uncertainty`` table, and each answer alone (see
         :func:`largest_certifiable`).
     rudder_authority : dict or None
-        For a rudder: the largest sway force (N) and yaw moment (N m) it gives at the envelope's top
-        surge speed (m/s), ``{speed, force_y, moment}``, and its lever arm (m).
+        For a rudder: the largest side force (N; the fin's lift, not a sway actuator: it comes only
+        with its yaw moment) and yaw moment (N m) it gives at the envelope's top surge speed (m/s),
+        ``{speed, side_force, moment}``, and its lever arm (m).
     guided_peak : dict or None
         With ``[guidance]``: the guidance certificate's thrust and rudder ``{force_x, rudder}`` (N, rad).
     """
@@ -234,7 +235,7 @@ def rudder_check(
     """
     speed = float(point.config.envelope.u[1])
     sway, moment = act.authority(speed)
-    authority = {"speed": speed, "force_y": sway, "moment": moment, "lever_arm": act.lever_arm}
+    authority = {"speed": speed, "side_force": sway, "moment": moment, "lever_arm": act.lever_arm}
     if point.config.guidance is not None:  # the guidance cascade runs: its certificate bounds thrust and rudder
         return guided_check(act, guided, authority)
     need = "" if peak is None else f" (it needs |tau_y| <= {peak[1]:.4g} N with |tau_psi| <= {peak[2]:.4g} N m)"

@@ -239,11 +239,15 @@ def plant_outside_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
         The declared box.
     """
     mult = dict(cfg.simulation.plant)
-    for k, name in enumerate(PARAMETERS):
-        m = float(mult.get(name, 1.0))
-        if not _within(m, box.lo[k], box.hi[k]):
-            return f"plant multiplier {name} = {m:g} is outside the declared box [{box.lo[k]:g}, {box.hi[k]:g}]"
-    return None
+    outside = [
+        f"{name} = {m:g} (box [{box.lo[k]:g}, {box.hi[k]:g}])"
+        for k, name in enumerate(PARAMETERS)
+        if not _within(m := float(mult.get(name, 1.0)), box.lo[k], box.hi[k])
+    ]
+    if not outside:
+        return None
+    each = "multiplier" if len(outside) == 1 else "multipliers"
+    return f"plant {each} {', '.join(outside)} outside the declared box"
 
 
 def _run_outside(point: DesignPoint) -> str | None:
