@@ -227,11 +227,13 @@ def box_multipliers(cfg: FormationConfig) -> FloatArray:
     Parameters
     ----------
     cfg : FormationConfig
-        The configuration; coefficients it does not declare are ``[1, 1]``.
+        The configuration; coefficients it does not declare are ``[1, 1]``, and so are those whose
+        value is zero (a multiple of zero is zero: their ranges would only repeat every vertex).
     """
     box = np.ones((len(COEFFICIENTS), 2))
     for k, (lo, hi) in cfg.uncertainty.box:
-        box[COEFFICIENTS.index(k)] = (lo, hi)
+        if float(getattr(cfg.vehicle, k)) != 0.0:
+            box[COEFFICIENTS.index(k)] = (lo, hi)
     return box
 
 

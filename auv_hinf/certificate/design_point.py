@@ -27,7 +27,7 @@ from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.reason import Reason
 from auv_hinf.composed.synthesis import OBJECTIVE as DEPLOYED_OBJECTIVE
 from auv_hinf.composed.synthesis import DeployedDesign, synthesise_deployed
-from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION
+from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION, DEFAULT_SYNTHESIS
 from auv_hinf.config.settings import FormationConfig, SimulationConfig
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.design.theorem1 import GainDesign, design_alpha
@@ -265,13 +265,19 @@ def _design_key(cfg: FormationConfig) -> FormationConfig:
     """``cfg`` without what the design does not depend on (name, start, plant, current of the run,
     horizon, the implementation unless the gains are designed for it (``synthesis = "deployed"``;
     otherwise they are designed for the continuous law and the certificates say whether they
-    survive the declared one), and the required separation, which only the separation part reads)."""
+    survive the declared one), and the required separation, which only the separation part reads).
+    With ``[guidance]`` the formation law does not run: its gains are Theorem 1's, not a robust or
+    deployed design's (a search of many certificates for a law no vehicle runs)."""
+    steered = cfg.guidance is not None
     return replace(
         cfg,
         name="design",
         simulation=SimulationConfig(),
-        implementation=cfg.implementation if cfg.synthesis == "deployed" else Implementation(),
+        implementation=cfg.implementation if cfg.synthesis == "deployed" and not steered else Implementation(),
         min_separation=DEFAULT_MIN_SEPARATION,
+        robust=cfg.robust and not steered,
+        integral=cfg.integral and not steered,
+        synthesis=DEFAULT_SYNTHESIS if steered else cfg.synthesis,
     )
 
 

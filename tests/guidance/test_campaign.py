@@ -12,11 +12,12 @@ import pytest
 from auv_hinf.campaign.guidance import run_guidance_campaign, run_inputs
 from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
 from auv_hinf.campaign.starts import CORNER_PERIOD
+from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.guidance import guidance_certificate
 from auv_hinf.certificate.run_plan import guidance_run
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.settings import DisturbanceConfig, FormationConfig
+from auv_hinf.config.settings import DisturbanceConfig, FormationConfig, UncertaintyConfig
 from auv_hinf.exceptions import ConfigError, Interrupted, ParameterError
 
 #: Runs of 40 s: long enough for the cascade to turn the start into the current, short for CI.
@@ -135,3 +136,21 @@ def test_a_certified_fleet_reports_counts_and_worst_ratios_to_its_bounds():
     bounds = {**s["certified_errors"], **guidance_certificate(cfg).certificate.to_dict()["certified_peak"]}
     for key, ratio in s["worst_ratio"].items():
         assert ratio == pytest.approx(t[key].max() / bounds[key], rel=1e-12) and 0.0 <= ratio <= 1.0, key
+
+
+def test_a_coefficient_that_is_zero_adds_no_vertices():
+    # the BlueROV2 Heavy has no linear sway damping: a range of it moves no plant
+    cfg = preset_config("bluerov2-line")
+    assert cfg.vehicle.d22_lin == 0.0
+    wider = replace(cfg, uncertainty=UncertaintyConfig((*cfg.uncertainty.box, ("d22_lin", (0.5, 2.0)))))
+    box = box_multipliers(wider)
+    assert tuple(box[COEFFICIENTS.index("d22_lin")]) == (1.0, 1.0)
+    assert np.array_equal(box, box_multipliers(cfg))
+
+
+def test_a_steered_fleet_designs_no_robust_gains_for_the_law_it_does_not_run():
+    # [design] robust asks for the formation law's robust design; with [guidance] that law never runs
+    cfg = preset_config("remus-transit-ilos")
+    point = design_point(replace(cfg, robust=True))
+    assert point.robust_design is None and point.deployed_design is None and point.source == "theorem1"
+    assert point.gains == design_point(cfg).gains
