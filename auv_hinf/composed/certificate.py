@@ -183,18 +183,33 @@ class Round:
         The nominal surge, sway and heading loops.
     gains : tuple of PeakGains
         Their peak gains.
-    steps : tuple of StepBounds
-        Their step responses' peaks and areas (the slowly varying deficit's channel).
     free : tuple of ndarray or None
         Their outputs' peaks per unit initial plant state (``None`` when the start has no error).
+    cells : tuple of tuple of SampledLoop
+        Every cell's nominal loop, per loop (the first is ``loops``'): what :meth:`steps` reads.
     """
 
     op: OperatingBox
     axes: tuple[AxisRanges, AxisRanges, AxisRanges]
     loops: tuple[SampledLoop, SampledLoop, SampledLoop]
     gains: tuple[PeakGains, PeakGains, PeakGains]
-    steps: tuple[StepBounds, StepBounds, StepBounds]
     free: tuple[FloatArray, FloatArray, FloatArray] | None
+    cells: tuple[tuple[SampledLoop, ...], ...] = ()
+
+    def steps(self, loop: int) -> StepBounds:
+        """Loop ``loop``'s step responses' peaks and areas, the largest over its cells (the slowly varying
+        deficit's channel); computed when a deficit first asks for them (:func:`_step_bounds`).
+
+        Parameters
+        ----------
+        loop : int
+            0 (surge), 1 (sway) or 2 (heading).
+        """
+        bounds = [_step_bounds(c) for c in self.cells[loop]]
+        return StepBounds(
+            peak=np.max(np.stack([b.peak for b in bounds]), axis=0),
+            area=np.max(np.stack([b.area for b in bounds]), axis=0),
+        )
 
 
 @dataclass(frozen=True)
@@ -316,7 +331,7 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
     """
     h, d = problem.timing
     axes = nominal_loops(problem.plant, op, problem.mission, problem.implementation.noise.heading, problem.gains, h, d)
-    loops, gains, steps, free = [], [], [], []
+    loops, gains, free = [], [], []
     start = problem.initial
     has_start = any(x > 0 for x in (start.position, start.velocity, start.heading, start.yaw_rate))
     for name, _, cell_loops in axes:
@@ -325,30 +340,27 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
             return name
         done = [a for a in analysed if a is not None]
         gains.append(_dominant([a[0] for a in done]))
-        steps.append(
-            StepBounds(
-                peak=np.max(np.stack([a[1].peak for a in done]), axis=0),
-                area=np.max(np.stack([a[1].area for a in done]), axis=0),
-            )
-        )
         loops.append(cell_loops[0])
         if has_start:
-            if any(a[2] is None for a in done):
+            if any(a[1] is None for a in done):
                 return "start"
-            free.append(np.max(np.stack([a[2] for a in done if a[2] is not None]), axis=0))
+            free.append(np.max(np.stack([a[1] for a in done if a[1] is not None]), axis=0))
     return Round(
         op,
         (axes[0][1], axes[1][1], axes[2][1]),
         (loops[0], loops[1], loops[2]),
         (gains[0], gains[1], gains[2]),
-        (steps[0], steps[1], steps[2]),
         (free[0], free[1], free[2]) if has_start else None,
+        tuple(tuple(c) for _, _, c in axes),
     )
 
 
 #: Nominal loops analysed so far, by their defining numbers (a fixed point, an advice search and a
 #: gain search meet the same loops many times).
-_ANALYSED: dict[tuple[Any, ...], tuple[PeakGains, StepBounds, FloatArray | None] | None] = {}
+_ANALYSED: dict[tuple[Any, ...], tuple[PeakGains, FloatArray | None] | None] = {}
+#: Their step bounds, computed only for the loops a deficit drives (a box, a current or a mission
+#: whose feed-forward lags: without one the step responses are never read).
+_STEPS: dict[tuple[Any, ...], StepBounds] = {}
 #: Most analyses kept.
 ANALYSIS_CACHE = 4096
 
@@ -370,19 +382,30 @@ def _loop_key(loop: SampledLoop, with_free: bool) -> tuple[Any, ...]:
     return (*(a.tobytes() for a in arrays), *(a.shape for a in arrays), loop.sample_time, loop.delay, with_free)
 
 
-def _analyse(loop: SampledLoop, with_free: bool) -> tuple[PeakGains, StepBounds, FloatArray | None] | None:
-    """The loop's peak gains, step bounds and (``with_free``) free-response peaks; ``None`` when unstable."""
+def _analyse(loop: SampledLoop, with_free: bool) -> tuple[PeakGains, FloatArray | None] | None:
+    """The loop's peak gains and (``with_free``) free-response peaks; ``None`` when unstable."""
     key = _loop_key(loop, with_free)
     if key in _ANALYSED:
         return _ANALYSED[key]
-    gains, steps = peak_gains(loop), step_bounds(loop, inputs=1)  # only the deficit (input 0) is slowly varying
-    result = None
-    if gains is not None and steps is not None:
-        result = (gains, steps, free_peaks(loop) if with_free else None)
+    gains = peak_gains(loop)
+    result = None if gains is None else (gains, free_peaks(loop) if with_free else None)
     if len(_ANALYSED) >= ANALYSIS_CACHE:
         _ANALYSED.clear()
     _ANALYSED[key] = result
     return result
+
+
+def _step_bounds(loop: SampledLoop) -> StepBounds:
+    """The step bounds of the loop's deficit input (input 0, the only slowly varying one), remembered."""
+    key = _loop_key(loop, False)
+    if key not in _STEPS:
+        steps = step_bounds(loop, inputs=1)
+        if steps is None:  # a loop is analysed (peak_gains, the same contraction) before it is asked
+            raise DesignError("the step bounds of a stable nominal loop could not be computed")
+        if len(_STEPS) >= ANALYSIS_CACHE:
+            _STEPS.clear()
+        _STEPS[key] = steps
+    return _STEPS[key]
 
 
 def _dominant(gains: list[PeakGains]) -> PeakGains:
@@ -438,17 +461,17 @@ def _system(problem: DeployedProblem, rnd: Round, dist: Disturbances) -> tuple[F
     # --- position axes
     for j in range(2):
         g = rnd.gains[j]
-        st = rnd.steps[j]
         other = 1 - j
         a0 = max(max(abs(lo), abs(hi)) for lo, hi in rnd.axes[j].parts)
         da, dc, dl = rnd.axes[j].deviations
         w_c = dist.deficit_axes[j]
         w_axis = w_c + dist.residual
+        st = rnd.steps(j) if w_c > 0.0 else None  # no deficit: its channel adds nothing
         # outputs: gains from w, q, q_e (continuous) and n_e, n_v, p_z (discrete)
         for k, o in enumerate(outs):
             row = ix(f"{j}:{o}")
             # the deficit is slowly varying: an output that settles sees its step response
-            deficit = min(g.continuous[k, 0] * w_c, st.bound(k, 0, w_c, dist.deficit_rate))
+            deficit = 0.0 if st is None else min(g.continuous[k, 0] * w_c, st.bound(k, 0, w_c, dist.deficit_rate))
             c[row] += deficit + g.continuous[k, 0] * dist.residual
             m[row, ix(f"{j}:q")] += g.continuous[k, 1]
             m[row, ix(f"{j}:qc")] += g.one_signed[k, 1]  # the drag's curvature keeps one sign

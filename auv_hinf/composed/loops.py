@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from auv_hinf._typing import FloatArray
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.implementation.peak import SampledLoop
 from auv_hinf.law.gains import Gains
@@ -484,6 +485,11 @@ RESIDUAL_GRID = 2001
 RESIDUAL_SEARCH = 24
 
 
+#: Grids of :func:`_residual_terms` kept (each about 0.6 MB: 8 box vertices, 5 candidates, the grid): a
+#: golden-section search reads one grid 26 times, and a round asks for a few.
+RESIDUAL_TERMS_CACHE = 16
+
+
 def drag_residual(plant: Plant, axis: str, desired: tuple[float, float], width: float, a0: float) -> float:
     """``sup |f(y + eta) - f(y) - a0 eta|`` over the box, ``y`` in ``desired``, ``|eta| <= width`` (m/s^2 or rad/s^2).
 
@@ -508,6 +514,19 @@ def drag_residual(plant: Plant, axis: str, desired: tuple[float, float], width: 
     a0 : float
         The nominal loop's slope (1/s).
     """
+    drag, eta, lipschitz, step = _residual_terms(plant, axis, desired, width)
+    worst = float(np.abs(drag - a0 * eta).max())
+    # between grid points: |dg/deta| <= (d_lin + 2 d_quad (|y| + width))/m + |a0|
+    return worst + 0.5 * (lipschitz + abs(a0)) * step
+
+
+@functools.lru_cache(maxsize=RESIDUAL_TERMS_CACHE)
+def _residual_terms(
+    plant: Plant, axis: str, desired: tuple[float, float], width: float
+) -> tuple[FloatArray, FloatArray, float, float]:
+    """What :func:`drag_residual` evaluates for every nominal slope: the drag's increment ``f(y + eta) - f(y)``
+    at every box vertex, candidate ``y`` and grid point; the grid; the increment's Lipschitz constant in
+    ``eta`` (without the slope's own); and the grid's step."""
     lins, quads, masses = plant.interval(f"d{axis}_lin"), plant.interval(f"d{axis}_quad"), plant.interval(f"m{axis}")
     lo, hi = desired
     eta = np.linspace(-width, width, RESIDUAL_GRID)
@@ -517,13 +536,10 @@ def drag_residual(plant: Plant, axis: str, desired: tuple[float, float], width: 
     sq = np.abs(x) * x - np.abs(ys) * ys  # |x| x - |y| y
     # |g| is largest at a vertex: for each (d_lin/m, d_quad/m) vertex the largest |g| over the grid
     vertices = np.array([(dl / m, dq / m) for dl, dq, m in itertools.product(lins, quads, masses)])
-    g = -vertices[:, 0, None, None] * eta - vertices[:, 1, None, None] * sq[None] - a0 * eta
-    worst = float(np.abs(g).max())
-    # between grid points: |dg/deta| <= (d_lin + 2 d_quad (|y| + width))/m + |a0|
+    drag = -vertices[:, 0, None, None] * eta - vertices[:, 1, None, None] * sq[None]
     top = max(abs(lo), abs(hi))
-    lipschitz = (lins[1] + 2.0 * quads[1] * (top + width)) / masses[0] + abs(a0)
-    step = 2.0 * width / (RESIDUAL_GRID - 1)
-    return worst + 0.5 * lipschitz * step
+    lipschitz = (lins[1] + 2.0 * quads[1] * (top + width)) / masses[0]
+    return drag, eta, lipschitz, 2.0 * width / (RESIDUAL_GRID - 1)
 
 
 @functools.lru_cache(maxsize=1024)
