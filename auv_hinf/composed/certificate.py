@@ -197,8 +197,9 @@ class Round:
     cells: tuple[tuple[SampledLoop, ...], ...] = ()
 
     def steps(self, loop: int) -> StepBounds:
-        """Loop ``loop``'s step responses' peaks and areas, the largest over its cells (the slowly varying
-        deficit's channel); computed when a deficit first asks for them (:func:`_step_bounds`).
+        """Loop ``loop``'s step responses' peaks and areas, the largest over its cells.
+
+        The slowly varying deficit's channel, computed when a deficit first asks for it (:func:`_step_bounds`).
 
         Parameters
         ----------

@@ -463,9 +463,13 @@ class GuidanceTable(_Table):
         guidance_law.DEFAULT_LOOKAHEAD, "lookahead distance Delta", "m", gt=0.0, le=MAX_COORDINATE
     )
     integral_gain: float = _field(
-        guidance_law.DEFAULT_INTEGRAL_GAIN, "ILOS integral gain sigma (below the speed less the current)", "m/s",
-        gt=0.0, le=MAX_SPEED,
-    )  # fmt: skip
+        guidance_law.DEFAULT_INTEGRAL_GAIN,
+        "ILOS integral gain sigma (the literature's stability conditions keep it below the speed less the "
+        "current; the certificate judges the declared value)",
+        "m/s",
+        gt=0.0,
+        le=MAX_SPEED,
+    )
     heading_bandwidth: float = _field(
         guidance_law.DEFAULT_HEADING_BANDWIDTH, "natural frequency of the critically damped heading loop",
         "rad/s", gt=0.0, le=MAX_RATE * 10,
