@@ -184,10 +184,16 @@ def test_certify_fuzz(data: dict[str, Any], tmp_path_factory: pytest.TempPathFac
     f.write_text(to_toml(data))
     code, out, err = run(["certify", "--config", str(f), "--json"], capsys)
     event(f"certify exit {code}")
-    if code == 2 or not out:  # bad input, or a solver/internal failure reported on stderr
-        assert out == "" and err
+    if code == 2:  # bad input: one line on stderr, and the same answer as one JSON object on stdout
+        assert err and json.loads(out)["exit_code"] == 2
+        return
+    if not out:  # a solver/internal failure reported on stderr
+        assert err
         return
     cert = json.loads(out)
+    if "certified" not in cert:  # a failure before the report, as one JSON object
+        assert cert["ok"] is False and err
+        return
     check_alphas(cert["alpha"], cert["lambda"], cert["gamma"])
     if code == 0:
         assert cert["certified"] is True
