@@ -296,7 +296,9 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
         if not cert.covers and search:
             found: list[Advice] = []
             for knob in declared_knobs(problem):
-                if knob in JOINT and any(a.knob not in JOINT or a.scale >= JOINT_ENOUGH for a in found):
+                if knob in JOINT and any(
+                    physical(a.scale, a.scaled) and (a.knob not in JOINT or a.scale >= JOINT_ENOUGH) for a in found
+                ):
                     break  # one setting alone (or the current and box together) certifies: no need for more
                 a = largest_covered(problem, knob, certify)
                 if a is not None:
