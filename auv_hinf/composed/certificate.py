@@ -179,38 +179,44 @@ class Round:
         The operating box the perturbation bounds hold in.
     axes : tuple of AxisRanges
         The surge, sway and heading ranges.
-    loops : tuple of SampledLoop
-        The nominal surge, sway and heading loops.
+    cells : tuple of tuple of SampledLoop
+        Per loop (surge, sway, heading), every cell's nominal loop (:attr:`loops` are the first ones).
     gains : tuple of PeakGains
-        Their peak gains.
+        Their peak gains, the largest over each loop's cells.
     free : tuple of ndarray or None
         Their outputs' peaks per unit initial plant state (``None`` when the start has no error).
-    cells : tuple of tuple of SampledLoop
-        Every cell's nominal loop, per loop (the first is ``loops``'): what :meth:`steps` reads.
     """
 
     op: OperatingBox
     axes: tuple[AxisRanges, AxisRanges, AxisRanges]
-    loops: tuple[SampledLoop, SampledLoop, SampledLoop]
+    cells: tuple[tuple[SampledLoop, ...], tuple[SampledLoop, ...], tuple[SampledLoop, ...]]
     gains: tuple[PeakGains, PeakGains, PeakGains]
     free: tuple[FloatArray, FloatArray, FloatArray] | None
-    cells: tuple[tuple[SampledLoop, ...], ...] = ()
+    _steps: dict[int, StepBounds] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def loops(self) -> tuple[SampledLoop, SampledLoop, SampledLoop]:
+        """The nominal surge, sway and heading loops (each loop's first cell)."""
+        return (self.cells[0][0], self.cells[1][0], self.cells[2][0])
 
     def steps(self, loop: int) -> StepBounds:
         """Loop ``loop``'s step responses' peaks and areas, the largest over its cells.
 
-        The slowly varying deficit's channel, computed when a deficit first asks for it (:func:`_step_bounds`).
+        The slowly varying deficit's channel, computed when a deficit first asks for it (:func:`_step_bounds`)
+        and kept for the fixed point's later iterations.
 
         Parameters
         ----------
         loop : int
             0 (surge), 1 (sway) or 2 (heading).
         """
-        bounds = [_step_bounds(c) for c in self.cells[loop]]
-        return StepBounds(
-            peak=np.max(np.stack([b.peak for b in bounds]), axis=0),
-            area=np.max(np.stack([b.area for b in bounds]), axis=0),
-        )
+        if loop not in self._steps:
+            bounds = [_step_bounds(c) for c in self.cells[loop]]
+            self._steps[loop] = StepBounds(
+                peak=np.max(np.stack([b.peak for b in bounds]), axis=0),
+                area=np.max(np.stack([b.area for b in bounds]), axis=0),
+            )
+        return self._steps[loop]
 
 
 @dataclass(frozen=True)
@@ -332,7 +338,7 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
     """
     h, d = problem.timing
     axes = nominal_loops(problem.plant, op, problem.mission, problem.implementation.noise.heading, problem.gains, h, d)
-    loops, gains, free = [], [], []
+    gains, free = [], []
     start = problem.initial
     has_start = any(x > 0 for x in (start.position, start.velocity, start.heading, start.yaw_rate))
     for name, _, cell_loops in axes:
@@ -341,7 +347,6 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
             return name
         done = [a for a in analysed if a is not None]
         gains.append(_dominant([a[0] for a in done]))
-        loops.append(cell_loops[0])
         if has_start:
             if any(a[1] is None for a in done):
                 return "start"
@@ -349,10 +354,9 @@ def make_round(problem: DeployedProblem, op: OperatingBox) -> Round | str:
     return Round(
         op,
         (axes[0][1], axes[1][1], axes[2][1]),
-        (loops[0], loops[1], loops[2]),
+        (tuple(axes[0][2]), tuple(axes[1][2]), tuple(axes[2][2])),
         (gains[0], gains[1], gains[2]),
         (free[0], free[1], free[2]) if has_start else None,
-        tuple(tuple(c) for _, _, c in axes),
     )
 
 

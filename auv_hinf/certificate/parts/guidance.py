@@ -57,8 +57,8 @@ from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.robust import run_settings
 from auv_hinf.certificate.parts.separation import (
     ADVICE_MARGIN,
-    SeparationBound,
     keeps_separation,
+    separation_with,
     spread_factor,
     spread_settings,
 )
@@ -71,11 +71,9 @@ from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import STEP, cascade_period, slot_motion
 from auv_hinf.implementation.peak import in_flight
 from auv_hinf.mission.paths import CircleReference, LawnmowerReference, LineReference
-from auv_hinf.mission.separation import slot_separation
 from auv_hinf.mission.tubes import slot_bounds
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.numerics.bisection import bisect, largest_holding
-from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.numerics.progress import PROGRESS_DELAY
 from auv_hinf.robust.box import PARAMETERS
 
@@ -738,10 +736,8 @@ def _spread(cfg: FormationConfig, cert: CascadeCertificate) -> tuple[Setting, ..
     if bound is None or _separated(cfg, bound):
         return ()
     point = design_point(cfg)
-    slots = slot_separation(point.fleet())
     for _ in range(SPREAD_TRIES):
-        sep = SeparationBound(cfg.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,))
-        settings = spread_settings(point, spread_factor(sep) * (1.0 + ADVICE_MARGIN))
+        settings = spread_settings(point, spread_factor(separation_with(point, bound)) * (1.0 + ADVICE_MARGIN))
         changed = _changed(cfg, settings) if settings else None
         if changed is None:
             return ()

@@ -162,12 +162,10 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
     return SeparationBound(required, slots, bound, tuple(v.part for v in proving))
 
 
-def keeps_separation(point: DesignPoint, bound: float) -> bool:
-    """Vehicles each within ``bound`` (m) of their slots keep ``point``'s ``[formation] min_separation``.
+def separation_with(point: DesignPoint, bound: float) -> SeparationBound:
+    """The separation of ``point``'s slots with every vehicle within ``bound`` (m) of its own.
 
-    The separation part's own test (:class:`SeparationBound`, the bound raised to the numerical floor
-    as :func:`separation_bound` raises it): an answer that certifies the tracking errors but not this
-    is not one that certifies when re-run.
+    The bound is raised to the numerical floor as :func:`separation_bound` raises it.
 
     Parameters
     ----------
@@ -177,7 +175,23 @@ def keeps_separation(point: DesignPoint, bound: float) -> bool:
         The certified bound of every vehicle's distance to its slot (m).
     """
     slots = slot_separation(point.fleet())
-    return SeparationBound(point.config.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,)).ok
+    return SeparationBound(point.config.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,))
+
+
+def keeps_separation(point: DesignPoint, bound: float) -> bool:
+    """Vehicles each within ``bound`` (m) of their slots keep ``point``'s ``[formation] min_separation``.
+
+    The separation part's own test (:func:`separation_with`): an answer that certifies the tracking
+    errors but not this is not one that certifies when re-run.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its slots and required separation).
+    bound : float
+        The certified bound of every vehicle's distance to its slot (m).
+    """
+    return separation_with(point, bound).ok
 
 
 def spread_factor(sep: SeparationBound) -> float:
@@ -424,6 +438,7 @@ __all__ = [
     "keeps_separation",
     "refusal",
     "separation_bound",
+    "separation_with",
     "spread_factor",
     "spread_settings",
 ]
