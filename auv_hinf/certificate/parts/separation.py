@@ -187,9 +187,9 @@ def keeps_separation(point: DesignPoint, bound: float) -> bool:
     Parameters
     ----------
     point : DesignPoint
-        The design point (its slots and required separation).
+        The configuration's design, whose slots are held to ``[formation] min_separation``.
     bound : float
-        The certified bound of every vehicle's distance to its slot (m).
+        How far (m) the certificate lets each vehicle be from its slot.
     """
     return separation_with(point, bound).ok
 
