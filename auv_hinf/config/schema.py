@@ -17,7 +17,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Sequence
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -359,7 +359,11 @@ class UncertaintyTable(_Table):
 class ActuatorsTable(_Table):
     """``[actuators]``: what the vehicle can push; the certificate checks the law's peak force against it."""
 
-    preset: ActuatorPreset | None = _field(None, "published actuation of a vehicle preset (see docs/vehicles.md)")
+    preset: ActuatorPreset | None = _field(
+        None,
+        "published actuation of a vehicle preset: that [vehicle] preset's own, or borrowed by a custom vehicle "
+        "(see docs/vehicles.md)",
+    )
     kind: ActuationKind = _field(
         "fully-actuated",
         "fully-actuated: independent surge force, sway force and yaw moment (tau_x, tau_y, tau_psi); "
@@ -913,6 +917,21 @@ class ConfigFile(_Table):
         init = self.simulation.initial
         if init is not None and len(init) != self.formation.n:
             raise ValueError(f"simulation.initial must have one row per vehicle ({self.formation.n}), got {len(init)}")
+        return self
+
+    @model_validator(mode="after")
+    def _actuators_of_the_vehicle(self) -> ConfigFile:
+        # an actuator preset is one vehicle's published actuation: on another preset hull its
+        # forces (or its rudder's coefficients, which scale with the hull) are another vehicle's
+        # figures; a custom [vehicle] may borrow a preset's actuation (a perturbed REMUS, say)
+        act, hull = self.actuators.preset if self.actuators is not None else None, self.vehicle.preset
+        if act is not None and hull is not None and act != hull:
+            has_own = hull in get_args(ActuatorPreset)
+            own = f"give actuators.preset = {hull!r}, or" if has_own else "it has no published actuation: give"
+            raise ValueError(
+                f"actuators.preset = {act!r} is the {act} vehicle's own actuation, but vehicle.preset = {hull!r}: "
+                f"{own} this vehicle's limits (tau_x, ... in N, N m and rad; docs/config.md)"
+            )
         return self
 
 

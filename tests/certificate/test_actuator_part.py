@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -24,6 +25,8 @@ from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import DisturbanceConfig, UncertaintyConfig, config_from_dict, load_config
 from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.mission.margins import ErrorBounds, inflate_envelope
+from auv_hinf.models.vehicle import preset as vehicle_preset
+from auv_hinf.robust.box import PARAMETERS
 from auv_hinf.simulation.engine import simulate_batch
 from auv_hinf.simulation.scenario import ScenarioBatch
 from tests.helpers import certificate_of, preset_certificate, starts_from_errors
@@ -106,10 +109,27 @@ def test_old_thrust_limit_key_is_refused_with_the_new_name():
         config_from_dict({"simulation": {"thrust_limit": [1.0, 1.0, 1.0]}})
     with pytest.raises(ConfigError, match="give all of tau_x, tau_y, tau_psi"):
         config_from_dict({"actuators": {"tau_x": 1.0}})
-    cfg = config_from_dict({"actuators": {"preset": "bluerov2-heavy"}})
+    cfg = config_from_dict({"vehicle": {"preset": "bluerov2-heavy"}, "actuators": {"preset": "bluerov2-heavy"}})
     assert cfg.actuators is not None and cfg.actuators.kind == "fully-actuated"
     again = config_from_dict(cfg.to_toml_dict())
     assert again.actuators == cfg.actuators
+
+
+@pytest.mark.parametrize(
+    ("hull", "act", "hint"),
+    [
+        ("remus100", "nps-auv2", "give actuators.preset = 'remus100'"),
+        ("bluerov2-heavy", "remus100", "give actuators.preset = 'bluerov2-heavy'"),
+        ("paper2011", "bluerov2-heavy", "it has no published actuation"),
+    ],
+)
+def test_another_vehicles_actuator_preset_is_refused(hull: str, act: str, hint: str):
+    with pytest.raises(ConfigError, match=f"vehicle.preset = '{hull}'.*{re.escape(hint)}"):
+        config_from_dict({"vehicle": {"preset": hull}, "actuators": {"preset": act}})
+    # a custom hull may borrow a preset's actuation (a perturbed REMUS with the REMUS rudder, say)
+    custom = {k: getattr(vehicle_preset(hull), k) for k in PARAMETERS}
+    cfg = config_from_dict({"vehicle": custom, "actuators": {"preset": act}})
+    assert cfg.actuators == vehicle_actuators(act)
 
 
 @pytest.fixture(scope="module")

@@ -106,6 +106,10 @@ ROWS = [[0.0, 0.0, 0.1, 1.0, 0.0, 0.0], [20.0, 0.0, 0.0, 1.0, 0.0, 0.0], [10.0, 
 #: One document per validator of the schema: (table, validator) -> (document, the key the message names).
 VALIDATOR_CASES: dict[tuple[tuple[str, ...], str], tuple[dict[str, Any], str]] = {
     ((), "_initial_rows"): ({"simulation": {"initial": ROWS[:2]}}, "simulation.initial"),
+    ((), "_actuators_of_the_vehicle"): (
+        {"vehicle": {"preset": "remus100"}, "actuators": {"preset": "nps-auv2"}},
+        "actuators.preset",
+    ),
     ((), "_default_reference_kind"): ({"reference": {"omega": -1.0}}, "reference.omega"),
     (("vehicle",), "_preset_or_parameters"): ({"vehicle": {"preset": "remus100", "m11": 1.0}}, "vehicle.preset"),
     (("formation",), "_one_shape"): ({"formation": {"n": 3, "offsets": [[0, 0], [1, 0]]}}, "formation.offsets"),
