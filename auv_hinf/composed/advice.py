@@ -9,6 +9,10 @@ so the bisection finds *a* covered value near the boundary, not necessarily the 
 finds only zero covered, the scale is halved down from the smallest one that failed, so that a
 small covered value is answered rather than the setting removed.
 
+The noise found so is every channel's bound at one scale; its channels that need not shrink are
+then put back at their declared bounds one at a time, and the ones that must shrink raised together
+as far as a bisection finds (:func:`refined_noise`): the answer names the channel that binds.
+
 A setting that is not declared (no noise, no box, no current, no delay) is never proposed, and
 neither is one whose shrinking to zero does not cover either. When no one setting certifies
 alone, the declared current and box (the water and the knowledge of the plant) are shrunk together
@@ -53,6 +57,10 @@ ADVICE_HALVINGS = 6
 #: The sample time is shrunk down to this fraction of the declared one at most (a law 20 times
 #: faster than declared is not advice a deployment can follow).
 SAMPLE_TIME_FLOOR = 0.05
+#: The noise's channels (:class:`~auv_hinf.implementation.model.MeasurementNoise`), in the order
+#: :func:`refined_noise` puts them back at their declared bounds: the rates and the heading first, whose
+#: bounds a navigation suite meets most easily, the position (an acoustic fix) last.
+NOISE_CHANNELS: tuple[str, ...] = ("yaw_rate", "heading", "velocity", "position")
 
 
 @dataclass(frozen=True)
@@ -73,6 +81,9 @@ class Advice:
         The settings it changed (``(knob,)``, or the declared ones of the joint knob's :data:`JOINT`).
     original : DeployedProblem or None
         The problem as declared.
+    channels : tuple of str
+        For the noise: the channels (of :data:`NOISE_CHANNELS`) shrunk to ``scale`` of their
+        declared bounds, the others kept (empty: every channel).
     """
 
     knob: Knob
@@ -81,6 +92,7 @@ class Advice:
     certificate: DeployedCertificate
     scaled: tuple[Knob, ...] = ()
     original: DeployedProblem | None = None
+    channels: tuple[str, ...] = ()
 
 
 def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:
@@ -121,7 +133,7 @@ def physical(scale: float, scaled: tuple[Knob, ...]) -> bool:
     return scale > 0.0 or "noise" not in scaled
 
 
-def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProblem:
+def shrunk(problem: DeployedProblem, knob: Knob, scale: float, channels: tuple[str, ...] = ()) -> DeployedProblem:
     """``problem`` with the setting ``knob`` at ``scale`` times its declared value.
 
     Parameters
@@ -133,6 +145,8 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProble
     scale : float
         In ``[0, 1]`` (the sample time is kept above :data:`SAMPLE_TIME_FLOOR` of the declared, and
         at most :data:`~auv_hinf.composed.certificate.MAX_DELAY_SAMPLES` samples within the delay).
+    channels : tuple of str
+        For the noise: the channels to shrink, the others kept (default: every channel).
     """
     impl, plant = problem.implementation, problem.plant
     if knob in JOINT:
@@ -140,7 +154,9 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float) -> DeployedProble
             problem = shrunk(problem, k, scale)
         return problem
     if knob == "noise":
-        return replace(problem, implementation=replace(impl, noise=impl.noise.scaled(scale)))
+        n = impl.noise
+        noise = replace(n, **{c: getattr(n, c) * scale for c in channels}) if channels else n.scaled(scale)
+        return replace(problem, implementation=replace(impl, noise=noise))
     if knob == "delay":
         return replace(problem, implementation=replace(impl, delay=impl.delay * scale))
     if knob == "sample_time":  # not below the floor, nor (when the declared one is within it) the delay's
@@ -190,7 +206,56 @@ def largest_covered(
         return None
     declared = declared_knobs(problem)
     scaled = tuple(k for k in JOINT[knob] if k in declared) if knob in JOINT else (knob,)
-    return Advice(knob, lo, shrunk(problem, knob, lo), cert, scaled, problem)
+    found_advice = Advice(knob, lo, shrunk(problem, knob, lo), cert, scaled, problem)
+    return refined_noise(found_advice, certify) if knob == "noise" and lo > 0.0 else found_advice
+
+
+def refined_noise(
+    advice: Advice, certify: Callable[[DeployedProblem], DeployedCertificate] = certify_deployed
+) -> Advice:
+    """``advice`` (every noise channel at one scale) with the channels that need not shrink kept as declared.
+
+    Each declared channel in :data:`NOISE_CHANNELS` order is put back at its declared bound, the
+    others as they stand, and kept there when the certificate still covers (one certificate each);
+    the channels left are then raised together from the advised scale by a geometric bisection
+    (:data:`ADVICE_STEPS` certificates; the advised scale may be a small fraction). Every value
+    returned was certified: the answer only grows.
+
+    Parameters
+    ----------
+    advice : Advice
+        A covering answer of the ``noise`` knob with every channel at ``advice.scale > 0``.
+    certify : callable
+        The certificate the answer was found with.
+    """
+    original = advice.original
+    if original is None:
+        return advice
+    declared = tuple(c for c in NOISE_CHANNELS if getattr(original.implementation.noise, c) > 0.0)
+    shrinking, best = list(declared), advice
+    for channel in declared:
+        if len(shrinking) == 1:
+            break
+        rest = tuple(c for c in shrinking if c != channel)
+        cert = certify(shrunk(original, "noise", advice.scale, rest))
+        if cert.covers:
+            shrinking.remove(channel)
+            best = replace(
+                advice, problem=shrunk(original, "noise", advice.scale, rest), certificate=cert, channels=rest
+            )
+    if len(shrinking) == len(declared):
+        return advice
+    channels = tuple(shrinking)
+    found: dict[float, DeployedCertificate] = {advice.scale: best.certificate}
+
+    def covers(scale: float) -> bool:
+        found[scale] = certify(shrunk(original, "noise", scale, channels))
+        return found[scale].covers
+
+    lo = bisect(covers, advice.scale, 1.0, steps=ADVICE_STEPS, geometric=True)[0]
+    if lo <= advice.scale or not found[lo].covers:
+        return best
+    return replace(best, scale=lo, problem=shrunk(original, "noise", lo, channels), certificate=found[lo])
 
 
 __all__ = [
@@ -198,6 +263,7 @@ __all__ = [
     "ADVICE_STEPS",
     "JOINT",
     "KNOBS",
+    "NOISE_CHANNELS",
     "SAMPLE_TIME_FLOOR",
     "TOGETHER",
     "WORLD",
@@ -206,5 +272,6 @@ __all__ = [
     "declared_knobs",
     "largest_covered",
     "physical",
+    "refined_noise",
     "shrunk",
 ]

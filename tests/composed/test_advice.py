@@ -16,6 +16,7 @@ from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import JOINT_ENOUGH, composed_start
 from auv_hinf.composed.advice import (
     ADVICE_HALVINGS,
+    NOISE_CHANNELS,
     WORLD,
     Advice,
     declared_knobs,
@@ -160,3 +161,37 @@ def test_noise_at_zero_is_not_a_physical_answer():
     assert not physical(0.0, TOGETHER)  # the noise shrunk with the others to nothing
     assert physical(0.0, ("delay",)) and physical(0.0, ("current", "box"))  # removable in the world or hardware
     assert physical(1e-3, ("noise",))  # a small noise is a navigation to buy
+
+
+def test_the_noise_answer_keeps_the_channels_that_need_not_shrink_and_raises_the_one_that_binds(boxed):
+    """Covered while the position noise is within 0.3 of its declared bound, whatever the other channels."""
+    declared = boxed.implementation.noise
+    assert declared.position > 0.0 and declared.velocity > 0.0  # the fixture declares both
+    calls = []
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        n = problem.implementation.noise
+        calls.append(n)
+        return DeployedCertificate(n.position <= 0.3 * declared.position, None, ())
+
+    got = largest_covered(boxed, "noise", certify)
+    assert got is not None and got.certificate.covers
+    n = got.problem.implementation.noise
+    assert got.channels == ("position",) and got.scale == pytest.approx(n.position / declared.position)
+    assert 0.3 / 1.3 < got.scale <= 0.3  # the geometric bisection lands within its resolution of the edge
+    assert (n.velocity, n.heading, n.yaw_rate) == (declared.velocity, declared.heading, declared.yaw_rate)
+    assert certify(got.problem).covers  # the answer is a value the certificate covered
+    assert len(calls) <= 2 + 4 + len(NOISE_CHANNELS) + 4 + 1
+
+
+def test_a_noise_answer_that_needs_every_channel_shrunk_is_the_uniform_one(boxed):
+    """Covered only with every channel within half its bound: nothing is put back, the uniform answer stands."""
+    declared = boxed.implementation.noise
+    names = [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0]
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        n = problem.implementation.noise
+        return DeployedCertificate(all(getattr(n, c) <= 0.5 * getattr(declared, c) for c in names), None, ())
+
+    got = largest_covered(boxed, "noise", certify)
+    assert got is not None and got.channels == () and 0.25 < got.scale <= 0.5

@@ -9,12 +9,15 @@ and its advice, written back into the configuration, certifies.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
 from auv_hinf.certificate.assembly import certify, waived
 from auv_hinf.certificate.part import Verdict
 from auv_hinf.certificate.run_plan import plan_run, run_report
+from auv_hinf.cli.main import main
 from auv_hinf.composed.certificate import DeployedProblem
 from auv_hinf.composed.loops import Errors
 from auv_hinf.config.settings import config_from_dict, with_settings
@@ -22,7 +25,7 @@ from auv_hinf.exceptions import DesignError
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.numerics.integrators import FORCE_FLOOR
 from auv_hinf.simulation.engine import simulate
-from tests.helpers import DEPLOYED, DEPLOYED_BOXED
+from tests.helpers import DEPLOYED, DEPLOYED_BOXED, to_toml
 
 
 @pytest.fixture(scope="module")
@@ -289,3 +292,29 @@ def test_a_declared_start_that_alone_binds_is_answered_with_the_start_on_the_slo
     again = certify(with_settings(cfg, [("simulation", "initial", None)]))
     assert again.certified
     assert again.to_dict()["composed"]["error_bounds"]["position"] == pytest.approx(entry["position_bound"])
+
+
+@pytest.mark.slow
+def test_gains_the_composed_certificate_refuses_from_the_slots_are_not_run_unless_asked(tmp_path, capsys):
+    """Position noise of 1.5 m (150x the deployed fleet's): no certificate covers the gains, so
+    ``simulate`` and ``campaign`` refuse them without ``--uncertified`` (the composed certificate judges the deployed
+    loop; no continuous part refuses them here: no box, no current). A start the certificate does not
+    cover, with gains it covers from the slots, is the run's matter: that run is simulated."""
+    noisy = {**DEPLOYED, "implementation": {**DEPLOYED["implementation"], "noise": {"position": 1.5}}}
+    path = tmp_path / "noisy.toml"
+    path.write_text(to_toml(noisy))
+    assert not certify(config_from_dict(noisy, "noisy")).certified
+    code = main(["simulate", "--config", str(path), "--horizon", "2"])
+    err = capsys.readouterr().err
+    assert code == 1 and "refusing to simulate gains that no certificate covers" in err
+    assert "composed certificate of the deployed loop does not cover them" in err and "--uncertified" in err
+    code = main(["campaign", "--config", str(path), "--runs", "2", "--horizon", "2", "--out", str(tmp_path / "c")])
+    assert code == 1 and "refusing to run a campaign" in capsys.readouterr().err
+    code = main(["simulate", "--config", str(path), "--horizon", "2", "--json", "--uncertified"])
+    assert json.loads(capsys.readouterr().out)["certificate_covers_run"] is False
+    initial = [[0.0, -6.0, 0.3, 0.4, 0.0, 0.0]] + [[0.0, y, 0.0, 0.4, 0.0, 0.0] for y in (-2.0, 2.0, 6.0)]
+    turned = tmp_path / "turned.toml"
+    turned.write_text(to_toml({**DEPLOYED, "simulation": {"horizon": 2.0, "initial": initial}}))
+    code = main(["simulate", "--config", str(turned), "--json"])
+    run = json.loads(capsys.readouterr().out)
+    assert "refusing" not in json.dumps(run) and run["certificate_covers_run"] is False
