@@ -102,6 +102,7 @@ class SettingRecord(_Strict):
     table: str = Field(description="TOML table")
     key: str = Field(description="key in that table")
     value: Any = Field(description="the value to write there, in the key's unit")
+    unit: str = Field("", description="the key's unit (empty: dimensionless)")
 
 
 class ReasonRecord(_Strict):

@@ -11,6 +11,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, get_args
 
+from auv_hinf.config.schema import key_unit
 from auv_hinf.exceptions import DesignError, SolverError
 
 #: What a reason says, in one word (``Reason.kind``):
@@ -87,9 +88,14 @@ class Setting:
     key: str
     value: Any
 
+    @property
+    def unit(self) -> str:
+        """The key's unit as the configuration's schema declares it (``""``: dimensionless)."""
+        return key_unit(self.table, self.key)
+
     def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dictionary."""
-        return {"table": self.table, "key": self.key, "value": self.value}
+        """JSON-safe dictionary: ``table``, ``key``, ``value`` and the value's ``unit``."""
+        return {"table": self.table, "key": self.key, "value": self.value, "unit": self.unit}
 
     def toml(self) -> str:
         """The value as a user writes it: ``[table] key = value`` (``remove [table] key`` for ``None``).
@@ -115,20 +121,20 @@ class Setting:
         Parameters
         ----------
         data : mapping
-            ``table``, ``key`` and ``value``.
+            ``table``, ``key`` and ``value`` (a ``unit`` is the schema's, and is not read).
         """
         return cls(str(data["table"]), str(data["key"]), data["value"])
 
 
 def toml_line(settings: Iterable[Setting]) -> str:
-    """The settings as a user writes them, comma-separated (:meth:`Setting.toml`).
+    """The settings as a user writes them, comma-separated (:meth:`Setting.toml`), each followed by its unit.
 
     Parameters
     ----------
     settings : iterable of Setting
         The values.
     """
-    return ", ".join(s.toml() for s in settings)
+    return ", ".join(s.toml() + (f" {s.unit}" if s.unit and s.value is not None else "") for s in settings)
 
 
 @dataclass(frozen=True)

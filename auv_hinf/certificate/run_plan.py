@@ -80,6 +80,11 @@ class RunPlan:
     implementation: ImplementationSummary | None = None
     checks: tuple[RunCheck, ...] = ()
 
+    @property
+    def judged(self) -> frozenset[str]:
+        """The parts whose say on this run is another's (:func:`judged_parts`)."""
+        return judged_parts(self.checks)
+
     def uncertified_gains(self) -> str | None:
         """Why no certificate covers the gains of this run's configuration, or ``None``.
 
@@ -93,6 +98,21 @@ class RunPlan:
         waived = {name for part in certified for name in part_supersedes(part)}
         refusals = (c.refuses_gains for c in self.checks if c.refuses_gains is not None and c.part not in waived)
         return next(refusals, None)
+
+
+def judged_parts(checks: tuple[RunCheck, ...]) -> frozenset[str]:
+    """The parts whose say on a run is another's: superseded by a part that certifies the gains as they run.
+
+    That part judges the run; the idealised parts it supersedes are evaluated only because it does
+    not cover this run (a plant outside the box, a start outside its set), and their notes would
+    repeat its reason or mislead (an implementation certificate of the model as the plant).
+
+    Parameters
+    ----------
+    checks : tuple of RunCheck
+        The run's checks.
+    """
+    return frozenset(name for c in checks if c.certifies_gains for name in part_supersedes(c.part))
 
 
 #: Stored output samples of a run of few vehicles (one every 0.1 s over the paper's 300 s).
@@ -189,13 +209,14 @@ def plan_run(
             "covered by the composed certificate of the deployed loop" if composed.covers else composed.reason,
             composed.detail.covers,
         )
+    judged = judged_parts(tuple(checks.values()))
     return RunPlan(
         design=point,
         certificate=cert,
         coverage=cov,
         covered=run_covered(list(checks.values())),
         scenario=scn,
-        notes=tuple(n for c in checks.values() for n in c.notes),
+        notes=tuple(n for c in checks.values() if c.part not in judged for n in c.notes),
         start=mode,
         robust=robust_detail,
         implementation=None if impl is None else impl.detail,
@@ -511,6 +532,7 @@ __all__ = [
     "certified_errors_of",
     "guidance_run",
     "implementation_report",
+    "judged_parts",
     "measured_decay_rate",
     "measured_errors",
     "plan_run",

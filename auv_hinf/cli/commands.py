@@ -327,7 +327,7 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
 def _run_reason(plan: RunPlan) -> str:
     """Why neither the nominal nor the robust certificate covers a run, in one line."""
     parts = list(plan.notes)
-    if plan.robust is not None and not plan.robust.covered:
+    if plan.robust is not None and not plan.robust.covered and "robust" not in plan.judged:
         parts.append(f"robust certificate: {plan.robust.reason}")
     return "; ".join(parts) or "not covered"
 

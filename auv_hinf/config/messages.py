@@ -253,7 +253,16 @@ def input_warnings(data: Any) -> list[str]:
     """
     if isinstance(data, dict) and not data:
         return ["the configuration file sets nothing: every table takes its defaults (see docs/config.md)"]
-    return []
+    out = []
+    act = data.get("actuators") if isinstance(data, dict) else None
+    sway, yaw = (act.get("rudder_sway"), act.get("rudder_yaw")) if isinstance(act, dict) else (None, None)
+    if isinstance(sway, numbers.Real) and isinstance(yaw, numbers.Real) and sway * yaw > 0.0:
+        out.append(
+            f"actuators.rudder_sway ({sway:g}) and actuators.rudder_yaw ({yaw:g}) have one sign: the rudder's side "
+            f"force then acts {yaw / sway:.3g} m ahead of the centre of mass, a bow rudder; a stern rudder's have "
+            "opposite signs (a REMUS 100's: 9.64 kg/(m rad) and -6.15 kg/rad)"
+        )
+    return out
 
 
 __all__ = [

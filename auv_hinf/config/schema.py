@@ -992,6 +992,28 @@ TABLES: dict[tuple[str, ...], type[BaseModel]] = {
 }
 
 
+def key_unit(table: str, key: str) -> str:
+    """The unit of ``[table] key`` as the schema declares it (``""``: dimensionless, or no such key).
+
+    Parameters
+    ----------
+    table : str
+        The TOML table, dotted when nested (``"implementation.noise"``); ``"reference"`` looks the
+        key up in every reference kind's table.
+    key : str
+        The key, as the user writes it.
+    """
+    path = tuple(table.split("."))
+    models = list(REFERENCE_MODELS.values()) if path == ("reference",) else [TABLES.get(path)]
+    for model in models:
+        if model is None:
+            continue
+        for name, f in model.model_fields.items():
+            if key in (name, f.alias) and isinstance(f.json_schema_extra, dict):
+                return str(f.json_schema_extra.get("unit", ""))
+    return ""
+
+
 def json_schema() -> dict[str, Any]:
     """JSON Schema of the TOML format (``auv-hinf schema``)."""
     schema = ConfigFile.model_json_schema(by_alias=True)
@@ -1050,6 +1072,7 @@ __all__ = [
     "VehiclePreset",
     "VehicleTable",
     "json_schema",
+    "key_unit",
     "schema_default",
     "speed_misfit",
     "suggest_key",

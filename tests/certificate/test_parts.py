@@ -22,7 +22,7 @@ from auv_hinf.certificate.part import (
     Verdict,
     part_laws,
 )
-from auv_hinf.certificate.reason import REASON_KINDS, Reason, Setting
+from auv_hinf.certificate.reason import REASON_KINDS, Reason, Setting, toml_line
 from auv_hinf.certificate.registry import PARTS, parts, register_part, unregister_part
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
@@ -84,7 +84,7 @@ def test_a_failing_plug_in_part_is_in_the_json_the_text_the_file_and_the_exit_co
     assert names.index("spacing") == names.index("actuators") + 1
     entry = record["parts"]["spacing"]
     assert entry["ok"] is False and entry["reasons"][0]["kind"] == "envelope"
-    assert entry["reasons"][0]["settings"] == [{"table": "formation", "key": "radius", "value": 1e6}]
+    assert entry["reasons"][0]["settings"] == [{"table": "formation", "key": "radius", "value": 1e6, "unit": ""}]
     assert not cert.certified and record["certified"] is False
     assert [r.part for r in cert.findings] == ["spacing"] and "slots only" in record["reasons"][0]
     text = cert.summary()
@@ -171,3 +171,18 @@ def test_a_box_the_nominal_design_does_not_cover_is_answered_with_the_robust_des
     current_only = certify(config_from_dict({**base, "uncertainty": {}}))
     for r in (r for r in current_only.findings if r.part == "robust"):
         assert "box" not in r.message.split(":")[0]
+
+
+def test_an_advised_value_carries_the_unit_the_schema_declares_for_its_key():
+    """One source for units: the TOML schema's; the sentence and the JSON both give it, TOML stays TOML."""
+    current = Setting("disturbance", "current_speed", 0.05)
+    assert current.unit == "m/s" and current.to_dict()["unit"] == "m/s"
+    assert current.toml() == "[disturbance] current_speed = 0.05"  # exactly what a user writes
+    turn = Setting("reference", "turn_radius", 480.0)  # found in the lawn-mower's table
+    noise = Setting("implementation.noise", "heading", 0.002)  # a nested table
+    box = Setting("uncertainty", "m11", [0.9, 1.1])  # a multiplier: dimensionless
+    assert (turn.unit, noise.unit, box.unit) == ("m", "rad", "")
+    assert toml_line([current, box, turn]) == (
+        "[disturbance] current_speed = 0.05 m/s, [uncertainty] m11 = [0.9, 1.1], [reference] turn_radius = 480 m"
+    )
+    assert Setting.from_dict(current.to_dict()) == current

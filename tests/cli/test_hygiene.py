@@ -20,6 +20,16 @@ def test_empty_files_are_flagged_and_degrees_are_errors_not_warnings():
     assert input_warnings({"reference": {"kind": "line", "heading": 1.0}}) == []
 
 
+@pytest.mark.parametrize(("sway", "yaw", "warned"), [(9.64, 6.15, True), (-9.64, -6.15, True), (9.64, -6.15, False)])
+def test_a_rudder_whose_side_force_and_moment_share_a_sign_is_flagged_as_a_bow_rudder(sway, yaw, warned):
+    """Same signs put the side force ahead of the centre of mass; a sign slip of Fossen's convention is common."""
+    rudder = {"kind": "underactuated", "tau_x": 67.0, "rudder_max": 0.2, "rudder_sway": sway, "rudder_yaw": yaw}
+    lines = input_warnings({"actuators": rudder})
+    assert bool(lines) is warned
+    if warned:
+        assert "actuators.rudder_yaw" in lines[0] and "0.638 m ahead" in lines[0] and "opposite signs" in lines[0]
+
+
 def test_cli_refuses_degrees_with_one_line_naming_the_key(tmp_path, capsys):
     path = tmp_path / "deg.toml"
     path.write_text('[reference]\nkind = "line"\nspeed = 1.0\nheading = 90.0\n', encoding="utf-8")

@@ -199,6 +199,19 @@ def test_a_run_with_a_declared_box_and_current_is_judged_by_the_composed_certifi
     assert "composed" in report["robust_reason"]
 
 
+def test_a_run_outside_the_box_of_certified_gains_is_told_why_by_the_composed_certificate_alone():
+    """The plant 10 % heavier than the box allows: the composed certificate (which covers the gains) says
+    why the run is not covered; the idealised parts it supersedes, evaluated because it does not cover
+    this run, add nothing (the implementation certificate of the model as the plant would mislead)."""
+    cfg = config_from_dict({**DEPLOYED_BOXED, "simulation": {"horizon": 5.0, "plant": {"m11": 1.1}}}, "heavy")
+    plan = plan_run(cfg)
+    checks = {c.part: c for c in plan.checks}
+    assert checks["composed"].certifies_gains and not checks["composed"].covers
+    assert {"closed_loop", "robust", "implementation"} <= set(checks) and plan.judged >= {"robust", "implementation"}
+    assert len(plan.notes) == 1 and plan.notes[0].startswith("composed certificate:") and "m11 = 1.1" in plan.notes[0]
+    assert plan.uncertified_gains() is None  # the gains are certified: the run is simulated
+
+
 @pytest.mark.slow
 def test_a_channel_the_mission_never_loads_is_certified_above_the_simulations_round_off():
     """Exact measurements on a straight line in still water: sway force and yaw moment are zero by symmetry,

@@ -172,7 +172,7 @@ FAR_START = {
 def test_a_declared_start_that_binds_is_answered_with_the_slots_and_the_world_kept():
     cfg, data, why = _refused(FAR_START, "far")
     assert "the declared start binds" in why["message"]
-    assert why["settings"] == [{"table": "simulation", "key": "initial", "value": None}]
+    assert why["settings"] == [{"table": "simulation", "key": "initial", "value": None, "unit": ""}]
     assert "remove [simulation] initial" in why["message"]
     again = _rerun(cfg, why)
     assert again["guidance"]["certified"] is True
