@@ -256,7 +256,7 @@ def input_warnings(data: Any) -> list[str]:
     out = []
     act = data.get("actuators") if isinstance(data, dict) else None
     sway, yaw = (act.get("rudder_sway"), act.get("rudder_yaw")) if isinstance(act, dict) else (None, None)
-    if isinstance(sway, numbers.Real) and isinstance(yaw, numbers.Real) and sway * yaw > 0.0:
+    if isinstance(sway, (int, float)) and isinstance(yaw, (int, float)) and float(sway) * float(yaw) > 0.0:
         out.append(
             f"actuators.rudder_sway ({sway:g}) and actuators.rudder_yaw ({yaw:g}) have one sign: the rudder's side "
             f"force then acts {yaw / sway:.3g} m ahead of the centre of mass, a bow rudder; a stern rudder's have "
