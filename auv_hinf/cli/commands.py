@@ -181,9 +181,8 @@ def _refuse_uncertified(plan: RunPlan, allowed: bool, what: str) -> None:
     refusal = plan.uncertified_gains()
     if refusal is not None and not allowed:
         raise Negative(
-            f"refusing to {what} gains that no certificate covers: {refusal}; `{PROG} certify` says why and what "
-            f"would certify (e.g. the largest certifiable box and current), or rerun with --uncertified to {what} "
-            "them anyway"
+            f"refusing to {what} gains that no certificate covers: {refusal}; `{PROG} certify` says why and gives "
+            f"the values that certify, or rerun with --uncertified to {what} them anyway"
         )
 
 

@@ -58,9 +58,10 @@ ADVICE_HALVINGS = 6
 #: faster than declared is not advice a deployment can follow).
 SAMPLE_TIME_FLOOR = 0.05
 #: The noise's channels (:class:`~auv_hinf.implementation.model.MeasurementNoise`), in the order
-#: :func:`refined_noise` puts them back at their declared bounds: the rates and the heading first, whose
-#: bounds a navigation suite meets most easily, the position (an acoustic fix) last.
-NOISE_CHANNELS: tuple[str, ...] = ("yaw_rate", "heading", "velocity", "position")
+#: :func:`refined_noise` tries to keep them at their declared bounds: the position first (an acoustic
+#: fix, the dearest to improve), then the heading, the velocity, and the yaw rate (a gyro's, the
+#: cheapest); an answer shrinks what a navigation suite improves most easily.
+NOISE_CHANNELS: tuple[str, ...] = ("position", "heading", "velocity", "yaw_rate")
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,7 @@ class Advice:
         The problem as declared.
     channels : tuple of str
         For the noise: the channels (of :data:`NOISE_CHANNELS`) shrunk to ``scale`` of their
-        declared bounds, the others kept (empty: every channel).
+        declared bounds, the others kept (empty: every channel, as found before any was put back).
     """
 
     knob: Knob
@@ -215,8 +216,9 @@ def refined_noise(
 ) -> Advice:
     """``advice`` (every noise channel at one scale) with the channels that need not shrink kept as declared.
 
-    Each declared channel in :data:`NOISE_CHANNELS` order is put back at its declared bound, the
-    others as they stand, and kept there when the certificate still covers (one certificate each);
+    Each declared channel in :data:`NOISE_CHANNELS` order (the dearest first) is put back at its
+    declared bound, the others as they stand, and kept there when the certificate still covers (one
+    certificate each);
     the channels left are then raised together from the advised scale by a geometric bisection
     (:data:`ADVICE_STEPS` certificates; the advised scale may be a small fraction). Every value
     returned was certified: the answer only grows.
@@ -244,7 +246,7 @@ def refined_noise(
                 advice, problem=shrunk(original, "noise", advice.scale, rest), certificate=cert, channels=rest
             )
     if len(shrinking) == len(declared):
-        return advice
+        return replace(advice, channels=declared)  # every channel binds: named all the same
     channels = tuple(shrinking)
     found: dict[float, DeployedCertificate] = {advice.scale: best.certificate}
 

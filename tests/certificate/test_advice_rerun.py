@@ -8,6 +8,7 @@ nothing covers at the design's gains the settings are shrunk together and re-run
 
 from __future__ import annotations
 
+from dataclasses import replace
 from types import SimpleNamespace
 
 import pytest
@@ -27,7 +28,7 @@ from auv_hinf.certificate.parts.composed import (
     rerun_together,
 )
 from auv_hinf.certificate.reason import Setting
-from auv_hinf.composed.advice import Advice, shrunk
+from auv_hinf.composed.advice import NOISE_CHANNELS, Advice, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate
 from auv_hinf.config.settings import config_from_dict, with_settings
 from tests.helpers import DEPLOYED, DEPLOYED_BOXED
@@ -55,15 +56,21 @@ def _fake_rerun(covers, problem_of):
     return rerun, calls
 
 
+def _with_noise(problem, settings):
+    """``problem`` with the noise channels ``settings`` writes, the others as declared (a re-run's problem)."""
+    n = problem.implementation.noise
+    written = {k: v for (table, k), v in settings.items() if table == "implementation.noise"}
+    noise = replace(n, **written)
+    return replace(problem, implementation=replace(problem.implementation, noise=noise))
+
+
 @pytest.mark.slow
 def test_advice_a_rerun_does_not_confirm_is_shrunk_until_one_does(boxed, monkeypatch):
     cfg, problem = boxed
     declared = problem.implementation.noise.position
     # the re-run's own gains cover only below a third of the declared noise
     key = ("implementation.noise", "position")
-    rerun, calls = _fake_rerun(
-        lambda s: s[key] <= declared / 3.0, lambda s: shrunk(problem, "noise", s[key] / declared)
-    )
+    rerun, calls = _fake_rerun(lambda s: s.get(key, declared) <= declared / 3.0, lambda s: _with_noise(problem, s))
     monkeypatch.setattr(composed_part, "rerun", rerun)
     found = Advice(
         "noise", 0.8, shrunk(problem, "noise", 0.8), DeployedCertificate(True, None, ()), ("noise",), problem
@@ -71,16 +78,23 @@ def test_advice_a_rerun_does_not_confirm_is_shrunk_until_one_does(boxed, monkeyp
     (got,) = confirmed(cfg, problem, (found,))
     first_covering = next(f for f in CONFIRM_FRACTIONS if 0.8 * f <= 1.0 / 3.0)
     assert calls[0][key] == pytest.approx(0.8 * declared)  # the advised value is re-run first
-    tried = [c[key] / declared for c in calls]
+    tried = [c.get(key, declared) / declared for c in calls]  # a channel not written is as declared
     confirming = tried.index(next(t for t in tried if t <= 1.0 / 3.0))
     assert tried[confirming] == pytest.approx(0.8 * first_covering)  # then shrunk until a re-run covers
-    # a deployed design then climbs by re-runs (its own gains may hold more noise): the answer is the
-    # largest scale a re-run covered, within a third of the declared, above the first covering one
-    assert len(tried) - confirming - 1 == NOISE_CLIMBS
+    # a deployed design then puts back the channels a re-run holds (here every one but the position, the
+    # only one the fake re-run reads), and climbs by re-runs: the answer is the largest scale a re-run
+    # covered, within a third of the declared, above the first covering one
+    declared_channels = [c for c in NOISE_CHANNELS if getattr(problem.implementation.noise, c) > 0.0]
+    # (one re-run confirms what the re-run's gains hold, one re-run tries each channel left, then the climb)
+    assert len(tried) - confirming - 1 <= 1 + len(declared_channels) + NOISE_CLIMBS
     best = max(t for t in tried if t <= 1.0 / 3.0)
     assert got.scale == pytest.approx(best) and 0.8 * first_covering < best <= 1.0 / 3.0
-    # the answer carries the re-run's problem: its settings are the values that certified
-    assert got.problem.implementation.noise.position == pytest.approx(best * declared)
+    assert got.channels == ("position",)
+    # the answer carries the re-run's problem: its settings are the values that certified, the other
+    # channels as declared
+    noise = got.problem.implementation.noise
+    assert noise.position == pytest.approx(best * declared)
+    assert all(getattr(noise, c) == getattr(problem.implementation.noise, c) for c in declared_channels[1:])
 
 
 def test_advice_no_rerun_confirms_is_dropped(boxed, monkeypatch):

@@ -331,3 +331,29 @@ def test_gains_the_composed_certificate_refuses_from_the_slots_are_not_run_unles
     code = main(["simulate", "--config", str(turned), "--json"])
     run = json.loads(capsys.readouterr().out)
     assert "refusing" not in json.dumps(run) and run["certificate_covers_run"] is False
+
+
+def test_a_run_whose_certified_bound_breaks_min_separation_is_not_covered_and_its_gains_are_refused():
+    """Position noise of 0.4 m (the other channels the deployed preset's): the composed certificate covers
+    the tracking errors, but its bound leaves the closest pair below ``[formation] min_separation``.
+    ``certify`` refuses it for that, and so does a run: not covered, and ``simulate``/``campaign`` refuse
+    the gains without ``--uncertified``, as ``certify`` refuses them."""
+    noisy = {
+        **DEPLOYED,
+        "implementation": {
+            **DEPLOYED["implementation"],
+            "noise": {"position": 0.4, "velocity": 0.004, "heading": 0.004, "yaw_rate": 0.002},
+        },
+    }
+    cfg = config_from_dict({**noisy, "simulation": {"horizon": 2.0}}, "close")
+    cert = certify(cfg)
+    assert not cert.certified and [r.part for r in cert.findings] == ["separation"]
+    plan = plan_run(cfg)
+    checks = {c.part: c for c in plan.checks}
+    assert checks["composed"].covers and not checks["separation"].covers and not plan.covered
+    bound = checks["composed"].bounds["position"]
+    slots = 4.0  # the closest slots of DEPLOYED's line abreast
+    assert slots - 2.0 * bound < cfg.min_separation  # the condition's own arithmetic
+    assert "min_separation" in (plan.uncertified_gains() or "")
+    calm = plan_run(config_from_dict({**DEPLOYED, "simulation": {"horizon": 2.0}}, "calm"))
+    assert calm.covered and {c.part: c for c in calm.checks}["separation"].covers

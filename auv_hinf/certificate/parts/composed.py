@@ -38,7 +38,16 @@ from auv_hinf.certificate.parts.implementation import ImplementationSummary, sta
 from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.parts.separation import keeps_separation
 from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line
-from auv_hinf.composed.advice import JOINT, TOGETHER, Advice, declared_knobs, largest_covered, physical, shrunk
+from auv_hinf.composed.advice import (
+    JOINT,
+    NOISE_CHANNELS,
+    TOGETHER,
+    Advice,
+    declared_knobs,
+    largest_covered,
+    physical,
+    shrunk,
+)
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
 from auv_hinf.composed.loops import Errors
 from auv_hinf.composed.reach import Reach, reach
@@ -151,6 +160,20 @@ class ComposedSummary:
         }
 
 
+def _words(channels: list[str]) -> str:
+    """``["position", "yaw_rate"]`` as ``position and yaw rate`` (``a, b and c`` for three)."""
+    names = [c.replace("_", " ") for c in channels]
+    return f"{', '.join(names[:-1])} and {names[-1]}" if len(names) > 1 else names[0]
+
+
+def _kept_channels(a: Advice) -> list[str]:
+    """The declared noise channels a noise answer keeps at their declared bounds (of :data:`NOISE_CHANNELS`)."""
+    if a.knob != "noise" or not a.channels or a.original is None:
+        return []
+    declared = a.original.implementation.noise
+    return [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0 and c not in a.channels]
+
+
 def _advice_dict(a: Advice) -> dict[str, Any]:
     cert = a.certificate
     return {
@@ -158,6 +181,7 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
         "scaled": list(a.scaled),
         "scale": a.scale,
         "channels": list(a.channels),
+        "kept": _kept_channels(a),
         "settings": [s.to_dict() for s in advice_settings(a)],
         "position_bound": None if cert.errors is None else cert.errors.position,
     }
@@ -442,16 +466,18 @@ class ComposedPart:
         out.append(f"    composed covered        NO: {'; '.join(f['reasons']) or 'not certified'}")
         for a in f.get("advice") or []:
             values = toml_line(Setting.from_dict(s) for s in a["settings"])
-            what = a["setting"]
+            what, kept = a["setting"], ""
             if a.get("channels"):  # the noise of these channels, the others as declared
-                names = [c.replace("_", " ") for c in a["channels"]]
-                what = f"{', '.join(names[:-1])} and {names[-1]} noise" if len(names) > 1 else f"{names[0]} noise"
+                what = f"{_words(a['channels'])} noise"
+                kept = f"; the {_words(a['kept'])} noise as declared" if a.get("kept") else ""
             if what in JOINT:
                 what = ", ".join(a.get("scaled") or []) + " together"
             if a.get("scale") is None:  # a change of the design or the mission, not a declared value shrunk
                 out.append(f"    certifies with          {values} (a change of the {what})")
             else:
-                out.append(f"    certifies with          {values} (the {what} at {a['scale']:.3g} of the declared)")
+                out.append(
+                    f"    certifies with          {values} (the {what} at {a['scale']:.3g} of the declared{kept})"
+                )
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
@@ -648,7 +674,7 @@ def confirmed(
                     if a.knob == "sample_time":
                         got = _climbed(cfg, got, original, certify)
                     elif a.knob == "noise" and cfg.synthesis == "deployed":
-                        got = _climbed_by_reruns(cfg, got, original)
+                        got = _climbed_by_reruns(cfg, got, original, certify)
                     out.append(got)
                     break
     return tuple(out)
@@ -689,23 +715,70 @@ def _climbed(
 NOISE_CLIMBS = 3
 
 
-def _climbed_by_reruns(cfg: FormationConfig, a: Advice, original: DeployedProblem) -> Advice:
-    """``a`` (a covering re-run of the noise) at the largest noise a geometric bisection of re-runs covers.
+def _climbed_by_reruns(
+    cfg: FormationConfig,
+    a: Advice,
+    original: DeployedProblem,
+    certify: Callable[[DeployedProblem], DeployedCertificate],
+) -> Advice:
+    """``a`` (a covering re-run of the noise) with the channels a re-run holds put back, and the rest raised.
 
-    Each step re-runs the configuration with the noise's channels at a larger scale (its deployed
-    design chooses the gains again); ``a`` is kept when none covers.
+    The answer was refined with the design's gains (:func:`~auv_hinf.composed.advice.refined_noise`);
+    a re-run designs others, which may hold more. Each channel it still shrinks, in
+    :data:`~auv_hinf.composed.advice.NOISE_CHANNELS` order, is put back at its declared bound when the
+    re-run's gains cover so (one certificate each, confirmed by one re-run: the re-run's design then
+    covers, those gains being among its candidates), else when a re-run with it put back covers (its
+    design choosing other gains). The channels left are then raised together by a geometric
+    bisection of re-runs (:data:`NOISE_CLIMBS`), at scales rounded down to :data:`NOISE_DIGITS`
+    significant digits. ``a`` is kept when nothing better is confirmed, and when it is the noise at
+    zero (not an answer a vehicle can follow, :func:`~auv_hinf.composed.advice.physical`).
     """
+    if a.scale <= 0.0:
+        return a
+    declared = original.implementation.noise
+    shrinking = [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0 and (not a.channels or c in a.channels)]
     best = a
+    cheap = list(shrinking)
+    for channel in list(cheap):
+        rest = tuple(c for c in cheap if c != channel)
+        if rest and certify(replace(shrunk(original, "noise", a.scale, rest), gains=a.problem.gains)).covers:
+            cheap.remove(channel)
+    if len(cheap) < len(shrinking):
+        got = _as_rerun(cfg, _scaled(replace(a, channels=tuple(cheap)), original, a.scale))
+        if got is not None:
+            best, shrinking = got, cheap
+    for channel in list(shrinking):
+        rest = tuple(c for c in shrinking if c != channel)
+        if not rest:
+            break
+        got = _as_rerun(cfg, _scaled(replace(best, channels=rest), original, a.scale))
+        if got is not None:
+            best, shrinking = got, list(rest)
+    start = replace(best, channels=tuple(shrinking))
 
     def covers(scale: float) -> bool:
         nonlocal best
-        got = _as_rerun(cfg, _scaled(a, original, scale))
+        scale = _rounded_down(scale, NOISE_DIGITS)
+        if scale <= start.scale:
+            return True
+        got = _as_rerun(cfg, _scaled(start, original, scale))
         if got is not None and scale > best.scale:
             best = got
         return got is not None
 
-    bisect(covers, a.scale, 1.0, steps=NOISE_CLIMBS, geometric=True)
+    bisect(covers, start.scale, 1.0, steps=NOISE_CLIMBS, geometric=True)
     return best
+
+
+#: Significant digits of a noise scale a re-run climbs to: the advised bounds read ``0.261 m``, not
+#: ``0.26108594541 m`` (the scale is rounded down, and the rounded value is the one re-run).
+NOISE_DIGITS = 3
+
+
+def _rounded_down(x: float, digits: int) -> float:
+    """``x > 0`` rounded down to ``digits`` significant digits."""
+    step = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return math.floor(x / step * (1.0 + 1e-12)) * step
 
 
 def _scaled(a: Advice, original: DeployedProblem, scale: float) -> Advice:

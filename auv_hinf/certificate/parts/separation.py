@@ -416,14 +416,30 @@ class SeparationPart:
         ]
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
-        """The part says nothing about single runs (``simulate`` reports the measured separation).
+        """A condition on the run: the position bound of a certificate that covers it keeps every pair apart.
+
+        With no covering certificate that bounds the position the run is not covered anyway, and
+        nothing is added. A bound that leaves two vehicles closer than ``[formation]
+        min_separation`` refuses the run and the gains, as ``certify`` refuses them (``simulate``
+        and ``campaign`` then need ``--uncertified``); ``simulate`` reports the measured separation.
 
         Parameters
         ----------
         ctx : RunContext
-            The run.
+            The run, and the earlier parts' checks of it.
         """
-        return None
+        bounds = [
+            float(c.bounds["position"])
+            for c in ctx.checks.values()
+            if c.applies and c.role == "certificate" and c.covers and c.bounds and "position" in c.bounds
+        ]
+        if not bounds:
+            return None
+        sep = separation_with(ctx.point, min(bounds))
+        if sep.ok:
+            return RunCheck(self.name, "condition", True, True, "the certified separation holds")
+        why = refusal(ctx.point, sep).message
+        return RunCheck(self.name, "condition", True, False, why, (f"separation: {why}",), refuses_gains=why)
 
 
 __all__ = [
