@@ -132,7 +132,9 @@ def summarize(camp: Campaign) -> dict[str, Any]:
     if n_app < k:
         note = ROBUST_NOTE if s.covers_sampled_runs else SAMPLED_NOTE
         notes.append(note + (f" ({s.robust_reason})" if s.robust_reason else ""))
-    if not s.certificate_applies:
+    if s.separation is not None:
+        notes.append(f"the certified bounds do not keep [formation] min_separation ({s.separation}): it covers no run")
+    elif not s.certificate_applies:
         notes.append("the certified thrust exceeds the configured thrust limit: the certificate covers no run")
     forces = force_summary(camp)
     veh_s = k * s.n * s.horizon

@@ -251,7 +251,7 @@ def _rows(
     checked = setup.checked
     if checked is not None:
         bound = np.broadcast_to(checked.bounds, measured.shape)
-        applies = np.ones(len(inputs), dtype=bool)
+        applies = np.full(len(inputs), setup.certificate_applies, dtype=bool)
     else:  # the nominal certificate's region; it is about the continuous law only
         bound = start_bounds(setup.p2, setup.q, *e0)  # (S, N, 4)
         applies = nominal & setup.certificate_applies & setup.covers_sampled_runs

@@ -17,6 +17,7 @@ from auv_hinf.campaign.composed_start import ComposedStart, composed_start
 from auv_hinf.campaign.starts import RobustStart, declared_rows, robust_start
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+from auv_hinf.certificate.parts.separation import refusal, separation_with
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.composed.loops import Errors
 from auv_hinf.config.settings import FormationConfig
@@ -78,7 +79,8 @@ class CampaignSetup:
     samples : int
     seed : int
     certificate_applies : bool
-        False when the certified thrust exceeds the configured limit (saturation voids it).
+        False when the certified thrust exceeds the configured limit (saturation voids it), or
+        when the bounds runs are checked against do not keep ``[formation] min_separation``.
     robust : RobustStart or None
         Start sets and bounds of the robust certificate, when a box or a current is declared
         and it covers them (:mod:`auv_hinf.campaign.starts`); then every run is checked
@@ -97,6 +99,9 @@ class CampaignSetup:
     noise_pattern : str
         The ``[simulation] noise_pattern`` setting: run ``i``'s pattern is
         :func:`~auv_hinf.certificate.run_plan.run_pattern` of it.
+    separation : str or None
+        Why the bounds of the composed or robust certificate the runs are checked against do not
+        keep ``[formation] min_separation`` (``None``: they do, or the nominal one is checked).
     """
 
     name: str
@@ -120,6 +125,7 @@ class CampaignSetup:
     implementation: Implementation = field(default_factory=Implementation)
     noise_pattern: str = "uniform"
     composed: ComposedStart | None = None
+    separation: str | None = None
 
     @property
     def n(self) -> int:
@@ -192,7 +198,13 @@ def prepare(
     else:
         raise DesignError(f"integral action is certified by the robust certificate, which does not cover this: {why}")
     limit = cfg.force_limits  # none for a rudder: the fully actuated law's forces are not deliverable there
-    applies = cfg.actuators is None or (limit is not None and limit.admits(thrust))
+    fits = cfg.actuators is None or (limit is not None and limit.admits(thrust))
+    # the bounds a run is checked against must keep [formation] min_separation, as certify requires
+    checked = composed if composed is not None else rob
+    separation = None
+    if checked is not None:
+        sep = separation_with(point, float(checked.bounds[0]))
+        separation = None if sep.ok else refusal(point, sep).message
     reg = None if cert is None else cert.region
     law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators)
     setup = CampaignSetup(
@@ -211,12 +223,13 @@ def prepare(
         horizon=hor,
         samples=round(hor / SAMPLE_INTERVAL) + 1,
         seed=int(seed),
-        certificate_applies=bool(applies),
+        certificate_applies=bool(fits) and separation is None,
         robust=rob,
         robust_reason=why,
         implementation=cfg.implementation,
         noise_pattern=cfg.simulation.noise_pattern,
         composed=composed,
+        separation=separation,
     )
     return setup, cert
 

@@ -44,8 +44,15 @@ ReasonKind = Literal[
 REASON_KINDS: tuple[ReasonKind, ...] = get_args(ReasonKind)
 
 
-def _number(v: float) -> str:
-    """``v`` (a number) with 4 significant digits when they give it back exactly, else its shortest exact form."""
+def _number(v: Any) -> str:
+    """``v`` (a number, or a nested list of them) with 4 significant digits when they give it back exactly.
+
+    Else its shortest exact form; a list is written as a TOML array (a formation's ``shape``).
+    """
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_number(x) for x in v) + "]"
+    if not isinstance(v, float):
+        return str(v)
     short = f"{v:.4g}"
     return short if float(short) == v else repr(v)
 
@@ -108,11 +115,14 @@ class Setting:
         if v is None:
             return f"remove [{self.table}] {self.key}"
         text = f'"{v}"' if isinstance(v, str) else "true" if v is True else "false" if v is False else None
-        if text is None and isinstance(v, (list, tuple)):
-            text = "[" + ", ".join(_number(x) for x in v) + "]"
         if text is None:
-            text = _number(v) if isinstance(v, float) else str(v)
+            text = _number(v)
         return f"[{self.table}] {self.key} = {text}"
+
+    def words(self) -> str:
+        """:meth:`toml` followed by the key's unit, for a sentence: ``[disturbance] current_speed = 0.05 m/s``."""
+        unit = self.unit
+        return self.toml() + (f" {unit}" if unit and self.value is not None else "")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Setting:
@@ -134,7 +144,7 @@ def toml_line(settings: Iterable[Setting]) -> str:
     settings : iterable of Setting
         The values.
     """
-    return ", ".join(s.toml() + (f" {s.unit}" if s.unit and s.value is not None else "") for s in settings)
+    return ", ".join(s.words() for s in settings)
 
 
 @dataclass(frozen=True)

@@ -186,3 +186,5 @@ def test_an_advised_value_carries_the_unit_the_schema_declares_for_its_key():
         "[disturbance] current_speed = 0.05 m/s, [uncertainty] m11 = [0.9, 1.1], [reference] turn_radius = 480 m"
     )
     assert Setting.from_dict(current.to_dict()) == current
+    shape = Setting("formation", "shape", [[0.0, -5.111801], [0.0, -7.5]])  # a nested array, in metres
+    assert shape.toml() == "[formation] shape = [[0, -5.111801], [0, -7.5]]" and shape.words().endswith("]] m")

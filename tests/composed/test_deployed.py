@@ -14,6 +14,7 @@ import json
 import numpy as np
 import pytest
 
+from auv_hinf.campaign.setup import prepare
 from auv_hinf.certificate.assembly import certify, waived
 from auv_hinf.certificate.part import Verdict
 from auv_hinf.certificate.run_plan import plan_run, run_report
@@ -357,3 +358,7 @@ def test_a_run_whose_certified_bound_breaks_min_separation_is_not_covered_and_it
     assert "min_separation" in (plan.uncertified_gains() or "")
     calm = plan_run(config_from_dict({**DEPLOYED, "simulation": {"horizon": 2.0}}, "calm"))
     assert calm.covered and {c.part: c for c in calm.checks}["separation"].covers
+    # a campaign of it (run with --uncertified) checks no run against those bounds, and says why
+    setup, _ = prepare(cfg, horizon=2.0)
+    assert not setup.certificate_applies and "min_separation" in (setup.separation or "")
+    assert prepare(config_from_dict(DEPLOYED, "calm"), horizon=2.0)[0].separation is None

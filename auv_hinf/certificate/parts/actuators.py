@@ -360,7 +360,7 @@ class ActuatorPart:
                 composed = record.get("composed") or {}
                 deployed = composed.get("applies") and composed.get("covers") is False
                 use = "for the continuous law only: see composed" if deployed else "re-run with these"
-                words = ", ".join(s.toml() for s in advice(best))
+                words = ", ".join(s.words() for s in advice(best))
                 out.append(f"    largest certifiable within the limits: {words} ({use}{scale})")
         return out
 

@@ -876,10 +876,10 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     if summary.sample_time is not None:
         period = Setting("implementation", "sample_time", summary.sample_time)
         kept = " with the declared delay and noise" if _navigates(problem) else ""
-        return (period,), f"a shorter sample time certifies the declared box and current{kept}: {period.toml()} (s)"
+        return (period,), f"a shorter sample time certifies the declared box and current{kept}: {period.words()}"
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
-        return (current,), f"a smaller current certifies: {current.toml()} (m/s)"
+        return (current,), f"a smaller current certifies: {current.words()}"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies: {toml_line(settings)}"

@@ -327,7 +327,7 @@ def run_kept_inside(cfg: FormationConfig, reason: Reason) -> Reason:
     extra = run_settings(cfg, reason.settings) if reason.settings else ()
     if not extra:
         return reason
-    words = f" (with {', '.join(x.toml() for x in extra)}, which keeps the configured run inside)"
+    words = f" (with {', '.join(x.words() for x in extra)}, which keeps the configured run inside)"
     tail = " (re-run with it)"
     head = reason.message.removesuffix(tail)
     message = head + words + (tail if head != reason.message else "")

@@ -307,7 +307,7 @@ def refusal(
                 advice = (
                     f"; the vehicles start on their slots at the mission's velocity through the water, so the "
                     f"configured current ({speed:.4g} m/s) is their start's velocity error, outside the certified "
-                    f"start set: {current.toml()} (m/s) starts inside it"
+                    f"start set: {current.words()} starts inside it"
                 )
                 settings = (current,)
         return Reason(
@@ -327,7 +327,7 @@ def refusal(
     if spread:  # re-certified as written by the part that bounds the errors
         settings, factor = spread, _written_factor(point, spread)
     words = (
-        f"[formation] {settings[0].key} = {settings[0].value}, in place of " + " or ".join(x.key for x in settings[1:])
+        f"{settings[0].words()}, in place of " + " or ".join(x.key for x in settings[1:])
         if settings
         else "[formation] polygon_radius, offsets or shape"
     )
