@@ -413,7 +413,7 @@ def run_report(plan: RunPlan, result: SimulationResult) -> dict[str, Any]:
             "measured_tail_errors": measured_errors(result, result.t.size // 2),
             "certified_errors": certified,
             "certified_errors_source": source,
-            "covered_by": covered_by,
+            "covered_by": covered_by if plan.covered else [],
             "numerical_floor": NUMERICAL_FLOOR,
             "certified_thrust": certified_thrust_of(plan),
             "robust_covers_run": None if plan.robust is None else plan.robust.covered,
@@ -442,7 +442,8 @@ DEFINITIONS = {
     "certified_errors": "per-vehicle bounds of the certificate, never below the numerical floor",
     "certified_errors_source": "the part whose bounds certified_errors are (composed, implementation, closed_loop, "
     "or robust for a run of a plant or current that only the robust certificate covers)",
-    "covered_by": "the parts whose certificates cover this run",
+    "covered_by": "the parts whose certificates cover this run (empty when a condition fails: the thrust, the "
+    "separation)",
     "max_force": "largest applied |tau_x| or |tau_y| over samples and vehicles (N)",
     "shape_errors": "error of each Jacobi shape vector against the mission, in the formation's frame (along and "
     "cross track in the path frame, x and y in the inertial one): largest |component| over the vectors at the end "

@@ -356,6 +356,9 @@ def test_a_run_whose_certified_bound_breaks_min_separation_is_not_covered_and_it
     slots = 4.0  # the closest slots of DEPLOYED's line abreast
     assert slots - 2.0 * bound < cfg.min_separation  # the condition's own arithmetic
     assert "min_separation" in (plan.uncertified_gains() or "")
+    report = run_report(plan, simulate(plan.scenario))  # as simulate --uncertified reports it
+    assert report["certificate_covers_run"] is False and report["covered_by"] == []
+    assert "min_separation" in report["coverage_reason"]
     calm = plan_run(config_from_dict({**DEPLOYED, "simulation": {"horizon": 2.0}}, "calm"))
     assert calm.covered and {c.part: c for c in calm.checks}["separation"].covers
     # a campaign of it (run with --uncertified) checks no run against those bounds, and says why
