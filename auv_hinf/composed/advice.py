@@ -218,10 +218,9 @@ def refined_noise(
 
     Each declared channel in :data:`NOISE_CHANNELS` order (the dearest first) is put back at its
     declared bound, the others as they stand, and kept there when the certificate still covers (one
-    certificate each);
-    the channels left are then raised together from the advised scale by a geometric bisection
-    (:data:`ADVICE_STEPS` certificates; the advised scale may be a small fraction). Every value
-    returned was certified: the answer only grows.
+    certificate each); the channels left are then raised together from the advised scale by a
+    geometric bisection (:data:`ADVICE_STEPS` certificates; the advised scale may be a small
+    fraction). Every value returned was certified: the answer only grows.
 
     Parameters
     ----------
@@ -239,12 +238,11 @@ def refined_noise(
         if len(shrinking) == 1:
             break
         rest = tuple(c for c in shrinking if c != channel)
-        cert = certify(shrunk(original, "noise", advice.scale, rest))
+        trial = shrunk(original, "noise", advice.scale, rest)
+        cert = certify(trial)
         if cert.covers:
             shrinking.remove(channel)
-            best = replace(
-                advice, problem=shrunk(original, "noise", advice.scale, rest), certificate=cert, channels=rest
-            )
+            best = replace(advice, problem=trial, certificate=cert, channels=rest)
     if len(shrinking) == len(declared):
         return replace(advice, channels=declared)  # every channel binds: named all the same
     channels = tuple(shrinking)
