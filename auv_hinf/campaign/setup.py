@@ -17,7 +17,7 @@ from auv_hinf.campaign.composed_start import ComposedStart, composed_start
 from auv_hinf.campaign.starts import RobustStart, declared_rows, robust_start
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
-from auv_hinf.certificate.parts.separation import refusal, separation_with
+from auv_hinf.certificate.parts.separation import separation_refusal
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.composed.loops import Errors
 from auv_hinf.config.settings import FormationConfig
@@ -201,10 +201,7 @@ def prepare(
     fits = cfg.actuators is None or (limit is not None and limit.admits(thrust))
     # the bounds a run is checked against must keep [formation] min_separation, as certify requires
     checked = composed if composed is not None else rob
-    separation = None
-    if checked is not None:
-        sep = separation_with(point, float(checked.bounds[0]))
-        separation = None if sep.ok else refusal(point, sep).message
+    separation = None if checked is None else separation_refusal(point, float(checked.bounds[0]))
     reg = None if cert is None else cert.region
     law = VehicleLaw(params=cfg.vehicle, gains=gains, actuators=cfg.actuators)
     setup = CampaignSetup(

@@ -23,7 +23,7 @@ shrunk *together* by one scale.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -211,6 +211,28 @@ def largest_covered(
     return refined_noise(found_advice, certify) if knob == "noise" and lo > 0.0 else found_advice
 
 
+def channels_put_back(shrinking: Sequence[str], holds: Callable[[tuple[str, ...]], bool]) -> tuple[str, ...]:
+    """The noise channels still shrunk after each of ``shrinking``, in order, is put back where it can be.
+
+    A channel is put back at its declared bound when ``holds`` of the channels then left shrunk is
+    true (the answer still covers); the last channel left is never tried (the declared noise is the
+    one refused).
+
+    Parameters
+    ----------
+    shrinking : sequence of str
+        The channels an answer shrinks (of :data:`NOISE_CHANNELS`), in the order to try them.
+    holds : callable
+        Whether the answer covers with only the given channels shrunk.
+    """
+    left = list(shrinking)
+    for channel in shrinking:
+        rest = tuple(c for c in left if c != channel)
+        if rest and holds(rest):
+            left.remove(channel)
+    return tuple(left)
+
+
 def refined_noise(
     advice: Advice, certify: Callable[[DeployedProblem], DeployedCertificate] = certify_deployed
 ) -> Advice:
@@ -233,19 +255,19 @@ def refined_noise(
     if original is None:
         return advice
     declared = tuple(c for c in NOISE_CHANNELS if getattr(original.implementation.noise, c) > 0.0)
-    shrinking, best = list(declared), advice
-    for channel in declared:
-        if len(shrinking) == 1:
-            break
-        rest = tuple(c for c in shrinking if c != channel)
+    best = advice
+
+    def holds(rest: tuple[str, ...]) -> bool:
+        nonlocal best
         trial = shrunk(original, "noise", advice.scale, rest)
         cert = certify(trial)
         if cert.covers:
-            shrinking.remove(channel)
             best = replace(advice, problem=trial, certificate=cert, channels=rest)
-    if len(shrinking) == len(declared):
+        return cert.covers
+
+    channels = channels_put_back(declared, holds)
+    if len(channels) == len(declared):
         return replace(advice, channels=declared)  # every channel binds: named all the same
-    channels = tuple(shrinking)
     found: dict[float, DeployedCertificate] = {advice.scale: best.certificate}
 
     def covers(scale: float) -> bool:
@@ -269,6 +291,7 @@ __all__ = [
     "WORLD",
     "Advice",
     "Knob",
+    "channels_put_back",
     "declared_knobs",
     "largest_covered",
     "physical",

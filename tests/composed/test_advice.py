@@ -19,6 +19,7 @@ from auv_hinf.composed.advice import (
     NOISE_CHANNELS,
     WORLD,
     Advice,
+    channels_put_back,
     declared_knobs,
     largest_covered,
     shrunk,
@@ -196,3 +197,22 @@ def test_a_noise_answer_that_needs_every_channel_shrunk_is_the_uniform_one(boxed
 
     got = largest_covered(boxed, "noise", certify)
     assert got is not None and got.channels == tuple(names) and 0.25 < got.scale <= 0.5  # every channel binds
+
+
+def test_channels_are_put_back_in_order_and_the_last_one_left_is_never_tried():
+    """``channels_put_back``: each channel in turn, kept shrunk where putting it back fails."""
+    asked = []
+
+    def holds(rest: tuple[str, ...]) -> bool:
+        asked.append(rest)
+        return "heading" in rest  # the answer covers while the heading stays shrunk
+
+    got = channels_put_back(NOISE_CHANNELS, holds)
+    assert got == ("heading",)
+    assert asked == [
+        ("heading", "velocity", "yaw_rate"),  # position put back
+        ("velocity", "yaw_rate"),  # heading not
+        ("heading", "yaw_rate"),  # velocity put back
+        ("heading",),  # yaw rate put back; the heading, alone left, is never tried
+    ]
+    assert channels_put_back(("position",), lambda rest: True) == ("position",)

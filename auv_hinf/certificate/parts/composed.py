@@ -43,6 +43,7 @@ from auv_hinf.composed.advice import (
     NOISE_CHANNELS,
     TOGETHER,
     Advice,
+    channels_put_back,
     declared_knobs,
     largest_covered,
     physical,
@@ -736,25 +737,25 @@ def _climbed_by_reruns(
     if a.scale <= 0.0:
         return a
     declared = original.implementation.noise
-    shrinking = [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0 and (not a.channels or c in a.channels)]
+    shrinking = tuple(c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0 and (not a.channels or c in a.channels))
     best = a
-    cheap = list(shrinking)
-    for channel in list(cheap):
-        rest = tuple(c for c in cheap if c != channel)
-        if rest and certify(replace(shrunk(original, "noise", a.scale, rest), gains=a.problem.gains)).covers:
-            cheap.remove(channel)
+    cheap = channels_put_back(
+        shrinking,
+        lambda rest: certify(replace(shrunk(original, "noise", a.scale, rest), gains=a.problem.gains)).covers,
+    )
     if len(cheap) < len(shrinking):
-        got = _as_rerun(cfg, _scaled(replace(a, channels=tuple(cheap)), original, a.scale))
+        got = _as_rerun(cfg, _scaled(replace(a, channels=cheap), original, a.scale))
         if got is not None:
             best, shrinking = got, cheap
-    for channel in list(shrinking):
-        rest = tuple(c for c in shrinking if c != channel)
-        if not rest:
-            break
+
+    def reruns(rest: tuple[str, ...]) -> bool:
+        nonlocal best
         got = _as_rerun(cfg, _scaled(replace(best, channels=rest), original, a.scale))
         if got is not None:
-            best, shrinking = got, list(rest)
-    start = replace(best, channels=tuple(shrinking))
+            best = got
+        return got is not None
+
+    start = replace(best, channels=channels_put_back(shrinking, reruns))
 
     def covers(scale: float) -> bool:
         nonlocal best

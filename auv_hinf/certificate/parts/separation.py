@@ -194,6 +194,23 @@ def keeps_separation(point: DesignPoint, bound: float) -> bool:
     return separation_with(point, bound).ok
 
 
+def separation_refusal(point: DesignPoint, bound: float) -> str | None:
+    """Why vehicles each within ``bound`` (m) of their slots break ``[formation] min_separation``, or ``None``.
+
+    The refusal's words (:func:`refusal`) for a bound that a run or a campaign is checked against;
+    ``None`` when the vehicles keep it.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point.
+    bound : float
+        The certified bound of every vehicle's distance to its slot (m).
+    """
+    sep = separation_with(point, bound)
+    return None if sep.ok else refusal(point, sep).message
+
+
 def spread_factor(sep: SeparationBound) -> float:
     """How many times the formation must be spread for ``sep``'s bound to keep its closest pair apart.
 
@@ -435,10 +452,9 @@ class SeparationPart:
         ]
         if not bounds:
             return None
-        sep = separation_with(ctx.point, min(bounds))
-        if sep.ok:
+        why = separation_refusal(ctx.point, min(bounds))
+        if why is None:
             return RunCheck(self.name, "condition", True, True, "the certified separation holds")
-        why = refusal(ctx.point, sep).message
         return RunCheck(self.name, "condition", True, False, why, (f"separation: {why}",), refuses_gains=why)
 
 
@@ -454,6 +470,7 @@ __all__ = [
     "keeps_separation",
     "refusal",
     "separation_bound",
+    "separation_refusal",
     "separation_with",
     "spread_factor",
     "spread_settings",
