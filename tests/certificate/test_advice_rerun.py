@@ -20,16 +20,19 @@ from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import (
     CONFIRM_FRACTIONS,
     NOISE_CLIMBS,
+    RERUN_NOISE,
     RERUN_SAMPLE_TIME,
     RERUN_TOGETHER,
     advice_settings,
     composed_start,
     confirmed,
+    rerun_noise,
     rerun_together,
 )
 from auv_hinf.certificate.reason import Setting
 from auv_hinf.composed.advice import NOISE_CHANNELS, Advice, shrunk
 from auv_hinf.composed.certificate import DeployedCertificate
+from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import config_from_dict, with_settings
 from tests.helpers import DEPLOYED, DEPLOYED_BOXED
 
@@ -216,3 +219,45 @@ def test_a_rerun_whose_bound_breaks_min_separation_is_not_an_answer():
     assert below is not None
     assert above is None
     assert not certify(with_settings(cfg, [("formation", "min_separation", 1.01 * certified)])).certified
+
+
+def test_when_the_designs_gains_hold_no_noise_the_noise_is_shrunk_and_rerun(boxed, monkeypatch):
+    cfg, problem = boxed
+    declared = problem.implementation.noise.position
+    key = ("implementation.noise", "position")
+    # the re-runs' own gains cover below a twentieth of the declared noise: the third step of the ladder
+    rerun, calls = _fake_rerun(lambda s: s[key] <= declared / 20.0, lambda s: _with_noise(problem, s))
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    got = rerun_noise(cfg, problem)
+    assert got is not None and got.knob == "noise" and got.scaled == ("noise",)
+    first = next(x for x in RERUN_NOISE if x <= 1.0 / 20.0)
+    assert got.scale == pytest.approx(first, rel=1e-2) and got.scale <= first  # rounded down to 3 digits
+    assert [c[key] / declared for c in calls] == pytest.approx([x for x in RERUN_NOISE if x >= first], rel=1e-2)
+    # every channel at the one scale: the confirmation puts back those a re-run does not need shrunk
+    assert got.problem.implementation.noise.velocity == pytest.approx(got.scale * problem.implementation.noise.velocity)
+
+
+def test_no_noise_rerun_covers_gives_no_answer(boxed, monkeypatch):
+    cfg, problem = boxed
+    rerun, calls = _fake_rerun(lambda s: False, lambda s: problem)
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    assert rerun_noise(cfg, problem) is None
+    assert len(calls) == len(RERUN_NOISE)
+
+
+@pytest.mark.slow
+def test_a_deployed_fleet_with_absurd_position_noise_is_told_a_position_noise_that_certifies():
+    # the design's gains, chosen for 50 m of position noise, hold no noise a vehicle has; the answer was
+    # "0.0017 of the noise and the delay together" before the noise was re-run on its own
+    base = preset_config("bluerov2-deployed")
+    noise = replace(base.implementation.noise, position=50.0)
+    cfg = replace(base, implementation=replace(base.implementation, noise=noise))
+    cert = certify(cfg)
+    assert not cert.certified
+    advice = cert.to_dict()["composed"]["advice"]
+    assert advice and advice[0]["setting"] == "noise"
+    assert advice[0]["channels"] == ["position"] and set(advice[0]["kept"]) == {"heading", "velocity", "yaw_rate"}
+    written = [(s["table"], s["key"], s["value"]) for s in advice[0]["settings"]]
+    assert written == [("implementation.noise", "position", pytest.approx(written[0][2]))]
+    assert 0.05 < written[0][2] < 1.0  # a USBL-like fix, not a thousandth of the declared
+    assert certify(with_settings(cfg, written)).certified

@@ -325,7 +325,13 @@ def test_gains_the_composed_certificate_refuses_from_the_slots_are_not_run_unles
     code = main(["campaign", "--config", str(path), "--runs", "2", "--horizon", "2", "--out", str(tmp_path / "c")])
     assert code == 1 and "refusing to run a campaign" in capsys.readouterr().err
     code = main(["simulate", "--config", str(path), "--horizon", "2", "--json", "--uncertified"])
-    assert json.loads(capsys.readouterr().out)["certificate_covers_run"] is False
+    assert code == 1 and json.loads(capsys.readouterr().out)["certificate_covers_run"] is False
+    # a campaign of them says the same: its runs are not covered, so it does not pass (it used to exit 0)
+    out = tmp_path / "u"
+    args = ["campaign", "--config", str(path), "--runs", "2", "--horizon", "2", "--out", str(out), "--uncertified"]
+    code = main(args)
+    assert code == 1 and "2 runs not covered" in capsys.readouterr().err
+    assert json.loads((out / "summary.json").read_text())["counts"]["certificate_applies"] == 0
     initial = [[0.0, -6.0, 0.3, 0.4, 0.0, 0.0]] + [[0.0, y, 0.0, 0.4, 0.0, 0.0] for y in (-2.0, 2.0, 6.0)]
     turned = tmp_path / "turned.toml"
     turned.write_text(to_toml({**DEPLOYED, "simulation": {"horizon": 2.0, "initial": initial}}))
