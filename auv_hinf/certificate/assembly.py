@@ -29,7 +29,8 @@ from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by,
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import ConfigError, DesignError
-from auv_hinf.guidance.export import guidance_controller
+from auv_hinf.guidance.export import sampled_guidance_controller
+from auv_hinf.guidance.simulation import cascade_period
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
 from auv_hinf.law.gains import Gains
 from auv_hinf.law.interconnect import fleet_closed_loop, formation_controller, sampled_formation_controller
@@ -291,8 +292,10 @@ class Certificate:
         rounded down; see :func:`auv_hinf.law.interconnect.sampled_formation_controller`).
         Otherwise it is the continuous static law
         (:func:`auv_hinf.law.interconnect.formation_controller`, ``dt = 0``), and a delay declared
-        with ``sample_time = 0`` is not in it. With ``[guidance]`` it is the line-of-sight cascade
-        (:func:`auv_hinf.guidance.export.guidance_controller`: inputs each vehicle's state and
+        with ``sample_time = 0`` is not in it. With ``[guidance]`` it is the line-of-sight cascade as
+        it runs and as its certificate covers it (:func:`auv_hinf.guidance.export.sampled_guidance_controller`:
+        discrete time at the cascade's control period, the declared sample time or 0.1 s, the ILOS
+        integrators as states, the delay a shift of whole samples; inputs each vehicle's state and
         ground velocity, outputs its thrust and rudder); ``reference`` is then ignored.
 
         Parameters
@@ -308,7 +311,9 @@ class Certificate:
         """
         cfg = self.config
         if cfg.guidance is not None and isinstance(cfg.actuators, RudderActuation):  # the cascade runs
-            return guidance_controller(cfg.guidance, cfg.vehicle, cfg.actuators, self.mission_fleet())
+            period, delay = cascade_period(cfg.implementation), cfg.implementation.delay
+            fleet = self.mission_fleet()
+            return sampled_guidance_controller(cfg.guidance, cfg.vehicle, cfg.actuators, fleet, period, delay)
         ref, impl = reference or self.mission_fleet(), self.config.implementation
         if impl.sampled:
             return sampled_formation_controller(self.law(), ref, self.config.n, impl.sample_time, impl.delay)
