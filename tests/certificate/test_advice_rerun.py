@@ -24,6 +24,7 @@ from auv_hinf.certificate.parts.composed import (
     RERUN_SAMPLE_TIME,
     RERUN_TOGETHER,
     advice_settings,
+    channel_fractions,
     composed_start,
     confirmed,
     rerun_noise,
@@ -261,3 +262,42 @@ def test_a_deployed_fleet_with_absurd_position_noise_is_told_a_position_noise_th
     assert written == [("implementation.noise", "position", pytest.approx(written[0][2]))]
     assert 0.05 < written[0][2] < 1.0  # a USBL-like fix, not a thousandth of the declared
     assert certify(with_settings(cfg, written)).certified
+
+
+def test_channels_that_bind_by_different_amounts_each_climb_on_their_own(boxed, monkeypatch):
+    cfg, problem = boxed
+    declared = problem.implementation.noise
+    pos, head = ("implementation.noise", "position"), ("implementation.noise", "heading")
+    limit = {"position": 0.3, "heading": 0.05}  # each re-run covers below these fractions, independently
+
+    def covers(s):
+        return all(
+            s.get(("implementation.noise", c), getattr(declared, c)) <= x * getattr(declared, c)
+            for c, x in limit.items()
+        )
+
+    rerun, calls = _fake_rerun(covers, lambda s: _with_noise(problem, s))
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    cfg = replace(cfg, synthesis="deployed", robust=True)
+    both = ("position", "heading")
+    found = Advice(
+        "noise",
+        0.02,
+        shrunk(problem, "noise", 0.02, both),
+        DeployedCertificate(True, None, ()),
+        ("noise",),
+        problem,
+        both,
+    )
+    (got,) = confirmed(cfg, problem, (found,))
+    fractions = channel_fractions(got)
+    assert set(fractions) == {"position", "heading"} and got.channels == both
+    # every fraction answered was re-run and covered; the position (the dearest) climbed first, far above
+    # the joint scale the heading binds
+    assert fractions["position"] <= limit["position"] and fractions["heading"] <= limit["heading"]
+    assert fractions["position"] > 4.0 * fractions["heading"]
+    noise = got.problem.implementation.noise
+    assert {"position": noise.position, "heading": noise.heading} == pytest.approx(
+        {c: fractions[c] * getattr(declared, c) for c in both}
+    )
+    assert covers({pos: noise.position, head: noise.heading})

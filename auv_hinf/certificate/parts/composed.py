@@ -175,6 +175,20 @@ def _kept_channels(a: Advice) -> list[str]:
     return [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0 and c not in a.channels]
 
 
+def channel_fractions(a: Advice) -> dict[str, float]:
+    """Each shrunk noise channel's advised bound over its declared one (empty unless a noise answer names channels).
+
+    Parameters
+    ----------
+    a : Advice
+        A covering answer.
+    """
+    if a.knob != "noise" or not a.channels or a.original is None:
+        return {}
+    declared, advised = a.original.implementation.noise, a.problem.implementation.noise
+    return {c: getattr(advised, c) / getattr(declared, c) for c in a.channels if getattr(declared, c) > 0.0}
+
+
 def _advice_dict(a: Advice) -> dict[str, Any]:
     cert = a.certificate
     return {
@@ -182,6 +196,7 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
         "scaled": list(a.scaled),
         "scale": a.scale,
         "channels": list(a.channels),
+        "channel_scales": channel_fractions(a),
         "kept": _kept_channels(a),
         "settings": [s.to_dict() for s in advice_settings(a)],
         "position_bound": None if cert.errors is None else cert.errors.position,
@@ -469,18 +484,21 @@ class ComposedPart:
         out.append(f"    composed covered        NO: {'; '.join(f['reasons']) or 'not certified'}")
         for a in f.get("advice") or []:
             values = toml_line(Setting.from_dict(s) for s in a["settings"])
-            what, kept = a["setting"], ""
+            what, kept, scale = a["setting"], "", f"{a['scale']:.3g}" if a.get("scale") is not None else ""
             if a.get("channels"):  # the noise of these channels, the others as declared
                 what = f"{_words(a['channels'])} noise"
                 kept = f"; the {_words(a['kept'])} noise as declared" if a.get("kept") else ""
+                fractions = a.get("channel_scales") or {}
+                if len({f"{x:.3g}" for x in fractions.values()}) > 1:  # each channel at its own fraction
+                    what = " and ".join(f"the {c.replace('_', ' ')} noise at {x:.3g}" for c, x in fractions.items())
+                    what, scale = what.removeprefix("the "), ""
             if what in JOINT:
                 what = ", ".join(a.get("scaled") or []) + " together"
             if a.get("scale") is None:  # a change of the design or the mission, not a declared value shrunk
                 out.append(f"    certifies with          {values} (a change of the {what})")
             else:
-                out.append(
-                    f"    certifies with          {values} (the {what} at {a['scale']:.3g} of the declared{kept})"
-                )
+                at = f" at {scale}" if scale else ""
+                out.append(f"    certifies with          {values} (the {what}{at} of the declared{kept})")
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
@@ -770,6 +788,44 @@ def _climbed_by_reruns(
         return got is not None
 
     bisect(covers, start.scale, 1.0, steps=NOISE_CLIMBS, geometric=True)
+    left = best.channels or shrinking
+    if len(left) > 1:  # the channels bind by different amounts: each climbs on its own, the dearest first
+        for channel in left:
+            best = _channel_climbed(cfg, best, original, channel)
+    return best
+
+
+def _channel_climbed(cfg: FormationConfig, a: Advice, original: DeployedProblem, channel: str) -> Advice:
+    """``a`` (a covering re-run of the noise) with ``channel`` raised alone as far as re-runs cover.
+
+    The other channels stay as ``a`` has them; a geometric bisection of re-runs
+    (:data:`NOISE_CLIMBS`) between the channel's present fraction of its declared bound and 1 (the
+    declared bound was refused when the channels were put back, with the others lower than now),
+    at fractions rounded down to :data:`NOISE_DIGITS` significant digits. ``a.scale`` stays the
+    fraction the channels were found at together; each channel's own is its value over its declared
+    bound (:func:`channel_fractions`).
+    """
+    declared = getattr(original.implementation.noise, channel)
+    present = getattr(a.problem.implementation.noise, channel)
+    if not declared > 0.0 or present >= declared:
+        return a
+    best = a
+
+    def covers(fraction: float) -> bool:
+        nonlocal best
+        fraction = _rounded_down(fraction, NOISE_DIGITS)
+        if fraction * declared <= present:
+            return True
+        noise = replace(best.problem.implementation.noise, **{channel: fraction * declared})
+        trial = replace(
+            best, problem=replace(best.problem, implementation=replace(best.problem.implementation, noise=noise))
+        )
+        got = _as_rerun(cfg, trial)
+        if got is not None:
+            best = got
+        return got is not None
+
+    bisect(covers, present / declared, 1.0, steps=NOISE_CLIMBS, geometric=True)
     return best
 
 
@@ -970,6 +1026,7 @@ __all__ = [
     "SUPERSEDES",
     "ComposedSummary",
     "advice_settings",
+    "channel_fractions",
     "composed_start",
     "composed_summary",
     "confirmed",
