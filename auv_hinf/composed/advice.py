@@ -23,6 +23,7 @@ shrunk *together* by one scale.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
@@ -54,6 +55,10 @@ ADVICE_STEPS = 4
 #: covered: an answer of 2^-6 of that (about 1/1000 of the declared value) is still a value to
 #: re-run with, where zero would remove the setting (each halving is one certificate).
 ADVICE_HALVINGS = 6
+#: Significant digits of every scale the advice evaluates: the advised bounds read ``0.261 m`` and
+#: ``0.0136 rad``, not ``0.26108594541 m`` and ``0.013671875 rad``. A bisection's midpoint is rounded
+#: down before its certificate is computed, so the value answered is the one certified.
+ADVICE_DIGITS = 3
 #: The sample time is shrunk down to this fraction of the declared one at most (a law 20 times
 #: faster than declared is not advice a deployment can follow).
 SAMPLE_TIME_FLOOR = 0.05
@@ -116,6 +121,22 @@ def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:
     # "together" beside "world" only when it shrinks some of the hardware too
     present["together"] = sum(present[k] for k in TOGETHER) >= 2 and any(present[k] for k in TOGETHER if k not in WORLD)
     return tuple(k for k in KNOBS if present[k])
+
+
+def rounded_down(x: float, digits: int = ADVICE_DIGITS) -> float:
+    """``x`` rounded down to ``digits`` significant digits (``x <= 0`` is returned as it is).
+
+    Parameters
+    ----------
+    x : float
+        A scale or a fraction.
+    digits : int
+        Significant digits kept.
+    """
+    if not x > 0.0:
+        return x
+    step = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return math.floor(x / step * (1.0 + 1e-12)) * step
 
 
 def physical(scale: float, scaled: tuple[Knob, ...]) -> bool:
@@ -188,8 +209,8 @@ def largest_covered(
     floor = SAMPLE_TIME_FLOOR if knob == "sample_time" else 0.0
     found: dict[float, DeployedCertificate] = {}
 
-    def covers(s: float) -> bool:
-        cert = certify(shrunk(problem, knob, s))
+    def covers(s: float) -> bool:  # at the scale rounded down (found: by the scale asked)
+        cert = certify(shrunk(problem, knob, rounded_down(s)))
         found[s] = cert
         return cert.covers
 
@@ -203,6 +224,7 @@ def largest_covered(
                 lo, _ = bisect(covers, hi, 2.0 * hi, steps=ADVICE_STEPS // 2)
                 break
     cert = found.get(lo)
+    lo = rounded_down(lo)
     if cert is None or not cert.covers:  # bisect returns a point it evaluated as covered
         return None
     declared = declared_knobs(problem)
@@ -270,17 +292,19 @@ def refined_noise(
         return replace(advice, channels=declared)  # every channel binds: named all the same
     found: dict[float, DeployedCertificate] = {advice.scale: best.certificate}
 
-    def covers(scale: float) -> bool:
-        found[scale] = certify(shrunk(original, "noise", scale, channels))
+    def covers(scale: float) -> bool:  # at the scale rounded down (found: by the scale asked)
+        found[scale] = certify(shrunk(original, "noise", rounded_down(scale), channels))
         return found[scale].covers
 
     lo = bisect(covers, advice.scale, 1.0, steps=ADVICE_STEPS, geometric=True)[0]
-    if lo <= advice.scale or not found[lo].covers:
+    if lo <= advice.scale or not found[lo].covers or rounded_down(lo) <= advice.scale:
         return best
-    return replace(best, scale=lo, problem=shrunk(original, "noise", lo, channels), certificate=found[lo])
+    cert, lo = found[lo], rounded_down(lo)
+    return replace(best, scale=lo, problem=shrunk(original, "noise", lo, channels), certificate=cert)
 
 
 __all__ = [
+    "ADVICE_DIGITS",
     "ADVICE_HALVINGS",
     "ADVICE_STEPS",
     "JOINT",
@@ -296,5 +320,6 @@ __all__ = [
     "largest_covered",
     "physical",
     "refined_noise",
+    "rounded_down",
     "shrunk",
 ]

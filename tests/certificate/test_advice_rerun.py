@@ -276,7 +276,7 @@ def test_channels_that_bind_by_different_amounts_each_climb_on_their_own(boxed, 
             for c, x in limit.items()
         )
 
-    rerun, calls = _fake_rerun(covers, lambda s: _with_noise(problem, s))
+    rerun, _ = _fake_rerun(covers, lambda s: _with_noise(problem, s))
     monkeypatch.setattr(composed_part, "rerun", rerun)
     cfg = replace(cfg, synthesis="deployed", robust=True)
     both = ("position", "heading")

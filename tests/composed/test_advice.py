@@ -7,6 +7,7 @@ synthesis runs when no candidate covers the declared box and current.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import pytest
@@ -15,6 +16,7 @@ from auv_hinf.certificate.deployed import deployed_problem
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.certificate.parts.composed import JOINT_ENOUGH, composed_start
 from auv_hinf.composed.advice import (
+    ADVICE_DIGITS,
     ADVICE_HALVINGS,
     NOISE_CHANNELS,
     WORLD,
@@ -22,6 +24,7 @@ from auv_hinf.composed.advice import (
     channels_put_back,
     declared_knobs,
     largest_covered,
+    rounded_down,
     shrunk,
 )
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, ForceBound
@@ -216,3 +219,26 @@ def test_channels_are_put_back_in_order_and_the_last_one_left_is_never_tried():
         ("heading",),  # yaw rate put back; the heading, alone left, is never tried
     ]
     assert channels_put_back(("position",), lambda rest: True) == ("position",)
+
+
+@pytest.mark.parametrize("x", [1.0, 0.5, 0.013671875, 0.0009765625, 0.26108594541, 7.0 / 3.0, 123456.789, 1e-9])
+def test_rounded_down_keeps_three_significant_digits_and_never_rounds_up(x):
+    r = rounded_down(x)
+    assert r <= x and x - r <= 10.0 ** (math.floor(math.log10(x)) - ADVICE_DIGITS + 1) * (1.0 + 1e-9)
+    assert len(f"{r:.12e}".split("e")[0].replace(".", "").rstrip("0")) <= ADVICE_DIGITS
+    assert rounded_down(0.0) == 0.0
+
+
+@pytest.mark.parametrize("edge", [0.0137, 0.2611])
+def test_an_advised_scale_is_the_certified_one_with_three_significant_digits(boxed, edge):
+    evaluated = []
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        s = _world_scale(problem, boxed)
+        evaluated.append(s)
+        return DeployedCertificate(s <= edge, None, ())
+
+    got = largest_covered(boxed, "world", certify)
+    assert got is not None and got.scale <= edge
+    assert any(s == pytest.approx(got.scale, rel=1e-12) for s in evaluated)  # the value the certificate saw
+    assert all(f"{s:.12e}"[:4] + "0" * 9 == f"{s:.12e}"[:13] for s in evaluated if s > 0.0)  # 3 digits each

@@ -47,6 +47,7 @@ from auv_hinf.composed.advice import (
     declared_knobs,
     largest_covered,
     physical,
+    rounded_down,
     shrunk,
 )
 from auv_hinf.composed.certificate import DeployedCertificate, DeployedProblem, certify_deployed
@@ -750,9 +751,10 @@ def _climbed_by_reruns(
     re-run's gains cover so (one certificate each, confirmed by one re-run: the re-run's design then
     covers, those gains being among its candidates), else when a re-run with it put back covers (its
     design choosing other gains). The channels left are then raised together by a geometric
-    bisection of re-runs (:data:`NOISE_CLIMBS`), at scales rounded down to :data:`NOISE_DIGITS`
-    significant digits. ``a`` is kept when nothing better is confirmed, and when it is the noise at
-    zero (not an answer a vehicle can follow, :func:`~auv_hinf.composed.advice.physical`).
+    bisection of re-runs (:data:`NOISE_CLIMBS`), at scales rounded down
+    (:func:`~auv_hinf.composed.advice.rounded_down`). ``a`` is kept when nothing better is confirmed,
+    and when it is the noise at zero (not an answer a vehicle can follow,
+    :func:`~auv_hinf.composed.advice.physical`).
     """
     if a.scale <= 0.0:
         return a
@@ -779,7 +781,7 @@ def _climbed_by_reruns(
 
     def covers(scale: float) -> bool:
         nonlocal best
-        scale = _rounded_down(scale, NOISE_DIGITS)
+        scale = rounded_down(scale)
         if scale <= start.scale:
             return True
         got = _as_rerun(cfg, _scaled(start, original, scale))
@@ -801,7 +803,7 @@ def _channel_climbed(cfg: FormationConfig, a: Advice, original: DeployedProblem,
     The other channels stay as ``a`` has them; a geometric bisection of re-runs
     (:data:`NOISE_CLIMBS`) between the channel's present fraction of its declared bound and 1 (the
     declared bound was refused when the channels were put back, with the others lower than now),
-    at fractions rounded down to :data:`NOISE_DIGITS` significant digits. ``a.scale`` stays the
+    at fractions rounded down (:func:`~auv_hinf.composed.advice.rounded_down`). ``a.scale`` stays the
     fraction the channels were found at together; each channel's own is its value over its declared
     bound (:func:`channel_fractions`).
     """
@@ -813,7 +815,7 @@ def _channel_climbed(cfg: FormationConfig, a: Advice, original: DeployedProblem,
 
     def covers(fraction: float) -> bool:
         nonlocal best
-        fraction = _rounded_down(fraction, NOISE_DIGITS)
+        fraction = rounded_down(fraction)
         if fraction * declared <= present:
             return True
         noise = replace(best.problem.implementation.noise, **{channel: fraction * declared})
@@ -829,17 +831,6 @@ def _channel_climbed(cfg: FormationConfig, a: Advice, original: DeployedProblem,
     return best
 
 
-#: Significant digits of a noise scale a re-run climbs to: the advised bounds read ``0.261 m``, not
-#: ``0.26108594541 m`` (the scale is rounded down, and the rounded value is the one re-run).
-NOISE_DIGITS = 3
-
-
-def _rounded_down(x: float, digits: int) -> float:
-    """``x > 0`` rounded down to ``digits`` significant digits."""
-    step = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
-    return math.floor(x / step * (1.0 + 1e-12)) * step
-
-
 def _scaled(a: Advice, original: DeployedProblem, scale: float) -> Advice:
     """``a`` at another ``scale`` of the declared ``original`` (its certificate left as found)."""
     return replace(a, scale=scale, problem=shrunk(original, a.knob, scale, a.channels))
@@ -852,7 +843,7 @@ def _scaled(a: Advice, original: DeployedProblem, scale: float) -> Advice:
 #: with these re-runs, 0.195 m of position noise with the rest as declared). Each step is a quarter:
 #: the confirmed answer then climbs (:func:`_climbed_by_reruns`).
 RERUN_NOISE = (0.25, 0.0625, 0.015625, 0.00390625, 0.0009765625)
-#: (each is rounded down to :data:`NOISE_DIGITS` significant digits, as the climbs' scales are)
+#: (each rounded down, :func:`~auv_hinf.composed.advice.rounded_down`, as every advised scale is)
 
 
 def rerun_noise(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None:
@@ -874,7 +865,7 @@ def rerun_noise(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None
         return None
     untried = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
     with tqdm(total=len(RERUN_NOISE), unit="re-run", desc="noise re-runs", leave=False) as bar:
-        for x in map(functools.partial(_rounded_down, digits=NOISE_DIGITS), RERUN_NOISE):
+        for x in map(rounded_down, RERUN_NOISE):
             bar.update(1)
             got = _as_rerun(cfg, Advice("noise", x, shrunk(problem, "noise", x), untried, ("noise",), problem))
             if got is not None:
