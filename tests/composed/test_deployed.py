@@ -331,7 +331,8 @@ def test_gains_the_composed_certificate_refuses_from_the_slots_are_not_run_unles
     args = ["campaign", "--config", str(path), "--runs", "2", "--horizon", "2", "--out", str(out), "--uncertified"]
     code = main(args)
     assert code == 1 and "2 runs not covered" in capsys.readouterr().err
-    assert json.loads((out / "summary.json").read_text())["counts"]["certificate_applies"] == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["counts"]["certificate_applies"] == 0 and summary["ok"] is False and summary["certificate"] is None
     initial = [[0.0, -6.0, 0.3, 0.4, 0.0, 0.0]] + [[0.0, y, 0.0, 0.4, 0.0, 0.0] for y in (-2.0, 2.0, 6.0)]
     turned = tmp_path / "turned.toml"
     turned.write_text(to_toml({**DEPLOYED, "simulation": {"horizon": 2.0, "initial": initial}}))
