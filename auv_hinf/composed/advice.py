@@ -90,6 +90,10 @@ class Advice:
     channels : tuple of str
         For the noise: the channels (of :data:`NOISE_CHANNELS`) shrunk to ``scale`` of their
         declared bounds, the others kept (empty: every channel, as found before any was put back).
+    ceiling : float
+        The smallest scale a *re-run* (which designs its own gains) was found not to cover (1: the
+        declared value): the re-runs that raise the answer bisect below it. A scale the design's gains
+        do not cover is no ceiling: a re-run's gains may cover far more.
     """
 
     knob: Knob
@@ -99,6 +103,7 @@ class Advice:
     scaled: tuple[Knob, ...] = ()
     original: DeployedProblem | None = None
     channels: tuple[str, ...] = ()
+    ceiling: float = 1.0
 
 
 def declared_knobs(problem: DeployedProblem) -> tuple[Knob, ...]:

@@ -226,7 +226,7 @@ def test_when_the_designs_gains_hold_no_noise_the_noise_is_shrunk_and_rerun(boxe
     cfg, problem = boxed
     declared = problem.implementation.noise.position
     key = ("implementation.noise", "position")
-    # the re-runs' own gains cover below a twentieth of the declared noise: the third step of the ladder
+    # the re-runs' own gains cover below a twentieth of the declared noise: the second step of the ladder
     rerun, calls = _fake_rerun(lambda s: s[key] <= declared / 20.0, lambda s: _with_noise(problem, s))
     monkeypatch.setattr(composed_part, "rerun", rerun)
     got = rerun_noise(cfg, problem)
@@ -234,6 +234,8 @@ def test_when_the_designs_gains_hold_no_noise_the_noise_is_shrunk_and_rerun(boxe
     first = next(x for x in RERUN_NOISE if x <= 1.0 / 20.0)
     assert got.scale == pytest.approx(first, rel=1e-2) and got.scale <= first  # rounded down to 3 digits
     assert [c[key] / declared for c in calls] == pytest.approx([x for x in RERUN_NOISE if x >= first], rel=1e-2)
+    # the ladder's step above it was refused by a re-run: the climbs bisect below it
+    assert got.ceiling == pytest.approx(next(x for x in reversed(RERUN_NOISE) if x > first), rel=1e-2)
     # every channel at the one scale: the confirmation puts back those a re-run does not need shrunk
     assert got.problem.implementation.noise.velocity == pytest.approx(got.scale * problem.implementation.noise.velocity)
 
@@ -247,11 +249,13 @@ def test_no_noise_rerun_covers_gives_no_answer(boxed, monkeypatch):
 
 
 @pytest.mark.slow
-def test_a_deployed_fleet_with_absurd_position_noise_is_told_a_position_noise_that_certifies():
+@pytest.mark.parametrize("position", [50.0, 1e6])
+def test_a_deployed_fleet_with_absurd_position_noise_is_told_a_position_noise_that_certifies(position):
     # the design's gains, chosen for 50 m of position noise, hold no noise a vehicle has; the answer was
-    # "0.0017 of the noise and the delay together" before the noise was re-run on its own
+    # "0.0017 of the noise and the delay together" before the noise was re-run on its own, and with 1e6 m
+    # (a units slip) "every noise at zero"
     base = preset_config("bluerov2-deployed")
-    noise = replace(base.implementation.noise, position=50.0)
+    noise = replace(base.implementation.noise, position=position)
     cfg = replace(base, implementation=replace(base.implementation, noise=noise))
     cert = certify(cfg)
     assert not cert.certified

@@ -751,7 +751,8 @@ def _climbed_by_reruns(
     re-run's gains cover so (one certificate each, confirmed by one re-run: the re-run's design then
     covers, those gains being among its candidates), else when a re-run with it put back covers (its
     design choosing other gains). The channels left are then raised together by a geometric
-    bisection of re-runs (:data:`NOISE_CLIMBS`), at scales rounded down
+    bisection of re-runs (:data:`NOISE_CLIMBS`) below ``a.ceiling`` (a scale a re-run refused), at
+    scales rounded down
     (:func:`~auv_hinf.composed.advice.rounded_down`). ``a`` is kept when nothing better is confirmed,
     and when it is the noise at zero (not an answer a vehicle can follow,
     :func:`~auv_hinf.composed.advice.physical`).
@@ -789,7 +790,7 @@ def _climbed_by_reruns(
             best = got
         return got is not None
 
-    bisect(covers, start.scale, 1.0, steps=NOISE_CLIMBS, geometric=True)
+    bisect(covers, start.scale, max(start.ceiling, start.scale), steps=NOISE_CLIMBS, geometric=True)
     left = best.channels or shrinking
     if len(left) > 1:  # the channels bind by different amounts: each climbs on its own, the dearest first
         for channel in left:
@@ -840,10 +841,12 @@ def _scaled(a: Advice, original: DeployedProblem, scale: float) -> Advice:
 #: noise a vehicle can have covers at the design's gains: the design chose its gains for the declared
 #: noise, and a re-run's design for a smaller one may hold far more than those gains do (a BlueROV2
 #: line declaring 50 m of position noise was advised 0.0017 of the noise and the delay together;
-#: with these re-runs, 0.195 m of position noise with the rest as declared). Each step is a quarter:
-#: the confirmed answer then climbs (:func:`_climbed_by_reruns`).
-RERUN_NOISE = (0.25, 0.0625, 0.015625, 0.00390625, 0.0009765625)
-#: (each rounded down, :func:`~auv_hinf.composed.advice.rounded_down`, as every advised scale is)
+#: with these re-runs, 0.28 m of position noise with the rest as declared). Each step is an eighth,
+#: down to 8^-10 (about 1e-9: a declared noise that far off is a units slip); the confirmed answer
+#: then climbs below the last scale refused (:func:`_climbed_by_reruns`, three steps: within a
+#: factor 8^(1/8) = 1.3 of the largest the re-runs cover). Each is rounded down
+#: (:func:`~auv_hinf.composed.advice.rounded_down`), as every advised scale is.
+RERUN_NOISE = tuple(0.125**k for k in range(1, 11))
 
 
 def rerun_noise(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None:
@@ -864,12 +867,15 @@ def rerun_noise(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None
     if problem.implementation.noise.exact:
         return None
     untried = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
+    above = 1.0  # the last scale a re-run refused: the climbs bisect below it
     with tqdm(total=len(RERUN_NOISE), unit="re-run", desc="noise re-runs", leave=False) as bar:
         for x in map(rounded_down, RERUN_NOISE):
             bar.update(1)
-            got = _as_rerun(cfg, Advice("noise", x, shrunk(problem, "noise", x), untried, ("noise",), problem))
+            trial = Advice("noise", x, shrunk(problem, "noise", x), untried, ("noise",), problem, ceiling=above)
+            got = _as_rerun(cfg, trial)
             if got is not None:
                 return got
+            above = x
     return None
 
 
