@@ -27,6 +27,7 @@ from auv_hinf.certificate.parts.composed import (
     channel_fractions,
     composed_start,
     confirmed,
+    hardware_put_back,
     rerun_noise,
     rerun_together,
 )
@@ -186,7 +187,13 @@ def test_settings_shrunk_together_are_rerun_at_larger_scales_first(boxed, monkey
     (got,) = confirmed(cfg, problem, (found,))
     # the largest scale of the ladder a re-run covers, not the one found at the design's gains
     assert got.scale == max(x for x in RERUN_TOGETHER if x <= 0.3)
-    assert [c[key] / current for c in calls] == pytest.approx([x for x in RERUN_TOGETHER if x > 0.0625][: len(calls)])
+    ladder = [x for x in RERUN_TOGETHER if x > 0.0625]
+    k = ladder.index(got.scale) + 1  # the ladder down to the first scale a re-run covers
+    assert [c[key] / current for c in calls[:k]] == pytest.approx(ladder[:k])
+    # then the hardware is put back where a re-run holds it (here all of it: the fake binds on the current),
+    # the current left where the ladder found it
+    assert all(c[key] / current == pytest.approx(got.scale) for c in calls[k:])
+    assert got.scaled == ("current", "box")
 
 
 def test_with_everything_else_gone_a_faster_law_is_rerun(boxed, monkeypatch):
@@ -305,3 +312,38 @@ def test_channels_that_bind_by_different_amounts_each_climb_on_their_own(boxed, 
         {c: fractions[c] * getattr(declared, c) for c in both}
     )
     assert covers({pos: noise.position, head: noise.heading})
+
+
+def test_an_answer_shrinking_everything_together_puts_back_the_hardware_a_rerun_holds(boxed, monkeypatch):
+    cfg, problem = boxed
+    declared = problem.implementation
+    pos, cur = ("implementation.noise", "position"), ("disturbance", "current_speed")
+
+    def covers(s):  # only the position noise and the current bind, each below a tenth
+        return s.get(pos, declared.noise.position) <= 0.1 * declared.noise.position and s[cur] <= (
+            0.1 * problem.plant.current
+        )
+
+    def problem_of(s):
+        p = _with_noise(problem, s)
+        delay = s.get(("implementation", "delay"), declared.delay)
+        return replace(
+            p,
+            implementation=replace(p.implementation, delay=delay),
+            plant=replace(p.plant, current=s[cur], box=problem.plant.box.scaled(0.1)),
+        )
+
+    rerun, calls = _fake_rerun(covers, problem_of)
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    scaled = ("noise", "delay", "current", "box")
+    together = Advice(
+        "together", 0.1, shrunk(problem, "together", 0.1), DeployedCertificate(True, None, ()), scaled, problem
+    )
+    got = hardware_put_back(cfg, together, problem)
+    assert got.scaled == ("noise", "current", "box") and got.channels == ("position",)
+    written = {(s.table, s.key) for s in advice_settings(got)}
+    assert pos in written and cur in written and ("uncertainty", "m11") in written
+    assert ("implementation", "delay") not in written and ("implementation.noise", "heading") not in written
+    channels = [c for c in NOISE_CHANNELS if getattr(declared.noise, c) > 0.0]
+    assert len(calls) == 1 + len(channels)  # one re-run for the delay, one per channel
+    assert covers({(t, k): v for t, k, v in ((s.table, s.key, s.value) for s in advice_settings(got))})

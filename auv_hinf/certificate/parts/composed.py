@@ -170,7 +170,7 @@ def _words(channels: list[str]) -> str:
 
 def _kept_channels(a: Advice) -> list[str]:
     """The declared noise channels a noise answer keeps at their declared bounds (of :data:`NOISE_CHANNELS`)."""
-    if a.knob != "noise" or not a.channels or a.original is None:
+    if a.knob not in ("noise", "together") or not a.channels or a.original is None:
         return []
     declared = a.original.implementation.noise
     return [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0 and c not in a.channels]
@@ -184,7 +184,7 @@ def channel_fractions(a: Advice) -> dict[str, float]:
     a : Advice
         A covering answer.
     """
-    if a.knob != "noise" or not a.channels or a.original is None:
+    if a.knob not in ("noise", "together") or not a.channels or a.original is None:
         return {}
     declared, advised = a.original.implementation.noise, a.problem.implementation.noise
     return {c: getattr(advised, c) / getattr(declared, c) for c in a.channels if getattr(declared, c) > 0.0}
@@ -239,7 +239,7 @@ def _advice_values(a: Advice) -> tuple[Setting, ...]:
     """:func:`advice_settings` before rounding."""
     p = a.problem
     impl, plant = p.implementation, p.plant
-    if len(a.scaled) > 1:
+    if len(a.scaled) > 1 or a.knob in JOINT:
         return tuple(s for k in a.scaled for s in _advice_values(replace(a, knob=k, scaled=(k,))))
     if a.knob == "noise":
         n = impl.noise
@@ -493,8 +493,9 @@ class ComposedPart:
                 if len({f"{x:.3g}" for x in fractions.values()}) > 1:  # each channel at its own fraction
                     what = " and ".join(f"the {c.replace('_', ' ')} noise at {x:.3g}" for c, x in fractions.items())
                     what, scale = what.removeprefix("the "), ""
-            if what in JOINT:
-                what = ", ".join(a.get("scaled") or []) + " together"
+            if a["setting"] in JOINT:  # the noise named by its channels when some were put back
+                names = [what if k == "noise" and a.get("channels") else k for k in a.get("scaled") or []]
+                what = ", ".join(names) + " together"
             if a.get("scale") is None:  # a change of the design or the mission, not a declared value shrunk
                 out.append(f"    certifies with          {values} (a change of the {what})")
             else:
@@ -688,7 +689,7 @@ def confirmed(
                 larger = [x for x in RERUN_TOGETHER if x > a.scale]
                 above = next(filter(None, (_as_rerun(cfg, _scaled(a, original, x)) for x in larger)), None)
                 if above is not None:
-                    out.append(above)
+                    out.append(hardware_put_back(cfg, above, original))
                     continue
             for scale in dict.fromkeys((a.scale, *(a.scale * f for f in CONFIRM_FRACTIONS))):
                 got = _as_rerun(cfg, a if scale == a.scale else _scaled(a, original, scale))
@@ -697,9 +698,63 @@ def confirmed(
                         got = _climbed(cfg, got, original, certify)
                     elif a.knob == "noise" and cfg.synthesis == "deployed":
                         got = _climbed_by_reruns(cfg, got, original, certify)
+                    elif a.knob == "together":
+                        got = hardware_put_back(cfg, got, original)
                     out.append(got)
                     break
     return tuple(out)
+
+
+def hardware_put_back(cfg: FormationConfig, a: Advice, original: DeployedProblem) -> Advice:
+    """``a`` (a covering re-run of settings shrunk ``together``) with the hardware put back where a re-run holds it.
+
+    The delay, then each noise channel in :data:`~auv_hinf.composed.advice.NOISE_CHANNELS` order (the
+    dearest first), is put back at its declared value, the rest as ``a`` has them, and kept there when
+    a re-run covers (one re-run each): the answer then shrinks the hardware only where it must, with
+    the current and the box. ``a`` is returned unchanged at scale 0 (nothing is left to keep).
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration as declared.
+    a : Advice
+        A covering re-run of the ``together`` knob.
+    original : DeployedProblem
+        The problem as declared.
+    """
+    if a.knob != "together" or a.scale <= 0.0:
+        return a
+    best = a
+    declared = original.implementation
+    if "delay" in best.scaled and len(best.scaled) > 1 and declared.delay > 0.0:
+        impl = replace(best.problem.implementation, delay=declared.delay)
+        trial = replace(
+            best,
+            problem=replace(best.problem, implementation=impl),
+            scaled=tuple(k for k in best.scaled if k != "delay"),
+        )
+        best = _as_rerun(cfg, trial) or best
+    if "noise" not in best.scaled:
+        return best
+    shrinking = tuple(c for c in NOISE_CHANNELS if getattr(declared.noise, c) > 0.0)
+
+    def holds(rest: tuple[str, ...]) -> bool:
+        nonlocal best
+        values = {c: getattr(declared.noise, c) * (best.scale if c in rest else 1.0) for c in shrinking}
+        impl = replace(best.problem.implementation, noise=replace(best.problem.implementation.noise, **values))
+        scaled = best.scaled if rest else tuple(k for k in best.scaled if k != "noise")
+        trial = replace(best, problem=replace(best.problem, implementation=impl), scaled=scaled, channels=rest)
+        got = _as_rerun(cfg, trial)
+        if got is not None:
+            best = got
+        return got is not None
+
+    left = list(shrinking)
+    for channel in shrinking:  # every channel may go back when something else stays shrunk
+        rest = tuple(c for c in left if c != channel)
+        if (rest or len(best.scaled) > 1) and holds(rest):
+            left.remove(channel)
+    return best
 
 
 def _climbed(
@@ -965,6 +1020,8 @@ def _no_advice(
             _change_entry(a.what, a.settings, a.position_bound),
         )
     together = rerun_together(point.config, problem)
+    if together is not None and physical(together.scale, together.scaled):
+        together = hardware_put_back(point.config, together, problem)
     if together is not None and not physical(together.scale, together.scaled):
         exact = (*exact, together)
         together = None
@@ -1028,6 +1085,7 @@ __all__ = [
     "composed_summary",
     "confirmed",
     "covered_position_bound",
+    "hardware_put_back",
     "rerun",
     "rerun_noise",
     "rerun_together",
