@@ -1095,6 +1095,15 @@ def small_gain(direct: FloatArray, loop_gain: FloatArray) -> FloatArray | None:
     # the exact solution is nonnegative and the computed one is within cond * eps of it (relative):
     # inflating by SOLVE_RTOL covers it; the inequality's right-hand side is checked at the result
     sol = np.maximum(sol, 0.0) * (1.0 + SOLVE_RTOL)
+    short = direct + loop_gain @ sol - sol
+    if np.any(short > sol * 1e-12):
+        # round-off left the solution short somewhere (a tiny component clipped at 0, or terms far apart in
+        # size): add a multiple of v = (I - loop_gain)^-1 1 >= 1, whose image under I - loop_gain is 1
+        lift = np.linalg.solve(system, np.ones(k))
+        if not np.all(np.isfinite(lift)):
+            return None
+        sol = sol + 2.0 * float(short.max()) * np.maximum(lift, 1.0)
+    # any z >= 0 with z >= direct + loop_gain z is above the least solution (iterate the inequality)
     if np.any(direct + loop_gain @ sol > sol * (1.0 + 1e-12)):
         return None
     out: FloatArray = sol

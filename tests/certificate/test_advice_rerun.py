@@ -347,3 +347,30 @@ def test_an_answer_shrinking_everything_together_puts_back_the_hardware_a_rerun_
     channels = [c for c in NOISE_CHANNELS if getattr(declared.noise, c) > 0.0]
     assert len(calls) == 1 + len(channels)  # one re-run for the delay, one per channel
     assert covers({(t, k): v for t, k, v in ((s.table, s.key, s.value) for s in advice_settings(got))})
+
+
+def test_an_answer_whose_every_channel_binds_names_them_with_their_own_fractions(boxed, monkeypatch):
+    cfg, problem = boxed
+    declared = problem.implementation.noise
+    names = [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0]
+    limit = {c: 0.05 * (k + 1) for k, c in enumerate(names)}  # every channel binds, each at its own fraction
+
+    def covers(s):
+        return all(
+            s.get(("implementation.noise", c), getattr(declared, c)) <= x * getattr(declared, c)
+            for c, x in limit.items()
+        )
+
+    rerun, _ = _fake_rerun(covers, lambda s: _with_noise(problem, s))
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    cfg = replace(cfg, synthesis="deployed", robust=True)
+    found = Advice(
+        "noise", 0.04, shrunk(problem, "noise", 0.04), DeployedCertificate(True, None, ()), ("noise",), problem
+    )
+    (got,) = confirmed(cfg, problem, (found,))
+    fractions = channel_fractions(got)
+    assert set(got.channels) == set(names) and set(fractions) == set(names)  # named, not left empty
+    assert all(fractions[c] <= limit[c] for c in names) and len({round(x, 6) for x in fractions.values()}) > 1
+    entry = composed_part._advice_dict(got)
+    assert entry["channel_scales"] == {c: pytest.approx(x, rel=1e-11) for c, x in fractions.items()}
+    assert entry["scale"] == float(f"{got.scale:.12g}")

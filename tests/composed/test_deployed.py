@@ -372,3 +372,29 @@ def test_a_run_whose_certified_bound_breaks_min_separation_is_not_covered_and_it
     setup, _ = prepare(cfg, horizon=2.0)
     assert not setup.certificate_applies and "min_separation" in (setup.separation or "")
     assert prepare(config_from_dict(DEPLOYED, "calm"), horizon=2.0)[0].separation is None
+
+
+def test_less_measurement_noise_never_loses_the_cover():
+    """A review's fleet (the deployed BlueROV2 line with a 0.3 s delay, gentle gains): certified with velocity
+    and heading noise of 1e-5, refused at 1e-11 before the small-gain solve lifted the components its round-off
+    left short (a tiny channel beside metres); the bound decreases with the noise down to 1e-13."""
+    from dataclasses import replace
+
+    from auv_hinf.certificate.deployed import deployed_problem
+    from auv_hinf.certificate.design_point import design_point
+    from auv_hinf.composed.certificate import certify_deployed
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.implementation.model import MeasurementNoise
+    from auv_hinf.law.gains import Gains
+
+    cfg = preset_config("bluerov2-deployed")
+    cfg = replace(cfg, implementation=replace(cfg.implementation, delay=0.3))
+    point = design_point(cfg)
+    base = deployed_problem(cfg, point.mission, point.tube, point.offsets, Gains(1.5, 0.28125, (1.0, 1.5), 0.0))
+    bounds = []
+    for v in (1e-5, 1e-9, 1e-11, 1e-13):
+        noise = MeasurementNoise(0.00975, v, v, 4.04e-5)
+        cert = certify_deployed(replace(base, implementation=replace(base.implementation, noise=noise)))
+        assert cert.covers and cert.errors is not None, (v, cert.reasons)
+        bounds.append(cert.errors.position)
+    assert bounds == sorted(bounds, reverse=True)

@@ -195,9 +195,9 @@ def _advice_dict(a: Advice) -> dict[str, Any]:
     return {
         "setting": a.knob,
         "scaled": list(a.scaled),
-        "scale": a.scale,
+        "scale": _written(a.scale),
         "channels": list(a.channels),
-        "channel_scales": channel_fractions(a),
+        "channel_scales": {c: _written(x) for c, x in channel_fractions(a).items()},
         "kept": _kept_channels(a),
         "settings": [s.to_dict() for s in advice_settings(a)],
         "position_bound": None if cert.errors is None else cert.errors.position,
@@ -491,8 +491,8 @@ class ComposedPart:
                 kept = f"; the {_words(a['kept'])} noise as declared" if a.get("kept") else ""
                 fractions = a.get("channel_scales") or {}
                 if len({f"{x:.3g}" for x in fractions.values()}) > 1:  # each channel at its own fraction
-                    what = " and ".join(f"the {c.replace('_', ' ')} noise at {x:.3g}" for c, x in fractions.items())
-                    what, scale = what.removeprefix("the "), ""
+                    parts = [f"{c.replace('_', ' ')} noise at {x:.3g}" for c, x in fractions.items()]
+                    what, scale = _words(parts).replace(", ", ", the ").replace(" and ", " and the "), ""
             if a["setting"] in JOINT:  # the noise named by its channels when some were put back
                 names = [what if k == "noise" and a.get("channels") else k for k in a.get("scaled") or []]
                 what = ", ".join(names) + " together"
@@ -834,6 +834,7 @@ def _climbed_by_reruns(
         return got is not None
 
     start = replace(best, channels=channels_put_back(shrinking, reruns))
+    best = replace(best, channels=start.channels)  # named even when none was put back (each may climb alone)
 
     def covers(scale: float) -> bool:
         nonlocal best
