@@ -275,11 +275,10 @@ def test_a_deployed_fleet_with_absurd_position_noise_is_told_a_position_noise_th
     assert certify(with_settings(cfg, written)).certified
 
 
-def test_channels_that_bind_by_different_amounts_each_climb_on_their_own(boxed, monkeypatch):
-    cfg, problem = boxed
+def _channel_limits(problem, limit, monkeypatch):
+    """A fake re-run that covers when each channel of ``limit`` is within its fraction of the declared bound, and
+    the coverage predicate (on written settings)."""
     declared = problem.implementation.noise
-    pos, head = ("implementation.noise", "position"), ("implementation.noise", "heading")
-    limit = {"position": 0.3, "heading": 0.05}  # each re-run covers below these fractions, independently
 
     def covers(s):
         return all(
@@ -289,6 +288,15 @@ def test_channels_that_bind_by_different_amounts_each_climb_on_their_own(boxed, 
 
     rerun, _ = _fake_rerun(covers, lambda s: _with_noise(problem, s))
     monkeypatch.setattr(composed_part, "rerun", rerun)
+    return covers
+
+
+def test_channels_that_bind_by_different_amounts_each_climb_on_their_own(boxed, monkeypatch):
+    cfg, problem = boxed
+    declared = problem.implementation.noise
+    pos, head = ("implementation.noise", "position"), ("implementation.noise", "heading")
+    limit = {"position": 0.3, "heading": 0.05}  # each re-run covers below these fractions, independently
+    covers = _channel_limits(problem, limit, monkeypatch)
     cfg = replace(cfg, synthesis="deployed", robust=True)
     both = ("position", "heading")
     found = Advice(
@@ -354,15 +362,7 @@ def test_an_answer_whose_every_channel_binds_names_them_with_their_own_fractions
     declared = problem.implementation.noise
     names = [c for c in NOISE_CHANNELS if getattr(declared, c) > 0.0]
     limit = {c: 0.05 * (k + 1) for k, c in enumerate(names)}  # every channel binds, each at its own fraction
-
-    def covers(s):
-        return all(
-            s.get(("implementation.noise", c), getattr(declared, c)) <= x * getattr(declared, c)
-            for c, x in limit.items()
-        )
-
-    rerun, _ = _fake_rerun(covers, lambda s: _with_noise(problem, s))
-    monkeypatch.setattr(composed_part, "rerun", rerun)
+    _channel_limits(problem, limit, monkeypatch)
     cfg = replace(cfg, synthesis="deployed", robust=True)
     found = Advice(
         "noise", 0.04, shrunk(problem, "noise", 0.04), DeployedCertificate(True, None, ()), ("noise",), problem
