@@ -374,3 +374,29 @@ def test_an_answer_whose_every_channel_binds_names_them_with_their_own_fractions
     entry = composed_part._advice_dict(got)
     assert entry["channel_scales"] == {c: pytest.approx(x, rel=1e-11) for c, x in fractions.items()}
     assert entry["scale"] == float(f"{got.scale:.12g}")
+
+
+def test_the_text_groups_the_channels_a_noise_answer_shrinks_by_their_fraction():
+    figures = {
+        "applies": True,
+        "parts": ["sample_time"],
+        "error_bounds": None,
+        "certified_peak": None,
+        "operating_box": None,
+        "covers": False,
+        "reasons": ["the error bounds grow"],
+        "advice": [
+            {
+                "setting": "noise",
+                "scale": 0.0262,
+                "channels": ["position", "heading", "velocity", "yaw_rate"],
+                "channel_scales": {"position": 0.0262, "heading": 0.0262, "velocity": 0.0262, "yaw_rate": 0.0413},
+                "kept": [],
+                "settings": [{"table": "implementation.noise", "key": "position", "value": 0.0786, "unit": "m"}],
+            }
+        ],
+    }
+    (line,) = [x for x in composed_part.ComposedPart().lines(figures, {}) if "certifies with" in x]
+    assert "(the position, heading and velocity noise at 0.0262 and the yaw rate noise at 0.0413 of the declared)" in (
+        line
+    )

@@ -491,8 +491,11 @@ class ComposedPart:
                 kept = f"; the {_words(a['kept'])} noise as declared" if a.get("kept") else ""
                 fractions = a.get("channel_scales") or {}
                 if len({f"{x:.3g}" for x in fractions.values()}) > 1:  # each channel at its own fraction
-                    parts = [f"{c.replace('_', ' ')} noise at {x:.3g}" for c, x in fractions.items()]
-                    what, scale = _words(parts).replace(", ", ", the ").replace(" and ", " and the "), ""
+                    groups: dict[str, list[str]] = {}  # the channels at one printed fraction together
+                    for c, x in fractions.items():
+                        groups.setdefault(f"{x:.3g}", []).append(c)
+                    phrases = [f"{_words(cs)} noise at {x}" for x, cs in groups.items()]
+                    what, scale = ", the ".join(phrases[:-1]) + " and the " + phrases[-1], ""
             if a["setting"] in JOINT:  # the noise named by its channels when some were put back
                 names = [what if k == "noise" and a.get("channels") else k for k in a.get("scaled") or []]
                 what = ", ".join(names) + " together"
