@@ -11,6 +11,7 @@ step, the delay a shift of whole samples.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import control as ct
@@ -59,27 +60,16 @@ def guidance_controller(
         (rad).
     """
     n = ref.offsets.shape[0]
-
-    def law(t: float, x: FloatArray, u: FloatArray) -> Commands:
-        inputs = np.asarray(u, dtype=float).reshape(n, len(VEHICLE_INPUTS))
-        (p, v, a, _), _ = ref.kinematics(np.asarray(float(t)))
-        return commands(gcfg, model, act, inputs[:, :6], np.asarray(x, dtype=float), SlotMotion(p, v, a), inputs[:, 6:])
+    law = _fleet_law(gcfg, model, act, ref)
 
     def updfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
         return np.asarray(law(t, x, u).integral_rate, dtype=float)
 
     def outfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
-        cmd = law(t, x, u)
-        return np.column_stack([cmd.thrust, cmd.rudder]).ravel()
+        return _outputs(law(t, x, u))
 
-    return ct.nlsys(
-        updfcn,
-        outfcn,
-        name=name,
-        states=[f"y_i[{k}]" for k in range(n)],
-        inputs=[f"{s}[{k}]" for k in range(n) for s in VEHICLE_INPUTS],
-        outputs=[f"{s}[{k}]" for k in range(n) for s in ("thrust", "rudder")],
-    )
+    inputs, outputs = _signals(n)
+    return ct.nlsys(updfcn, outfcn, name=name, states=[f"y_i[{k}]" for k in range(n)], inputs=inputs, outputs=outputs)
 
 
 def sampled_guidance_controller(
@@ -130,12 +120,11 @@ def sampled_guidance_controller(
     n = ref.offsets.shape[0]
     m = delay_samples(sample_time, delay)
     h, width = float(sample_time), n * len(VEHICLE_INPUTS)
+    fleet_law = _fleet_law(gcfg, model, act, ref)
 
     def law(t: float, x: FloatArray, u: FloatArray) -> Commands:
-        x = np.asarray(x, dtype=float)
-        measured = (x[n : n + width] if m else np.asarray(u, dtype=float)).reshape(n, len(VEHICLE_INPUTS))
-        (p, v, a, _), _ = ref.kinematics(np.asarray(max(float(t) - m * h, 0.0)))
-        return commands(gcfg, model, act, measured[:, :6], x[:n], SlotMotion(p, v, a), measured[:, 6:])
+        x = np.asarray(x, dtype=float)  # the measurement of step k - m, against the slots at its time
+        return fleet_law(max(float(t) - m * h, 0.0), x[:n], x[n : n + width] if m else u)
 
     def updfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
         x = np.asarray(x, dtype=float)
@@ -143,19 +132,38 @@ def sampled_guidance_controller(
         return np.concatenate([integral, x[n + width :], np.asarray(u, dtype=float)]) if m else integral
 
     def outfcn(t: float, x: FloatArray, u: FloatArray, params: dict[str, Any] | None) -> FloatArray:
-        cmd = law(t, x, u)
-        return np.column_stack([cmd.thrust, cmd.rudder]).ravel()
+        return _outputs(law(t, x, u))
 
+    inputs, outputs = _signals(n)
+    states = [f"y_i[{k}]" for k in range(n)] + [f"{s}@k-{j}" for j in range(m, 0, -1) for s in inputs]
+    return ct.nlsys(updfcn, outfcn, name=name, dt=h, states=states, inputs=inputs, outputs=outputs)
+
+
+def _fleet_law(
+    gcfg: GuidanceConfig, model: VehicleParams, act: RudderActuation, ref: FleetReference
+) -> Callable[[float, FloatArray, FloatArray], Commands]:
+    """The cascade at slot time ``t`` on the ILOS integrators and the measured inputs (:data:`VEHICLE_INPUTS`)."""
+    n = ref.offsets.shape[0]
+
+    def law(t: float, integrators: FloatArray, inputs: FloatArray) -> Commands:
+        measured = np.asarray(inputs, dtype=float).reshape(n, len(VEHICLE_INPUTS))
+        (p, v, a, _), _ = ref.kinematics(np.asarray(float(t)))
+        slots = SlotMotion(p, v, a)
+        return commands(gcfg, model, act, measured[:, :6], np.asarray(integrators, dtype=float), slots, measured[:, 6:])
+
+    return law
+
+
+def _outputs(cmd: Commands) -> FloatArray:
+    """The outputs ``thrust[k], rudder[k]`` (N, rad) of a command, vehicle by vehicle."""
+    out: FloatArray = np.column_stack([cmd.thrust, cmd.rudder]).ravel()
+    return out
+
+
+def _signals(n: int) -> tuple[list[str], list[str]]:
+    """The input and output names of ``n`` vehicles' cascade."""
     inputs = [f"{s}[{k}]" for k in range(n) for s in VEHICLE_INPUTS]
-    return ct.nlsys(
-        updfcn,
-        outfcn,
-        name=name,
-        dt=h,
-        states=[f"y_i[{k}]" for k in range(n)] + [f"{s}@k-{j}" for j in range(m, 0, -1) for s in inputs],
-        inputs=inputs,
-        outputs=[f"{s}[{k}]" for k in range(n) for s in ("thrust", "rudder")],
-    )
+    return inputs, [f"{s}[{k}]" for k in range(n) for s in ("thrust", "rudder")]
 
 
 __all__ = ["GUIDANCE_CONTROLLER_NAME", "VEHICLE_INPUTS", "guidance_controller", "sampled_guidance_controller"]
