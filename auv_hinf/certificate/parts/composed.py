@@ -925,16 +925,27 @@ def rerun_noise(cfg: FormationConfig, problem: DeployedProblem) -> Advice | None
     """
     if problem.implementation.noise.exact:
         return None
-    untried = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
-    above = 1.0  # the last scale a re-run refused: the climbs bisect below it
-    with tqdm(total=len(RERUN_NOISE), unit="re-run", desc="noise re-runs", leave=False) as bar:
-        for x in map(rounded_down, RERUN_NOISE):
+    scales = [rounded_down(x) for x in RERUN_NOISE]
+    # each candidate's ceiling is the scale before it, which a re-run refused when it is tried
+    candidates = [
+        Advice("noise", x, shrunk(problem, "noise", x), _UNTRIED, ("noise",), problem, ceiling=above)
+        for x, above in zip(scales, [1.0, *scales[:-1]], strict=True)
+    ]
+    return _first_rerun(cfg, candidates, "noise re-runs")
+
+
+#: The certificate of an answer not yet re-run: the design's gains do not cover it, a re-run designs its own.
+_UNTRIED = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
+
+
+def _first_rerun(cfg: FormationConfig, candidates: list[Advice], what: str) -> Advice | None:
+    """The first of ``candidates`` a re-run covers (with the re-run's problem and certificate), or ``None``."""
+    with tqdm(total=len(candidates), unit="re-run", desc=what, leave=False) as bar:
+        for cand in candidates:
             bar.update(1)
-            trial = Advice("noise", x, shrunk(problem, "noise", x), untried, ("noise",), problem, ceiling=above)
-            got = _as_rerun(cfg, trial)
+            got = _as_rerun(cfg, cand)
             if got is not None:
                 return got
-            above = x
     return None
 
 
@@ -956,23 +967,16 @@ def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | N
     scaled = tuple(k for k in TOGETHER if k in knobs)
     if not scaled:
         return None
-    untried = DeployedCertificate(False, None, ("at the design's gains: the re-run designs its own",))
     candidates = [
-        Advice("together", x, shrunk(problem, "together", x), untried, scaled, problem) for x in RERUN_TOGETHER
+        Advice("together", x, shrunk(problem, "together", x), _UNTRIED, scaled, problem) for x in RERUN_TOGETHER
     ]
     # with all of them gone the sample time binds: a faster law with them at nothing
     nothing = shrunk(problem, "together", 0.0)
     candidates += [
-        Advice("together", 0.0, shrunk(nothing, "sample_time", f), untried, (*scaled, "sample_time"), problem)
+        Advice("together", 0.0, shrunk(nothing, "sample_time", f), _UNTRIED, (*scaled, "sample_time"), problem)
         for f in RERUN_SAMPLE_TIME
     ]
-    with tqdm(total=len(candidates), unit="re-run", desc="advice re-runs", leave=False) as bar:
-        for cand in candidates:
-            bar.update(1)
-            got = _as_rerun(cfg, cand)
-            if got is not None:
-                return got
-    return None
+    return _first_rerun(cfg, candidates, "advice re-runs")
 
 
 #: The answer that starts every vehicle on its slot: the declared ``[simulation] initial`` removed.
