@@ -238,12 +238,15 @@ def largest_covered(
     return refined_noise(found_advice, certify) if knob == "noise" and lo > 0.0 else found_advice
 
 
-def channels_put_back(shrinking: Sequence[str], holds: Callable[[tuple[str, ...]], bool]) -> tuple[str, ...]:
+def channels_put_back(
+    shrinking: Sequence[str], holds: Callable[[tuple[str, ...]], bool], last: bool = False
+) -> tuple[str, ...]:
     """The noise channels still shrunk after each of ``shrinking``, in order, is put back where it can be.
 
     A channel is put back at its declared bound when ``holds`` of the channels then left shrunk is
-    true (the answer still covers); the last channel left is never tried (the declared noise is the
-    one refused).
+    true (the answer still covers). The last channel left is tried only with ``last``: an answer that
+    shrinks the noise alone never (the declared noise is the one refused), one that shrinks other
+    settings with it may put back every channel.
 
     Parameters
     ----------
@@ -251,11 +254,13 @@ def channels_put_back(shrinking: Sequence[str], holds: Callable[[tuple[str, ...]
         The channels an answer shrinks (of :data:`NOISE_CHANNELS`), in the order to try them.
     holds : callable
         Whether the answer covers with only the given channels shrunk.
+    last : bool
+        Try the last channel left too (``holds`` of the empty tuple).
     """
     left = list(shrinking)
     for channel in shrinking:
         rest = tuple(c for c in left if c != channel)
-        if rest and holds(rest):
+        if (rest or last) and holds(rest):
             left.remove(channel)
     return tuple(left)
 

@@ -202,6 +202,19 @@ def test_a_noise_answer_that_needs_every_channel_shrunk_is_the_uniform_one(boxed
     assert got is not None and got.channels == tuple(names) and 0.25 < got.scale <= 0.5  # every channel binds
 
 
+def test_with_last_the_last_channel_left_is_tried_too():
+    """An answer that shrinks other settings with the noise may put back every channel."""
+    asked = []
+
+    def holds(rest: tuple[str, ...]) -> bool:
+        asked.append(rest)
+        return True
+
+    assert channels_put_back(NOISE_CHANNELS, holds, last=True) == ()
+    assert asked[-1] == () and len(asked) == len(NOISE_CHANNELS)
+    assert channels_put_back(NOISE_CHANNELS, lambda rest: True) == ("yaw_rate",)  # without it, the last stays
+
+
 def test_channels_are_put_back_in_order_and_the_last_one_left_is_never_tried():
     """``channels_put_back``: each channel in turn, kept shrunk where putting it back fails."""
     asked = []

@@ -752,11 +752,8 @@ def hardware_put_back(cfg: FormationConfig, a: Advice, original: DeployedProblem
             best = got
         return got is not None
 
-    left = list(shrinking)
-    for channel in shrinking:  # every channel may go back when something else stays shrunk
-        rest = tuple(c for c in left if c != channel)
-        if (rest or len(best.scaled) > 1) and holds(rest):
-            left.remove(channel)
+    # every channel may go back when something else stays shrunk (the current, the box)
+    channels_put_back(shrinking, holds, last=len(best.scaled) > 1)
     return best
 
 
