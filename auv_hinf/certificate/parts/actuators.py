@@ -40,7 +40,7 @@ from typing import Any
 from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.certificate.reason import Reason, Setting, upper
 from auv_hinf.numerics.integrators import FORCE_FLOOR
 from auv_hinf.robust.margin import largest_certifiable
 
@@ -131,7 +131,19 @@ def peak_of(bounds: list[Peak]) -> Peak | None:
     """
     if not bounds:
         return None
-    return tuple(max(FORCE_FLOOR, *(b[k] for b in bounds)) for k in range(3))  # type: ignore[return-value]
+    floored = [floor_peak(b) for b in bounds]
+    return tuple(max(b[k] for b in floored) for k in range(3))  # type: ignore[return-value]
+
+
+def floor_peak(bound: Peak) -> Peak:
+    """One certificate's thrust bound with each channel raised to :data:`~auv_hinf.numerics.integrators.FORCE_FLOOR`.
+
+    Parameters
+    ----------
+    bound : Peak
+        The thrust bound ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
+    """
+    return (max(FORCE_FLOOR, bound[0]), max(FORCE_FLOOR, bound[1]), max(FORCE_FLOOR, bound[2]))
 
 
 def check_actuators(
@@ -159,11 +171,15 @@ def check_actuators(
         return rudder_check(point, act, peak, guided)
     if peak is None:
         return ActuatorCheck(act, None, None, None, False, "no certificate bounds the commanded force")
-    channel, ratio = act.binding(peak)
-    if act.admits(peak):
+    # each certificate bounds the force over the runs it covers by its own box: the boxes are checked
+    # one by one (their union is deliverable when each is), not their elementwise largest, whose
+    # corners mix one certificate's surge with another's sway
+    worst = max((floor_peak(p) for p in peaks), key=lambda p: act.binding(p)[1])
+    channel, ratio = act.binding(worst)
+    if all(act.admits(floor_peak(p)) for p in peaks):
         why = f"the certified peak force fits the limits (binding: {channel}, {ratio:.3g} times its limit)"
         return ActuatorCheck(act, peak, channel, ratio, True, why)
-    why = actuator_shortfall(act, peak)
+    why = actuator_shortfall(act, worst)
     if act.note:
         why += f" ({act.note})"
     best = None
@@ -238,7 +254,11 @@ def rudder_check(
     authority = {"speed": speed, "side_force": sway, "moment": moment, "lever_arm": act.lever_arm}
     if point.config.guidance is not None:  # the guidance cascade runs: its certificate bounds thrust and rudder
         return guided_check(act, guided, authority)
-    need = "" if peak is None else f" (it needs |tau_y| <= {peak[1]:.4g} N with |tau_psi| <= {peak[2]:.4g} N m)"
+    need = (
+        ""
+        if peak is None
+        else f" (it needs |tau_y| <= {upper(peak[1], 4)} N with |tau_psi| <= {upper(peak[2], 4)} N m)"
+    )
     why = (
         f"the formation law is fully actuated: it commands sway force and yaw moment independently{need}, and "
         f"this vehicle has no sway actuator: its rudder (+-{act.rudder_max:.4g} rad) gives sway force and yaw moment "
@@ -328,8 +348,9 @@ class ActuatorPart:
         if peak is None or peak.get("force_y") is None:  # none certified (a rudder's entries are null)
             return [f"  actuators                 {f['reason']}"]
         out = [
-            f"  commanded force (certified) |tau_x| <= {peak['force_x']:.5g} N, |tau_y| <= {peak['force_y']:.5g} N, "
-            f"|tau_psi| <= {peak['moment']:.5g} N m"
+            f"  commanded force (certified) |tau_x| <= {upper(peak['force_x'], 5)} N, "
+            f"|tau_y| <= {upper(peak['force_y'], 5)} N, "
+            f"|tau_psi| <= {upper(peak['moment'], 5)} N m"
         ]
         lim = f["limits"]
         if lim is None:
@@ -373,4 +394,4 @@ class ActuatorPart:
         return RunCheck(self.name, "condition", True, False, why, refuses_gains=why)
 
 
-__all__ = ["ActuatorCheck", "Peak", "check_actuators", "peak_of", "rudder_check"]
+__all__ = ["ActuatorCheck", "Peak", "check_actuators", "floor_peak", "peak_of", "rudder_check"]
