@@ -173,11 +173,38 @@ def envelope_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelop
 def cell_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -> FloatArray:
     """Sound envelope margins of every tube cell, shape ``(K, 6)`` in the order :data:`MARGIN_NAMES`.
 
-    Per cell ``theta = delta + e_psi`` lies in ``[offset_lo - E_psi, offset_hi + E_psi]``
-    and ``S`` in ``[speed_lo, speed_hi]``; exact interval ``cos``/``sin`` give
-    ``u`` in ``[min S cos theta - E_v, max S cos theta + E_v]``,
-    ``v`` in ``[min(-S sin theta) - E_v, max(-S sin theta) + E_v]`` and
-    ``r`` in ``[yaw_rate_lo - E_r, yaw_rate_hi + E_r]``.
+    The distances of each cell's velocity ranges from the envelope's edges, positive inside.
+
+    Parameters
+    ----------
+    tube, bounds
+        The tube of ``K`` cells and the error bounds, as :func:`cell_velocities` takes them (which
+        raises :class:`~auv_hinf.exceptions.DesignError` for a heading bound of ``pi/2`` or more).
+    envelope : Envelope
+        Operating envelope.
+    """
+    u_lo, u_hi, v_lo, v_hi, r_lo, r_hi = cell_velocities(tube, bounds)
+    out: FloatArray = np.stack(
+        [
+            envelope.u[1] - u_hi,
+            u_lo - envelope.u[0],
+            envelope.v[1] - v_hi,
+            v_lo - envelope.v[0],
+            envelope.r[1] - r_hi,
+            r_lo - envelope.r[0],
+        ],
+        axis=-1,
+    )
+    return out
+
+
+def cell_velocities(tube: ReferenceTube, bounds: ErrorBounds) -> tuple[FloatArray, ...]:
+    """Per tube cell, the ranges of ``u, v`` (m/s) and ``r`` (rad/s) while the errors stay within ``bounds``.
+
+    Per cell ``theta = delta + e_psi`` lies in ``[offset_lo - E_psi, offset_hi + E_psi]`` and ``S``
+    in ``[speed_lo, speed_hi]``; exact interval ``cos``/``sin`` give ``u`` in ``[min S cos theta -
+    E_v, max S cos theta + E_v]``, ``v`` in ``[min(-S sin theta) - E_v, max(-S sin theta) + E_v]``
+    and ``r`` in ``[yaw_rate_lo - E_r, yaw_rate_hi + E_r]``.
 
     Parameters
     ----------
@@ -185,8 +212,11 @@ def cell_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -
         Bounds of the vehicle's desired motion over its ``K`` time cells.
     bounds : ErrorBounds
         Sup-in-time bounds ``E_p, E_v, E_psi, E_r`` of the vehicle's errors (``E_p`` unused).
-    envelope : Envelope
-        Operating envelope.
+
+    Returns
+    -------
+    tuple of ndarray
+        ``(u_lo, u_hi, v_lo, v_hi, r_lo, r_hi)``, each of shape ``(K,)``.
 
     Raises
     ------
@@ -203,18 +233,39 @@ def cell_margins(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope) -
     # -sin(theta) = cos(theta + pi/2)
     v_lo, v_hi = _scaled_range(s_lo, s_hi, *cos_range(th_lo + 0.5 * math.pi, th_hi + 0.5 * math.pi))
     ev, er = bounds.velocity, bounds.yaw_rate
-    out: FloatArray = np.stack(
-        [
-            envelope.u[1] - (u_hi + ev),
-            u_lo - ev - envelope.u[0],
-            envelope.v[1] - (v_hi + ev),
-            v_lo - ev - envelope.v[0],
-            envelope.r[1] - (tube.yaw_rate[:, 1] + er),
-            tube.yaw_rate[:, 0] - er - envelope.r[0],
-        ],
-        axis=-1,
+    return (u_lo - ev, u_hi + ev, v_lo - ev, v_hi + ev, tube.yaw_rate[:, 0] - er, tube.yaw_rate[:, 1] + er)
+
+
+def operating_envelope(tube: ReferenceTube, bounds: ErrorBounds, envelope: Envelope, widen: float) -> Envelope:
+    """The body velocities the vehicle can reach while its errors stay within ``bounds``, widened, in ``envelope``.
+
+    The hull over the tube's cells of :func:`cell_velocities`, each range widened by ``widen``
+    times the larger modulus of its ends on each side, then intersected with ``envelope``. A
+    certificate computed on it holds for the vehicle as long as its velocities stay in it, which a
+    first-exit argument closes when the certificate's own bounds lie strictly inside it.
+
+    Parameters
+    ----------
+    tube : ReferenceTube
+        Bounds of the vehicle's desired motion over its time cells.
+    bounds : ErrorBounds
+        Bounds of the errors (m, m/s, rad, rad/s; ``E_v`` with the current's speed added when the
+        velocities are taken through the water).
+    envelope : Envelope
+        The declared envelope the result is clipped to.
+    widen : float
+        Relative widening of each range (dimensionless, >= 0).
+    """
+    u_lo, u_hi, v_lo, v_hi, r_lo, r_hi = cell_velocities(tube, bounds)
+
+    def hull(lo: FloatArray, hi: FloatArray, limits: tuple[float, float]) -> tuple[float, float]:
+        a, b = float(lo.min()), float(hi.max())
+        pad = widen * max(abs(a), abs(b))
+        return max(limits[0], a - pad), min(limits[1], b + pad)
+
+    return Envelope(
+        u=hull(u_lo, u_hi, envelope.u), v=hull(v_lo, v_hi, envelope.v), r=hull(r_lo, r_hi, envelope.r), psi=envelope.psi
     )
-    return out
 
 
 __all__ = [
@@ -225,8 +276,10 @@ __all__ = [
     "ErrorBounds",
     "Margins",
     "cell_margins",
+    "cell_velocities",
     "cos_range",
     "envelope_margins",
     "heading_c_range",
     "inflate_envelope",
+    "operating_envelope",
 ]

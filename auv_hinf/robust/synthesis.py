@@ -58,12 +58,12 @@ from auv_hinf.actuation.limits import Actuators
 from auv_hinf.exceptions import SolverError
 from auv_hinf.law.gains import Gains, heading_gains, with_integral
 from auv_hinf.mission.fleet import ReferenceTube
-from auv_hinf.mission.margins import inflate_envelope
+from auv_hinf.mission.margins import ErrorBounds, inflate_envelope, operating_envelope
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.numerics.lmi import LYAP_STRICT_RTOL, solve, strict_nsd_gap
 from auv_hinf.robust.bandwidth import HEADING_RATIO, TARGET_MARGIN, RobustDesign
 from auv_hinf.robust.box import ParameterBox, TubeSummary, box_lambda, position_disturbance
-from auv_hinf.robust.invariant_set import RobustCertificate, robust_certificate
+from auv_hinf.robust.invariant_set import OPERATING_WIDEN, RobustCertificate, robust_certificate
 
 _CP: Any = cp
 
@@ -254,6 +254,32 @@ def _score(cert: RobustCertificate, actuators: Actuators | None) -> float:
     return max(peak[0], peak[1])
 
 
+def _proposals(
+    box: ParameterBox, env: Envelope, summ: TubeSummary, current: float, velocity: float, integral: bool
+) -> list[tuple[Gains, float]]:
+    """The gains the synthesis SDP proposes at each of :data:`RATES`, the plant's spread taken over ``env``.
+
+    Each comes with its position loop's natural frequency ``sqrt(l k1)`` (rad/s); ``velocity`` caps
+    the velocity error's half-width (m/s) on the invariant ellipsoid.
+    """
+    lc, spread = box.input_gain()
+    lam, sigma = box_lambda(box, env)
+    scale = abs(lam) + sigma
+    # the disturbance of the position loop at zero heading error; the heading coupling is
+    # checked afterwards by the robust certificate of each candidate
+    dbar = max(position_disturbance(box, env, summ, current, 0.0, lam, sigma), DISTURBANCE_FLOOR)
+    cap = min((velocity / dbar) ** 2, VELOCITY_CAP_MAX)
+    out = []
+    for frac in RATES:
+        found = synthesise_position(lam, lc, sigma, spread, frac * scale, cap)
+        if found is None:
+            continue
+        h = HEADING_RATIO * math.sqrt(lc * found.k1)
+        gains = Gains(found.alpha, found.k1, heading_gains(box.nominal, (-h, -1.5 * h)))
+        out.append((with_integral(gains, lam, lc) if integral else gains, math.sqrt(lc * found.k1)))
+    return out
+
+
 def synthesise_robust(
     box: ParameterBox,
     envelope: Envelope,
@@ -291,26 +317,17 @@ def synthesise_robust(
         ``target`` the box scale it covers (``TARGET_MARGIN``, 1, or 0 when no candidate covers:
         then the candidate with the best objective on the declared box, not certified).
     """
-    env = inflate_envelope(envelope)
-    lam, sigma = box_lambda(box, env)
-    lc, spread = box.input_gain()
+    lc = box.input_gain()[0]
     summ = TubeSummary.of(tube)
     half_v = min(-envelope.v[0], envelope.v[1])
-    scale = abs(lam) + sigma
     candidates: list[tuple[Gains, float]] = []
-    # the disturbance of the position loop at zero heading error; the heading coupling is
-    # checked afterwards by the robust certificate of each candidate
-    dbar = max(position_disturbance(box, env, summ, current, 0.0, lam, sigma), DISTURBANCE_FLOOR)
+    # the plant's spread and the disturbance over the declared envelope, and over the velocities
+    # a vehicle whose velocity error is the share's cap can reach (the robust certificate refines
+    # its own envelope the same way, :func:`~auv_hinf.robust.invariant_set.robust_certificate`)
     for share in VELOCITY_SHARES:
-        cap = min((share * half_v / dbar) ** 2, VELOCITY_CAP_MAX)
-        for frac in RATES:
-            found = synthesise_position(lam, lc, sigma, spread, frac * scale, cap)
-            if found is None:
-                continue
-            k1, alpha = found.k1, found.alpha
-            h = HEADING_RATIO * math.sqrt(lc * k1)
-            gains = Gains(alpha, k1, heading_gains(box.nominal, (-h, -1.5 * h)))
-            candidates.append((with_integral(gains, lam, lc) if integral else gains, math.sqrt(lc * k1)))
+        for reach in (None, ErrorBounds(0.0, share * half_v + current, 0.0, share * half_v)):
+            env = envelope if reach is None else operating_envelope(tube, reach, envelope, OPERATING_WIDEN)
+            candidates += _proposals(box, inflate_envelope(env), summ, current, share * half_v, integral)
     tried: list[tuple[float, float, bool]] = []
     best: tuple[float, int, float] | None = None  # (score, candidate, box scale)
     cap_scale = box.max_scale if box.declared else math.inf
@@ -346,6 +363,7 @@ def synthesise_robust(
         # nothing covers: show the candidate with the best objective on the declared box
         rated = [(g, w, on_declared(k)) for k, (g, w) in enumerate(candidates)]
         if not rated:
+            lam, _ = box_lambda(box, inflate_envelope(envelope))
             gains = Gains(-lam / lc + 1.0, 1.0, heading_gains(box.nominal, (-1.0, -1.5)))
             gains = with_integral(gains, lam, lc) if integral else gains
             cert = robust_certificate(box, envelope, tube, gains, current, actuators)

@@ -51,6 +51,18 @@ ROBUST_PATHS = ("/robust/", "/robust_bounds/")
 #: by the tube's speed and heading offset plus the error bounds instead of the whole envelope).
 #: Each is still checked to be no larger than the recorded one: tighter, never looser.
 TIGHTENED = ("thrust", "/closed_loop/max_force", "/closed_loop/max_moment")
+#: The robust certificate's numbers that its operating envelope moved (since they are computed over
+#: the velocities the bounds themselves allow rather than the whole declared envelope,
+#: docs/derivations/robust.md, section 4b), each with the only way it may move: bounds, spreads and
+#: disturbances down, margins up, the high end of a coefficient range down and its low end up.
+ROBUST_TIGHTENED = ("/robust/ultimate_bounds/", "/robust_bounds/", "/robust/details/ultimate_bounds/")
+ROBUST_SMALLER = (
+    "/robust/details/sigma",
+    "/robust/details/position_disturbance",
+    "/robust/details/heading_disturbance",
+)
+ROBUST_LARGER = ("/robust/details/envelope_margins/",)
+ROBUST_RANGES = ("/robust/details/heading_damping", "/robust/details/heading_stiffness")
 
 #: Verdicts recorded as one bool for the fleet that are now reported per vehicle (issue 23: in the path
 #: frame each vehicle has its own desired motion); the recorded bool must be their conjunction.
@@ -117,6 +129,14 @@ def test_every_recorded_number_is_reproduced(key: str, tmp_path: Path) -> None:
             assert math.isclose(new, max(old, NUMERICAL_FLOOR), rel_tol=RTOL, abs_tol=ATOL), (key, path, new, old)
         elif any(t in path for t in TIGHTENED):
             assert new <= old * (1 + RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
+        elif path.startswith(ROBUST_TIGHTENED + ROBUST_SMALLER) or (
+            path.startswith(ROBUST_RANGES) and path.endswith("[1]")
+        ):
+            assert new <= old * (1 + ROBUST_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
+        elif path.startswith(ROBUST_LARGER) or (path.startswith(ROBUST_RANGES) and path.endswith("[0]")):
+            assert new >= old * (1 - ROBUST_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
+        elif path == "/robust/details/lambda":  # the drag's centre: it stays within the recorded spread of it
+            assert abs(new - old) <= lookup(RECORDED[key], "/robust/details/sigma"), (key, new, old)
         else:
             rtol = ROBUST_RTOL if path.startswith(ROBUST_PATHS) else RTOL
             assert isinstance(new, (int, float)) and math.isclose(new, old, rel_tol=rtol, abs_tol=ATOL), (

@@ -254,3 +254,98 @@ def test_a_run_outside_the_box_names_every_multiplier_outside():
     why = plant_outside_box(two, box)
     assert why is not None and why.startswith("plant multipliers ")
     assert "m11 = 1.3 (box [0.9, 1.1])" in why and "d11_quad = 1.5 (box [0.8, 1.2])" in why and "m22" not in why
+
+
+#: The BlueROV2 line's box (masses +-10 %, drag +-20 %), envelope and current (m/s).
+BLUEROV_RANGES = tuple((k, (0.9, 1.1)) for k in ("m11", "m22", "m33")) + tuple(
+    (k, (0.8, 1.2)) for k in ("d11_lin", "d11_quad", "d22_quad", "d33_quad")
+)
+BLUEROV_ENV = Envelope(u=(-0.5, 1.0), v=(-0.5, 0.5), r=(-0.5, 0.5))
+BLUEROV_CURRENT = 0.1
+
+
+@pytest.fixture(scope="module")
+def bluerov_refined():
+    """The BlueROV2 line's box and current with gains of the LMI synthesis' kind (a fixed input)."""
+    box = ParameterBox.from_ranges(bluerov2_heavy(), BLUEROV_RANGES)
+    tube = mission_tube(LineReference(speed=0.4))
+    gains = Gains(19.15, 111.0, heading_gains(box.nominal, (-0.8 * np.sqrt(111.0), -1.2 * np.sqrt(111.0))))
+    return box, tube, gains, robust_certificate(box, BLUEROV_ENV, tube, gains, BLUEROV_CURRENT)
+
+
+@pytest.mark.slow
+def test_the_operating_envelope_certificate_lies_inside_it_and_is_tighter(bluerov_refined) -> None:
+    """The certificate over the velocities its bounds allow: strictly inside that envelope (the first
+    exit closes), with a smaller drag spread and smaller bounds and force than over the declared one."""
+    from auv_hinf.mission.margins import ErrorBounds, envelope_margins
+    from auv_hinf.robust.invariant_set import _certificate_on
+
+    box, tube, gains, cert = bluerov_refined
+    declared = _certificate_on(box, BLUEROV_ENV, tube, gains, BLUEROV_CURRENT, None)
+    assert cert.stable and declared.stable and cert.operating is not None and declared.operating is None
+    b, d = cert.bounds, declared.bounds
+    through = ErrorBounds(b.position, b.velocity + BLUEROV_CURRENT, b.heading, b.yaw_rate)
+    assert envelope_margins(tube, through, cert.operating).min > 0.0
+    assert envelope_margins(tube, through, BLUEROV_ENV) == cert.margins  # reported against the declared one
+    for lo, hi, e in zip(
+        (cert.operating.u, cert.operating.v, cert.operating.r),
+        (BLUEROV_ENV.u, BLUEROV_ENV.v, BLUEROV_ENV.r),
+        ("u", "v", "r"),
+        strict=True,
+    ):
+        assert hi[0] <= lo[0] < lo[1] <= hi[1], e
+    assert cert.sigma < declared.sigma and b.velocity < d.velocity and b.position < d.position
+    assert max(cert.thrust.as_tuple()[:2]) < max(declared.thrust.as_tuple()[:2])
+
+
+@pytest.mark.slow
+def test_box_corners_in_the_current_stay_inside_the_operating_envelope_bounds(bluerov_refined) -> None:
+    """Brute force on the refined bounds: box corners, currents at the bound in several directions."""
+    box, _, gains, cert = bluerov_refined
+    b = cert.bounds
+    rng = np.random.default_rng(5)
+    corners = box.vertices()
+    offsets = np.array([[0.0, 0.0], [0.0, 4.0]])
+    for k in rng.choice(len(corners), size=6, replace=False):
+        ang = rng.uniform(0.0, 2.0 * np.pi)
+        c = BLUEROV_CURRENT * np.array([np.cos(ang), np.sin(ang)])
+        init = np.array([[0.0, y, 0.0, 0.4 - c[0], -c[1], 0.0] for y in offsets[:, 1]])
+        scn = Scenario(
+            law=VehicleLaw(params=box.nominal, gains=gains),
+            reference=FleetReference(LineReference(speed=0.4), offsets),
+            plant=box.plant(corners[k]),
+            initial=init,
+            horizon=15.0,
+            current=(float(c[0]), float(c[1])),
+            envelope=BLUEROV_ENV,
+            samples=601,
+        )
+        tr = simulate(scn).tracking
+        assert np.linalg.norm(tr.e, axis=-1).max() <= b.position
+        assert np.linalg.norm(tr.e_dot, axis=-1).max() <= b.velocity
+        assert np.abs(tr.e_psi).max() <= b.heading
+
+
+@pytest.mark.slow
+def test_a_start_only_the_declared_envelope_certificate_holds_is_covered_by_it(bluerov_refined) -> None:
+    """The refined sets are smaller: a start between them and the declared envelope's is covered by the
+    declared envelope's certificate (its looser bounds), one beyond both by none."""
+    _, _, _, cert = bluerov_refined
+    wider = cert.wider
+    assert wider is not None and wider.covers is cert.covers
+    still = np.zeros(2)
+    found = {"refined": 0, "wider": 0, "none": 0}
+    for x in np.linspace(0.0, 3.0 * wider.bounds.position, 61):
+        e, de = np.array([[x, 0.0]]), np.zeros((1, 2))
+        epsi, depsi = np.zeros(1), np.zeros(1)
+        got = cert.covering(e, de, epsi, depsi, still)
+        if cert.start_inside(e, de, epsi, depsi, still):
+            assert got is cert
+            found["refined"] += 1
+        elif wider.start_inside(e, de, epsi, depsi, still):
+            assert got is (wider if wider.covers else None)
+            found["wider"] += 1
+        else:
+            assert got is None
+            found["none"] += 1
+    assert all(found.values()), found

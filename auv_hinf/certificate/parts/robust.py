@@ -21,7 +21,7 @@ from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
-from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from
+from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from, upper
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
@@ -415,7 +415,8 @@ def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReferenc
         return None
     cur = np.asarray(point.config.simulation.current, dtype=float)
     e, de, epsi, depsi = initial_errors(fleet, initial, cur)
-    return float(c.bounds.position) if c.start_inside(e, de, epsi, depsi, cur) else None
+    covering = c.covering(e, de, epsi, depsi, cur)
+    return None if covering is None or covering.bounds is None else float(covering.bounds.position)
 
 
 #: Bisection steps of the configured current at which an on-slot start lies in the certified start set.
@@ -449,7 +450,7 @@ def start_current(point: DesignPoint, rob: RobustSummary) -> Setting | None:
     def inside(scale: float) -> bool:
         now = cur * scale
         e, de, epsi, depsi = initial_errors(fleet, initial, now)
-        return c.start_inside(e, de, epsi, depsi, now)
+        return c.covering(e, de, epsi, depsi, now) is not None
 
     if inside(1.0) or not inside(0.0):
         return None
@@ -495,13 +496,16 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
     if not cert.covers or cert.bounds is None:
         why = "; ".join(cert.reasons) or "the robust certificate does not cover"
         return RobustRunCheck(False, None, why, design_covered=False if fleet.shaping is None else None)
-    b = cert.bounds  # raised to the integrator's floor: the simulated run obeys them to its accuracy
-    bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in b.to_dict().items()}
     e, de, epsi, depsi = initial_errors(fleet, initial, (float(cur[0]), float(cur[1])))
-    if not cert.start_inside(e, de, epsi, depsi, cur):
+    covering = cert.covering(e, de, epsi, depsi, cur)
+    b = (cert if covering is None else covering).bounds
+    assert b is not None  # a covering certificate has bounds
+    # raised to the integrator's floor: the simulated run obeys them to its accuracy
+    bounds = {k: max(v, NUMERICAL_FLOOR) for k, v in b.to_dict().items()}
+    if covering is None:
         return RobustRunCheck(False, bounds, "the start is outside the certified invariant set", design_covered=True)
     why = "covered: plant and current declared, start inside the certified set"
-    return RobustRunCheck(True, bounds, why, design_covered=True, thrust=cert.thrust)
+    return RobustRunCheck(True, bounds, why, design_covered=True, thrust=covering.thrust)
 
 
 @dataclass(frozen=True)
@@ -586,15 +590,15 @@ class RobustPart:
         b = f["ultimate_bounds"]
         if b is not None and f["decay_rate"] is not None:
             out.append(
-                f"    decay rate {f['decay_rate']:.4g} 1/s; ultimate |e| <= {b['position']:.4g} m, "
-                f"|e'| <= {b['velocity']:.4g} m/s, |e_psi| <= {b['heading']:.4g} rad, "
-                f"|e_r| <= {b['yaw_rate']:.4g} rad/s"
+                f"    decay rate {f['decay_rate']:.4g} 1/s; ultimate |e| <= {upper(b['position'], 4)} m, "
+                f"|e'| <= {upper(b['velocity'], 4)} m/s, |e_psi| <= {upper(b['heading'], 4)} rad, "
+                f"|e_r| <= {upper(b['yaw_rate'], 4)} rad/s"
             )
         t = f.get("thrust")
         if t is not None:
             out.append(
-                f"    thrust |tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, "
-                f"|tau_psi| <= {t['moment']:.5g} N m"
+                f"    thrust |tau_x| <= {upper(t['force_x'], 5)} N, |tau_y| <= {upper(t['force_y'], 5)} N, "
+                f"|tau_psi| <= {upper(t['moment'], 5)} N m"
             )
         if f["margin"] is not None and not model_only and f.get("details") is not None:
             out.append(f"    box scale certified up to {f['margin']['lower']:.4g} (1 = the declared box)")
@@ -602,9 +606,9 @@ class RobustPart:
         if integral is not None:
             without = integral["position_bound_without"]
             out.append(
-                f"    integral action ki {integral['ki']:.4g} 1/s^3: |e| <= {integral['position_bound']:.4g} m; "
+                f"    integral action ki {integral['ki']:.4g} 1/s^3: |e| <= {upper(integral['position_bound'], 4)} m; "
                 "the same alpha, k1 without it: "
-                + (f"|e| <= {without:.4g} m" if without is not None else "not certified")
+                + (f"|e| <= {upper(without, 4)} m" if without is not None else "not certified")
             )
         return out
 
