@@ -1447,7 +1447,15 @@ def _certify_one(problem: CascadeProblem, max_periods: int = MAX_PERIODS) -> Cas
     # every trajectory stays in each invariant box, so in their intersection, over which the commands are bounded
     final: FloatArray = np.min(boxes, axis=0)
     res = residual_bounds(problem, final)
-    assert not isinstance(res, str)  # each box's image was computed, and the intersection is smaller
+    # the intersection takes each state from the box that bounds it better; a bound that is not
+    # monotone in the box (the surge acceleration's hold term, solved for on both sides) can refuse
+    # that mixture as an operating region, so each box is tried on its own then (each is invariant)
+    for box in boxes:
+        if not isinstance(res, str):
+            break
+        final, res = box, residual_bounds(problem, box)
+    if isinstance(res, str):
+        return CascadeCertificate(False, None, None, f"no error box is an operating region: {res}", k, gains.radius)
     actuation = res.actuation
     over = []
     if actuation.thrust > problem.act.tau_x:

@@ -205,3 +205,48 @@ def test_a_sample_time_too_long_for_the_cascade_is_answered_with_a_shorter_one_t
     assert again["certified"] is True
     longer = certify(with_settings(cfg, [("implementation", "sample_time", 1.1 * 1.07 * h)])).to_dict()
     assert longer["certified"] is False  # within the bisection's resolution (6 %) of the longest
+
+
+@pytest.mark.slow
+def test_a_late_sampled_fleet_in_still_water_is_answered_not_crashed_and_the_answer_certifies():
+    """The transit's gains in still water, no box, 5 Hz on measurements 0.2 s old: the fixed points of
+    the two treatments of the turn close, but their intersection is no operating region of the
+    cascade (a bound that is not monotone in the box); the certificate then keeps a box that is one,
+    and the refusal's navigation answer certifies when written back."""
+    from dataclasses import replace
+
+    from auv_hinf.config.settings import DisturbanceConfig, UncertaintyConfig
+
+    base = preset_config("remus-transit-ilos")
+    cfg = replace(
+        base,
+        uncertainty=UncertaintyConfig(()),
+        disturbance=DisturbanceConfig(),
+        simulation=replace(base.simulation, current=(0.0, 0.0)),
+        implementation=Implementation(0.2, 0.2),
+    )
+    data = certify(cfg).to_dict()
+    assert data["certified"] is False
+    why = data["parts"]["guidance"]["reasons"][0]
+    settings = [(s["table"], s["key"], s["value"]) for s in why["settings"]]
+    assert settings and {t for t, _, _ in settings} <= {"implementation", "implementation.noise"}
+    again = certify(with_settings(cfg, settings)).to_dict()
+    assert again["certified"] is True and again["guidance"]["certified"] is True
+
+
+@pytest.mark.slow
+def test_a_navigation_and_a_sample_time_that_certify_only_together_are_answered_together():
+    """The transit's box and current at 5 Hz on measurements 0.2 s old: no delay certifies at 5 Hz and the
+    declared delay does not at 10 Hz; the answer gives both, and it certifies when written back."""
+    cfg = with_settings(
+        preset_config("remus-transit-ilos"), [("implementation", "sample_time", 0.2), ("implementation", "delay", 0.2)]
+    )
+    data = certify(cfg).to_dict()
+    assert data["certified"] is False
+    why = data["parts"]["guidance"]["reasons"][0]
+    settings = [(s["table"], s["key"], s["value"]) for s in why["settings"]]
+    assert ("implementation", "sample_time", 0.1) in settings and any(k == "delay" for _, k, _ in settings)
+    best = data["guidance"]["largest_certifiable"]
+    assert best["sample_time"] == 0.1 and 0.0 < best["navigation_scale"] < 1.0
+    again = certify(with_settings(cfg, settings)).to_dict()
+    assert again["certified"] is True and again["guidance"]["certified"] is True

@@ -62,7 +62,7 @@ from auv_hinf.certificate.parts.separation import (
     spread_factor,
     spread_settings,
 )
-from auv_hinf.certificate.reason import Reason, Setting, apart, toml_line
+from auv_hinf.certificate.reason import Reason, Setting, apart, toml_line, upper
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
@@ -424,20 +424,25 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
     gains = _certifying_gains(problem) if bounded else None
     lag_scale = None
     if gains is None and bounded and _navigates(problem):
-        with tqdm(
-            total=ADVICE_STEPS + 2, unit="certificate", desc="navigation", leave=False, delay=PROGRESS_DELAY
-        ) as bar:
-
-            def navigates(s: float) -> bool:
-                bar.update()
-                return certify_cascade(_navigation(problem, s), cells=False).holds
-
-            lag_scale = largest_holding(navigates, 1.0, steps=ADVICE_STEPS)
+        lag_scale = _lag_scale(problem)
         if lag_scale and _confirmed(cfg, _navigation_settings(problem, lag_scale)) is None:
             lag_scale = None  # its rounded values, as written, are refused
     period = None
     if gains is None and bounded and not lag_scale and problem.sample_time > STEP:
         period = _longest_period(cfg, problem)
+    if (
+        gains is None
+        and bounded
+        and not lag_scale
+        and period is None
+        and _navigates(problem)
+        and problem.sample_time > STEP
+    ):
+        # neither alone: the default period with a faster, more precise navigation
+        both = _lag_scale(replace(problem, sample_time=STEP))
+        written = (Setting("implementation", "sample_time", STEP), *_navigation_settings(problem, both or 0.0))
+        if both and _confirmed(cfg, written) is not None:
+            lag_scale, period = both, STEP
     bare = _navigation(_with(cfg, problem, current=0.0, scale=0.0), 0.0)
     binds = (
         current is None
@@ -458,6 +463,17 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             together = 0.0  # its rounded values, as written, are refused
     mission = mission_answer(cfg)
     return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission, together)
+
+
+def _lag_scale(problem: CascadeProblem) -> float | None:
+    """The largest share of ``problem``'s declared delay and noise, scaled together, that certifies (a bisection)."""
+    with tqdm(total=ADVICE_STEPS + 2, unit="certificate", desc="navigation", leave=False, delay=PROGRESS_DELAY) as bar:
+
+        def navigates(s: float) -> bool:
+            bar.update()
+            return certify_cascade(_navigation(problem, s), cells=False).holds
+
+        return largest_holding(navigates, 1.0, steps=ADVICE_STEPS)
 
 
 def _longest_period(cfg: FormationConfig, problem: CascadeProblem) -> float | None:
@@ -829,7 +845,7 @@ def _mission_sentence(m: MissionAnswer) -> str:
         if m.scale >= 1.0
         else f"the current and the box together at {m.scale:.3g} of the declared"
     )
-    within = f"every vehicle within {m.position_bound:.3g} m of its slot"
+    within = f"every vehicle within {upper(m.position_bound, 3)} m of its slot"
     gains = " with the heading loop's gains changed" if any(s.table == "guidance" for s in m.settings) else ""
     return f"{toml_line(m.settings)} certifies ({CHANGE_WORDS[m.what]}{gains}, {world}; {within})"
 
@@ -849,7 +865,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         if summary.supported_bound is not None:
             return summary.supported, (
                 f"changed to what this version certifies ({toml_line(summary.supported)}), it is certified: every "
-                f"vehicle within {summary.supported_bound:.3g} m of its slot"
+                f"vehicle within {upper(summary.supported_bound, 3)} m of its slot"
             )
         m = summary.mission
         return ((), "") if m is None else (m.settings, _mission_sentence(m))
@@ -861,7 +877,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     if summary.start_bound is not None:
         return (RESTART,), (
             f"the declared start binds: every vehicle started on its slot, heading into the current, certifies "
-            f"({RESTART.toml()}; every vehicle within {summary.start_bound:.3g} m of its slot)"
+            f"({RESTART.toml()}; every vehicle within {upper(summary.start_bound, 3)} m of its slot)"
         )
     if summary.gains is not None:
         settings: tuple[Setting, ...] = _gain_settings(summary.gains, problem.guidance)
@@ -869,6 +885,13 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         return settings, f"{toml_line(settings)} ({units}) certifies the declared box and current"
     if summary.lag_scale is not None and summary.lag_scale > 0.0:
         settings = _navigation_settings(problem, summary.lag_scale)
+        if summary.sample_time is not None:  # neither alone certifies: both together
+            period = Setting("implementation", "sample_time", summary.sample_time)
+            return (period, *settings), (
+                f"a shorter sample time and a faster, more precise navigation together certify the declared box and "
+                f"current: {period.words()} with the delay and the noise at {summary.lag_scale:.3g} of the declared "
+                f"({toml_line(settings)})"
+            )
         return settings, (
             f"a faster, more precise navigation certifies the declared box and current: the delay and the noise "
             f"together at {summary.lag_scale:.3g} of the declared ({toml_line(settings)})"
@@ -1077,8 +1100,8 @@ class GuidancePart:
             by = f" (the box in {cells} cells, each certified with its own nominal plant)"
         out = [
             f"{head} certified at h = {f['sample_time']:.4g} s{_navigation_words(f)}{by}",
-            f"    errors <= along-track {b['along_track']:.4g} m, cross-track {b['cross_track']:.4g} m, "
-            f"heading {b['heading']:.4g} rad; sway <= {f['sway_speed']:.4g} m/s",
+            f"    errors <= along-track {upper(b['along_track'], 4)} m, cross-track {upper(b['cross_track'], 4)} m, "
+            f"heading {upper(b['heading'], 4)} rad; sway <= {upper(f['sway_speed'], 4)} m/s",
         ]
         if lim is not None:
             out.append(
