@@ -76,7 +76,6 @@ def test_certified_gains_are_simulated_when_the_run_leaves_the_box():
     cfg = preset_config("bluerov2-survey")
     raw = cfg.to_toml_dict()
     raw["simulation"] = {**raw["simulation"], "horizon": 5.0, "plant": {"d11_quad": 3.0}}
-    raw["envelope"] = {**raw["envelope"], "psi": [-0.1, 0.1]}
     plan = plan_run(config_from_dict(raw, "outside"))
     assert plan.uncertified_gains() is None
     composed = next(c for c in plan.checks if c.part == "composed")

@@ -398,3 +398,19 @@ def test_less_measurement_noise_never_loses_the_cover():
         assert cert.covers and cert.errors is not None, (v, cert.reasons)
         bounds.append(cert.errors.position)
     assert bounds == sorted(bounds, reverse=True)
+
+
+def test_a_heading_range_narrower_than_the_circle_is_refused_by_certify_and_by_the_run_alike():
+    """The composed certificate bounds the heading error, not the heading: a narrowed ``[envelope] psi``
+    is refused by ``certify`` with the full circle as the answer, and the run of the same file is not
+    covered (the composed part's run check applies the same gate)."""
+    data = {**DEPLOYED, "envelope": {**DEPLOYED["envelope"], "psi": [1.0, 2.0]}}
+    cfg = config_from_dict(data, "narrow heading")
+    out = certify(cfg).to_dict()
+    assert out["certified"] is False
+    why = out["parts"]["composed"]["reasons"][0]
+    assert [(s["table"], s["key"]) for s in why["settings"]] == [("envelope", "psi")]
+    assert "[envelope] psi = [" in why["message"]
+    assert plan_run(cfg).covered is False
+    full = with_settings(cfg, [(s["table"], s["key"], s["value"]) for s in why["settings"]])
+    assert plan_run(full).covered is True

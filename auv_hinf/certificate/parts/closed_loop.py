@@ -18,7 +18,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNELS, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.reason import Reason, reason_from
+from auv_hinf.certificate.reason import Reason, Setting, reason_from, upper
 from auv_hinf.closed_loop.actuator_fit import mission_thrust, within_actuators
 from auv_hinf.closed_loop.coverage import Coverage, StartMode, cover_start
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_certificate
@@ -52,9 +52,11 @@ def full_heading_range(envelope: Envelope) -> None:
     """
     width = envelope.psi[1] - envelope.psi[0]
     if width < 2.0 * math.pi * (1.0 - FULL_CIRCLE_RTOL):
+        full = Setting("envelope", "psi", [-math.pi, math.pi])
         raise DesignError(
             f"envelope.psi = {list(envelope.psi)} rad is narrower than the full circle: the certificates bound "
-            "surge, sway, yaw rate and the errors, not the heading itself, so they cannot promise a heading range",
+            "surge, sway, yaw rate and the errors, not the heading itself, so they cannot promise a heading range "
+            f"(declare the full circle, {full.words()})",
             kind="envelope",
             channel="psi",
             value=width,
@@ -377,9 +379,10 @@ class ClosedLoopPart:
             return [*head, "  closed loop               not certified"]
         r, t = f["region"], f.get("thrust")
         force = (
-            f"|tau_x| <= {t['force_x']:.5g} N, |tau_y| <= {t['force_y']:.5g} N, |tau_psi| <= {t['moment']:.5g} N m"
+            f"|tau_x| <= {upper(t['force_x'], 5)} N, |tau_y| <= {upper(t['force_y'], 5)} N, "
+            f"|tau_psi| <= {upper(t['moment'], 5)} N m"
             if t is not None  # records of format versions 1-3 hold the largest force and moment only
-            else f"|tau_x|, |tau_y| <= {f['max_force']:.5g} N, |tau_psi| <= {f['max_moment']:.5g} N m"
+            else f"|tau_x|, |tau_y| <= {upper(f['max_force'], 5)} N, |tau_psi| <= {upper(f['max_moment'], 5)} N m"
         )
         out = [
             *head,

@@ -37,7 +37,7 @@ from auv_hinf.certificate.parts.closed_loop import full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.parts.separation import keeps_separation
-from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line
+from auv_hinf.certificate.reason import Reason, Setting, reason_from, toml_line, upper
 from auv_hinf.composed.advice import (
     JOINT,
     NOISE_CHANNELS,
@@ -295,8 +295,9 @@ def within_actuators(point: DesignPoint) -> Callable[[DeployedProblem], Deployed
             return cert
         channel, ratio = limits.binding(cert.force.as_tuple())
         why = (
-            f"the certified force (|tau_x| <= {cert.force.force_x:.4g} N, |tau_y| <= {cert.force.force_y:.4g} N, "
-            f"|tau_psi| <= {cert.force.moment:.4g} N m) does not fit the actuators "
+            f"the certified force (|tau_x| <= {upper(cert.force.force_x, 4)} N, "
+            f"|tau_y| <= {upper(cert.force.force_y, 4)} N, "
+            f"|tau_psi| <= {upper(cert.force.moment, 4)} N m) does not fit the actuators "
             f"({channel} at {ratio:.3g} times its limit)"
         )
         return replace(cert, covers=False, governed_by="actuators", reasons=(why,))
@@ -322,6 +323,10 @@ def composed_summary(point: DesignPoint, *, search: bool = True) -> ComposedSumm
     cfg = point.config
     if not _applies(cfg):
         return ComposedSummary(False, None, True, ())
+    try:  # the composed certificate bounds the heading error, not the heading
+        full_heading_range(cfg.envelope)
+    except DesignError as exc:
+        return ComposedSummary(True, None, False, (f"composed certificate not computed: {exc}",))
     if point.gains is None:
         return ComposedSummary(True, None, False, ("the design gives no gains to certify",))
     start = composed_start(point)
@@ -458,19 +463,21 @@ class ComposedPart:
         b, peak, op = f["error_bounds"], f["certified_peak"], f["operating_box"]
         if b is not None:
             out.append(
-                f"    errors (whole run)      |e| <= {b['position']:.3g} m, |e'| <= {b['velocity']:.3g} m/s, "
-                f"|e_psi| <= {b['heading']:.3g} rad, |e_r| <= {b['yaw_rate']:.3g} rad/s"
+                f"    errors (whole run)      |e| <= {upper(b['position'], 3)} m, "
+                f"|e'| <= {upper(b['velocity'], 3)} m/s, "
+                f"|e_psi| <= {upper(b['heading'], 3)} rad, |e_r| <= {upper(b['yaw_rate'], 3)} rad/s"
             )
         if peak is not None:
             out.append(
-                f"    commanded force         |tau_x| <= {peak['force_x']:.4g} N, |tau_y| <= {peak['force_y']:.4g} N, "
-                f"|tau_psi| <= {peak['moment']:.4g} N m"
+                f"    commanded force         |tau_x| <= {upper(peak['force_x'], 4)} N, "
+                f"|tau_y| <= {upper(peak['force_y'], 4)} N, "
+                f"|tau_psi| <= {upper(peak['moment'], 4)} N m"
             )
         if op is not None:
             out.append(
                 f"    envelope it needs       u in [{op['u_min']:.3g}, {op['u_max']:.3g}] m/s, "
-                f"|v| <= {op['v_max']:.3g} m/s, "
-                f"|r| <= {op['r_max']:.3g} rad/s"
+                f"|v| <= {upper(op['v_max'], 3)} m/s, "
+                f"|r| <= {upper(op['r_max'], 3)} rad/s"
             )
         t = f.get("timing")
         if t is not None:
@@ -1011,7 +1018,7 @@ def _no_advice(
         if bound is not None:
             return (
                 f"the declared start binds: every vehicle started on its slot certifies ({START_ON_SLOTS.toml()}; "
-                f"certified |e| <= {bound:.3g} m)",
+                f"certified |e| <= {upper(bound, 3)} m)",
                 (START_ON_SLOTS,),
                 _change_entry("start", (START_ON_SLOTS,), bound),
             )
@@ -1035,7 +1042,7 @@ def _no_advice(
         return (
             f"no declared setting certifies when shrunk at the design's gains, and neither do {tried(point.config)}; "
             f"with the gains a re-run designs, these values of {', '.join(together.scaled)} certify: "
-            f"{_advice_line(together)} (certified |e| <= {bound:.3g} m)",
+            f"{_advice_line(together)} (certified |e| <= {upper(bound, 3)} m)",
             advice_settings(together),
             _advice_dict(together),
         )
