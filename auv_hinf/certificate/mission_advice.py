@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from tqdm.auto import tqdm
 
 from auv_hinf.certificate.design_point import DesignPoint
-from auv_hinf.certificate.reason import Setting, toml_line
+from auv_hinf.certificate.reason import Setting, toml_line, upper
 from auv_hinf.config.settings import FormationConfig
 
 #: Multipliers of the turn radius (and of the legs' spacing, which must hold two turns) tried in
@@ -60,7 +60,7 @@ class MissionAdvice:
 
     def line(self) -> str:
         """The change, as the TOML values to write, and what it certifies."""
-        return f"{toml_line(self.settings)} (certified |e| <= {self.position_bound:.3g} m)"
+        return f"{toml_line(self.settings)} (certified |e| <= {upper(self.position_bound, 3)} m)"
 
 
 def mission_changes(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:

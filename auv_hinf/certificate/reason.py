@@ -7,8 +7,10 @@ verdict, next to the sentence a person reads. No code decides anything from the 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from decimal import ROUND_CEILING, Decimal
 from typing import Any, Literal, get_args
 
 from auv_hinf.config.schema import key_unit
@@ -55,6 +57,26 @@ def _number(v: Any) -> str:
         return str(v)
     short = f"{v:.4g}"
     return short if float(short) == v else repr(v)
+
+
+def upper(x: float, digits: int = 3) -> str:
+    """A certified upper bound ``x`` printed with ``digits`` significant digits, rounded up.
+
+    Rounding to the nearest could print a bound below the certified one (0.140299 m as 0.14 m);
+    rounding towards ``+inf`` keeps the printed number a bound. Non-finite values print as they are.
+
+    Parameters
+    ----------
+    x : float
+        The bound (any unit).
+    digits : int
+        Significant digits (>= 1).
+    """
+    if not math.isfinite(x) or x == 0.0:
+        return f"{x:g}"
+    d = Decimal(repr(float(x)))
+    q = d.quantize(Decimal(1).scaleb(d.adjusted() - digits + 1), rounding=ROUND_CEILING)
+    return f"{float(q):.{digits}g}"
 
 
 def apart(value: float, bound: float, digits: int = 4) -> tuple[str, str]:
@@ -247,4 +269,4 @@ def reason_from(part: str, exc: Exception, prefix: str = "") -> Reason:
     return Reason(part, "solver" if isinstance(exc, SolverError) else "not_covered", message)
 
 
-__all__ = ["REASON_KINDS", "Reason", "ReasonKind", "Setting", "apart", "reason_from", "toml_line"]
+__all__ = ["REASON_KINDS", "Reason", "ReasonKind", "Setting", "apart", "reason_from", "toml_line", "upper"]

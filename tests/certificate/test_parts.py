@@ -188,3 +188,17 @@ def test_an_advised_value_carries_the_unit_the_schema_declares_for_its_key():
     assert Setting.from_dict(current.to_dict()) == current
     shape = Setting("formation", "shape", [[0.0, -5.111801], [0.0, -7.5]])  # a nested array, in metres
     assert shape.toml() == "[formation] shape = [[0, -5.111801], [0, -7.5]]" and shape.words().endswith("]] m")
+
+
+def test_a_printed_upper_bound_is_never_below_the_bound_and_loses_one_unit_at_most() -> None:
+    """``upper`` rounds towards +inf at the requested significant digits (0.140299 m reads 0.141 m, not 0.14 m)."""
+    from auv_hinf.certificate.reason import upper
+
+    rng = np.random.default_rng(3)
+    values = np.concatenate([10.0 ** rng.uniform(-9, 6, 400), [0.140299, 0.14, 1.0, 99.95, 1e-300]])
+    for x in values:
+        for d in (3, 4, 5):
+            y = float(upper(float(x), d))
+            assert y >= x
+            assert y - x <= 10.0 ** (np.floor(np.log10(x)) - d + 1) * (1 + 1e-12)
+    assert upper(0.140299, 3) == "0.141" and upper(0.14, 3) == "0.14" and upper(float("inf")) == "inf"

@@ -18,7 +18,7 @@ from auv_hinf.certificate.deployed import mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
-from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.certificate.reason import Reason, Setting, upper
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.exceptions import AuvHinfError
@@ -417,13 +417,15 @@ class ImplementationPart:
         b, u = f["error_bounds"], f["ultimate_bounds"]
         if declared and b is not None and u is not None:
             out.append(
-                f"  errors (whole run)        |e| <= {b['position']:.3g} m, |e'| <= {b['velocity']:.3g} m/s, "
-                f"|e_psi| <= {b['heading']:.3g} rad, |e_r| <= {b['yaw_rate']:.3g} rad/s "
+                f"  errors (whole run)        |e| <= {upper(b['position'], 3)} m, "
+                f"|e'| <= {upper(b['velocity'], 3)} m/s, "
+                f"|e_psi| <= {upper(b['heading'], 3)} rad, |e_r| <= {upper(b['yaw_rate'], 3)} rad/s "
                 f"(decay {f['decay_rate']:.3g} 1/s)"
             )
             out.append(
-                f"  ultimate bounds           |e| <= {u['position']:.3g} m, |e'| <= {u['velocity']:.3g} m/s, "
-                f"|e_psi| <= {u['heading']:.3g} rad, |e_r| <= {u['yaw_rate']:.3g} rad/s"
+                f"  ultimate bounds           |e| <= {upper(u['position'], 3)} m, "
+                f"|e'| <= {upper(u['velocity'], 3)} m/s, "
+                f"|e_psi| <= {upper(u['heading'], 3)} rad, |e_r| <= {upper(u['yaw_rate'], 3)} rad/s"
             )
         if not declared:
             return out

@@ -37,7 +37,7 @@ import numpy as np
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.robust import RobustSummary, run_outside, start_current
-from auv_hinf.certificate.reason import Reason, Setting
+from auv_hinf.certificate.reason import Reason, Setting, upper
 from auv_hinf.config.schema import MAX_COORDINATE
 from auv_hinf.mission.fleet import FleetReference
 from auv_hinf.mission.separation import SlotSeparation, slot_separation
@@ -353,7 +353,7 @@ def refusal(
         "envelope",
         f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below "
         f"[formation] min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped}, "
-        f"and each vehicle's position error is certified <= {b:.4g} m (certified = slot distance - 2 x bound); "
+        f"and each vehicle's position error is certified <= {upper(b, 4)} m (certified = slot distance - 2 x bound); "
         f"spread the formation about {factor:.3g} times ({words}), or reduce the certified error bound "
         f"({_bound_levers(point)})"
         + (
@@ -428,7 +428,7 @@ class SeparationPart:
             ]
         return [
             f"  min separation            {f['min_separation_certified']:.4g} m certified "
-            f"(required {f['min_separation']:g} m; {slots}, position error <= {f['position_bound']:.4g} m "
+            f"(required {f['min_separation']:g} m; {slots}, position error <= {upper(f['position_bound'], 4)} m "
             f"from {', '.join(f['bound_parts'])})"
         ]
 
