@@ -31,7 +31,7 @@ from auv_hinf.config.schema import DEFAULT_MIN_SEPARATION, DEFAULT_SYNTHESIS
 from auv_hinf.config.settings import FormationConfig, SimulationConfig
 from auv_hinf.design.sigma import SigmaBounds, vehicle_sigma
 from auv_hinf.design.theorem1 import GainDesign, design_alpha
-from auv_hinf.exceptions import AuvHinfError, DesignError
+from auv_hinf.exceptions import AuvHinfError, ConfigError, DesignError
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.law.gains import Gains, GainSource, heading_gains
 from auv_hinf.mission.fit import ReferenceFit, reference_fit
@@ -250,11 +250,17 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
 
     Raises
     ------
+    ConfigError
+        If ``cfg`` is not a :class:`~auv_hinf.config.settings.FormationConfig`.
     DesignError
         If ``cfg.method`` is not a gain method.
     ParameterError
         If the mission reference is invalid.
     """
+    if not isinstance(cfg, FormationConfig):
+        raise ConfigError(
+            f"expected a configuration (load_config(path) or preset_config(name)), got {type(cfg).__name__}"
+        )
     if cfg.method not in GAIN_METHODS:
         raise DesignError(f"gain method must be one of {GAIN_METHODS}, got {cfg.method!r}")
     core = _design(_design_key(cfg))

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any, cast
+from typing import Any, cast, get_args
 
 import numpy as np
 
@@ -162,12 +162,16 @@ def plan_run(
 
     Raises
     ------
+    ConfigError
+        If ``start`` is not a start mode.
     DesignError
         If the design gives no gains.
     """
+    if start is not None and start not in get_args(StartMode):
+        raise ConfigError(f"start must be one of {list(get_args(StartMode))}, got {start!r}")
+    point = design if design is not None else design_point(cfg)
     sim = cfg.simulation
     mode: StartMode = start or sim.start
-    point = design if design is not None else design_point(cfg)
     gains = point.require_gains()
     initial = initial_states(point)
     span = float(horizon if horizon is not None else sim.horizon)

@@ -312,7 +312,14 @@ def simulate(
         Integration tolerances.
     subdivisions : int
         Sub-grid points per step on which the envelope margin is checked.
+
+    Raises
+    ------
+    ParameterError
+        If ``scn`` is not a :class:`~auv_hinf.simulation.scenario.Scenario`.
     """
+    if not isinstance(scn, Scenario):
+        raise ParameterError(f"expected a Scenario (plan_run(config).scenario), got {type(scn).__name__}")
     return simulate_batch(
         ScenarioBatch((scn,)), method=method, systems=systems, rtol=rtol, atol=atol, subdivisions=subdivisions
     )[0]

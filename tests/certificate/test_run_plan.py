@@ -201,3 +201,20 @@ def test_initial_states_and_offsets(triangle):
     np.testing.assert_allclose(off.mean(axis=0), 0.0, atol=1e-12)
     np.testing.assert_allclose(off[0] - off[1], TRIANGLE_SHAPE[0], atol=1e-12)
     np.testing.assert_allclose(0.5 * (off[0] + off[1]) - off[2], TRIANGLE_SHAPE[1], atol=1e-12)
+
+
+def test_the_api_refuses_what_is_not_a_configuration_or_a_start_with_its_own_errors():
+    """A wrong argument to the API is one of the package's errors, with what was expected, not an AttributeError."""
+    import auv_hinf
+    from auv_hinf.exceptions import ConfigError, ParameterError
+    from auv_hinf.simulation.engine import simulate
+
+    for bad in (None, "paper-triangle", 3.0):
+        with pytest.raises(ConfigError, match="expected a configuration"):
+            auv_hinf.certify(bad)
+        with pytest.raises(ConfigError, match="expected a configuration"):
+            auv_hinf.plan_run(bad)
+    with pytest.raises(ConfigError, match="start must be one of"):
+        auv_hinf.plan_run(auv_hinf.preset_config("paper-triangle"), start="bogus")
+    with pytest.raises(ParameterError, match="expected a Scenario"):
+        simulate(None)
