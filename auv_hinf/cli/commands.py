@@ -12,7 +12,7 @@ import json
 import os
 import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from contextlib import ExitStack
 from dataclasses import replace
 from pathlib import Path
@@ -256,7 +256,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                     + ("" if val["control_period"] is None else f", seed {val['seed']}")
                 )
             elif key not in ("definitions", "null_reasons") and val is not None:  # both are in --json
-                print(f"{key:>24}: {_short(val, REPORT_UNITS.get(key))}")
+                print(_report_line(key, val, REPORT_UNITS))
     if plan.certificate is None and not plan.covered:  # integral action: covered by the robust certificate
         return _verdict(False, "; ".join(plan.notes))
     if result.diverged_at is not None:
@@ -316,11 +316,22 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         from auv_hinf.guidance.simulation import REPORT_UNITS as GUIDANCE_UNITS
 
         for key, val in summary.items():
-            print(f"{key:>24}: {_short(val, GUIDANCE_UNITS.get(key))}")
+            print(_report_line(key, val, GUIDANCE_UNITS))
     if summary["within_certified_bounds"] is False:
         print(f"{PROG}: error: the run left its certified bounds: please report this configuration", file=sys.stderr)
         return EXIT_NEGATIVE
     return _verdict(bool(summary["certificate_covers_run"]), str(summary["coverage_reason"]))
+
+
+def _report_line(key: str, value: Any, units: Mapping[str, Any]) -> str:
+    """One line of a run's text report: the key, its value with its units (``units``, by key).
+
+    The closest pair of vehicles is named as ``certify`` names vehicles, counted from 1 (the JSON
+    counts from 0).
+    """
+    if key in ("min_separation_pair", "closest_pair") and isinstance(value, (list, tuple)) and len(value) == 2:
+        return f"{key:>24}: vehicles {value[0] + 1} and {value[1] + 1} (counted from 1; the JSON counts from 0)"
+    return f"{key:>24}: {_short(value, units.get(key))}"
 
 
 def _run_reason(plan: RunPlan) -> str:

@@ -77,7 +77,7 @@ MAX_VEHICLES = 100_000
 MAX_HORIZON = 1e5  # s
 
 
-MAX_COORDINATE = 1e6  # m: offsets and radii beyond 1000 km are refused
+MAX_COORDINATE = 1e6  # m: offsets, radii and path lengths beyond 1000 km are refused
 
 
 #: Range of a vehicle's inertias (kg, kg m^2) and largest damping coefficient (kg/s, kg/m, kg m^2/s,
@@ -260,7 +260,7 @@ class SineReference(_Reference):
     """Sine path ``[speed t, amplitude sin(omega t)]`` (the paper's Section V)."""
 
     kind: Literal["sine"] = _field("sine", _KIND_TEXT)
-    amplitude: float = _field(30.0, "amplitude of the lateral sine", "m", ge=0.0)
+    amplitude: float = _field(30.0, "amplitude of the lateral sine", "m", ge=0.0, le=MAX_COORDINATE)
     omega: float = _field(0.1, "angular frequency of the sine", "rad/s", gt=0.0, le=MAX_RATE)
 
 
@@ -275,23 +275,29 @@ class CircleReference(_Reference):
     """Circle of given radius."""
 
     kind: Literal["circle"] = _field("circle", _KIND_TEXT)
-    radius: float = _field(..., "circle radius", "m", gt=0.0, examples=[50.0])
+    radius: float = _field(..., "circle radius", "m", gt=0.0, le=MAX_COORDINATE, examples=[50.0])
 
 
 class LawnmowerReference(_Reference):
     """Survey pattern: straight legs joined by turns."""
 
     kind: Literal["lawnmower"] = _field("lawnmower", _KIND_TEXT)
-    leg_length: float = _field(..., "length of one straight leg", "m", gt=0.0, examples=[200.0])
+    leg_length: float = _field(..., "length of one straight leg", "m", gt=0.0, le=MAX_COORDINATE, examples=[200.0])
     spacing: float = _field(
         ...,
         "distance between neighbouring legs; at least about 3.97 turn_radius (two turns fit)",
         "m",
         gt=0.0,
+        le=MAX_COORDINATE,
         examples=[100.0],
     )
     turn_radius: float = _field(
-        ..., "smallest radius of the turns; at most about spacing / 3.97", "m", gt=0.0, examples=[20.0]
+        ...,
+        "smallest radius of the turns; at most about spacing / 3.97",
+        "m",
+        gt=0.0,
+        le=MAX_COORDINATE,
+        examples=[20.0],
     )
 
     @model_validator(mode="after")

@@ -723,8 +723,9 @@ def shaped_start(
     speed = np.hypot(vel[..., 0], vel[..., 1])
     if np.any(speed < floor):
         raise ParameterError(
-            f"initial ground speed must be >= {floor!r} m/s (START_SPEED_RTOL x mission speed), "
-            f"got {speed.min()!r}: the heading reference is undefined for a vehicle at rest"
+            f"every vehicle's initial ground speed must be at least {floor:.3g} m/s ({START_SPEED_RTOL:g} times "
+            f"the mission's slowest speed), got {float(speed.min()):.3g} m/s: the heading reference is undefined "
+            "for a vehicle at rest (start the vehicles moving along the mission, or let the run start on the slots)"
         )
     raw = FleetReference(mission, off, None, frame)
     (p0, v0, a0, _), _ = raw.kinematics(0.0)

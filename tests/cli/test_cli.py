@@ -283,3 +283,15 @@ def test_the_force_limits_flag_on_a_guidance_fleet_is_bad_input_naming_the_rudde
     assert main([command, "--preset", "remus-transit-ilos", "--actuators", "10,10,10"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "[guidance]" in err[0] and "rudder_max" in err[0], err
+
+
+def test_a_run_reports_its_closest_pair_as_certify_counts_vehicles():
+    """The text names the closest pair counted from 1 (as ``certify`` does), the JSON keeps 0-based indices."""
+    from auv_hinf.cli.commands import _report_line
+
+    line = _report_line("min_separation_pair", [0, 3], {"min_separation_pair": "ignored"})
+    assert "vehicles 1 and 4" in line and "of the vehicles" not in line
+    assert _report_line("closest_pair", [2, 1], {}).endswith(
+        "vehicles 3 and 2 (counted from 1; the JSON counts from 0)"
+    )
+    assert _report_line("min_separation", 1.5, {"min_separation": "m"}).strip() == "min_separation: 1.5 m"

@@ -456,3 +456,17 @@ def test_unshaped_tube_is_mission_tube_and_vanishing_speed_raises() -> None:
         shaped_tube(
             shaped_start(mission, off, _random_starts(mission, off, np.random.default_rng(1), 1)[0], 50.0), cells=0
         )
+
+
+def test_a_shaped_start_at_rest_is_refused_in_plain_words():
+    """Vehicles at rest have no course: the refusal gives the speed needed and the one found in m/s, with no
+    Python names or reprs in it."""
+    from auv_hinf.mission.paths import LineReference
+
+    offsets = np.array([[0.0, 0.0], [0.0, 4.0]])
+    at_rest = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 4.0, 0.0, 0.0, 0.0, 0.0]])
+    with pytest.raises(ParameterError) as err:
+        shaped_start(LineReference(speed=0.4), offsets, at_rest, 10.0)
+    text = str(err.value)
+    assert "at least 0.0004 m/s" in text and "got 0 m/s" in text
+    assert "np." not in text and "START_SPEED_RTOL" not in text
