@@ -49,7 +49,10 @@ def solve(problem: cp.Problem, what: str) -> int:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)
-                problem.solve(solver=cp.CLARABEL, **settings)
+                # warm_start=False: cvxpy would otherwise reuse the cached problem's Clarabel solver,
+                # whose settings start from the last solve's (a retry's settings would stick) and
+                # whose answers then depend on what the process solved before
+                problem.solve(solver=cp.CLARABEL, warm_start=False, **settings)
         except BaseException as exc:
             # cvxpy raises its own SolverError when Clarabel stops on a numerical error, and
             # Clarabel's Rust core can panic (pyo3's PanicException, a BaseException) on a

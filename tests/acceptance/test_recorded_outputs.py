@@ -42,6 +42,16 @@ ATOL = 1e-9
 #: 3e-4 relative on ``remus-line`` (each answer re-verified with eigenvalues). A real change of the
 #: computation moves them by far more.
 ROBUST_RTOL = 1e-3
+#: Every SDP is now solved by a fresh Clarabel solver (``warm_start=False`` in
+#: :func:`auv_hinf.numerics.lmi.solve`); the recorded outputs came from solvers that cvxpy reused
+#: from one solve of a cached problem to the next, settings and all, so their answers depended on
+#: what the process had solved before. Fresh solves land elsewhere on the flat objectives: the
+#: nominal region's numbers by up to 4e-5 (relative), the robust heading ellipsoid's yaw-rate
+#: bound by up to 0.8 % (its other bounds fell more, with the operating envelope).
+SOLVER_RTOL = 1e-4
+ROBUST_SOLVER_RTOL = 1e-2
+#: Where the nominal region's SDP-derived numbers are.
+REGION_PATHS = ("/closed_loop/region", "/closed_loop/shaped_start/", "/closed_loop/single_axis_region/")
 #: Where the robust certificate's numbers are, in ``certify`` and ``simulate`` outputs.
 ROBUST_PATHS = ("/robust/", "/robust_bounds/")
 
@@ -132,13 +142,15 @@ def test_every_recorded_number_is_reproduced(key: str, tmp_path: Path) -> None:
         elif path.startswith(ROBUST_TIGHTENED + ROBUST_SMALLER) or (
             path.startswith(ROBUST_RANGES) and path.endswith("[1]")
         ):
-            assert new <= old * (1 + ROBUST_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
+            assert new <= old * (1 + ROBUST_SOLVER_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
         elif path.startswith(ROBUST_LARGER) or (path.startswith(ROBUST_RANGES) and path.endswith("[0]")):
-            assert new >= old * (1 - ROBUST_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
+            assert new >= old * (1 - ROBUST_SOLVER_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
         elif path == "/robust/details/lambda":  # the drag's centre: it stays within the recorded spread of it
             assert abs(new - old) <= lookup(RECORDED[key], "/robust/details/sigma"), (key, new, old)
         else:
-            rtol = ROBUST_RTOL if path.startswith(ROBUST_PATHS) else RTOL
+            rtol = (
+                ROBUST_RTOL if path.startswith(ROBUST_PATHS) else SOLVER_RTOL if path.startswith(REGION_PATHS) else RTOL
+            )
             assert isinstance(new, (int, float)) and math.isclose(new, old, rel_tol=rtol, abs_tol=ATOL), (
                 f"{key}{path}: {new!r} != recorded {old!r}"
             )

@@ -299,8 +299,8 @@ def test_the_operating_envelope_certificate_lies_inside_it_and_is_tighter(bluero
 
 
 @pytest.mark.slow
-def test_box_corners_in_the_current_stay_inside_the_operating_envelope_bounds(bluerov_refined) -> None:
-    """Brute force on the refined bounds: box corners, currents at the bound in several directions."""
+def test_box_corners_in_the_current_stay_inside_the_refined_bounds(bluerov_refined) -> None:
+    """Brute force on the refined bounds, from the slots: box corners, currents at the bound in several directions."""
     box, _, gains, cert = bluerov_refined
     b = cert.bounds
     rng = np.random.default_rng(5)
@@ -349,3 +349,18 @@ def test_a_start_only_the_declared_envelope_certificate_holds_is_covered_by_it(b
             assert got is None
             found["none"] += 1
     assert all(found.values()), found
+
+
+def test_an_ellipsoid_does_not_depend_on_what_the_process_solved_before() -> None:
+    """The same heading SDP, solved after another one on the same cached problem, gives the same answer
+    (cvxpy no longer hands the last solve's Clarabel solver, settings and all, to the next one)."""
+    from auv_hinf.robust.invariant_set import clear_ellipsoid_caches
+
+    args = ((500.0, 600.0), (40.0, 60.0), 5.0, 1.0 / 500.0)
+    first = heading_ellipsoid(*args)
+    clear_ellipsoid_caches()
+    heading_ellipsoid((10.0, 20.0), (1.0, 3.0), 1.0, 0.1)
+    clear_ellipsoid_caches()
+    again = heading_ellipsoid(*args)
+    assert first is not None and again is not None and first is not again
+    np.testing.assert_array_equal(first.matrix, again.matrix)
