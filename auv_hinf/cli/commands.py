@@ -330,8 +330,15 @@ def _report_line(key: str, value: Any, units: Mapping[str, Any]) -> str:
     counts from 0).
     """
     if key in ("min_separation_pair", "closest_pair") and isinstance(value, (list, tuple)) and len(value) == 2:
-        return f"{key:>24}: vehicles {value[0] + 1} and {value[1] + 1} (counted from 1; the JSON counts from 0)"
+        first, second = (_ordinal(int(i) + 1) for i in value)
+        return f"{key:>24}: the {first} and the {second} vehicle (the JSON counts them from zero)"
     return f"{key:>24}: {_short(value, units.get(key))}"
+
+
+def _ordinal(k: int) -> str:
+    """``1st``, ``2nd``, ``3rd``, ``4th``, ..., ``11th``, ``12th``, ``13th``, ``21st``."""
+    suffix = "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
+    return f"{k}{suffix}"
 
 
 def _run_reason(plan: RunPlan) -> str:

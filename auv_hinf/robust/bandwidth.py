@@ -147,7 +147,8 @@ def design_robust(
 
     def covers(w: float, s: float) -> bool:
         b = box.scaled(min(s, cap)) if box.declared else box
-        c = robust_certificate(b, envelope, tube, family_gains(box, envelope, w, integral), current * s, actuators)
+        gains = family_gains(box, envelope, w, integral)
+        c = robust_certificate(b, envelope, tube, gains, current * s, actuators, until_covered=True)
         tried.append((w, s, c.covers))
         return c.covers
 

@@ -421,7 +421,7 @@ def largest_certifiable(
     out: dict[str, Any] = {"box_scale": None, "current_speed": None}
 
     def fits(scale: float, speed: float) -> bool:
-        return robust_certificate(box.scaled(scale), envelope, tube, gains, speed, act).covers
+        return robust_certificate(box.scaled(scale), envelope, tube, gains, speed, act, until_covered=True).covers
 
     def redesign_fits(scale: float, speed: float) -> bool:
         b = box.scaled(scale)
@@ -429,7 +429,10 @@ def largest_certifiable(
             design = synthesise_robust(b, envelope, tube, speed, act, integral=integral)
         else:
             design = design_robust(b, envelope, tube, speed, act, fallback=False, integral=integral)
-        return design.target > 0.0 and robust_certificate(b, envelope, tube, design.gains, speed, act).covers
+        return (
+            design.target > 0.0
+            and robust_certificate(b, envelope, tube, design.gains, speed, act, until_covered=True).covers
+        )
 
     def answer(scale_of: Any, top: float) -> float | None:
         """Bisection with the design's gains; with a robust design, confirmed by re-running it."""

@@ -290,8 +290,7 @@ def test_a_run_reports_its_closest_pair_as_certify_counts_vehicles():
     from auv_hinf.cli.commands import _report_line
 
     line = _report_line("min_separation_pair", [0, 3], {"min_separation_pair": "ignored"})
-    assert "vehicles 1 and 4" in line and "of the vehicles" not in line
-    assert _report_line("closest_pair", [2, 1], {}).endswith(
-        "vehicles 3 and 2 (counted from 1; the JSON counts from 0)"
-    )
+    assert "the 1st and the 4th vehicle" in line and "of the vehicles" not in line
+    pair = _report_line("closest_pair", [10, 21], {})
+    assert pair.endswith("the 11th and the 22nd vehicle (the JSON counts them from zero)")
     assert _report_line("min_separation", 1.5, {"min_separation": "m"}).strip() == "min_separation: 1.5 m"

@@ -185,7 +185,8 @@ def robust_summary(
     if margins and cert.stable:
 
         def covers(s: float) -> bool:
-            return robust_certificate(box.scaled(s), cfg.envelope, tube, gains, current * s, cfg.force_limits).covers
+            b, c = box.scaled(s), current * s
+            return robust_certificate(b, cfg.envelope, tube, gains, c, cfg.force_limits, until_covered=True).covers
 
         margin = robust_margin(box, gains, speed, current, covers)
     worst = weakest_corner(box, gains, speed, current)
