@@ -753,8 +753,7 @@ def robust_certificate(
         b = cert.bounds
         if b is None or cert.margins is None or not cert.margins.ok or (until_covered and cert.covers):
             break
-        through_water = ErrorBounds(b.position, b.velocity + current, b.heading, b.yaw_rate)
-        op = operating_envelope(tube, through_water, envelope, OPERATING_WIDEN)
+        op = operating_envelope(tube, _through_water(b, current), envelope, OPERATING_WIDEN)
         nxt = _certificate_on(box, op, tube, gains, current, actuators)
         nb = nxt.bounds
         if nb is None or nxt.margins is None or not nxt.margins.ok or nb.velocity > b.velocity:
@@ -767,11 +766,12 @@ def robust_certificate(
     if not refined or cert.bounds is None:
         return cert
     # the margins reported are the declared envelope's (the operating one's hold by construction)
-    b = cert.bounds
-    return replace(
-        cert,
-        margins=envelope_margins(tube, ErrorBounds(b.position, b.velocity + current, b.heading, b.yaw_rate), envelope),
-    )
+    return replace(cert, margins=envelope_margins(tube, _through_water(cert.bounds, current), envelope))
+
+
+def _through_water(bounds: ErrorBounds, current: float) -> ErrorBounds:
+    """``bounds`` with the current's speed (m/s) added to the velocity bound: body velocities are through the water."""
+    return ErrorBounds(bounds.position, bounds.velocity + current, bounds.heading, bounds.yaw_rate)
 
 
 def _certificate_on(
@@ -859,7 +859,7 @@ def _certificate_on(
     }
     reasons: list[str] = []
     try:
-        margins: Margins | None = envelope_margins(tube, ErrorBounds(b_p, b_v + current, b_h, b_r), envelope)
+        margins: Margins | None = envelope_margins(tube, _through_water(bounds, current), envelope)
     except AuvHinfError as exc:
         margins = None
         reasons.append(f"envelope margins: {exc}")
