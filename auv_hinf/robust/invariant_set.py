@@ -635,6 +635,7 @@ class RobustCertificate:
             "operating_envelope": None
             if self.operating is None
             else {"u": list(self.operating.u), "v": list(self.operating.v), "r": list(self.operating.r)},
+            "declared_sigma": None if self.wider is None else self.wider.sigma,
         } | ({} if self.integral_bound is None else {"integral_bound": self.integral_bound})
 
 

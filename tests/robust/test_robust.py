@@ -364,3 +364,18 @@ def test_an_ellipsoid_does_not_depend_on_what_the_process_solved_before() -> Non
     again = heading_ellipsoid(*args)
     assert first is not None and again is not None and first is not again
     np.testing.assert_array_equal(first.matrix, again.matrix)
+
+
+@pytest.mark.slow
+def test_certify_text_says_over_which_velocities_the_robust_bounds_hold():
+    """The text gives the operating envelope and both drag spreads, from the JSON record."""
+    from auv_hinf.certificate.assembly import certify
+    from auv_hinf.certificate.text import certificate_text
+    from auv_hinf.config.presets import preset_config
+
+    record = certify(preset_config("remus-line")).to_dict()
+    details = record["robust"]["details"]
+    op = details["operating_envelope"]
+    assert op is not None and details["declared_sigma"] > details["sigma"]
+    (line,) = [x for x in certificate_text(record).splitlines() if "computed over the velocities" in x]
+    assert f"u in [{op['u'][0]:.3g}, {op['u'][1]:.3g}] m/s" in line and f"{details['declared_sigma']:.3g} 1/s" in line

@@ -34,7 +34,7 @@ from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.bandwidth import RobustDesign
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
-from auv_hinf.robust.invariant_set import RobustCertificate, robust_certificate
+from auv_hinf.robust.invariant_set import OPERATING_WIDEN, RobustCertificate, robust_certificate
 from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest_corner
 
 #: The part's registry name and JSON key.
@@ -594,6 +594,16 @@ class RobustPart:
                 f"    decay rate {f['decay_rate']:.4g} 1/s; ultimate |e| <= {upper(b['position'], 4)} m, "
                 f"|e'| <= {upper(b['velocity'], 4)} m/s, |e_psi| <= {upper(b['heading'], 4)} rad, "
                 f"|e_r| <= {upper(b['yaw_rate'], 4)} rad/s"
+            )
+        op = (f.get("details") or {}).get("operating_envelope")
+        if op is not None:
+            d = f["details"]
+            out.append(
+                f"    computed over the velocities these bounds allow ({100 * OPERATING_WIDEN:g} % wider): "
+                f"u in [{op['u'][0]:.3g}, {op['u'][1]:.3g}] m/s, "
+                f"v in [{op['v'][0]:.3g}, {op['v'][1]:.3g}] m/s, r in [{op['r'][0]:.3g}, {op['r'][1]:.3g}] rad/s "
+                f"(drag spread sigma {d['sigma']:.3g} 1/s there, {d['declared_sigma']:.3g} 1/s over the declared "
+                "envelope)"
             )
         t = f.get("thrust")
         if t is not None:
