@@ -695,16 +695,12 @@ def _heading_at(
 
 
 #: Relative widening of the operating envelope (:func:`~auv_hinf.mission.margins.operating_envelope`)
-#: around the velocities the last certificate's bounds allow: the room the next certificate's bounds
-#: need to lie strictly inside it (its ellipsoid search is numerical, so its bounds need not fall
-#: monotonically); 5 % of a BlueROV2's 0.65 m/s is 0.03 m/s, which moves sigma by about 3 %.
+#: around the velocities the declared envelope's certificate allows: the room the second certificate's
+#: bounds need to lie strictly inside it (its ellipsoid search is numerical, so its bounds need not
+#: fall monotonically); 5 % of a BlueROV2's 0.65 m/s is 0.03 m/s, which moves sigma by about 3 %.
+#: The refinement is computed once: on the BlueROV2 line it takes the surge force from 102 to 81 N,
+#: and a second, at about the same cost again, would take about 2 N more.
 OPERATING_WIDEN = 0.05
-#: Most certificates computed on an operating envelope after the declared one. Each costs about as
-#: much as the first; on the BlueROV2 line the first takes the surge force from 102 to 81 N and a
-#: second would take about 2 N more, so one is computed.
-OPERATING_REFINEMENTS = 1
-#: The refinement stops when the velocity bound falls by less than this fraction.
-OPERATING_RTOL = 0.05
 
 
 def robust_certificate(
@@ -721,15 +717,15 @@ def robust_certificate(
 
     The certificate is first computed over the declared envelope: its drag slopes, model
     mismatch and Munk moments are bounded at the envelope's widest velocities. When it holds,
-    it is computed again over the *operating* envelope, the velocities its own bounds allow
+    it is computed once more over the *operating* envelope, the velocities its own bounds allow
     (the mission's plus the errors' and the current's, widened by :data:`OPERATING_WIDEN`,
     :func:`~auv_hinf.mission.margins.operating_envelope`), and kept when its bounds lie inside
-    that envelope: a trajectory starting in the certified set cannot be the first to leave the
-    operating envelope, since up to that time the second certificate bounds its errors, and so
-    its velocities, strictly inside it (first exit). Repeated up to
-    :data:`OPERATING_REFINEMENTS` times while the velocity bound falls. The tighter bounds come
-    with smaller start sets: the declared envelope's certificate stays attached (``wider``) and
-    covers the starts only it holds (:meth:`RobustCertificate.covering`).
+    that envelope, its velocity bound is no larger and it covers if the first did: a trajectory
+    starting in the certified set cannot be the first to leave the operating envelope, since up
+    to that time the second certificate bounds its errors, and so its velocities, strictly inside
+    it (first exit). The tighter bounds come with smaller start sets: the declared envelope's
+    certificate stays attached (``wider``) and covers the starts only it holds
+    (:meth:`RobustCertificate.covering`).
 
     Parameters
     ----------
@@ -745,29 +741,23 @@ def robust_certificate(
     actuators : Actuators, optional
         What the vehicles can push: the certificate covers only if its thrust bound fits.
     until_covered : bool
-        Refine only until a certificate covers (a search that reads :attr:`RobustCertificate.covers`
-        alone): the verdict is the same, the bounds may be looser.
+        Refine only when the declared envelope's certificate does not cover (a search that reads
+        :attr:`RobustCertificate.covers` alone): the verdict is the same, the bounds may be looser.
     """
-    cert = declared = _certificate_on(box, envelope, tube, gains, current, actuators)
-    refined = False
-    for _ in range(OPERATING_REFINEMENTS):
-        b = cert.bounds
-        if b is None or cert.margins is None or not cert.margins.ok or (until_covered and cert.covers):
-            break
-        op = operating_envelope(tube, _through_water(b, current), envelope, OPERATING_WIDEN)
-        nxt = _certificate_on(box, op, tube, gains, current, actuators)
-        nb = nxt.bounds
-        if nb is None or nxt.margins is None or not nxt.margins.ok or nb.velocity > b.velocity:
-            break  # not inside its own operating envelope, or no tighter: the last one stands
-        if cert.covers and not nxt.covers:
-            break  # tighter but refused (a force the numerical search put higher): the covering one stands
-        cert, refined = replace(nxt, operating=op, wider=declared), True
-        if nb.velocity > (1.0 - OPERATING_RTOL) * b.velocity:
-            break
-    if not refined or cert.bounds is None:
-        return cert
+    declared = _certificate_on(box, envelope, tube, gains, current, actuators)
+    b = declared.bounds
+    if b is None or declared.margins is None or not declared.margins.ok or (until_covered and declared.covers):
+        return declared
+    op = operating_envelope(tube, _through_water(b, current), envelope, OPERATING_WIDEN)
+    cert = _certificate_on(box, op, tube, gains, current, actuators)
+    nb = cert.bounds
+    if nb is None or cert.margins is None or not cert.margins.ok or nb.velocity > b.velocity:
+        return declared  # not inside its own operating envelope, or no tighter
+    if declared.covers and not cert.covers:
+        return declared  # tighter but refused (a force the numerical search put higher)
     # the margins reported are the declared envelope's (the operating one's hold by construction)
-    return replace(cert, margins=envelope_margins(tube, _through_water(cert.bounds, current), envelope))
+    margins = envelope_margins(tube, _through_water(nb, current), envelope)
+    return replace(cert, operating=op, wider=declared, margins=margins)
 
 
 def _through_water(bounds: ErrorBounds, current: float) -> ErrorBounds:
@@ -890,8 +880,6 @@ __all__ = [
     "FIXED_POINT_ITERATIONS",
     "FIXED_POINT_RTOL",
     "METHOD",
-    "OPERATING_REFINEMENTS",
-    "OPERATING_RTOL",
     "OPERATING_WIDEN",
     "RATE_GRID",
     "RATE_REFINEMENTS",
