@@ -174,9 +174,11 @@ def check_actuators(
     # each certificate bounds the force over the runs it covers by its own box: the boxes are checked
     # one by one (their union is deliverable when each is), not their elementwise largest, whose
     # corners mix one certificate's surge with another's sway
-    worst = max((floor_peak(p) for p in peaks), key=lambda p: act.binding(p)[1])
-    channel, ratio = act.binding(worst)
-    if all(act.admits(floor_peak(p)) for p in peaks):
+    boxes = [floor_peak(p) for p in peaks]
+    bindings = [act.binding(p) for p in boxes]  # each one LP with thrusters: computed once
+    k = max(range(len(boxes)), key=lambda i: bindings[i][1])
+    worst, (channel, ratio) = boxes[k], bindings[k]
+    if all(act.admits(p) for p in boxes):
         why = f"the certified peak force fits the limits (binding: {channel}, {ratio:.3g} times its limit)"
         return ActuatorCheck(act, peak, channel, ratio, True, why)
     why = actuator_shortfall(act, worst)
