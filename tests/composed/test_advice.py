@@ -8,6 +8,7 @@ synthesis runs when no candidate covers the declared box and current.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import pytest
@@ -46,6 +47,19 @@ def _world_scale(problem: DeployedProblem, declared: DeployedProblem) -> float:
     return problem.plant.current / declared.plant.current
 
 
+def _world_covered_up_to(
+    declared: DeployedProblem, edge: float, seen: list[float]
+) -> Callable[[DeployedProblem], DeployedCertificate]:
+    """A stand-in certificate covering the world up to ``edge`` of ``declared``'s; it records each scale in ``seen``."""
+
+    def certify(problem: DeployedProblem) -> DeployedCertificate:
+        s = _world_scale(problem, declared)
+        seen.append(s)
+        return DeployedCertificate(s <= edge, None, ())
+
+    return certify
+
+
 def test_a_box_and_current_declared_with_the_hardware_get_the_world_knob_before_everything_together(boxed):
     knobs = declared_knobs(boxed)
     assert WORLD == ("current", "box") and knobs.index("world") < knobs.index("together")
@@ -61,14 +75,8 @@ def test_a_box_and_current_declared_with_the_hardware_get_the_world_knob_before_
 @pytest.mark.parametrize("edge", [0.03, 0.004])
 def test_a_covered_scale_below_the_bisection_is_found_by_halving_not_answered_as_zero(boxed, edge):
     """Covered up to ``edge`` of the declared world: the answer is covered, positive and within 2x of it."""
-    calls = []
-
-    def certify(problem: DeployedProblem) -> DeployedCertificate:
-        s = _world_scale(problem, boxed)
-        calls.append(s)
-        return DeployedCertificate(s <= edge, None, ())
-
-    got = largest_covered(boxed, "world", certify)
+    calls: list[float] = []
+    got = largest_covered(boxed, "world", _world_covered_up_to(boxed, edge, calls))
     assert got is not None and 0.5 * edge < got.scale <= edge
     assert got.scaled == ("current", "box") and got.certificate.covers
     assert len(calls) <= 1 + 4 + ADVICE_HALVINGS + 2
@@ -244,14 +252,8 @@ def test_rounded_down_keeps_three_significant_digits_and_never_rounds_up(x):
 
 @pytest.mark.parametrize("edge", [0.0137, 0.2611])
 def test_an_advised_scale_is_the_certified_one_with_three_significant_digits(boxed, edge):
-    evaluated = []
-
-    def certify(problem: DeployedProblem) -> DeployedCertificate:
-        s = _world_scale(problem, boxed)
-        evaluated.append(s)
-        return DeployedCertificate(s <= edge, None, ())
-
-    got = largest_covered(boxed, "world", certify)
+    evaluated: list[float] = []
+    got = largest_covered(boxed, "world", _world_covered_up_to(boxed, edge, evaluated))
     assert got is not None and got.scale <= edge
     assert any(s == pytest.approx(got.scale, rel=1e-12) for s in evaluated)  # the value the certificate saw
     assert all(f"{s:.12e}"[:4] + "0" * 9 == f"{s:.12e}"[:13] for s in evaluated if s > 0.0)  # 3 digits each
