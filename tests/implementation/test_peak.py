@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import control as ct
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -279,6 +280,21 @@ def test_gains_summed_to_the_gramian_tail_agree_with_the_long_exact_sum(params, 
     for new, old in ((fast.continuous, long.continuous), (fast.discrete, long.discrete), (free, long_free)):
         assert np.all(new >= old * (1 - 1e-9) - 1e-12)
         assert np.all(new <= old * (1 + 2 * TAIL_RTOL) + 1e-9 * old.max())
+
+
+def test_the_hold_maps_are_python_controls_zero_order_hold_to_the_last_bit():
+    """The one-exponential hold maps equal ``control.sample_system(..., "zoh")`` exactly, for random plants."""
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        n, m = int(rng.integers(1, 8)), int(rng.integers(1, 4))
+        a = rng.normal(size=(n, n)) * rng.uniform(0.1, 20.0)
+        b = rng.normal(size=(n, m))
+        t = float(rng.uniform(1e-4, 0.5))
+        ref = ct.sample_system(ct.ss(a, b, np.eye(n), np.zeros((n, m))), t, method="zoh")
+        ad, bd = peak_module._zoh(a, b, t)
+        assert np.array_equal(ad, ref.A) and np.array_equal(bd, ref.B)
+    eye, zero = peak_module._zoh(np.ones((2, 2)), np.ones((2, 1)), 0.0)
+    assert np.array_equal(eye, np.eye(2)) and not zero.any()
 
 
 def test_a_loop_far_too_fast_for_its_fine_step_is_refused_not_an_error():
