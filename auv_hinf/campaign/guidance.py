@@ -53,6 +53,7 @@ COLUMN_UNITS: dict[str, str] = {
     "peak_sway_speed": "m/s",
     "covered": "bool",
     "within_bounds": "bool",
+    "stayed_in_envelope": "bool",
 }
 #: Units of the summary's figures (the text of ``campaign``).
 SUMMARY_UNITS: dict[str, Any] = {
@@ -282,7 +283,7 @@ def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dic
         int(np.random.SeedSequence(seed, spawn_key=(index,)).generate_state(1)[0]),
         NOISE_PATTERNS[index % len(NOISE_PATTERNS)] if pattern == "mixed" else pattern,
     )
-    rep = guidance_run(cfg, horizon, plant=plant, current=flow, noise=noise).report()
+    rep = guidance_run(cfg, horizon, plant=plant, current=flow, noise=noise).report(envelope=cfg.envelope)
     coverage = run_coverage(cfg, rep, np.asarray(mult, dtype=float), flow, cfg.simulation.initial)
     errors, final, peak = rep["measured_errors"], rep["final_errors"], rep["commanded_peak"]
     return {
@@ -302,6 +303,7 @@ def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dic
         "peak_sway_speed": rep["peak_sway_speed"],
         "covered": bool(coverage["certificate_covers_run"]),
         "within_bounds": coverage["within_certified_bounds"] is not False,
+        "stayed_in_envelope": bool(rep["stayed_in_envelope"]),
     }
 
 

@@ -301,7 +301,7 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         run = guidance_run(cfg, horizon=args.horizon, six_dof=args.six_dof)
     except KeyboardInterrupt:
         raise Stopped("interrupted after 0 of 1 runs; no run finished, nothing written") from None
-    summary = run.report()
+    summary = run.report(envelope=cfg.envelope)
     initial = cfg.simulation.initial
     summary.update(run_coverage(cfg, summary, plant_multipliers(cfg), cfg.simulation.current, initial, args.six_dof))
     if args.out:

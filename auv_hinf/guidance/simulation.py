@@ -28,6 +28,7 @@ from auv_hinf.guidance.law import Commands, GuidanceConfig, SlotMotion, commands
 from auv_hinf.implementation.draws import ImplementationDraws
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.mission.fleet import FleetReference, wrap_angle
+from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams, rhs
 
 #: Integration and control step (s): a 10 Hz autopilot, a tenth of the fastest time constant of
@@ -57,6 +58,7 @@ REPORT_UNITS: dict[str, Any] = {
     "final_errors": {"along_track": "m", "cross_track": "m", "heading": "rad", "after": "s"},
     "peak_sway_speed": "m/s",
     "min_separation": "m",
+    "first_exit_time": "s",
     "horizon": "s",
     "sample_time": "s",
     "delay": "s",
@@ -177,16 +179,33 @@ class GuidanceRun:
             "peak_pitch": float(np.abs(v[..., 2]).max()),
         }
 
-    def report(self, settle: float = 0.5) -> dict[str, Any]:
+    def envelope_exit(self, envelope: Envelope) -> float | None:
+        """The first time (s) some vehicle's ``(u, v, r)`` is outside ``envelope``; ``None``: never.
+
+        Parameters
+        ----------
+        envelope : Envelope
+            The declared ``[envelope]`` (its heading range is not checked: the heading is the full circle).
+        """
+        s = self.states
+        inside = envelope.contains(s[:, :, 3], s[:, :, 4], s[:, :, 5]).all(axis=1)
+        out = np.flatnonzero(~inside)
+        return float(self.t[out[0]]) if out.size else None
+
+    def report(self, settle: float = 0.5, envelope: Envelope | None = None) -> dict[str, Any]:
         """The ``simulate --json`` figures of the run (SI units; vehicles 0-based).
 
         Parameters
         ----------
         settle : float
             Fraction of the horizon after which the ``final_errors`` are measured (0-1).
+        envelope : Envelope or None
+            The declared ``[envelope]``: ``stayed_in_envelope`` and ``first_exit_time`` say whether
+            and when the run left it (both ``None`` without one).
         """
         tail = self.t >= self.t[-1] * settle
         sep, pair = self.min_separation()
+        exit_time = None if envelope is None else self.envelope_exit(envelope)
 
         def worst(x: FloatArray) -> float:
             return float(np.max(np.abs(x))) if x.size else 0.0
@@ -211,6 +230,8 @@ class GuidanceRun:
             "peak_sway_speed": worst(self.states[:, :, 4]),
             "min_separation": sep,
             "closest_pair": list(pair),
+            "stayed_in_envelope": None if envelope is None else exit_time is None,
+            "first_exit_time": exit_time,
             "horizon": float(self.t[-1]),
             "sample_time": float(self.t[1] - self.t[0]) if self.t.size > 1 else None,
             "delay": self.navigation.delay,

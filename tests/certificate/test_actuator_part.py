@@ -230,6 +230,8 @@ def test_bluerov2_line_answers_and_the_answer_certifies():
     assert redo.certified, redo.reasons
     peak, limits = redo.to_dict()["actuators"]["certified_peak"], redo.to_dict()["actuators"]["limits"]
     assert all(peak[k] <= limits[k] for k in limits)
+    # the key stays in the JSON when nothing binds, with no answer in it
+    assert redo.to_dict()["actuators"]["largest_certifiable"] is None
 
 
 def test_the_thrusters_take_each_certificates_force_box_on_its_own():

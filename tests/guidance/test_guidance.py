@@ -18,6 +18,7 @@ from auv_hinf.exceptions import ConfigError, ParameterError
 from auv_hinf.guidance.law import GuidanceConfig, SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance
 from auv_hinf.mission.fleet import FleetReference, reference_from_dict
+from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import remus100
 from tests.helpers import preset_certificate, to_toml
 
@@ -82,6 +83,23 @@ def test_ilos_holds_a_box_corner_plant_in_a_current(scale):
     q = -float(drag) / (REMUS.m11 * g.speed_gain * g.along_track_gain)
     assert run.along_track[-1, 0] == pytest.approx(q / np.sqrt(1.0 - (q / g.along_track_length) ** 2), abs=1e-3)
     assert rep["saturation_fraction"] == 0.0 and rep["commanded_peak"]["rudder"] < RUDDER.rudder_max
+
+
+def test_the_report_says_whether_and_when_the_run_left_the_envelope():
+    """A LOS run in a cross current: inside a wide envelope; a surge range below the cruise speed is left at once,
+    a yaw-rate range that the turn onto the crab exceeds is left at the first sample above it."""
+    _, run = steady("los", (0.0, 0.1), horizon=40.0)
+    wide = Envelope(u=(0.0, 2.5), v=(-1.0, 1.0), r=(-1.0, 1.0))
+    rep = run.report(envelope=wide)
+    assert rep["stayed_in_envelope"] is True and rep["first_exit_time"] is None
+    slow = replace(wide, u=(0.0, 1.0))
+    assert run.report(envelope=slow)["stayed_in_envelope"] is False and run.envelope_exit(slow) == run.t[0]
+    r_peak = float(np.abs(run.states[:, 0, 5]).max())
+    assert r_peak > 0.0
+    tight = replace(wide, r=(-0.5 * r_peak, 0.5 * r_peak))
+    first = int(np.flatnonzero(np.abs(run.states[:, 0, 5]) > 0.5 * r_peak)[0])
+    assert run.envelope_exit(tight) == run.t[first] > run.t[0]
+    assert run.report()["stayed_in_envelope"] is None  # no envelope given: no verdict
 
 
 @pytest.mark.slow

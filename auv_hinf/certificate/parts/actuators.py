@@ -74,7 +74,7 @@ class ActuatorCheck:
     largest_certifiable : dict or None
         When the limits bind: a ``box_scale`` and ``current_speed`` that certify together within
         them, with the scaled ``uncertainty`` table, and each answer alone (see
-        :func:`largest_certifiable`).
+        :func:`largest_certifiable`); ``None`` otherwise (JSON ``null``, the key always present).
     rudder_authority : dict or None
         For a rudder: the largest side force (N; the fin's lift, not a sway actuator: it comes only
         with its yaw moment) and yaw moment (N m) it gives at the envelope's top surge speed (m/s),
@@ -111,9 +111,10 @@ class ActuatorCheck:
             "binding_ratio": self.binding_ratio,
             "certified": self.certified,
             "reason": self.reason,
+            # always present (null when the limits do not bind or nothing was searched), as in
+            # ``guidance.largest_certifiable``: a reader can test the value, not the key
+            "largest_certifiable": None if self.largest_certifiable is None else dict(self.largest_certifiable),
         }
-        if self.largest_certifiable is not None:
-            out["largest_certifiable"] = dict(self.largest_certifiable)
         if self.rudder_authority is not None:
             out["rudder_authority"] = dict(self.rudder_authority)
         return out
