@@ -16,7 +16,7 @@ import pytest
 from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, formation_offsets, initial_states
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
-from auv_hinf.certificate.run_plan import measured_decay_rate, plan_run, run_report, with_start
+from auv_hinf.certificate.run_plan import force_floor, measured_decay_rate, plan_run, run_report, with_start
 from auv_hinf.config.presets import TRIANGLE_SHAPE, preset_config
 from auv_hinf.config.settings import FormationConfig, ReferenceConfig, SimulationConfig
 from auv_hinf.models.envelope import Envelope
@@ -107,7 +107,25 @@ def test_run_report_keys_and_measured_errors(triangle, rng):
     for k, b in zip(("position_error", "velocity_error", "heading_error", "yaw_rate_error"), bounds):
         assert rep["certified_errors"][k] == pytest.approx(b, rel=1e-9)
         assert rep["measured_errors"][k] <= rep["certified_errors"][k] + 1e-6
-    assert rep["certified_thrust"] == plan.coverage.thrust.to_dict()
+    # the start region's force bound, each channel with the floor of a computed trajectory
+    floor = force_floor(cfg.vehicle, plan.design.require_gains(), cfg.envelope)
+    assert rep["certified_thrust"] == {k: b + floor[k] for k, b in plan.coverage.thrust.to_dict().items()}
+    assert all(rep["commanded_peak"][k] <= rep["certified_thrust"][k] for k in floor)
+
+
+def test_a_run_from_exactly_on_its_slots_commands_no_more_than_its_certified_thrust():
+    """A review's BlueROV2 line (the answer's small box), started exactly on its slots in still water: the start
+    region is a point, certified the force at the reference alone (no sway force, no moment), and the simulation
+    commands round-off above it (3e-5 N of surge, 6e-5 N of sway). The reported bound carries the floor."""
+    cfg = preset_config("bluerov2-line")
+    plan = plan_run(cfg, horizon=10.0)
+    rep = run_report(plan, simulate(plan.scenario))
+    assert rep["certificate_covers_run"] and rep["certified_errors_source"] == "closed_loop"
+    exact = plan.coverage.thrust.to_dict()
+    peak, bound = rep["commanded_peak"], rep["certified_thrust"]
+    assert peak["force_y"] > exact["force_y"]  # not vacuous: the round-off is above the exact bound
+    assert all(peak[k] <= bound[k] for k in bound), (peak, bound)
+    assert all(bound[k] - exact[k] < 1e-3 * max(exact["force_x"], 1.0) for k in bound)  # and the floor is small
 
 
 @pytest.mark.slow
