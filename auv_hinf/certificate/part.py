@@ -35,6 +35,13 @@ if TYPE_CHECKING:
 # A commanded-force bound (|tau_x|, |tau_y|, |tau_psi|) (N, N, N m): a plain alias, left out of the API pages.
 Peak = tuple[float, float, float]
 
+#: Relative tolerance of a run's plant-in-box and current-in-disc tests: the round-off of decimals
+#: written to a TOML file. A current at the bound in a diagonal direction written with 12 digits,
+#: ``0.1 (cos 45 deg, sin 45 deg)``, has a norm 5e-12 above 0.1 (a review's sweep found every such run
+#: called "outside the bound" at 1e-12); 1e-9 holds ten significant digits, and is below what any
+#: certificate resolves (their fixed points are inflated by at least 1e-9).
+RUN_RTOL = 1e-9
+
 
 def figures_in(entry: Mapping[str, Any], record: Mapping[str, Any]) -> Any:
     """The figures, in a certificate ``record``, of the part whose ``parts`` entry is ``entry``.

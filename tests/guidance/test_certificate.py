@@ -27,6 +27,7 @@ from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, raw_fleet
 from auv_hinf.certificate.parts.guidance import (
     cascade_problem,
+    covers_run,
     fleet_refusal,
     guidance_certificate,
     guidance_summary,
@@ -220,6 +221,16 @@ def test_cli_certify_and_simulate_carry_the_interface(tmp_path, capsys):
     assert main(["simulate", "--config", str(path), "--json"]) == 1
     rep = json.loads(capsys.readouterr().out)
     assert rep["certificate_covers_run"] is False and "box" in rep["coverage_reason"]
+
+
+def test_a_current_at_the_bound_written_with_twelve_digits_is_inside_and_one_part_in_ten_million_above_is_not():
+    """A review swept currents at the bound in eight directions; the diagonal ones, written as 0.070710678119,
+    have a norm 5e-12 above 0.1 m/s and were called outside. Ten significant digits are inside; 3e-7 above is not."""
+    cfg = preset_config("remus-transit-ilos")
+    summary = guidance_certificate(cfg)
+    assert covers_run(cfg, summary, None, (0.070710678119, 0.070710678119), None)[0]
+    covered, why = covers_run(cfg, summary, None, (0.0707107, 0.0707107), None)
+    assert not covered and "exceeds [disturbance] current_speed" in why
 
 
 def test_plant_multipliers_follow_the_parameter_order():

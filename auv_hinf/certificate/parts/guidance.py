@@ -53,7 +53,7 @@ from auv_hinf.cascade.certificate import (
 from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
-from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import RUN_RTOL, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.robust import run_settings
 from auv_hinf.certificate.parts.separation import (
     ADVICE_MARGIN,
@@ -1156,10 +1156,10 @@ def covers_run(
     box = problem.plant.box
     if multipliers is not None:
         m = np.asarray(multipliers, dtype=float)
-        if np.any(m < np.asarray(box.lo) * (1.0 - 1e-12)) or np.any(m > np.asarray(box.hi) * (1.0 + 1e-12)):
+        if np.any(m < np.asarray(box.lo) * (1.0 - RUN_RTOL)) or np.any(m > np.asarray(box.hi) * (1.0 + RUN_RTOL)):
             return False, "the run's plant is outside the [uncertainty] box"
     speed = math.hypot(*current)
-    if speed > problem.plant.current * (1.0 + 1e-12):
+    if speed > problem.plant.current * (1.0 + RUN_RTOL):
         run, bound = apart(speed, problem.plant.current)
         return False, f"the run's current ({run} m/s) exceeds [disturbance] current_speed ({bound} m/s)"
     if initial is not None:

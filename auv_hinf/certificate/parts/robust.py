@@ -19,7 +19,15 @@ import numpy as np
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.design_point import DesignPoint, initial_states
-from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.part import (
+    FORMATION_LAW,
+    RUN_RTOL,
+    ControlLaw,
+    PartContext,
+    RunCheck,
+    RunContext,
+    Verdict,
+)
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
 from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from, upper
 from auv_hinf.closed_loop.coverage import initial_errors
@@ -41,8 +49,6 @@ from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest
 PART = "robust"
 #: Largest fleet whose own shaped tube is built to check a run (the tube costs ~0.1-1 s a vehicle).
 RUN_TUBE_MAX_N = 16
-#: Relative tolerance of the plant-in-box and current-in-disc tests (round-off of TOML decimals).
-BOX_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -225,8 +231,11 @@ class RobustRunCheck:
 
 
 def _within(x: float, lo: float, hi: float) -> bool:
-    """``x`` lies in ``[lo, hi]`` widened by :data:`BOX_RTOL` (a multiplier in its range, a speed below its bound)."""
-    return lo * (1 - BOX_RTOL) <= x <= hi * (1 + BOX_RTOL)
+    """``x`` lies in ``[lo, hi]`` widened by :data:`~auv_hinf.certificate.part.RUN_RTOL`.
+
+    A multiplier in its range, or a speed below its bound.
+    """
+    return lo * (1 - RUN_RTOL) <= x <= hi * (1 + RUN_RTOL)
 
 
 def plant_outside_box(cfg: FormationConfig, box: ParameterBox) -> str | None:
@@ -646,7 +655,6 @@ class RobustPart:
 
 
 __all__ = [
-    "BOX_RTOL",
     "RUN_TUBE_MAX_N",
     "START_CURRENT_STEPS",
     "RobustRunCheck",
