@@ -145,6 +145,26 @@ def test_advice_written_back_into_the_configuration_certifies():
     assert again.verdict("composed").ok and again.to_dict()["composed"]["covers"]
 
 
+@pytest.mark.slow
+def test_the_actuators_judge_the_sampled_laws_force_not_the_continuous_ones(deployed):
+    """Thrusters too weak for the deployed loop's certified surge force: the composed part refuses for the force,
+    and the actuators part says the same with the same peak. Before, it held the continuous law's start-region
+    force (fitted to the limits) and said "the peaks fit" beside the composed refusal."""
+    _, cert = deployed
+    surge = cert.to_dict()["composed"]["certified_peak"]["force_x"]
+    weak = {**DEPLOYED, "actuators": {"tau_x": 0.85 * surge, "tau_y": 86.0, "tau_psi": 23.0}}
+    out = certify(config_from_dict(weak, "weak")).to_dict()
+    act, comp = out["actuators"], out["composed"]
+    assert not out["certified"] and not comp["covers"] and act["certified"] is False
+    assert act["certified_peak"] == pytest.approx(comp["certified_peak"]) and act["binding"] == "force_x"
+    assert act["largest_certifiable"] is None  # the continuous law's answer is not the deployed loop's
+    # with no fixed point for the deployed loop, no certificate bounds its force
+    loud = {**weak, "implementation": {**DEPLOYED["implementation"], "noise": {"position": 2.0}}}
+    out = certify(config_from_dict(loud, "loud")).to_dict()
+    assert out["composed"]["certified_peak"] is None and out["actuators"]["certified_peak"] is None
+    assert out["actuators"]["certified"] is False and "sampled law" in out["actuators"]["reason"]
+
+
 def test_a_failing_superseding_part_is_waived_when_the_parts_it_supersedes_hold():
     verdicts = {
         "composed": Verdict("composed", False, True),

@@ -147,8 +147,17 @@ def floor_peak(bound: Peak) -> Peak:
     return (max(FORCE_FLOOR, bound[0]), max(FORCE_FLOOR, bound[1]), max(FORCE_FLOOR, bound[2]))
 
 
+#: Why no force bound reaches the actuators, by default.
+UNBOUNDED = "no certificate bounds the commanded force"
+
+
 def check_actuators(
-    point: DesignPoint, peaks: list[Peak], *, answers: bool = True, guided: Mapping[str, float] | None = None
+    point: DesignPoint,
+    peaks: list[Peak],
+    *,
+    answers: bool = True,
+    guided: Mapping[str, float] | None = None,
+    unbounded: str = UNBOUNDED,
 ) -> ActuatorCheck:
     """The actuator verdict of a design whose certificates bound the thrust by ``peaks``.
 
@@ -162,6 +171,8 @@ def check_actuators(
         Compute :func:`largest_certifiable` when the limits bind.
     guided : mapping or None
         With ``[guidance]``: the guidance certificate's ``{force_x, rudder}`` (N, rad), if any.
+    unbounded : str
+        The reason when ``peaks`` is empty.
     """
     act = point.config.actuators
     peak = peak_of(peaks)
@@ -171,7 +182,7 @@ def check_actuators(
     if isinstance(act, RudderActuation):
         return rudder_check(point, act, peak, guided)
     if peak is None:
-        return ActuatorCheck(act, None, None, None, False, "no certificate bounds the commanded force")
+        return ActuatorCheck(act, None, None, None, False, unbounded)
     # each certificate bounds the force over the runs it covers by its own box: the boxes are checked
     # one by one (their union is deliverable when each is), not their elementwise largest, whose
     # corners mix one certificate's surge with another's sway
@@ -285,6 +296,36 @@ def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
     return tuple(out)
 
 
+#: Why no force bound reaches the actuators when the law is sampled.
+SAMPLED_UNBOUNDED = (
+    "no certificate bounds the sampled law's commanded force: the composed certificate of the deployed loop "
+    "does not hold (see composed), and the continuous law's force bounds do not hold the held, delayed, noisy one"
+)
+
+
+def sampled_law_peaks(ctx: PartContext) -> list[Peak] | None:
+    """The force bounds of a sampled fully actuated law: the composed certificate's alone; ``None``: not sampled.
+
+    The closed-loop, robust and implementation parts are about the continuous law or the model as
+    the plant; only the composed certificate bounds the force the held law commands on delayed,
+    noisy measurements, in the declared box and current. It bounds it when its fixed point holds,
+    even when that force is what it refuses (it does not fit the actuators); when it has no fixed
+    point (or it was waived for the parts it supersedes), no certificate bounds the force.
+
+    Parameters
+    ----------
+    ctx : PartContext
+        The design and the earlier parts' verdicts.
+    """
+    cfg = ctx.point.config
+    composed = ctx.verdicts.get("composed")
+    if composed is None or cfg.guidance is not None or not cfg.implementation.sampled:
+        return None
+    c = getattr(composed.detail, "certificate", None)
+    force = getattr(c, "force", None)
+    return [] if force is None else [force.as_tuple()]
+
+
 @dataclass(frozen=True)
 class ActuatorPart:
     """The certified peak force of every earlier part against the declared ``[actuators]``.
@@ -300,7 +341,11 @@ class ActuatorPart:
         point = ctx.point
         guidance = ctx.verdicts.get("guidance")
         guided = None if guidance is None or not guidance.figures else guidance.figures.get("certified_peak")
-        act = check_actuators(point, ctx.peaks(), guided=guided)
+        deployed = sampled_law_peaks(ctx)
+        if deployed is None:
+            act = check_actuators(point, ctx.peaks(), guided=guided)
+        else:  # the continuous law's answers do not hold the sampled law's forces: the composed part answers
+            act = check_actuators(point, deployed, answers=False, unbounded=SAMPLED_UNBOUNDED)
         if act.limits is None:
             return Verdict(self.name, True, False, (), act.to_dict(), detail=act)
         binding = None
@@ -323,14 +368,8 @@ class ActuatorPart:
             return Verdict(self.name, False, True, (why,), act.to_dict(), detail=act)
         limits = act.limits.limits()
         k = CHANNELS.index(act.binding) if act.binding in CHANNELS else None
-        settings = advice(act.largest_certifiable)
+        settings = advice(act.largest_certifiable)  # none for a sampled law: the composed part answers for it
         text = f"actuators: {act.reason}"
-        composed = ctx.verdicts.get("composed")
-        if settings and composed is not None and composed.applies and not composed.ok:
-            # the box and current that fit the thrusters under the continuous law do not make the
-            # deployed loop's certificate cover: its own answer (which holds the thrusters too) is the one
-            settings = ()
-            text += " (for the continuous law; the composed part's answer covers the deployed loop and its actuators)"
         why = Reason(
             self.name,
             "thrust" if peak is not None else "not_covered",
@@ -381,11 +420,8 @@ class ActuatorPart:
                 )
             else:
                 scale = "" if best.get("box_scale") is None else f"; the box scaled by {best['box_scale']:.4g}"
-                composed = record.get("composed") or {}
-                deployed = composed.get("applies") and composed.get("covers") is False
-                use = "for the continuous law only: see composed" if deployed else "re-run with these"
                 words = ", ".join(s.words() for s in advice(best))
-                out.append(f"    largest certifiable within the limits: {words} ({use}{scale})")
+                out.append(f"    largest certifiable within the limits: {words} (re-run with these{scale})")
         return out
 
     def check_run(self, ctx: RunContext) -> RunCheck | None:
