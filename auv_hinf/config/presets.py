@@ -45,8 +45,7 @@ from auv_hinf.guidance.law import GuidanceConfig
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
 from auv_hinf.models.envelope import PAPER_ENVELOPE, Envelope
 from auv_hinf.models.jacobi import JacobiTransform, offsets_from_shape, regular_polygon, shape_from_offsets
-from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
-from auv_hinf.models.vehicle import bluerov2_heavy, paper2011, remus100
+from auv_hinf.models.vehicle import bluerov2_heavy, paper2011, preset, remus100
 
 #: Demo envelope of the paper presets (u, v in m/s, r in rad/s). The paper's envelope has
 #: ``|v| <= 1 m/s``, but its Section V vehicles start with sway exactly 1 m/s, on the edge, so
@@ -446,7 +445,8 @@ def annotated_toml(cfg: FormationConfig) -> str:
     """
     data = cfg.to_toml_dict()
     vehicle = data["vehicle"]
-    preset_vehicle = VEHICLE_PRESETS[vehicle["preset"]]().to_dict() if "preset" in vehicle else {}
+    speed = float(cfg.reference.kwargs()["speed"])
+    preset_vehicle = preset(vehicle["preset"], speed).to_dict() if "preset" in vehicle else {}
     lines = [
         f"# auv-hinf configuration (written by `auv-hinf init` from {cfg.name!r}).",
         "# Every table is optional; units are in brackets. `auv-hinf schema` prints the full JSON Schema.",

@@ -560,7 +560,11 @@ class VehicleTable(_Table):
     See :class:`~auv_hinf.models.vehicle.VehicleParams`.
     """
 
-    preset: VehiclePreset | None = _field(None, "built-in vehicle; excludes the nine parameters")
+    preset: VehiclePreset | None = _field(
+        None,
+        "built-in vehicle; excludes the nine parameters (remus100 and nps-auv2 take their lift damping at the "
+        "[reference] speed)",
+    )
     name: str | None = _field(None, "label of a custom vehicle (default: the configuration name)", min_length=1)
     m11: float | None = _field(
         None, "surge inertia m - X_udot", "kg", ge=MASS_RANGE[0], le=MASS_RANGE[1], examples=[200.0]
@@ -601,18 +605,21 @@ class VehicleTable(_Table):
             raise ValueError(f"missing keys {missing} (or give vehicle.preset){hint}")
         return data
 
-    def to_params(self, default_name: str) -> VehicleParams:
+    def to_params(self, default_name: str, speed: float | None = None) -> VehicleParams:
         """The validated :class:`VehicleParams`.
 
         Parameters
         ----------
         default_name : str
             Name of a custom vehicle without ``name`` (a preset keeps its own).
+        speed : float or None
+            The mission's speed (m/s): a preset whose lift terms are linear damping at a design
+            surge speed (``remus100``, ``nps-auv2``) is linearised there, not at its default 1.5 m/s.
         """
         if self.preset is not None:
             from auv_hinf.models.vehicle import preset
 
-            return preset(self.preset)
+            return preset(self.preset, speed)
         values = {k: getattr(self, k) for k in PARAMETERS}
         return VehicleParams(**values, name=self.name or default_name)
 

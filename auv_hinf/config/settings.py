@@ -51,7 +51,7 @@ from auv_hinf.law.gains import DEFAULT_K1
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.jacobi import JacobiTransform
 from auv_hinf.models.vehicle import PRESETS as VEHICLE_PRESETS
-from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.models.vehicle import VehicleParams, preset
 
 
 @dataclass(frozen=True)
@@ -452,8 +452,9 @@ class FormationConfig:
 
     def to_toml_dict(self) -> dict[str, Any]:
         """The configuration as TOML tables (no ``None``): ``config_from_dict`` of it reproduces it."""
+        speed = float(self.reference.kwargs()["speed"])  # a speed-linearised preset is the mission speed's
         vehicle: dict[str, Any] = next(
-            ({"preset": key} for key, make in VEHICLE_PRESETS.items() if make() == self.vehicle),
+            ({"preset": key} for key in VEHICLE_PRESETS if preset(key, speed) == self.vehicle),
             {k: v for k, v in self.vehicle.to_dict().items()},
         )
         design = self._design_table()
@@ -536,7 +537,7 @@ def config_from_dict(data: Any, name: str = "config") -> FormationConfig:
     cf = parse_config(data)
     label = cf.name or name
     try:
-        vehicle = cf.vehicle.to_params(label)
+        vehicle = cf.vehicle.to_params(label, float(cf.reference.speed))
     except AuvHinfError as exc:
         raise ConfigError(f"vehicle: {exc}") from None
     sim = cf.simulation

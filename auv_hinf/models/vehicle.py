@@ -285,13 +285,20 @@ PRESETS: dict[str, Callable[[], VehicleParams]] = {
 }
 
 
-def preset(name: str) -> VehicleParams:
+#: Presets whose lift terms are linear damping at a design surge speed (``design_speed``, m/s).
+SPEED_LINEARISED: frozenset[str] = frozenset({"remus100", "nps-auv2"})
+
+
+def preset(name: str, design_speed: float | None = None) -> VehicleParams:
     """Return the vehicle preset called ``name`` (one of :data:`PRESETS`).
 
     Parameters
     ----------
     name : str
         A key of :data:`PRESETS`; presets with arguments get their defaults.
+    design_speed : float or None
+        For a preset of :data:`SPEED_LINEARISED`: the surge speed (m/s) its lift terms are
+        linearised at (``None``: its default, 1.5 m/s); ignored by the others.
 
     Raises
     ------
@@ -299,9 +306,12 @@ def preset(name: str) -> VehicleParams:
         If ``name`` is not a preset.
     """
     try:
-        return PRESETS[name]()
+        make = PRESETS[name]
     except KeyError:
         raise ParameterError(f"unknown vehicle preset {name!r}; expected one of {sorted(PRESETS)}") from None
+    if design_speed is not None and name in SPEED_LINEARISED:
+        return cast(Callable[[float], VehicleParams], make)(design_speed)
+    return make()
 
 
 def rotation(psi: ArrayLike) -> FloatArray:
@@ -605,6 +615,7 @@ __all__ = [
     "NPS_AUV2_DENSITY",
     "NPS_AUV2_LENGTH",
     "PRESETS",
+    "SPEED_LINEARISED",
     "PlantBatch",
     "VehicleParams",
     "bluerov2_heavy",

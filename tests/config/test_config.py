@@ -21,6 +21,7 @@ from auv_hinf.config.settings import (
     UncertaintyConfig,
     config_from_dict,
     load_config,
+    with_settings,
 )
 from auv_hinf.exceptions import ConfigError
 from auv_hinf.implementation.model import Implementation, MeasurementNoise
@@ -290,6 +291,23 @@ def test_demo_envelope_keeps_the_paper_gains():
     demo = preset_config("paper-triangle").envelope
     assert lam_sigma(demo) == pytest.approx(lam_sigma(PAPER_ENVELOPE), rel=1e-12)
     assert demo.v == (-1.5, 1.5) and PAPER_ENVELOPE.v == (-1.0, 1.0)
+
+
+@pytest.mark.parametrize("speed", [0.375, 0.75, 2.0])
+def test_a_speed_linearised_preset_takes_the_missions_speed_and_round_trips(speed):
+    """A REMUS 100's lift ``Y_uv u v`` and ``N_ur u r`` are linear damping at its surge speed: a mission at
+    ``speed`` gets ``d22_lin = 28.6 speed``, not the 1.5 m/s default (a review was advised a quarter of the
+    speed and certified with the damping of the full one). The BlueROV2 has no lift terms and does not move."""
+    line = {"kind": "line", "speed": speed}
+    cfg = config_from_dict({"vehicle": {"preset": "remus100"}, "envelope": {"u": [0.2, 2.5]}, "reference": line})
+    assert cfg.vehicle.d22_lin == pytest.approx(28.6 * speed) and cfg.vehicle.d33_lin == pytest.approx(2.0 * speed)
+    assert cfg.to_toml_dict()["vehicle"] == {"preset": "remus100"}
+    assert config_from_dict(cfg.to_toml_dict()) == cfg
+    assert config_from_dict(tomllib.loads(annotated_toml(cfg))).vehicle == cfg.vehicle
+    faster = with_settings(cfg, [("reference", "speed", 1.5)])  # a re-run at another speed re-linearises
+    assert faster.vehicle.d22_lin == pytest.approx(28.6 * 1.5)
+    rov = config_from_dict({"vehicle": {"preset": "bluerov2-heavy"}, "reference": {"kind": "line", "speed": speed}})
+    assert rov.vehicle == VEHICLE_PRESETS["bluerov2-heavy"]()
 
 
 def test_vehicle_preset_literal_matches_registry():
