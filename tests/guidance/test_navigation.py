@@ -23,7 +23,7 @@ from auv_hinf._typing import NOISE_PATTERNS
 from auv_hinf.cascade.certificate import STATES, certify_cascade
 from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, raw_fleet
-from auv_hinf.certificate.parts.guidance import cascade_problem, guidance_summary
+from auv_hinf.certificate.parts.guidance import _navigation_settings, cascade_problem, guidance_summary
 from auv_hinf.cli.main import main
 from auv_hinf.config.presets import preset_config
 from auv_hinf.config.settings import with_settings
@@ -148,6 +148,14 @@ def test_a_fleet_refused_for_its_navigation_is_answered_with_one_that_certifies_
     assert {t for t, _, _ in settings} <= {"implementation", "implementation.noise"}
     scale = data["guidance"]["largest_certifiable"]["navigation_scale"]
     assert 0.0 < scale < 1.0
+    # every advised bound is a navigation some vehicle can have (none at zero), written as a short decimal
+    assert all(0.0 < v == float(f"{v:.3g}") for t, _, v in settings if t == "implementation.noise")
+    # also at a scale where four decimals wrote the heading and yaw-rate noise as 0 (a review's fleet)
+    problem = cascade_problem(cfg, design_point(cfg))
+    declared = {"delay": problem.delay, **problem.noise.to_dict()}
+    for x in _navigation_settings(problem, 0.00879):
+        want = declared[x.key] * 0.00879
+        assert 0.99 * want <= x.value <= want and x.value == float(f"{x.value:.3g}"), (x.key, x.value, want)
     again = certify(with_settings(cfg, settings)).to_dict()
     assert again["certified"] is True and again["guidance"]["certified"] is True
 

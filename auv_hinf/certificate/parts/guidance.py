@@ -63,6 +63,7 @@ from auv_hinf.certificate.parts.separation import (
     spread_settings,
 )
 from auv_hinf.certificate.reason import Reason, Setting, apart, toml_line, upper
+from auv_hinf.composed.advice import rounded_down
 from auv_hinf.composed.certificate import MAX_DELAY_SAMPLES
 from auv_hinf.composed.loops import Plant
 from auv_hinf.config.settings import FormationConfig, SimulationConfig, with_settings
@@ -501,14 +502,27 @@ def _navigation(problem: CascadeProblem, scale: float) -> CascadeProblem:
 
 
 def _navigation_settings(problem: CascadeProblem, scale: float) -> tuple[Setting, ...]:
-    """The declared delay and noise bounds scaled by ``scale``, as settings rounded down (the certified side)."""
+    """The declared delay and noise bounds scaled by ``scale``, as settings rounded down (the certified side).
+
+    To significant digits (:func:`~auv_hinf.composed.advice.rounded_down`), not decimals: a heading
+    noise of 0.01 rad at 0.00879 of the declared is 8.79e-5 rad, which four decimals wrote as 0 (exact
+    measurements, which no navigation gives).
+    """
     out: list[Setting] = []
     if problem.delay > 0.0:
-        out.append(Setting("implementation", "delay", _down(problem.delay * scale)))
+        out.append(Setting("implementation", "delay", _down_digits(problem.delay * scale)))
     for key, value in problem.noise.to_dict().items():
         if value > 0.0:
-            out.append(Setting("implementation.noise", key, _down(value * scale)))
+            out.append(Setting("implementation.noise", key, _down_digits(value * scale)))
     return tuple(out)
+
+
+def _down_digits(x: float) -> float:
+    """``x`` rounded down to three significant digits, written as that decimal (0.00439, not 0.004390000000000001).
+
+    The advice is confirmed by a re-run with the values as written (:func:`_confirmed`).
+    """
+    return float(f"{rounded_down(x):.3g}")
 
 
 def _navigation_words(figures: Mapping[str, Any]) -> str:
