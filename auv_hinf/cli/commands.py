@@ -117,7 +117,14 @@ def _cmd_design(args: argparse.Namespace) -> int:
     for flag in report.paper_flags:
         print(f"  paper: {flag}")
     h = data["closed_loop_hinf"]
-    print(f"||T||_inf exact {h['exact']} s, python-control {h['python_control']} s, LMI {h['lmi']} s")
+    if all(h[k] is None for k in ("exact", "python_control", "lmi")):
+        print("||T||_inf (stabilizing gain) n/a: no stabilizing alpha at this gamma")
+    else:
+        norms = ", ".join(
+            f"{label} " + ("n/a" if h[k] is None else f"{h[k]:.9g} s")
+            for label, k in (("exact", "exact"), ("python-control", "python_control"), ("LMI", "lmi"))
+        )
+        print(f"||T||_inf (stabilizing gain) {norms}")
     print(f"max relative difference {report.max_rel_diff:.3g}: {'consistent' if report.ok else 'DISAGREES'}")
     for c in report.checks:
         if not c.ok:
@@ -366,6 +373,28 @@ def _with_actuators(cfg: FormationConfig, limits: tuple[float, ...] | None) -> F
             "[guidance] with a propeller and a rudder: set [actuators] tau_x and rudder_max in the file instead"
         )
     return replace(cfg, actuators=Actuators(limits[0], limits[1], limits[2]))
+
+
+#: Units of the runtime monitor's figures in the text of ``run`` and ``replay``.
+MONITOR_UNITS: dict[str, str] = {
+    "steps": "steps",
+    "violation_count": "violations",
+    "max_age": "s",
+    "max_period": "s",
+    "mean_period": "s",
+    "std_period": "s",
+}
+#: What a ``null`` figure of the monitor means, in words.
+MONITOR_NULLS: dict[str, str] = {
+    "reproduced": "not checked (the log carries no verdicts of its own)",
+    "log": "none written",
+}
+
+
+def _monitor_line(key: str, value: Any) -> str:
+    """One ``key: value`` line of the runtime monitor's text, the number with its unit (words for a null)."""
+    text = MONITOR_NULLS.get(key, "n/a") if value is None else _short(value, MONITOR_UNITS.get(key))
+    return f"{key:>16}: {text}"
 
 
 def _short(value: Any, unit: Any = None) -> str:
@@ -645,7 +674,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(json.dumps(json_safe(summary)))
     else:
         for key in ("steps", "covered", "violation_count", "max_age", "max_period", "mean_period", "std_period", "log"):
-            print(f"{key:>16}: {_short(summary[key])}")
+            print(_monitor_line(key, summary[key]))
     steps, count = summary["steps"], summary["violation_count"]
     covered = "yes" if summary["covered"] else f"no ({count} violation(s))"
     if summary["stopped_by"] in ("sigint", "sigterm", "sighup", "stop_event"):
@@ -765,7 +794,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         print(json.dumps(json_safe(summary)))
     else:
         for key in ("steps", "covered", "violation_count", "reproduced", "max_age", "max_period", "unchecked"):
-            print(f"{key:>16}: {_short(summary[key])}")
+            print(_monitor_line(key, summary[key]))
     if summary["assumptions_match"] is False:
         print(f"{PROG}: warning: the log was run under other assumptions than this certificate's", file=sys.stderr)
     if summary["reproduced"] is False:

@@ -16,8 +16,8 @@ from tests.helpers import fully_actuated_file
 NUMBER = re.compile(r"(?<![\w./^])[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?(?![\w./^])")
 #: What may follow a number: a unit (physical, or what is counted), or the closing of a group.
 UNIT = re.compile(
-    r"\s(m/s\^2|m/s|m|rad/s|rad|N m|N|s|1/s\^3|1/s\^2|1/s|Hz|vehicles|runs/s|runs|vehicle-s/s|of the [\w -]+"
-    r"|in each error's unit)\b"
+    r"\s(m/s\^2|m/s|m|rad/s|rad|N m|N|s|1/s\^3|1/s\^2|1/s|Hz|vehicles|runs/s|runs|vehicle-s/s|steps|violations"
+    r"|of the [\w -]+|in each error's unit)\b"
 )
 #: Keys whose value is words that may contain numbers with units of their own (a description, a reason).
 WORDS = {"scenario", "start", "coverage_reason", "robust_reason", "implementation", "gain_source", "config"}
@@ -75,3 +75,9 @@ def test_campaign_and_design_print_every_number_with_its_unit(tmp_path: Path, ca
     checked = [line for line in out.splitlines() if not line.startswith("max relative difference")]  # a ratio
     assert "alpha[stabilizing] = 0.330964979 1/s" in out
     assert unitless_numbers("\n".join(line.replace(" = ", ": ", 1) for line in checked)) == []
+    norms = next(line for line in out.splitlines() if line.startswith("||T||_inf"))
+    assert unitless_numbers(norms.replace(") ", "): ", 1)) == [] and re.search(r"exact [\d.]+ s", norms)
+    # below the stabilising regime the norms do not exist: said in words, not "None s"
+    assert main(["design", "--lam", "-1.2", "--gamma", "0.1"]) == 0
+    out = capsys.readouterr().out
+    assert "None" not in out and "||T||_inf (stabilizing gain) n/a" in out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from auv_hinf.law.formation_law import VehicleLaw
 from auv_hinf.law.gains import with_integral
 from auv_hinf.simulation.engine import simulate
 from auv_hinf.simulation.stream import INTEGRATOR_COLUMNS, STATE_COLUMNS, save_trajectories
+from tests.cli.test_text_units import unitless_numbers
 
 #: Agreement of the streamed and the stored run: the same integration, so round-off only.
 STREAM_ATOL = 1e-9
@@ -73,3 +75,8 @@ def test_a_saved_run_is_a_log_that_replay_reads(tmp_path: Path, capsys) -> None:
     summary = json.loads(out.strip().splitlines()[-1])
     timing = {"period", "lag", "delay", "stale"}
     assert timing <= set(summary["unchecked"]) and not timing & {v["assumption"] for v in summary["violations"]}
+    # the text: every figure with its unit, a log without verdicts of its own said in words (not "None")
+    main(["replay", "--preset", "paper-triangle", str(path)])
+    text = capsys.readouterr().out
+    assert "None" not in text and "reproduced: not checked" in text
+    assert unitless_numbers(text) == [] and re.search(r"max_period: [\d.e+-]+ s\n", text)
