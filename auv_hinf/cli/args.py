@@ -60,9 +60,9 @@ class Parser(argparse.ArgumentParser):
 
 
 def number(
-    kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf, *, strict: bool = False
+    kind: type[int] | type[float], lo: float = -math.inf, hi: float = math.inf, *, strict: bool | str = False
 ) -> Callable[[str], float]:
-    """An argparse type: a finite int or float in ``[lo, hi]``, or ``(lo, hi)`` when ``strict``.
+    """An argparse type: a finite int or float in ``[lo, hi]``, with the bounds ``strict`` names excluded.
 
     Negative and scientific forms are included (``-1e-3``).
 
@@ -72,9 +72,11 @@ def number(
         The type of the value.
     lo, hi : float
         The bounds, in the option's unit; infinite for none.
-    strict : bool
-        Exclude the bounds (``--gamma`` must be > 0, ``--lam`` < 0).
+    strict : bool or {"lo", "hi"}
+        Exclude both bounds (``True``), or only the lower (``"lo"``: ``--k1`` in ``(0, 1e6]``) or the
+        upper (``"hi"``: ``--lam`` in ``[-1e6, 0)``), as the configuration's keys do.
     """
+    open_lo, open_hi = strict in (True, "lo"), strict in (True, "hi")
 
     def parse(text: str) -> float:
         try:
@@ -84,19 +86,24 @@ def number(
             raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
         if not math.isfinite(value):
             raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
-        inside = lo < value < hi if strict else lo <= value <= hi
-        if not inside:
-            raise argparse.ArgumentTypeError(f"must be {_range_text(lo, hi, strict)}, got {text!r}")
+        above = lo < value if open_lo else lo <= value
+        below = value < hi if open_hi else value <= hi
+        if not (above and below):
+            raise argparse.ArgumentTypeError(f"must be {_range_text(lo, hi, open_lo, open_hi)}, got {text!r}")
         return value
 
     return parse
 
 
-def _range_text(lo: float, hi: float, strict: bool) -> str:
-    """``"in [1, 10]"``, ``"< 0"`` or ``"> 0"``: the range of :func:`number` in words."""
-    if math.isinf(lo) or math.isinf(hi):
-        return f"{'<' if math.isinf(lo) else '>'}{'' if strict else '='} {hi if math.isinf(lo) else lo:g}"
-    return f"in {'(' if strict else '['}{lo:g}, {hi:g}{')' if strict else ']'}"
+def _range_text(lo: float, hi: float, open_lo: bool, open_hi: bool) -> str:
+    """``"in [1, 10]"``, ``"in [-1e+06, 0)"``, ``"< 0"`` or ``">= 0"``: the range of :func:`number` in words."""
+    if math.isinf(lo) and math.isinf(hi):
+        return "finite"
+    if math.isinf(lo):
+        return f"<{'' if open_hi else '='} {hi:g}"
+    if math.isinf(hi):
+        return f">{'' if open_lo else '='} {lo:g}"
+    return f"in {'(' if open_lo else '['}{lo:g}, {hi:g}{')' if open_hi else ']'}"
 
 
 #: Options taking a number; their values may look like options (``-1e-3``), see :func:`join_numbers`.
@@ -108,7 +115,7 @@ def numeric(
     flag: str,
     kind: type[int] | type[float],
     *bounds: float,
-    strict: bool = False,
+    strict: bool | str = False,
     **kw: Any,
 ) -> None:
     """Add the option ``flag`` taking a :func:`number` (its value may look like an option: ``-1e-3``).
@@ -123,8 +130,8 @@ def numeric(
         Its type.
     *bounds : float
         ``lo, hi`` of :func:`number`.
-    strict : bool
-        Exclude the bounds.
+    strict : bool or {"lo", "hi"}
+        Exclude both bounds, or the one named (:func:`number`).
     **kw : Any
         Other arguments of ``add_argument`` (``help``, ``default``, ...).
     """

@@ -62,7 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", parser_class=Parser)
 
     d = sub.add_parser("design", help="Theorem 1 gains three ways, cross-checked four ways", allow_abbrev=False)
-    numeric(d, "--lam", float, -MAX_DESIGN_RATE, 0.0, strict=True, required=True, help="nominal lambda < 0 (1/s)")
+    numeric(d, "--lam", float, -MAX_DESIGN_RATE, 0.0, strict="hi", required=True, help="nominal lambda < 0 (1/s)")
     numeric(d, "--gamma", float, *GAMMA_RANGE, required=True, help="H-infinity bound gamma > 0 (s)")
     numeric(d, "--n", int, 2, DESIGN_MAX_N, default=3, help=f"number of vehicles, 2..{DESIGN_MAX_N} (default 3)")
     numeric(
@@ -71,7 +71,7 @@ def build_parser() -> argparse.ArgumentParser:
         float,
         0.0,
         MAX_DESIGN_RATE,
-        strict=True,
+        strict="lo",
         default=DEFAULT_K1,
         help=f"Theorem 2 position gain (1/s^2), default {DEFAULT_K1:g}",
     )

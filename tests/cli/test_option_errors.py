@@ -176,3 +176,17 @@ def test_the_save_error_of_the_issue_names_save_not_out(capsys):
     assert err.startswith("auv-hinf: error: --save '/sys/kernel/x.parquet': its folder '/sys/kernel' is not") and (
         "--out" not in err
     )
+
+
+def test_design_options_take_the_configurations_bounds(capsys):
+    """``--lam`` is in ``[-1e6, 0)`` and ``--k1`` in ``(0, 1e6]``, as ``[design] lambda`` and ``k1`` are:
+    each end the configuration accepts is accepted, each it refuses is refused with the interval written."""
+    assert main(["design", "--lam", "-1e6", "--gamma", "0.5", "--k1", "1e6", "--json"]) == 0
+    capsys.readouterr()
+    for argv, words in (
+        (["--lam", "0", "--gamma", "0.5"], "must be in [-1e+06, 0)"),
+        (["--lam", "-1.000001e6", "--gamma", "0.5"], "must be in [-1e+06, 0)"),
+        (["--lam", "-1", "--gamma", "0.5", "--k1", "0"], "must be in (0, 1e+06]"),
+    ):
+        assert main(["design", *argv]) == 2
+        assert words in capsys.readouterr().err
