@@ -120,7 +120,7 @@ def require_finite(name: str, value: Any) -> float:
     ParameterError
         If the value is not a real number or is NaN or infinite.
     """
-    if isinstance(value, bool):
+    if isinstance(value, (bool, str, bytes)):  # "20" is text, as in the configuration: never read as a number
         raise ParameterError(f"{name} must be a finite real number, got {value!r}")
     try:
         out = float(value)

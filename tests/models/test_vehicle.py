@@ -176,6 +176,9 @@ def test_zero_control_speeds_decay(vehicle):
         ("m22", math.nan, "m22 must be finite"),
         ("d33_lin", math.inf, "d33_lin must be finite"),
         ("d11_lin", "abc", "d11_lin must be a finite real number"),
+        ("m11", "20", "m11 must be a finite real number"),  # text is never read as a number
+        ("d22_quad", b"1", "d22_quad must be a finite real number"),
+        ("m22", True, "m22 must be a finite real number"),
     ],
 )
 def test_bad_parameters_raise(field, value, pattern):
