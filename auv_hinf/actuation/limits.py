@@ -137,7 +137,9 @@ class Actuators:
         """
         worst = max(self.ratios(peak))
         if self.thrusters is not None and any(p > 0.0 for p in peak):
-            worst = max(worst, 1.0 / self.thrusters.largest_box_scale(peak))
+            scale = self.thrusters.largest_box_scale(peak)
+            # a box so large that the LP's scale rounds to 0 (a review's 1e12 kg/s damping) uses it infinitely
+            worst = max(worst, math.inf if scale <= 0.0 else 1.0 / scale)
         return float(worst)
 
     def binding(self, peak: tuple[float, float, float]) -> tuple[str, float]:

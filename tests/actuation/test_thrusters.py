@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from auv_hinf.actuation.limits import vehicle_actuators
 from auv_hinf.actuation.thrusters import (
     BENZON2022_THRUST,
     FORCE_TOLERANCE,
@@ -214,3 +215,15 @@ def test_bluerov2_heavy_parameters():
     assert (p.d11_lin, p.d11_quad, p.d22_lin, p.d22_quad, p.d33_lin, p.d33_quad) == (13.7, 141.0, 0.0, 217.0, 0.0, 1.5)
     assert PRESETS["bluerov2-heavy"] is bluerov2_heavy and preset("bluerov2-heavy") == p
     assert p.name == "bluerov2-heavy"
+
+
+def test_a_box_far_beyond_the_thrusters_is_used_infinitely_not_a_division_by_zero():
+    """A review's vehicle with 1e12 kg/s of damping asked for forces whose largest deliverable scale the LP
+    returns as -0.0: the utilisation is then infinite and the binding names the thrusters (was ZeroDivisionError)."""
+    act = vehicle_actuators("bluerov2-heavy")
+    big = (1e14, 1e14, 1e14)
+    assert act.thrusters is not None and act.thrusters.largest_box_scale(big) <= 0.0
+    assert act.utilisation(big) == math.inf and act.binding(big) == ("thrusters", math.inf)
+    assert not act.admits(big)
+    finite = (1e6, 1e6, 1e6)  # still a number where the scale is positive: its inverse
+    assert act.utilisation(finite) == pytest.approx(1.0 / act.thrusters.largest_box_scale(finite))
