@@ -18,7 +18,7 @@ from auv_hinf._version import __version__
 if TYPE_CHECKING:
     from auv_hinf.certificate.assembly import Certificate, certify
     from auv_hinf.certificate.design_point import DesignPoint, design_point
-    from auv_hinf.certificate.run_plan import RunPlan, plan_run, run_report
+    from auv_hinf.certificate.run_plan import RunPlan, guidance_run, plan_run, run_report
     from auv_hinf.closed_loop.coverage import Coverage, cover_start
     from auv_hinf.closed_loop.nominal import ClosedLoopCertificate, closed_loop_certificate
     from auv_hinf.closed_loop.region import Region
@@ -82,7 +82,7 @@ if TYPE_CHECKING:
 _LAZY: dict[str, tuple[str, ...]] = {
     "auv_hinf.certificate.assembly": ("Certificate", "certify"),
     "auv_hinf.certificate.design_point": ("DesignPoint", "design_point"),
-    "auv_hinf.certificate.run_plan": ("RunPlan", "plan_run", "run_report"),
+    "auv_hinf.certificate.run_plan": ("RunPlan", "guidance_run", "plan_run", "run_report"),
     "auv_hinf.closed_loop.coverage": ("Coverage", "cover_start"),
     "auv_hinf.closed_loop.nominal": ("ClosedLoopCertificate", "closed_loop_certificate"),
     "auv_hinf.closed_loop.region": ("Region",),
@@ -211,6 +211,7 @@ __all__ = [
     "design_point",
     "envelope_lambda",
     "formation_matrices",
+    "guidance_run",
     "heading_gains",
     "hinf_norm",
     "hinf_norm_peak",

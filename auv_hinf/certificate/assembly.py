@@ -28,7 +28,7 @@ from auv_hinf.certificate.reason import Reason
 from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by, superseded_figures
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import ConfigError, DesignError
+from auv_hinf.exceptions import ConfigError, DesignError, ParameterError
 from auv_hinf.guidance.export import sampled_guidance_controller
 from auv_hinf.guidance.simulation import cascade_period
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
@@ -309,6 +309,11 @@ class Certificate:
         control.NonlinearIOSystem
             The controller.
         """
+        if reference is not None and not callable(getattr(reference, "motion", None)):
+            raise ParameterError(
+                f"reference must give the desired motion (an object with motion(t), such as plan_run(cfg)"
+                f".scenario.reference), got {type(reference).__name__}"
+            )
         cfg = self.config
         if cfg.guidance is not None and isinstance(cfg.actuators, RudderActuation):  # the cascade runs
             period, delay = cascade_period(cfg.implementation), cfg.implementation.delay
@@ -405,6 +410,10 @@ def certify(
         Tighten that bound by branch-and-bound (slow; the certificate itself uses vehicle
         coordinates).
     """
+    if isinstance(jacobi_samples, bool) or not isinstance(jacobi_samples, int) or jacobi_samples < 1:
+        raise ParameterError(f"jacobi_samples must be an integer >= 1, got {jacobi_samples!r}")
+    if not isinstance(refine_jacobi, bool):
+        raise ParameterError(f"refine_jacobi must be True or False, got {refine_jacobi!r}")
     point = design_point(config)
     options = {"jacobi_samples": jacobi_samples, "refine_jacobi": refine_jacobi}
     verdicts: dict[str, Verdict] = {}

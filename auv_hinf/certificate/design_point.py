@@ -257,10 +257,7 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
     ParameterError
         If the mission reference is invalid.
     """
-    if not isinstance(cfg, FormationConfig):
-        raise ConfigError(
-            f"expected a configuration (load_config(path) or preset_config(name)), got {type(cfg).__name__}"
-        )
+    require_config(cfg)
     if cfg.method not in GAIN_METHODS:
         raise DesignError(f"gain method must be one of {GAIN_METHODS}, got {cfg.method!r}")
     core = _design(_design_key(cfg))
@@ -285,6 +282,21 @@ def _design_key(cfg: FormationConfig) -> FormationConfig:
         integral=cfg.integral and not steered,
         synthesis=DEFAULT_SYNTHESIS if steered else cfg.synthesis,
     )
+
+
+def require_config(cfg: Any) -> FormationConfig:
+    """``cfg`` when it is a configuration; else the package's :class:`~auv_hinf.exceptions.ConfigError`.
+
+    Parameters
+    ----------
+    cfg : Any
+        What the caller passed as a configuration.
+    """
+    if not isinstance(cfg, FormationConfig):
+        raise ConfigError(
+            f"expected a configuration (load_config(path) or preset_config(name)), got {type(cfg).__name__}"
+        )
+    return cfg
 
 
 @lru_cache(maxsize=16)
@@ -364,5 +376,6 @@ __all__ = [
     "initial_states",
     "mission_reference",
     "raw_fleet",
+    "require_config",
     "slot_states",
 ]

@@ -19,7 +19,7 @@ import numpy as np
 
 from auv_hinf._typing import NOISE_PATTERNS, FloatArray, NoisePattern
 from auv_hinf.actuation.limits import CHANNEL_UNITS, LIMIT_UNITS, RudderActuation
-from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states, raw_fleet
+from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states, raw_fleet, require_config
 from auv_hinf.certificate.part import RunCheck, RunContext, run_covered
 from auv_hinf.certificate.parts.implementation import ImplementationSummary
 from auv_hinf.certificate.parts.robust import RobustRunCheck
@@ -27,7 +27,7 @@ from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by
 from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import ConfigError
+from auv_hinf.exceptions import ConfigError, ParameterError, require_positive
 from auv_hinf.guidance.simulation import GuidanceRun, Navigation, cascade_period, simulate_guidance
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
@@ -163,12 +163,24 @@ def plan_run(
     Raises
     ------
     ConfigError
-        If ``start`` is not a start mode.
+        If ``cfg`` is not a configuration, steers its fleet by ``[guidance]`` (see
+        :func:`guidance_run`), or ``start`` is not a start mode.
+    ParameterError
+        If ``horizon`` is not a positive number of seconds or ``samples`` not an integer >= 2.
     DesignError
         If the design gives no gains.
     """
+    if require_config(cfg).guidance is not None:
+        raise ConfigError(
+            "plan_run: this fleet is steered by its [guidance] cascade, not the fully actuated formation law: "
+            "simulate it with guidance_run(cfg) (auv_hinf.guidance_run), as `auv-hinf simulate` does"
+        )
     if start is not None and start not in get_args(StartMode):
         raise ConfigError(f"start must be one of {list(get_args(StartMode))}, got {start!r}")
+    if horizon is not None:
+        require_positive("horizon (s)", horizon)
+    if samples is not None and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 2):
+        raise ParameterError(f"samples must be an integer >= 2 (output samples of the run), got {samples!r}")
     point = design if design is not None else design_point(cfg)
     sim = cfg.simulation
     mode: StartMode = start or sim.start
@@ -625,11 +637,16 @@ def guidance_run(
     Raises
     ------
     ConfigError
-        If the configuration has no ``[guidance]`` table, or declares a varying ``[implementation]``
-        delay (the cascade is run, and certified, with a fixed one).
+        If ``cfg`` is not a configuration, has no ``[guidance]`` table, or declares a varying
+        ``[implementation]`` delay (the cascade is run, and certified, with a fixed one).
+    ParameterError
+        If ``horizon`` is not a positive number of seconds.
     """
+    require_config(cfg)
     if cfg.guidance is None or not isinstance(cfg.actuators, RudderActuation):
         raise ConfigError("guidance_run: the configuration has no [guidance] table for a propeller-and-rudder vehicle")
+    if horizon is not None:
+        require_positive("horizon (s)", horizon)
     impl = cfg.implementation
     if impl.varying_delay:
         raise ConfigError(

@@ -669,6 +669,8 @@ def read_config(path: str | Path) -> tuple[FormationConfig, dict[str, Any]]:
     ConfigError
         As :func:`load_config`.
     """
+    if not isinstance(path, (str, Path)):
+        raise ConfigError(f"expected the path of a TOML configuration file (str or Path), got {type(path).__name__}")
     p = Path(path)
     data = read_document(p, "config", "TOML", tomllib.loads)
     try:

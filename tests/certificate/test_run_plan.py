@@ -16,9 +16,17 @@ import pytest
 from auv_hinf.certificate.assembly import certify
 from auv_hinf.certificate.design_point import design_point, formation_offsets, initial_states
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for
-from auv_hinf.certificate.run_plan import force_floor, measured_decay_rate, plan_run, run_report, with_start
+from auv_hinf.certificate.run_plan import (
+    force_floor,
+    guidance_run,
+    measured_decay_rate,
+    plan_run,
+    run_report,
+    with_start,
+)
 from auv_hinf.config.presets import TRIANGLE_SHAPE, preset_config
 from auv_hinf.config.settings import FormationConfig, ReferenceConfig, SimulationConfig
+from auv_hinf.exceptions import ConfigError, ParameterError
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import remus100
 from auv_hinf.numerics.quadratic_forms import start_bounds
@@ -236,3 +244,55 @@ def test_the_api_refuses_what_is_not_a_configuration_or_a_start_with_its_own_err
         auv_hinf.plan_run(auv_hinf.preset_config("paper-triangle"), start="bogus")
     with pytest.raises(ParameterError, match="expected a Scenario"):
         simulate(None)
+
+
+def test_plan_run_sends_a_guided_fleet_to_its_cascade_and_checks_its_arguments():
+    """A torpedo fleet steered by [guidance] is not planned with the fully actuated law (a review's plan_run +
+    simulate ran that law, commanding 67 N of sway the vehicle has not); bad arguments are the package's errors."""
+    guided = preset_config("remus-transit-ilos")
+    with pytest.raises(ConfigError, match=r"guidance_run\(cfg\)"):
+        plan_run(guided)
+    tri = preset_config("paper-triangle")
+    with pytest.raises(ParameterError, match="horizon"):
+        plan_run(tri, horizon="10")
+    with pytest.raises(ParameterError, match="horizon"):
+        plan_run(tri, horizon=-1.0)
+    with pytest.raises(ParameterError, match="samples"):
+        plan_run(tri, samples=1)
+    with pytest.raises(ConfigError, match="expected a configuration"):
+        guidance_run("remus-transit-ilos")
+    with pytest.raises(ParameterError, match="horizon"):
+        guidance_run(guided, horizon="5")
+    run = guidance_run(guided, horizon=2.0)  # the cascade the message names runs the fleet
+    assert run.report()["commanded_peak"].keys() == {"force_x", "rudder"}
+
+
+def test_the_public_calls_refuse_bad_arguments_with_the_packages_errors(tmp_path):
+    """What a notebook user mistypes is an AuvHinfError naming the argument, never a bare AssertionError,
+    ValueError or numpy error from deep inside (a review's list)."""
+    from auv_hinf import certify as certify_api
+    from auv_hinf import load_config
+    from auv_hinf import simulate as simulate_api
+
+    tri = preset_config("paper-triangle")
+    for bad in (0, -1, "a", True):
+        with pytest.raises(ParameterError, match="jacobi_samples"):
+            certify_api(tri, jacobi_samples=bad)
+    with pytest.raises(ParameterError, match="refine_jacobi"):
+        certify_api(tri, refine_jacobi="yes")
+    with pytest.raises(ConfigError, match="path of a TOML"):
+        load_config(5)
+    plan = plan_run(tri, horizon=1.0, samples=11)
+    for kw, word in (
+        ({"rtol": "a"}, "rtol"),
+        ({"rtol": -1.0}, "rtol"),
+        ({"atol": 0.0}, "atol"),
+        ({"subdivisions": 0}, "subdivisions"),
+    ):
+        with pytest.raises(ParameterError, match=word):
+            simulate_api(plan.scenario, **kw)
+    cert = certify_api(tri)
+    for bad in ("x", 3):
+        with pytest.raises(ParameterError, match="reference"):
+            cert.controller(reference=bad)
+    assert cert.controller(reference=plan.scenario.reference).noutputs == 3 * tri.n
