@@ -120,6 +120,14 @@ class GuidanceCampaign:
             "vertex_runs": int(np.sum(t["vertex"] >= 0)),
             "vertices": vertices,
             "current_speed": float(cfg.disturbance.current_speed or 0.0),
+            "implementation": {
+                **cfg.implementation.to_dict(),
+                "description": cfg.implementation.describe(),
+                "draws": None
+                if cfg.implementation.noise.exact
+                else "per run, seeded by runs.parquet's implementation_seed (from the campaign seed and the run index)",
+                "noise_pattern": cfg.simulation.noise_pattern,
+            },
             "worst_errors": {
                 "along_track": _worst(t, "along_track"),
                 "cross_track": _worst(t, "cross_track"),
@@ -284,6 +292,7 @@ def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dic
         NOISE_PATTERNS[index % len(NOISE_PATTERNS)] if pattern == "mixed" else pattern,
     )
     rep = guidance_run(cfg, horizon, plant=plant, current=flow, noise=noise).report(envelope=cfg.envelope)
+    noisy = not cfg.implementation.noise.exact
     coverage = run_coverage(cfg, rep, np.asarray(mult, dtype=float), flow, cfg.simulation.initial)
     errors, final, peak = rep["measured_errors"], rep["final_errors"], rep["commanded_peak"]
     return {
@@ -304,6 +313,9 @@ def _run_row(cfg: FormationConfig, seed: int, index: int, horizon: float) -> dic
         "covered": bool(coverage["certificate_covers_run"]),
         "within_bounds": coverage["within_certified_bounds"] is not False,
         "stayed_in_envelope": bool(rep["stayed_in_envelope"]),
+        # the run's own measurement errors: their seed and pattern reproduce them (empty without noise)
+        "implementation_seed": noise[0] if noisy else -1,
+        "noise_pattern": noise[1] if noisy else "",
     }
 
 

@@ -154,3 +154,24 @@ def test_a_steered_fleet_designs_no_robust_gains_for_the_law_it_does_not_run():
     point = design_point(replace(cfg, robust=True))
     assert point.robust_design is None and point.deployed_design is None and point.source == "theorem1"
     assert point.gains == design_point(cfg).gains
+
+
+@pytest.mark.slow
+def test_a_noisy_campaigns_rows_say_which_noise_each_run_had_and_reproduce_it():
+    """Each run of a noisy guided fleet records its seed and pattern (``mixed``: its own pattern), and
+    guidance_run with them gives the row's figures again; the summary names the implementation."""
+    from tests.guidance.test_navigation import _navigation_fleet
+
+    cfg = _navigation_fleet(simulation={"horizon": 20.0, "noise_pattern": "mixed"})
+    camp = run_guidance_campaign(cfg, 3, seed=5, horizon=10.0)
+    t = camp.table
+    assert len(set(t["noise_pattern"])) == 3 and len(set(t["implementation_seed"])) == 3
+    for _, row in t.iterrows():
+        _, mult, current = run_inputs(cfg, 5, int(row["run"]))
+        noise = (int(row["implementation_seed"]), str(row["noise_pattern"]))
+        plant = scaled_plant(cfg.vehicle, mult)
+        rep = guidance_run(cfg, 10.0, plant=plant, current=tuple(current), noise=noise).report()
+        assert row["cross_track"] == rep["measured_errors"]["cross_track"]
+        assert row["rudder"] == rep["commanded_peak"]["rudder"]
+    impl = camp.summary()["implementation"]
+    assert impl["noise_pattern"] == "mixed" and impl["sample_time"] == pytest.approx(0.05) and impl["draws"]
