@@ -65,6 +65,26 @@ SUMMARY_UNITS: dict[str, Any] = {
     "horizon": "s",
     "current_speed": "m/s",
     "certified_errors": {"along_track": "m", "cross_track": "m", "heading": "rad"},
+    "worst_ratio": "of the certified bound",
+    **dict.fromkeys(
+        (
+            "runs",
+            "runs_asked",
+            "vertex_runs",
+            "saturated_runs",
+            "runs_below_min_separation",
+            "covered_runs",
+            "runs_outside_bounds",
+            "counts",
+        ),
+        "runs",
+    ),
+    "vertices": "vertices",
+    "implementation": {
+        "sample_time": "s",
+        "delay": "s",
+        "noise": {"position": "m", "velocity": "m/s", "heading": "rad", "yaw_rate": "rad/s"},
+    },
 }
 
 

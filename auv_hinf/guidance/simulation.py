@@ -56,6 +56,7 @@ REPORT_UNITS: dict[str, Any] = {
     "certified_errors": {"along_track": "m", "cross_track": "m", "heading": "rad"},
     "certified_peak": {"force_x": "N", "rudder": "rad"},
     "final_errors": {"along_track": "m", "cross_track": "m", "heading": "rad", "after": "s"},
+    "saturation_fraction": "of the samples (some vehicle's thrust or rudder at its limit)",
     "peak_sway_speed": "m/s",
     "min_separation": "m",
     "first_exit_time": "s",

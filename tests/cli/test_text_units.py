@@ -16,7 +16,7 @@ from tests.helpers import fully_actuated_file
 NUMBER = re.compile(r"(?<![\w./^])[-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?(?![\w./^])")
 #: What may follow a number: a unit (physical, or what is counted), or the closing of a group.
 UNIT = re.compile(
-    r"\s(m/s\^2|m/s|m|rad/s|rad|N m|N|s|1/s\^3|1/s\^2|1/s|Hz|vehicles|runs/s|runs|vehicle-s/s|steps|violations"
+    r"\s(m/s\^2|m/s|m|rad/s|rad|N m|N|s|1/s\^3|1/s\^2|1/s|Hz|vehicles|runs/s|runs|vehicle-s/s|steps|violations|vertices"
     r"|of the [\w -]+|in each error's unit)\b"
 )
 #: Keys whose value is words that may contain numbers with units of their own (a description, a reason).
@@ -81,3 +81,19 @@ def test_campaign_and_design_print_every_number_with_its_unit(tmp_path: Path, ca
     assert main(["design", "--lam", "-1.2", "--gamma", "0.1"]) == 0
     out = capsys.readouterr().out
     assert "None" not in out and "||T||_inf (stabilizing gain) n/a" in out
+
+
+@pytest.mark.slow
+def test_a_guided_fleets_simulate_and_campaign_print_every_number_with_its_unit(tmp_path: Path, capsys):
+    """The torpedo path's text: the saturated share, the run counts, the ratios and the implementation's
+    figures each with its unit (a review found them bare); the seed is a name, not a quantity."""
+    assert main(["simulate", "--preset", "remus-transit-ilos", "--horizon", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "saturation_fraction: 0 of the samples" in out and unitless_numbers(out) == []
+    assert (
+        main(["campaign", "--preset", "remus-transit-ilos", "--runs", "2", "--horizon", "5", "--out", str(tmp_path)])
+        == 0
+    )
+    out = capsys.readouterr().out
+    lines = [line for line in out.splitlines() if line.partition(": ")[0].strip() not in ("seed", "notes")]
+    assert "vertex_runs: 1 runs" in out and unitless_numbers("\n".join(lines)) == []

@@ -807,9 +807,11 @@ def _gain_variants(problem: CascadeProblem) -> list[GuidanceConfig]:
     g = problem.guidance
     out = []
     for bandwidth, lookahead in GAIN_CANDIDATES:
-        w = g.heading_bandwidth * bandwidth
+        # each multiple as the decimal an advice writes (1.5 x 2.4 is 3.6 rad/s, not 3.5999999999999996),
+        # so that the gains certified are the gains written
+        w = float(f"{g.heading_bandwidth * bandwidth:.6g}")
         if w * problem.sample_time <= MAX_BANDWIDTH_STEP:
-            out.append(replace(g, heading_bandwidth=w, lookahead=g.lookahead * lookahead))
+            out.append(replace(g, heading_bandwidth=w, lookahead=float(f"{g.lookahead * lookahead:.6g}")))
     return out
 
 
