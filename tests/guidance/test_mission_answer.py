@@ -209,3 +209,20 @@ def test_an_answer_keeps_the_required_separation_and_certifies_when_rerun():
     assert again.certified, again.reasons
     sep = again.to_dict()["formation"]
     assert sep["min_separation_certified"] >= 2.0
+
+
+@pytest.mark.slow
+def test_the_default_start_written_out_is_refused_in_a_current_and_the_refusal_says_why():
+    """A review wrote out the very states every vehicle starts from (on its slot, crabbed into the current)
+    and was refused: a declared start is judged in every current of the disc. The refusal says so, and its
+    answer (the default start) certifies."""
+    from auv_hinf.certificate.run_plan import guidance_run
+    from auv_hinf.config.settings import UncertaintyConfig
+
+    base = replace(preset_config("remus-transit-ilos"), uncertainty=UncertaintyConfig(()))
+    start = guidance_run(base, horizon=0.2).states[0]
+    cfg = replace(base, simulation=replace(base.simulation, initial=tuple(map(tuple, start.tolist()))))
+    data = certify(cfg).to_dict()
+    (why,) = data["parts"]["guidance"]["reasons"]
+    assert not data["certified"] and "judged in every current up to [disturbance] current_speed" in why["message"]
+    assert certify(base).certified

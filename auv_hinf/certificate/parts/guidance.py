@@ -891,9 +891,16 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             f"else {_envelope_remedy(cfg.envelope, summary.envelope)}"
         )
     if summary.start_bound is not None:
+        disc = (
+            " (a declared start is judged in every current up to [disturbance] current_speed: a heading that is the "
+            "crab of one current is a heading error in the others, while the default start heads into whichever "
+            "current the fleet meets)"
+            if problem.plant.current > 0.0
+            else ""
+        )
         return (RESTART,), (
-            f"the declared start binds: every vehicle started on its slot, heading into the current, certifies "
-            f"({RESTART.toml()}; every vehicle within {upper(summary.start_bound, 3)} m of its slot)"
+            f"the declared start binds{disc}: every vehicle started on its slot, heading into the current, "
+            f"certifies ({RESTART.toml()}; every vehicle within {upper(summary.start_bound, 3)} m of its slot)"
         )
     if summary.gains is not None:
         settings: tuple[Setting, ...] = _gain_settings(summary.gains, problem.guidance)
