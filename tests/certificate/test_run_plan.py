@@ -121,6 +121,7 @@ def test_run_report_keys_and_measured_errors(triangle, rng):
     assert all(rep["commanded_peak"][k] <= rep["certified_thrust"][k] for k in floor)
 
 
+@pytest.mark.slow
 def test_a_run_from_exactly_on_its_slots_commands_no_more_than_its_certified_thrust():
     """A review's BlueROV2 line (the answer's small box), started exactly on its slots in still water: the start
     region is a point, certified the force at the reference alone (no sway force, no moment), and the simulation
@@ -246,6 +247,7 @@ def test_the_api_refuses_what_is_not_a_configuration_or_a_start_with_its_own_err
         simulate(None)
 
 
+@pytest.mark.slow
 def test_plan_run_sends_a_guided_fleet_to_its_cascade_and_checks_its_arguments():
     """A torpedo fleet steered by [guidance] is not planned with the fully actuated law (a review's plan_run +
     simulate ran that law, commanding 67 N of sway the vehicle has not); bad arguments are the package's errors."""
@@ -267,6 +269,7 @@ def test_plan_run_sends_a_guided_fleet_to_its_cascade_and_checks_its_arguments()
     assert run.report()["commanded_peak"].keys() == {"force_x", "rudder"}
 
 
+@pytest.mark.slow
 def test_the_public_calls_refuse_bad_arguments_with_the_packages_errors(tmp_path):
     """What a notebook user mistypes is an AuvHinfError naming the argument, never a bare AssertionError,
     ValueError or numpy error from deep inside (a review's list)."""

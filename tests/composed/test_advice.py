@@ -110,6 +110,7 @@ def test_with_no_candidate_for_the_box_and_current_the_gains_for_the_hardware_al
     assert not design.certificate.covers  # its certificate is the declared world's
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("world_scale", "answers"), [(0.01, ("world", "together")), (0.1, ("world",))])
 def test_a_small_world_answer_is_given_beside_everything_together_and_a_large_one_alone(
     boxed, monkeypatch, world_scale, answers

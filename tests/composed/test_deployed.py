@@ -311,6 +311,7 @@ def test_the_preset_noise_with_a_small_box_and_current_certifies_and_its_corners
             assert report["commanded_peak"][k] <= c["certified_peak"][k], (corner, k)
 
 
+@pytest.mark.slow
 def test_a_declared_start_that_alone_binds_is_answered_with_the_start_on_the_slots():
     """One vehicle starts turned 0.3 rad off its course: the composed certificate does not cover that start
     and no declared setting, shrunk, covers it either; the answer removes ``[simulation] initial`` (every

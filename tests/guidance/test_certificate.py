@@ -223,6 +223,7 @@ def test_cli_certify_and_simulate_carry_the_interface(tmp_path, capsys):
     assert rep["certificate_covers_run"] is False and "box" in rep["coverage_reason"]
 
 
+@pytest.mark.slow
 def test_a_current_at_the_bound_written_with_twelve_digits_is_inside_and_one_part_in_ten_million_above_is_not():
     """A review swept currents at the bound in eight directions; the diagonal ones, written as 0.070710678119,
     have a norm 5e-12 above 0.1 m/s and were called outside. Ten significant digits are inside; 3e-7 above is not."""

@@ -85,6 +85,7 @@ def test_ilos_holds_a_box_corner_plant_in_a_current(scale):
     assert rep["saturation_fraction"] == 0.0 and rep["commanded_peak"]["rudder"] < RUDDER.rudder_max
 
 
+@pytest.mark.slow
 def test_the_report_says_whether_and_when_the_run_left_the_envelope():
     """A LOS run in a cross current: inside a wide envelope; a surge range below the cruise speed is left at once,
     a yaw-rate range that the turn onto the crab exceeds is left at the first sample above it."""
