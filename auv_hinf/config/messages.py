@@ -262,10 +262,24 @@ def input_warnings(data: Any) -> list[str]:
             f"force then acts {yaw / sway:.3g} m ahead of the centre of mass, a bow rudder; a stern rudder's have "
             "opposite signs (a REMUS 100's: 9.64 kg/(m rad) and -6.15 kg/rad)"
         )
+    sim = data.get("simulation") if isinstance(data, dict) else None
+    if isinstance(data, dict) and isinstance(data.get("guidance"), dict) and isinstance(sim, dict):
+        for key, default in GUIDED_UNUSED.items():
+            if key in sim and sim[key] != default:
+                out.append(
+                    f"simulation.{key} is not used by a [guidance] fleet: its cascade starts every vehicle on its slot "
+                    "heading into the current (or from [simulation] initial), with no blended reference"
+                )
     return out
 
 
+#: ``[simulation]`` keys of the formation law's shaped start, which a ``[guidance]`` fleet does not read,
+#: with the value ``auv-hinf init`` writes (not worth a warning).
+GUIDED_UNUSED: dict[str, object] = {"start": "shaped", "blend_time": None}
+
+
 __all__ = [
+    "GUIDED_UNUSED",
     "as_dict",
     "format_errors",
     "input_warnings",

@@ -95,3 +95,12 @@ def test_help_init_and_bad_input_do_not_load_the_numerical_stack(tmp_path, argv,
     )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True)
     assert out.stdout.strip().splitlines()[-1] == f"{code} [] paper-triangle", out.stdout
+
+
+def test_a_guided_fleet_is_told_which_simulation_keys_it_does_not_read():
+    """A review set [simulation] start = "paper" and blend_time on a torpedo fleet and got no word."""
+    guided = {"guidance": {"kind": "ilos"}, "simulation": {"start": "paper", "blend_time": 10.0}}
+    lines = input_warnings(guided)
+    assert len(lines) == 2 and all("not used by a [guidance] fleet" in x for x in lines)
+    assert input_warnings({"guidance": {"kind": "ilos"}, "simulation": {"start": "shaped"}}) == []  # init writes it
+    assert input_warnings({"simulation": {"start": "paper", "blend_time": 10.0}}) == []  # the formation law reads them
