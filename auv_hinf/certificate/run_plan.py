@@ -32,7 +32,9 @@ from auv_hinf.guidance.simulation import GuidanceRun, Navigation, cascade_period
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
 from auv_hinf.law.formation_law import VehicleLaw
+from auv_hinf.law.gains import Gains
 from auv_hinf.mission.margins import ERROR_UNITS
+from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.simulation.metrics import DECAY_MEASURE_DROP, decay_rates, lyapunov_values
@@ -358,7 +360,7 @@ def certified_errors_of(plan: RunPlan) -> tuple[dict[str, float] | None, str | N
     return {f"{k}_error": max(b[k], NUMERICAL_FLOOR) for k in keys}, source
 
 
-def force_floor(vehicle: VehicleParams, gains: Any, envelope: Any) -> dict[str, float]:
+def force_floor(vehicle: VehicleParams, gains: Gains, envelope: Envelope) -> dict[str, float]:
     """The numerical floor of a certified force compared with a simulated one (N, N, N m).
 
     The certificate bounds the force the law commands on the exact trajectory; the integrator
