@@ -8,6 +8,7 @@ what was expected and what was found.
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 
@@ -120,15 +121,35 @@ def require_finite(name: str, value: Any) -> float:
     ParameterError
         If the value is not a real number or is NaN or infinite.
     """
-    if isinstance(value, (bool, str, bytes)):  # "20" is text, as in the configuration: never read as a number
+    # "20" is text, as in the configuration: never read as a number; a truth value (numpy's too) or a
+    # complex number is not a real one
+    kind = getattr(getattr(value, "dtype", None), "kind", "")  # a numpy scalar's or array's
+    if isinstance(value, (bool, str, bytes, complex)) or (kind and kind in "bcSUO"):
         raise ParameterError(f"{name} must be a finite real number, got {value!r}")
     try:
         out = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ParameterError(f"{name} must be a finite real number, got {value!r}") from None
     if not math.isfinite(out):
         raise ParameterError(f"{name} must be finite, got {out!r}")
     return out
+
+
+def require_count(name: str, value: Any, minimum: int = 1) -> int:
+    """Return ``value`` as an int, or raise if it is not an integer (Python's or numpy's) >= ``minimum``.
+
+    Parameters
+    ----------
+    name : str
+        Name of the quantity, used in the error message.
+    value : Any
+        The value to check.
+    minimum : int
+        Its least admissible value.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) < minimum:
+        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
 
 
 def require_positive(name: str, value: Any) -> float:
@@ -185,6 +206,7 @@ __all__ = [
     "LogError",
     "ParameterError",
     "SolverError",
+    "require_count",
     "require_finite",
     "require_fleet_size",
     "require_positive",

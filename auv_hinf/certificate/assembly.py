@@ -28,7 +28,7 @@ from auv_hinf.certificate.reason import Reason
 from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by, superseded_figures
 from auv_hinf.certificate.text import certificate_text
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import ConfigError, DesignError, ParameterError
+from auv_hinf.exceptions import ConfigError, DesignError, ParameterError, require_count
 from auv_hinf.guidance.export import sampled_guidance_controller
 from auv_hinf.guidance.simulation import cascade_period
 from auv_hinf.law.formation_law import MotionSource, VehicleLaw
@@ -410,8 +410,7 @@ def certify(
         Tighten that bound by branch-and-bound (slow; the certificate itself uses vehicle
         coordinates).
     """
-    if isinstance(jacobi_samples, bool) or not isinstance(jacobi_samples, int) or jacobi_samples < 1:
-        raise ParameterError(f"jacobi_samples must be an integer >= 1, got {jacobi_samples!r}")
+    jacobi_samples = require_count("jacobi_samples", jacobi_samples)
     if not isinstance(refine_jacobi, bool):
         raise ParameterError(f"refine_jacobi must be True or False, got {refine_jacobi!r}")
     point = design_point(config)
@@ -437,29 +436,40 @@ def certify(
                 figures=figures_kept_inside(config, verdict.figures),
             )
         verdicts[part.name] = replace(verdict, part=part.name, key=part.key)
-        verdicts = waived(verdicts)  # before the later parts read the verdicts
+        verdicts = waived(verdicts, keep=_force_bounding(config))  # before the later parts read the verdicts
     binding = next((v.binding for v in reversed(list(verdicts.values())) if v.binding is not None), None)
     design = {**point.summary(), "binding": binding}
     return Certificate(config, tuple(verdicts.values()), point.gains, point.source, design)
 
 
-def waived(verdicts: Mapping[str, Verdict]) -> dict[str, Verdict]:
+def _force_bounding(config: FormationConfig) -> tuple[str, ...]:
+    """The superseding parts that cannot be waived: with declared actuators and a sampled formation
+    law, only the composed certificate bounds the force the actuators are checked against."""
+    sampled = config.implementation.sampled and config.guidance is None
+    return ("composed",) if sampled and config.actuators is not None else ()
+
+
+def waived(verdicts: Mapping[str, Verdict], keep: tuple[str, ...] = ()) -> dict[str, Verdict]:
     """The verdicts, with a failing superseding part waived when the parts it would supersede all hold.
 
     Two routes certify a deployed loop: the superseding part, or the parts it supersedes
     together. When the first fails and the second holds (every one of those parts holds, and one
     of them applies), the fleet is certified by the second, and the first is marked as not
     needed (it does not apply; its figures and the reasons it would give are kept in its figures).
+    A part of ``keep`` is never waived: the second route bounds the errors but not what only the
+    first bounds (a sampled law's force, which the actuators need), so its refusal and its advice stay.
 
     Parameters
     ----------
     verdicts : mapping of str to Verdict
         Every part's verdict, by name.
+    keep : tuple of str
+        Superseding parts that are not waived.
     """
     out = dict(verdicts)
     for name, v in verdicts.items():
         names = part_supersedes(name)
-        if not names or not all(a in verdicts for a in names):
+        if name in keep or not names or not all(a in verdicts for a in names):
             continue  # not a superseding part, or the other route is not evaluated yet
         alternatives = [verdicts[a] for a in names]
         if v.applies and not v.ok and all(a.ok for a in alternatives) and any(a.applies for a in alternatives):

@@ -27,7 +27,7 @@ from auv_hinf.certificate.registry import part_supersedes, parts, superseded_by
 from auv_hinf.closed_loop.coverage import Coverage, StartMode
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.exceptions import ConfigError, ParameterError, require_positive
+from auv_hinf.exceptions import ConfigError, ParameterError, require_count, require_finite, require_positive
 from auv_hinf.guidance.simulation import GuidanceRun, Navigation, cascade_period, simulate_guidance
 from auv_hinf.guidance.six_dof import simulate_guidance_6dof
 from auv_hinf.implementation.sampled_loop import control_period
@@ -181,8 +181,10 @@ def plan_run(
         raise ConfigError(f"start must be one of {list(get_args(StartMode))}, got {start!r}")
     if horizon is not None:
         require_positive("horizon (s)", horizon)
-    if samples is not None and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 2):
-        raise ParameterError(f"samples must be an integer >= 2 (output samples of the run), got {samples!r}")
+    if samples is not None:
+        samples = require_count("samples (output samples of the run)", samples, 2)
+    if design is not None and not isinstance(design, DesignPoint):
+        raise ConfigError(f"design must be the DesignPoint of cfg (design_point(cfg)), got {type(design).__name__}")
     point = design if design is not None else design_point(cfg)
     sim = cfg.simulation
     mode: StartMode = start or sim.start
@@ -396,8 +398,9 @@ def force_floor(vehicle: VehicleParams, gains: Gains, envelope: Envelope) -> dic
 def certified_thrust_of(plan: RunPlan) -> dict[str, float] | None:
     """The certified commanded-force bound of the run (N, N, N m), or ``None`` when none bounds it.
 
-    The deployed loop's composed certificate when it covers the run (its whole-run force bound),
-    else the nominal closed-loop certificate's over its start region; each channel with its
+    The deployed loop's composed certificate when it covers the run (its whole-run force bound;
+    with a sampled law no other certificate bounds the force), else the nominal closed-loop
+    certificate's over its start region; each channel with its
     numerical floor (:func:`force_floor`), as the certified errors carry theirs, so that the
     simulated run's ``commanded_peak`` is compared with what a computed trajectory can reach.
 
@@ -410,8 +413,8 @@ def certified_thrust_of(plan: RunPlan) -> dict[str, float] | None:
     cov = plan.coverage
     if composed is not None:
         bound = dict(composed.thrust.to_dict())
-    elif cov is None or cov.thrust is None:
-        return None
+    elif plan.design.config.implementation.sampled or cov is None or cov.thrust is None:
+        return None  # the continuous law's start-region force does not bound the held, delayed, noisy law's
     else:
         bound = dict(cov.thrust.to_dict())
     cfg = plan.design.config
@@ -559,7 +562,7 @@ _NULL_REASONS = {
     "certified_decay_rate": "no closed-loop certificate",
     "certified_errors": "no certificate covers the run's start",
     "certified_errors_source": "no certified_errors",
-    "certified_thrust": "no certificate bounds the run's force",
+    "certified_thrust": "no certificate bounds the run's force (a sampled law's: only the composed certificate does)",
     "robust_covers_run": "no [uncertainty] box or [disturbance] current declared",
     "robust_bounds": "no robust bound for this run (none declared, or not covered)",
     "robust_reason": "no [uncertainty] box or [disturbance] current declared",
@@ -642,13 +645,25 @@ def guidance_run(
         If ``cfg`` is not a configuration, has no ``[guidance]`` table, or declares a varying
         ``[implementation]`` delay (the cascade is run, and certified, with a fixed one).
     ParameterError
-        If ``horizon`` is not a positive number of seconds.
+        If ``horizon`` is not a positive number of seconds, ``plant`` not a vehicle, ``current`` not
+        two numbers, or ``noise`` not an integer seed >= 0 and a noise pattern.
     """
     require_config(cfg)
     if cfg.guidance is None or not isinstance(cfg.actuators, RudderActuation):
         raise ConfigError("guidance_run: the configuration has no [guidance] table for a propeller-and-rudder vehicle")
     if horizon is not None:
         require_positive("horizon (s)", horizon)
+    if plant is not None and not isinstance(plant, VehicleParams):
+        raise ParameterError(f"plant must be a VehicleParams (the true vehicle), got {type(plant).__name__}")
+    if current is not None:
+        if isinstance(current, (str, bytes)) or np.shape(current) != (2,):
+            raise ParameterError(f"current must be two numbers (m/s, inertial x and y), got {current!r}")
+        current = (require_finite("current x (m/s)", current[0]), require_finite("current y (m/s)", current[1]))
+    if noise is not None:
+        if isinstance(noise, (str, bytes)) or len(noise) != 2 or noise[1] not in get_args(NoisePattern):
+            patterns = get_args(NoisePattern)
+            raise ParameterError(f"noise must be (seed, pattern), the pattern one of {patterns}, got {noise!r}")
+        noise = (require_count("noise seed", noise[0], 0), noise[1])
     impl = cfg.implementation
     if impl.varying_delay:
         raise ConfigError(

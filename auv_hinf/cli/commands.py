@@ -323,7 +323,8 @@ def _simulate_guidance(args: argparse.Namespace, cfg: FormationConfig) -> int:
         from auv_hinf.guidance.simulation import REPORT_UNITS as GUIDANCE_UNITS
 
         for key, val in summary.items():
-            print(_report_line(key, val, GUIDANCE_UNITS))
+            if val is not None:  # a null (no noise, never left the envelope) is the JSON's; the text leaves it out
+                print(_report_line(key, val, GUIDANCE_UNITS))
     if summary["within_certified_bounds"] is False:
         print(f"{PROG}: error: the run left its certified bounds: please report this configuration", file=sys.stderr)
         return EXIT_NEGATIVE

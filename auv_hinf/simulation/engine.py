@@ -15,7 +15,7 @@ from typing import Literal, cast
 import numpy as np
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.exceptions import ParameterError, require_positive
+from auv_hinf.exceptions import ParameterError, require_count, require_positive
 from auv_hinf.implementation.sampled_loop import integrate_sampled
 from auv_hinf.law.formation_law import VehicleLaw, VehicleMotionSource
 from auv_hinf.mission.fleet import Motion
@@ -168,8 +168,7 @@ def integrate_batch(
         (``w = law.width``: 6, or 8 with the integrator).
     """
     rtol, atol = require_positive("rtol", rtol), require_positive("atol", atol)
-    if isinstance(subdivisions, bool) or not isinstance(subdivisions, int) or subdivisions < 1:
-        raise ParameterError(f"subdivisions must be an integer >= 1 (sub-grid points per step), got {subdivisions!r}")
+    subdivisions = require_count("subdivisions (sub-grid points per step)", subdivisions)
     first = batch.scenarios[0]
     n_s, n = batch.initial.shape[:2]
     wd = first.law.width

@@ -299,3 +299,24 @@ def test_the_public_calls_refuse_bad_arguments_with_the_packages_errors(tmp_path
         with pytest.raises(ParameterError, match="reference"):
             cert.controller(reference=bad)
     assert cert.controller(reference=plan.scenario.reference).noutputs == 3 * tri.n
+    # numbers of numpy's and of Python's alike: integers and reals accepted, truth values, complex and huge refused
+    assert certify_api(tri, jacobi_samples=np.int64(10)).certified
+    assert plan_run(tri, horizon=np.float64(1.0), samples=np.int64(11)).scenario.horizon == 1.0
+    for bad in (np.True_, 5 + 3j, np.complex128(5 + 3j), 10**400, np.array(["1"])):
+        with pytest.raises(ParameterError, match="horizon"):
+            plan_run(tri, horizon=bad)
+    guided = preset_config("remus-transit-ilos")
+    for kw in (
+        {"current": (0.0, 0.5, 1.0)},
+        {"current": "ab"},
+        {"plant": "x"},
+        {"noise": (-1, "uniform")},
+        {"noise": (5,)},
+        {"noise": ("5", "uniform")},
+        {"noise": (5.5, "uniform")},
+        {"noise": (5, "loud")},
+    ):
+        with pytest.raises(ParameterError):
+            guidance_run(guided, horizon=1.0, **kw)
+    with pytest.raises(ConfigError, match="DesignPoint"):
+        plan_run(tri, design="x")

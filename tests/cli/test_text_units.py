@@ -90,6 +90,7 @@ def test_a_guided_fleets_simulate_and_campaign_print_every_number_with_its_unit(
     assert main(["simulate", "--preset", "remus-transit-ilos", "--horizon", "5"]) == 0
     out = capsys.readouterr().out
     assert "saturation_fraction: 0 of the samples" in out and unitless_numbers(out) == []
+    assert "None" not in out  # a null (no noise, never left the envelope) is the JSON's, not the text's
     assert (
         main(["campaign", "--preset", "remus-transit-ilos", "--runs", "2", "--horizon", "5", "--out", str(tmp_path)])
         == 0

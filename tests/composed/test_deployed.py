@@ -436,3 +436,27 @@ def test_a_heading_range_narrower_than_the_circle_is_refused_by_certify_and_by_t
     assert plan_run(cfg).covered is False
     full = with_settings(cfg, [(s["table"], s["key"], s["value"]) for s in why["settings"]])
     assert plan_run(full).covered is True
+
+
+@pytest.mark.slow
+def test_with_actuators_the_composed_part_is_not_waived_and_its_answer_certifies():
+    """The nominal design at 10 Hz with a varying 0.1 s delay: the closed-loop and implementation parts hold, the
+    composed one does not. Without actuators that route certifies the errors; with them only the composed certificate
+    bounds the sampled law's force, so it is not waived: it refuses with its advice (which re-run certifies) and the
+    actuators part agrees, where a review found the composed part "not needed" beside an actuators refusal."""
+    table = {
+        **DEPLOYED,
+        "design": {"method": "stabilizing"},
+        "implementation": {"sample_time": 0.1, "delay": 0.1, "varying_delay": True},
+    }
+    cert = certify(config_from_dict(table, "varying"))
+    out = cert.to_dict()
+    assert not out["certified"] and out["parts"]["composed"]["applies"] and not out["parts"]["composed"]["ok"]
+    assert out["actuators"]["certified"] is False and "sampled law" in out["actuators"]["reason"]
+    (why,) = [r for r in cert.findings if r.part == "composed"]
+    assert why.settings
+    again = certify(with_settings(cert.config, [(s.table, s.key, s.value) for s in why.settings]))
+    assert again.certified, again.reasons
+    # without actuators the other route certifies the errors, and the composed part is waived
+    free = certify(config_from_dict({k: v for k, v in table.items() if k != "actuators"}, "free")).to_dict()
+    assert free["certified"] and not free["parts"]["composed"]["applies"]
