@@ -146,10 +146,20 @@ def require_count(name: str, value: Any, minimum: int = 1) -> int:
         The value to check.
     minimum : int
         Its least admissible value.
+
+    Raises
+    ------
+    ParameterError
+        If the value is a bool, not an integer, or below ``minimum``.
     """
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) < minimum:
+    if not _is_count(value, minimum):
         raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
+
+
+def _is_count(value: Any, minimum: int) -> bool:
+    """``value`` is an integer (Python's or numpy's, not a bool) of at least ``minimum``."""
+    return not isinstance(value, bool) and isinstance(value, numbers.Integral) and int(value) >= minimum
 
 
 def require_positive(name: str, value: Any) -> float:
@@ -188,9 +198,7 @@ def require_fleet_size(n: Any, minimum: int = 2) -> int:
     FormationError
         If ``n`` is a bool, not an integer, or below ``minimum``.
     """
-    import numpy as np
-
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < minimum:
+    if not _is_count(n, minimum):
         raise FormationError(f"number of vehicles n must be an integer >= {minimum}, got {n!r}")
     return int(n)
 

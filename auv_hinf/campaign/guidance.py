@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from auv_hinf._typing import NOISE_PATTERNS
-from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, scaled_plant
+from auv_hinf.campaign.setup import COEFFICIENTS, box_multipliers, implementation_summary, scaled_plant
 from auv_hinf.campaign.starts import declared_rows, sample_plant_and_current, vertex_index
 from auv_hinf.cascade.certificate import CascadeCertificate
 from auv_hinf.certificate.document import json_safe
@@ -140,14 +140,9 @@ class GuidanceCampaign:
             "vertex_runs": int(np.sum(t["vertex"] >= 0)),
             "vertices": vertices,
             "current_speed": float(cfg.disturbance.current_speed or 0.0),
-            "implementation": {
-                **cfg.implementation.to_dict(),
-                "description": cfg.implementation.describe(),
-                "draws": None
-                if cfg.implementation.noise.exact
-                else "per run, seeded by runs.parquet's implementation_seed (from the campaign seed and the run index)",
-                "noise_pattern": cfg.simulation.noise_pattern,
-            },
+            "implementation": implementation_summary(
+                cfg.implementation, cfg.simulation.noise_pattern, not cfg.implementation.noise.exact
+            ),
             "worst_errors": {
                 "along_track": _worst(t, "along_track"),
                 "cross_track": _worst(t, "cross_track"),

@@ -18,7 +18,7 @@ import numpy as np
 
 from auv_hinf.actuation.limits import CHANNELS
 from auv_hinf.campaign.runs import ERROR_KINDS, FORCE_COLUMNS
-from auv_hinf.campaign.setup import COEFFICIENTS, nominal_certificate
+from auv_hinf.campaign.setup import COEFFICIENTS, implementation_summary, nominal_certificate
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.mission.margins import ERROR_UNITS
 
@@ -157,14 +157,7 @@ def summarize(camp: Campaign) -> dict[str, Any]:
         "composition": _composition(s, k),
         "uncertainty_box": {c: list(b) for c, b in zip(COEFFICIENTS, s.box.tolist()) if b != [1.0, 1.0]},
         "current_speed": s.current_speed,
-        "implementation": {
-            **s.implementation.to_dict(),
-            "description": s.implementation.describe(),
-            "draws": "per run, seeded by runs.parquet's implementation_seed (from the campaign seed and the run index)"
-            if not s.implementation.continuous
-            else None,
-            "noise_pattern": s.noise_pattern,
-        },
+        "implementation": implementation_summary(s.implementation, s.noise_pattern, not s.implementation.continuous),
         "counts": {
             "runs": k,
             "certificate_applies": n_app,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -290,6 +291,28 @@ def default_chunk(setup: CampaignSetup) -> int:
     return max(1, min(MAX_CHUNK, CHUNK_BYTES // per_run))
 
 
+def implementation_summary(impl: Implementation, pattern: str, drawn: bool) -> dict[str, Any]:
+    """The ``implementation`` object of a campaign's ``summary.json``: the declared law as it runs.
+
+    Parameters
+    ----------
+    impl : Implementation
+        The declared sample time (s), delay (s) and noise bounds.
+    pattern : str
+        The ``[simulation] noise_pattern``.
+    drawn : bool
+        Each run draws its own delays or measurement errors (then seeded per run).
+    """
+    return {
+        **impl.to_dict(),
+        "description": impl.describe(),
+        "draws": "per run, seeded by runs.parquet's implementation_seed (from the campaign seed and the run index)"
+        if drawn
+        else None,
+        "noise_pattern": pattern,
+    }
+
+
 def chunks(runs: int, chunk: int) -> list[tuple[int, int]]:
     """``[lo, hi)`` index ranges of ``runs`` runs in chunks of ``chunk``.
 
@@ -313,6 +336,7 @@ __all__ = [
     "box_multipliers",
     "chunks",
     "default_chunk",
+    "implementation_summary",
     "nominal_certificate",
     "prepare",
     "scaled_plant",

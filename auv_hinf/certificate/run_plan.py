@@ -410,14 +410,13 @@ def certified_thrust_of(plan: RunPlan) -> dict[str, float] | None:
         The planned run.
     """
     composed = next((c for c in plan.checks if c.part == "composed" and c.covers and c.thrust is not None), None)
-    cov = plan.coverage
+    cov, cfg = plan.coverage, plan.design.config
     if composed is not None:
         bound = dict(composed.thrust.to_dict())
-    elif plan.design.config.implementation.sampled or cov is None or cov.thrust is None:
+    elif cfg.implementation.sampled or cov is None or cov.thrust is None:
         return None  # the continuous law's start-region force does not bound the held, delayed, noisy law's
     else:
         bound = dict(cov.thrust.to_dict())
-    cfg = plan.design.config
     floor = force_floor(cfg.vehicle, plan.design.require_gains(), cfg.envelope)
     return {k: float(b) + floor[k] for k, b in bound.items()}
 
@@ -660,9 +659,8 @@ def guidance_run(
             raise ParameterError(f"current must be two numbers (m/s, inertial x and y), got {current!r}")
         current = (require_finite("current x (m/s)", current[0]), require_finite("current y (m/s)", current[1]))
     if noise is not None:
-        if isinstance(noise, (str, bytes)) or len(noise) != 2 or noise[1] not in get_args(NoisePattern):
-            patterns = get_args(NoisePattern)
-            raise ParameterError(f"noise must be (seed, pattern), the pattern one of {patterns}, got {noise!r}")
+        if not isinstance(noise, (tuple, list)) or len(noise) != 2 or noise[1] not in NOISE_PATTERNS:
+            raise ParameterError(f"noise must be (seed, pattern), the pattern one of {NOISE_PATTERNS}, got {noise!r}")
         noise = (require_count("noise seed", noise[0], 0), noise[1])
     impl = cfg.implementation
     if impl.varying_delay:

@@ -312,6 +312,7 @@ def test_the_public_calls_refuse_bad_arguments_with_the_packages_errors(tmp_path
         {"plant": "x"},
         {"noise": (-1, "uniform")},
         {"noise": (5,)},
+        {"noise": 5},
         {"noise": ("5", "uniform")},
         {"noise": (5.5, "uniform")},
         {"noise": (5, "loud")},
