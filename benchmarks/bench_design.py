@@ -9,9 +9,11 @@ from common import REPEATS, fleet, table, timed
 
 from auv_hinf.certificate.design_point import design_point
 from auv_hinf.config.presets import preset_config
-from auv_hinf.design.brl import lmi_stabilizing_alpha
+from auv_hinf.design.brl import _brl_closed_loop_problem, lmi_stabilizing_alpha
+from auv_hinf.design.crosscheck import crosscheck
 from auv_hinf.design.theorem1 import alpha_stabilizing, riccati_c
 from auv_hinf.mission.fleet import Motion
+from auv_hinf.numerics.lmi import solve
 from auv_hinf.simulation.engine import fleet_derivative
 
 #: Estimated floating-point work of one vehicle-rhs (law + reference + plant), counting a
@@ -46,7 +48,7 @@ def gains() -> str:
         ("closed form `design.alpha_stabilizing`", lambda: alpha_stabilizing(lam, gamma).alpha, 2000),
         ("scipy `solve_continuous_are`, 1x1", lambda: float(sla.solve_continuous_are(a1, one, one, r1)[0, 0]), 200),
         ("`control.care`, n = 2 (4x4)", care2, 200),
-        ("LMI `lmi_stabilizing_alpha`, n = 2 (4x4)", lambda: lmi_stabilizing_alpha(lam, gamma, 2).value, 1),
+        ("LMI `lmi_stabilizing_alpha` (one vehicle's block)", lambda: lmi_stabilizing_alpha(lam, gamma, 2).value, 1),
     ]
     rows, base = [], None
     for name, fn, calls in peers:
@@ -54,15 +56,41 @@ def gains() -> str:
         base = base or t
         val = float(fn())  # type: ignore[arg-type]
         rows.append([name, f"{t * 1e6:,.1f}", f"{t / base:,.0f}x", f"{val:.12f}", f"{abs(val - exact) / exact:.1e}"])
+    rows += _crosscheck_rows(lam, gamma, base)
     return table(
         f"4. Gain design on one channel, lambda = {lam:.4g} 1/s, gamma = {gamma:.4g} s (paper triangle; medians of "
         f"{REPEATS})",
         ["method", "time [us]", "ratio", "alpha [1/s]", "rel. diff to closed form"],
         rows,
         "With A = lambda I every 2x2 channel is identical, so the per-channel problem is the fair peer; n = 2 is "
-        "the smallest size `control.care` via `riccati_alpha` and the LMI accept (the LMI time includes cvxpy "
-        "problem construction and the Clarabel solve).",
+        "the smallest size `control.care` via `riccati_alpha` accepts (the LMI time includes cvxpy "
+        "problem construction and the Clarabel solve). The last rows time the `design` command's LMI cross-checks "
+        "(`crosscheck`, solved on one vehicle's block) at n = 3 and 20 against one solve of the fleet's 2n-state "
+        "bounded-real LMI at n = 20, of which the former full-size bisection ran about 28.",
     )
+
+
+def _crosscheck_rows(lam: float, gamma: float, base: float) -> list[list[str]]:
+    """Rows of table 4 for the LMI cross-checks of ``design`` against the fleet-size LMI they replace."""
+    exact = alpha_stabilizing(lam, gamma).alpha
+    problem, beta, _, _ = _brl_closed_loop_problem(40)
+
+    def fleet_solve() -> None:
+        beta.value = 1.0
+        solve(problem, "fleet BRL LMI")
+
+    rows = []
+    for name, fn in (
+        ("`crosscheck`, n = 3 (the `design` command's LMIs)", lambda: crosscheck(lam, gamma, 3)),
+        ("`crosscheck`, n = 20", lambda: crosscheck(lam, gamma, 20)),
+        ("peer: one solve of the fleet's BRL LMI, n = 20 (120x120)", fleet_solve),
+    ):
+        t, out = timed(fn)
+        alpha = getattr(out, "alpha_lmi", None)
+        val = f"{alpha:.12f}" if alpha is not None else "-"
+        diff = f"{abs(alpha - exact) / exact:.1e}" if alpha is not None else "-"
+        rows.append([name, f"{t * 1e6:,.1f}", f"{t / base:,.0f}x", val, diff])
+    return rows
 
 
 def _one_vehicle_motion(m: Motion, i: int) -> Motion:

@@ -10,17 +10,19 @@ continuous certificate is about. When the composed certificate
   heading and yaw-rate errors uniform in ``[-H, H]`` and ``[-R, R]``. ``(P, V, H, R)`` is the
   largest common fraction :attr:`ComposedStart.scale` of a reference set (the continuous
   nominal certificate's start region, a familiar scale for a user) at which the composed
-  certificate covers, found by a halving ladder (:data:`LADDER` rungs) and a geometric
-  bisection (:data:`START_STEPS` certificates); the fraction is 0, the vehicles starting on
-  their slots, when only that is covered.
+  certificate covers with bounds that keep ``[formation] min_separation`` (as ``certify``
+  requires), found by a halving ladder (:data:`LADDER` rungs) and a geometric bisection
+  (:data:`START_STEPS` certificates); the fraction is 0, the vehicles starting on their slots,
+  when only that is covered.
 * **Plants and currents** as the robust campaign (:mod:`auv_hinf.campaign.starts`): box
   vertices every other run first, with the current at its full speed, the others uniform.
 * **Check** each run against the certificate computed at that start set: the error bounds
   hold for every vehicle of every run, whatever the plant of the box, the current within its
   bound and the measurement errors within theirs, and so does its force bound.
 
-When the composed certificate does not cover even the on-slot start, no certificate covers a
-sampled run, and every run is reported as not covered (``inside_bounds`` NA) with the reason.
+When the composed certificate does not cover even the on-slot start (or its bounds there do not
+keep the separation), no certificate covers a sampled run, and every run is reported as not
+covered (``inside_bounds`` NA) with the reason.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from auv_hinf._typing import FloatArray
 from auv_hinf.campaign.starts import BoxVertices, uniform_ball
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.parts.composed import composed_summary, within_actuators
+from auv_hinf.certificate.parts.separation import separation_refusal
 from auv_hinf.composed.certificate import DeployedCertificate
 from auv_hinf.composed.loops import Errors
 from auv_hinf.exceptions import ParameterError
@@ -126,6 +129,10 @@ def composed_start(
 ) -> tuple[ComposedStart | None, str | None]:
     """The largest scaled ``reference`` start set the composed certificate covers, or why there is none.
 
+    A start set counts as covered when its certificate covers and its position bound keeps
+    ``[formation] min_separation``: a larger set whose bound breaks the separation is passed over
+    for a smaller one, down to the on-slot start that ``certify`` judges.
+
     Parameters
     ----------
     point : DesignPoint
@@ -141,14 +148,17 @@ def composed_start(
         return None, "; ".join(summary.reasons) or "the composed certificate does not apply"
     certify = within_actuators(point)
     found: dict[float, DeployedCertificate] = {}
+    apart: dict[float, str | None] = {}  # why a covering certificate's bound breaks the separation
 
     def start(scale: float) -> Errors:
         r = reference or Errors(0.0, 0.0, 0.0, 0.0)
         return Errors(scale * r.position, scale * r.velocity, scale * r.heading, scale * r.yaw_rate)
 
     def covers(scale: float) -> bool:
-        found[scale] = certify(replace(problem, start=start(scale)))
-        return found[scale].covers
+        cert = found[scale] = certify(replace(problem, start=start(scale)))
+        errors = cert.errors if cert.covers else None
+        apart[scale] = None if errors is None else separation_refusal(point, errors.position)
+        return errors is not None and apart[scale] is None
 
     scale = None
     if reference is not None:  # a halving ladder to the first covered scale, then a geometric bisection above it
@@ -160,6 +170,8 @@ def composed_start(
     if scale is None:
         scale = 0.0 if covers(0.0) else None
     if scale is None:
+        if apart.get(0.0):
+            return None, f"the composed certificate's bounds from the slots do not keep the separation: {apart[0.0]}"
         why = "; ".join(found[0.0].reasons) if 0.0 in found else "not computed"
         return None, f"the composed certificate does not cover the deployed loop even from the slots: {why}"
     return ComposedStart(found[scale], start(scale), float(scale), declared), None

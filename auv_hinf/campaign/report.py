@@ -129,7 +129,7 @@ def summarize(camp: Campaign) -> dict[str, Any]:
     # perturbed plant or a current the errors settle at an offset, so it says nothing there
     rates = t.loc[applicable & t["nominal"], "measured_decay_rate"].dropna()
     notes = []
-    if n_app < k:
+    if n_app < k and s.separation is None and s.certificate_applies:  # else the notes below say why
         note = ROBUST_NOTE if s.covers_sampled_runs else SAMPLED_NOTE
         notes.append(note + (f" ({s.robust_reason})" if s.robust_reason else ""))
     if s.separation is not None:

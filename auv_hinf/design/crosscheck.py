@@ -109,7 +109,8 @@ class CrosscheckReport:
     gamma : float
         Requested H-infinity bound (s).
     n : int
-        Number of vehicles; the Riccati and LMI problems have size ``2n``.
+        Number of vehicles; the Riccati problems have size ``2n``, the LMIs one vehicle's block
+        (:func:`~auv_hinf.design.brl.vehicle_block`).
     k1 : float
         Theorem 2 position gain (1/s^2).
     conditions : dict

@@ -63,3 +63,33 @@ def test_a_sampled_fleet_the_composed_certificate_does_not_cover_has_no_covered_
     assert camp.setup.composed is None and s["counts"]["certificate_applies"] == 0
     assert camp.table["inside_bounds"].isna().all()
     assert any(SAMPLED_NOTE in n for n in s["notes"]) and "composed" in camp.setup.robust_reason
+
+
+@pytest.mark.slow
+def test_the_campaigns_start_set_keeps_the_separation_that_certify_requires():
+    """Regression: a larger start set whose bound broke ``min_separation`` was chosen, refusing every run.
+
+    ``certify`` judges the on-slot start; the campaign grows the start set from there. With a
+    ``min_separation`` that the on-slot bound keeps and a larger start set's bound breaks, the
+    campaign takes a start set whose bound keeps it (down to the on-slot one), not the larger one.
+    """
+    from auv_hinf.campaign.composed_start import composed_start
+    from auv_hinf.campaign.starts import declared_rows
+    from auv_hinf.certificate.parts.separation import separation_refusal, separation_with
+    from auv_hinf.composed.loops import Errors
+
+    base = {**COVERED, "uncertainty": {}, "disturbance": {}}
+    reference = Errors(0.5, 0.2, 0.1, 0.1)
+    loose = design_point(config_from_dict(base, "loose"))
+    wide, why = composed_start(loose, declared_rows(np.ones((9, 2))), reference)
+    on_slot = certify_deployed(composed_summary(loose, search=False).problem)
+    assert wide is not None and why is None and wide.scale > 0.0 and on_slot.covers
+    b_wide, b_slot = float(wide.bounds[0]), on_slot.errors.position
+    assert b_wide > b_slot
+    # a separation between the two: kept by the on-slot bound, broken by the larger start set's
+    sep = 0.5 * (separation_with(loose, b_slot).certified + separation_with(loose, b_wide).certified)
+    tight = design_point(config_from_dict({**base, "formation": {**base["formation"], "min_separation": sep}}, "t"))
+    assert separation_refusal(tight, b_slot) is None and separation_refusal(tight, b_wide) is not None
+    got, why = composed_start(tight, declared_rows(np.ones((9, 2))), reference)
+    assert got is not None and why is None
+    assert got.scale < wide.scale and separation_refusal(tight, float(got.bounds[0])) is None
