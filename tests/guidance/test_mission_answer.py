@@ -226,3 +226,36 @@ def test_the_default_start_written_out_is_refused_in_a_current_and_the_refusal_s
     (why,) = data["parts"]["guidance"]["reasons"]
     assert not data["certified"] and "judged in every current up to [disturbance] current_speed" in why["message"]
     assert certify(base).certified
+
+
+#: Three REMUS 100 line abreast on a lawn-mower with 150 m turns, masses +-3 %, damping +-20 %, in a
+#: current up to 0.1 m/s: only a current under a tenth of the declared certifies these turns.
+WEAK_CURRENT = {
+    "vehicle": {"preset": "remus100"},
+    "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 15.0], [0.0, 0.0], [0.0, -15.0]]},
+    "envelope": {"u": [0.5, 2.5], "v": [-0.3, 0.3], "r": [-0.3, 0.3]},
+    "reference": {"kind": "lawnmower", "speed": 1.5, "leg_length": 400.0, "spacing": 600.0, "turn_radius": 150.0},
+    "actuators": {"preset": "remus100"},
+    "guidance": {"kind": "ilos", "lookahead": 16.0, "heading_bandwidth": 2.4},
+    "uncertainty": {
+        **{k: [0.97, 1.03] for k in ("m11", "m22", "m33")},
+        **{k: [0.8, 1.2] for k in ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")},
+    },
+    "disturbance": {"current_speed": 0.1},
+}
+
+
+@pytest.mark.slow
+def test_a_turning_fleet_that_only_a_weak_current_certifies_is_told_the_turns_that_keep_the_declared_current():
+    from auv_hinf.certificate.parts.guidance import WEAK_WORLD
+
+    cfg, _, why = _refused(WEAK_CURRENT, "weak-current")
+    keys = {(x["table"], x["key"]) for x in why["settings"]}
+    assert keys == {("reference", "turn_radius"), ("reference", "spacing")}, why
+    # the current alone would have to shrink below WEAK_WORLD of the declared: it is named as the alternative
+    assert "or, on the declared mission, a smaller current" in why["message"]
+    named = float(why["message"].rsplit("current_speed = ", 1)[1].split(" ")[0])
+    assert 0.0 < named < WEAK_WORLD * 0.1
+    # re-run with the answer (the declared current and box untouched): certified
+    again = _rerun(cfg, why)
+    assert again["guidance"]["certified"] is True and again["certified"] is True

@@ -107,6 +107,10 @@ MISSION_SCALE_STEPS = 6
 #: together on the declared mission only when it certifies the declared ones, or more than this
 #: many times the joint scale.
 MISSION_OVER_TOGETHER = 2.0
+#: A current (or a box scale) that certifies only below this share of the declared one leaves the
+#: survey in a different sea: on a mission that turns, a change of the mission that certifies the
+#: declared current and box is then looked for as well, and advised first.
+WEAK_WORLD = 0.5
 #: Bisection steps of the advised sample time between the default period :data:`~auv_hinf.guidance.simulation.STEP`
 #: and a longer declared one, geometric: 2^-6 of the ratio's logarithm (6 % between 0.1 s and 5 s).
 PERIOD_STEPS = 6
@@ -245,7 +249,9 @@ class GuidanceSummary:
         mission (its turns, its slots' speeds) and the gains bind, not the box or the current.
     mission : MissionAnswer or None
         When nothing of the above certifies: a change of the mission that does
-        (:func:`mission_answer`).
+        (:func:`mission_answer`). Also when only a current or a box scale below
+        :data:`WEAK_WORLD` of the declared certifies a mission that turns: a change of the mission
+        that certifies the declared current and box, if there is one.
     together : float or None
         When neither the current nor the box alone certifies, both are declared and the nominal
         plant in still water certifies the declared mission: the largest joint scale of the two
@@ -455,7 +461,18 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
     )
     if bool(current) or bool(scale) or gains is not None or bool(lag_scale) or period is not None or not bounded:
         return GuidanceSummary(
-            problem, cert, cert.reason, current, scale, gains, binds, lag_scale=lag_scale or None, sample_time=period
+            problem,
+            cert,
+            cert.reason,
+            current,
+            scale,
+            gains,
+            binds,
+            _world_keeping_mission(cfg, problem, current, scale)
+            if gains is None and not lag_scale and period is None
+            else None,
+            lag_scale=lag_scale or None,
+            sample_time=period,
         )
     together = None
     if not binds and problem.plant.current > 0.0 and problem.plant.box.declared:
@@ -464,6 +481,22 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             together = 0.0  # its rounded values, as written, are refused
     mission = mission_answer(cfg)
     return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission, together)
+
+
+def _world_keeping_mission(
+    cfg: FormationConfig, problem: CascadeProblem, current: float | None, scale: float | None
+) -> MissionAnswer | None:
+    """A change of the mission that certifies the declared current and box, when only a weak world certifies.
+
+    Looked for on a mission that turns when the largest current that certifies (or, with none,
+    the largest box scale) is below :data:`WEAK_WORLD` of the declared (:func:`mission_answer`);
+    ``None`` otherwise, or when no change certifies the declared world.
+    """
+    share = current / problem.plant.current if current else scale
+    if not problem.turns or share is None or share >= WEAK_WORLD:
+        return None
+    m = mission_answer(cfg)
+    return m if m is not None and m.scale >= 1.0 else None
 
 
 def _lag_scale(problem: CascadeProblem) -> float | None:
@@ -871,7 +904,8 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
 
     The start on the slots (when a declared start binds) and gains that certify the declared box
     and current come first (they leave the declared world as it is), then the largest current,
-    then the largest box scale, then the current and the box
+    then the largest box scale (each after a change of the mission that certifies the declared
+    world, when it is below :data:`WEAK_WORLD` of the declared), then the current and the box
     together on the declared mission or a change of the mission (:data:`MISSION_OVER_TOGETHER`).
     Every advised value is rounded towards the certified side: a current down, a box's lower
     multipliers up and upper ones down.
@@ -923,13 +957,24 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         period = Setting("implementation", "sample_time", summary.sample_time)
         kept = " with the declared delay and noise" if _navigates(problem) else ""
         return (period,), f"a shorter sample time certifies the declared box and current{kept}: {period.words()}"
+    m = summary.mission
+    keeps_world = m is not None and m.scale >= 1.0 and (bool(summary.current_speed) or bool(summary.box_scale))
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
+        if keeps_world and m is not None:
+            return (
+                m.settings,
+                f"{_mission_sentence(m)}; or, on the declared mission, a smaller current: {current.words()}",
+            )
         return (current,), f"a smaller current certifies: {current.words()}"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
+        if keeps_world and m is not None:
+            return m.settings, (
+                f"{_mission_sentence(m)}; or, on the declared mission, the [uncertainty] box scaled by "
+                f"{summary.box_scale:.3g}: {toml_line(settings)}"
+            )
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies: {toml_line(settings)}"
-    m = summary.mission
     s0 = summary.together or 0.0
     if s0 > 0.0 and (m is None or (m.scale < 1.0 and m.scale <= MISSION_OVER_TOGETHER * s0)):
         world = _world(cfg, problem, s0)
@@ -1273,6 +1318,7 @@ __all__ = [
     "MAX_BANDWIDTH_STEP",
     "PART",
     "SPREAD_TRIES",
+    "WEAK_WORLD",
     "GuidancePart",
     "GuidanceSummary",
     "cascade_problem",
