@@ -962,17 +962,17 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     if summary.current_speed is not None and summary.current_speed > 0.0:
         current = Setting("disturbance", "current_speed", _down(summary.current_speed))
         if keeps_world and m is not None:
-            return (
-                m.settings,
-                f"{_mission_sentence(m)}; or, on the declared mission, a smaller current: {current.words()}",
+            return m.settings, (
+                f"on the declared mission only a smaller current certifies ({current.words()}); keeping the declared "
+                f"current and box, {_mission_sentence(m)}"
             )
         return (current,), f"a smaller current certifies: {current.words()}"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
         if keeps_world and m is not None:
             return m.settings, (
-                f"{_mission_sentence(m)}; or, on the declared mission, the [uncertainty] box scaled by "
-                f"{summary.box_scale:.3g}: {toml_line(settings)}"
+                f"on the declared mission only the [uncertainty] box scaled by {summary.box_scale:.3g} certifies "
+                f"({toml_line(settings)}); keeping the declared current and box, {_mission_sentence(m)}"
             )
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies: {toml_line(settings)}"
     s0 = summary.together or 0.0
