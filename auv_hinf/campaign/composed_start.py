@@ -20,9 +20,8 @@ continuous certificate is about. When the composed certificate
   hold for every vehicle of every run, whatever the plant of the box, the current within its
   bound and the measurement errors within theirs, and so does its force bound.
 
-When the composed certificate does not cover even the on-slot start (or its bounds there do not
-keep the separation), no certificate covers a sampled run, and every run is reported as not
-covered (``inside_bounds`` NA) with the reason.
+When the composed certificate does not cover even the on-slot start, no certificate covers a
+sampled run, and every run is reported as not covered (``inside_bounds`` NA) with the reason.
 """
 
 from __future__ import annotations
@@ -131,7 +130,9 @@ def composed_start(
 
     A start set counts as covered when its certificate covers and its position bound keeps
     ``[formation] min_separation``: a larger set whose bound breaks the separation is passed over
-    for a smaller one, down to the on-slot start that ``certify`` judges.
+    for a smaller one, down to the on-slot start that ``certify`` judges (returned when it covers
+    even if its bound breaks the separation too: the campaign's setup then refuses every run, as
+    ``certify`` refuses the fleet).
 
     Parameters
     ----------
@@ -148,7 +149,6 @@ def composed_start(
         return None, "; ".join(summary.reasons) or "the composed certificate does not apply"
     certify = within_actuators(point)
     found: dict[float, DeployedCertificate] = {}
-    apart: dict[float, str | None] = {}  # why a covering certificate's bound breaks the separation
 
     def start(scale: float) -> Errors:
         r = reference or Errors(0.0, 0.0, 0.0, 0.0)
@@ -157,8 +157,7 @@ def composed_start(
     def covers(scale: float) -> bool:
         cert = found[scale] = certify(replace(problem, start=start(scale)))
         errors = cert.errors if cert.covers else None
-        apart[scale] = None if errors is None else separation_refusal(point, errors.position)
-        return errors is not None and apart[scale] is None
+        return errors is not None and separation_refusal(point, errors.position) is None
 
     scale = None
     if reference is not None:  # a halving ladder to the first covered scale, then a geometric bisection above it
@@ -169,9 +168,10 @@ def composed_start(
                 break
     if scale is None:
         scale = 0.0 if covers(0.0) else None
+    if scale is None and 0.0 in found and found[0.0].covers:
+        # covered from the slots, but its bound breaks the separation: the campaign refuses every run for it
+        return ComposedStart(found[0.0], start(0.0), 0.0, declared), None
     if scale is None:
-        if apart.get(0.0):
-            return None, f"the composed certificate's bounds from the slots do not keep the separation: {apart[0.0]}"
         why = "; ".join(found[0.0].reasons) if 0.0 in found else "not computed"
         return None, f"the composed certificate does not cover the deployed loop even from the slots: {why}"
     return ComposedStart(found[scale], start(scale), float(scale), declared), None

@@ -17,6 +17,7 @@ and the largest formation scale that fit.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -86,6 +87,22 @@ class Binding:
         }
 
 
+#: Significant digits of the turn radius and offset a refusal advises.
+ADVISED_DIGITS = 4
+
+
+def _rounded(x: float, towards: Callable[[float], int]) -> float:
+    """``x`` to :data:`ADVISED_DIGITS` significant digits, rounded by ``towards`` (``math.ceil`` or ``math.floor``).
+
+    An advised value is rounded to the side that fits: a smallest radius of 20.00015 m printed as
+    "20 m" would be the declared radius that does not, and a re-run would be refused again.
+    """
+    if not math.isfinite(x) or x <= 0.0:
+        return x
+    unit = 10.0 ** (math.floor(math.log10(x)) - ADVISED_DIGITS + 1)
+    return float(f"{towards(x / unit) * unit:.{ADVISED_DIGITS}g}")
+
+
 @dataclass(frozen=True)
 class ReferenceFit:
     """Per-vehicle verdict on the desired motion at zero error.
@@ -141,9 +158,9 @@ class ReferenceFit:
             + ("" if math.isinf(self.turn_radius) else f" (turn radius {self.turn_radius:.4g} m)")
         ]
         if self.smallest_radius is not None:
-            out.append(f"smallest turn radius that fits: {self.smallest_radius:.4g} m")
+            out.append(f"smallest turn radius that fits: {_rounded(self.smallest_radius, math.ceil):.4g} m")
         if self.largest_offset is not None:
-            out.append(f"largest offset that fits (shape scaled): {self.largest_offset:.4g} m")
+            out.append(f"largest offset that fits (shape scaled): {_rounded(self.largest_offset, math.floor):.4g} m")
         return "; ".join(out)
 
     def to_dict(self) -> dict[str, Any]:
@@ -269,6 +286,7 @@ def reference_fit(
 
 
 __all__ = [
+    "ADVISED_DIGITS",
     "CHANNELS",
     "FIT_RTOL",
     "STRAIGHT_FACTOR",

@@ -19,6 +19,7 @@ import pytest
 
 from auv_hinf.config.presets import preset_config
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
+from auv_hinf.numerics.lmi import LMI_RTOL
 from tests.helpers import fully_actuated_file
 
 #: Presets that declared no ``[actuators]`` when the outputs were recorded (v0.2.0): ``remus-line``
@@ -145,6 +146,10 @@ def test_every_recorded_number_is_reproduced(key: str, tmp_path: Path) -> None:
             assert new <= old * (1 + ROBUST_SOLVER_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
         elif path.startswith(ROBUST_LARGER) or (path.startswith(ROBUST_RANGES) and path.endswith("[0]")):
             assert new >= old * (1 - ROBUST_SOLVER_RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
+        elif path == "/crosscheck_max_rel_diff":
+            # the routes' largest relative disagreement is solver round-off: since the LMIs are solved on one
+            # vehicle's block it moved (1.29e-8 to 1.43e-8 on remus-line); it stays within the LMIs' tolerance
+            assert 0.0 <= new <= LMI_RTOL, (key, new, old)
         elif path == "/robust/details/lambda":  # the drag's centre: it stays within the recorded spread of it
             assert abs(new - old) <= lookup(RECORDED[key], "/robust/details/sigma"), (key, new, old)
         else:

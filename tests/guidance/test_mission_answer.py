@@ -259,3 +259,68 @@ def test_a_turning_fleet_that_only_a_weak_current_certifies_is_told_the_turns_th
     # re-run with the answer (the declared current and box untouched): certified
     again = _rerun(cfg, why)
     assert again["guidance"]["certified"] is True and again["certified"] is True
+
+
+#: Four torpedo vehicles (a REMUS 100 within 3 %) on a line at 1.5 m/s in a current up to 0.15 m/s,
+#: masses +-3 %, damping +-20 %, navigated at 10 Hz with a 0.1 s delay and a 0.5 m position noise:
+#: neither the navigation alone, nor the current and box together, nor a slower mission certifies.
+EVERYTHING = {
+    "vehicle": {
+        "m11": 34.551,
+        "m22": 59.382,
+        "m33": 9.3296,
+        "d11_lin": 0.0,
+        "d11_quad": 1.782,
+        "d22_lin": 38.61,
+        "d22_quad": 1152.8,
+        "d33_lin": 3.3,
+        "d33_quad": 106.22,
+    },
+    "formation": {"n": 4, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0], [0.0, 30.0]]},
+    "envelope": {"u": [0.5, 2.5], "v": [-0.3, 0.3], "r": [-0.3, 0.3]},
+    "reference": {"kind": "line", "speed": 1.5, "heading": 0.0},
+    "actuators": {"preset": "remus100"},
+    "guidance": {"kind": "ilos", "lookahead": 16.0, "heading_bandwidth": 2.4},
+    "uncertainty": WEAK_CURRENT["uncertainty"],
+    "disturbance": {"current_speed": 0.15},
+    "implementation": {
+        "sample_time": 0.1,
+        "delay": 0.1,
+        "noise": {"position": 0.5, "velocity": 0.02, "heading": 0.01, "yaw_rate": 0.005},
+    },
+}
+
+
+@pytest.mark.slow
+def test_a_fleet_that_needs_its_navigation_and_its_world_shrunk_together_is_told_both():
+    """Regression: each answer shrank one kind of effect, and a fleet that needed two got no values at all."""
+    cfg, data, why = _refused(EVERYTHING, "everything")
+    scale = data["guidance"]["largest_certifiable"]["everything"]
+    assert scale is not None and 0.0 < scale < 1.0
+    keys = {(x["table"], x["key"]) for x in why["settings"]}
+    assert {("implementation", "delay"), ("implementation.noise", "position"), ("disturbance", "current_speed")} <= keys
+    assert any(t == "uncertainty" for t, _ in keys) and "every declared effect together" in why["message"]
+    again = _rerun(cfg, why)
+    assert again["guidance"]["certified"] is True and again["certified"] is True
+
+
+#: A slow REMUS mission (0.3 m/s) in a current up to 0.5 m/s, its envelope's surge range from 0.5 m/s:
+#: the current hides that the mission itself runs below the envelope until a smaller current is tried.
+SLOW_IN_CURRENT = {
+    **{k: WEAK_CURRENT[k] for k in ("vehicle", "envelope", "actuators", "uncertainty")},
+    "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 15.0], [0.0, 0.0], [0.0, -15.0]]},
+    "reference": {"kind": "line", "speed": 0.3, "heading": 0.0},
+    "guidance": {"kind": "ilos", "lookahead": 16.0, "heading_bandwidth": 2.4},
+    "disturbance": {"current_speed": 0.5},
+}
+
+
+@pytest.mark.slow
+def test_a_smaller_current_whose_motion_leaves_the_envelope_is_answered_with_the_envelope_it_needs():
+    """Regression: "a smaller current certifies" was refused on the envelope when re-run."""
+    cfg, data, why = _refused(SLOW_IN_CURRENT, "slow")
+    keys = {(x["table"], x["key"]) for x in why["settings"]}
+    assert keys == {("disturbance", "current_speed"), ("envelope", "u")}, why
+    assert data["guidance"]["largest_certifiable"]["envelope"] is not None
+    again = _rerun(cfg, why)
+    assert again["guidance"]["certified"] is True and again["certified"] is True

@@ -72,3 +72,25 @@ def test_a_path_frame_turn_where_a_vehicle_would_stop_is_refused_by_name_not_by_
     assert not cert.certified
     why = " ".join(cert.reasons)
     assert "vehicle" in why and "smallest turn radius that fits" in why
+
+
+def test_an_advised_radius_is_rounded_to_the_side_that_fits():
+    """Regression: a smallest radius of 20.00015 m printed as "20 m", the declared radius that does not fit."""
+    import math
+
+    from auv_hinf.mission.fit import Binding, ReferenceFit
+
+    fit = ReferenceFit(
+        frame="path",
+        inside=(True, False),
+        margins=np.zeros((2, 1)),
+        binding=Binding(vehicle=1, time=None, channel="surge", edge="lower", margin=-5e-13),
+        turn_radius=20.0,
+        smallest_radius=20.00015,
+        largest_offset=20.3999,
+    )
+    words = fit.reason()
+    radius = float(words.split("smallest turn radius that fits: ")[1].split(" m")[0])
+    offset = float(words.split("largest offset that fits (shape scaled): ")[1].split(" m")[0])
+    assert radius >= 20.00015 and radius == 20.01 and offset <= 20.3999 and offset == 20.39
+    assert not math.isclose(radius, fit.turn_radius, rel_tol=1e-9)

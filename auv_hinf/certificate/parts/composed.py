@@ -1027,7 +1027,7 @@ def _no_advice(
         a = found[0]
         return (
             "at the design's gains no declared setting certifies when shrunk, even all together; "
-            f"{CHANGE_WORDS[a.what]} certify: {a.line()}",
+            f"this certifies, {CHANGE_WORDS[a.what]}: {a.line()}",
             a.settings,
             _change_entry(a.what, a.settings, a.position_bound),
         )

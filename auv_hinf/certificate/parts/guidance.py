@@ -281,6 +281,15 @@ class GuidanceSummary:
         When the cascade is certified but its bound leaves two vehicles closer than ``[formation]
         min_separation``: a spread of the formation re-certified as written (:func:`_spread`; the
         separation part answers with it); empty otherwise.
+    world_envelope : tuple of Setting
+        When the answer is a smaller current or box and its certified motion leaves the declared
+        ``[envelope]`` (a mission slower than the envelope's surge range, once the current no longer
+        hides it): the envelope's ranges widened to hold it, written with the answer
+        (:func:`_world_envelope`); empty otherwise.
+    everything : float or None
+        When a delay or noise is declared and neither the answers above nor a change of the mission
+        certify: the largest scale of every declared effect together (delay, noise, current, box)
+        that certifies, its values confirmed as written (0: none; :func:`_everything_scale`).
     """
 
     problem: CascadeProblem | None
@@ -299,6 +308,8 @@ class GuidanceSummary:
     envelope: tuple[Setting, ...] = ()
     sample_time: float | None = None
     spread: tuple[Setting, ...] = ()
+    world_envelope: tuple[Setting, ...] = ()
+    everything: float | None = None
 
     @property
     def holds(self) -> bool:
@@ -459,6 +470,9 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         and period is None
         and not certify_cascade(bare, cells=False).holds
     )
+    world_env: tuple[Setting, ...] = ()
+    if gains is None and not lag_scale and period is None and (current or scale):
+        world_env = _world_envelope(cfg, problem, current, scale)
     if bool(current) or bool(scale) or gains is not None or bool(lag_scale) or period is not None or not bounded:
         return GuidanceSummary(
             problem,
@@ -473,6 +487,7 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             else None,
             lag_scale=lag_scale or None,
             sample_time=period,
+            world_envelope=world_env,
         )
     together = None
     if not binds and problem.plant.current > 0.0 and problem.plant.box.declared:
@@ -480,7 +495,68 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         if together > 0.0 and _confirmed(cfg, _world(cfg, problem, together)) is None:
             together = 0.0  # its rounded values, as written, are refused
     mission = mission_answer(cfg)
-    return GuidanceSummary(problem, cert, cert.reason, current, scale, gains, binds, mission, together)
+    everything = None
+    if not together and mission is None and bounded and _navigates(problem):
+        everything = _everything_scale(cfg, problem)
+    return GuidanceSummary(
+        problem, cert, cert.reason, current, scale, gains, binds, mission, together, everything=everything
+    )
+
+
+def _everything(cfg: FormationConfig, problem: CascadeProblem, scale: float) -> CascadeProblem:
+    """``problem`` with its delay, noise, current and box all scaled by ``scale``."""
+    return _navigation(_with(cfg, problem, current=problem.plant.current * scale, scale=scale), scale)
+
+
+def _everything_settings(cfg: FormationConfig, problem: CascadeProblem, scale: float) -> tuple[Setting, ...]:
+    """The declared delay, noise, current and box scaled by ``scale``, as settings rounded to the certified side."""
+    return _navigation_settings(problem, scale) + _world(cfg, problem, scale)
+
+
+def _everything_scale(cfg: FormationConfig, problem: CascadeProblem) -> float:
+    """The largest scale in ``[0, 1)`` of every declared effect together (delay, noise, current, box) that certifies.
+
+    The last answer, when neither the navigation alone, the current and box together, nor a change
+    of the mission certifies: each of them needs the other shrunk too. A bisection of
+    :data:`MISSION_SCALE_STEPS` steps from ``s = 0`` (exact, undelayed navigation on the nominal
+    plant in still water, checked first); its values, as written, are certified once more, and 0
+    is returned when they are refused.
+    """
+
+    def holds(x: float) -> bool:
+        return _kept_apart(cfg, _everything(cfg, problem, x))
+
+    if not holds(0.0):
+        return 0.0
+    scale = bisect(holds, 0.0, 1.0, steps=MISSION_SCALE_STEPS)[0]
+    if scale <= 0.0 or _confirmed(cfg, _everything_settings(cfg, problem, scale)) is None:
+        return 0.0
+    return scale
+
+
+def _world_envelope(
+    cfg: FormationConfig, problem: CascadeProblem, current: float | None, scale: float | None
+) -> tuple[Setting, ...]:
+    """The ``[envelope]`` ranges a smaller current (or, without one, box) answer needs, as written with it.
+
+    The answer is the current rounded down (:func:`_down`), or the box scaled by ``scale``; when the
+    cascade's certified motion there leaves the declared envelope (:func:`envelope_gap`), its ranges
+    widened to hold it are part of the answer, else a re-run refuses on the envelope. Empty when the
+    motion stays inside, or when the answer with them is not confirmed by a re-run as written.
+    """
+    changed = _with(cfg, problem, current=_down(current)) if current else _with(cfg, problem, scale=scale)
+    cert = certify_cascade(changed, cells=False)
+    if not cert.holds:
+        return ()
+    wider = envelope_gap(cfg.envelope, cert)[1]
+    if not wider:
+        return ()
+    answer = (
+        (Setting("disturbance", "current_speed", _down(current)),)
+        if current
+        else tuple(x for x in _world(cfg, problem, scale or 0.0) if x.table == "uncertainty")
+    )
+    return wider if _confirmed(cfg, answer + wider) is not None else ()
 
 
 def _world_keeping_mission(
@@ -966,6 +1042,11 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
                 f"on the declared mission only a smaller current certifies ({current.words()}); keeping the declared "
                 f"current and box, {_mission_sentence(m)}"
             )
+        if summary.world_envelope:
+            return (current, *summary.world_envelope), (
+                f"a smaller current certifies, with the [envelope] widened to hold the motion it leaves "
+                f"(if the model holds there): {toml_line((current, *summary.world_envelope))}"
+            )
         return (current,), f"a smaller current certifies: {current.words()}"
     if summary.box_scale is not None and summary.box_scale > 0.0:
         settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
@@ -973,6 +1054,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             return m.settings, (
                 f"on the declared mission only the [uncertainty] box scaled by {summary.box_scale:.3g} certifies "
                 f"({toml_line(settings)}); keeping the declared current and box, {_mission_sentence(m)}"
+            )
+        if summary.world_envelope:
+            settings += summary.world_envelope
+            return settings, (
+                f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies, with the [envelope] widened to "
+                f"hold the motion it leaves (if the model holds there): {toml_line(settings)}"
             )
         return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies: {toml_line(settings)}"
     s0 = summary.together or 0.0
@@ -995,6 +1082,14 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             else f"no {_tried(problem, 'gains')} alone certify"
         )
         return m.settings, f"{lead}: {_mission_sentence(m)}"
+    if summary.everything:
+        settings = _everything_settings(cfg, problem, summary.everything)
+        settings += run_settings(cfg, settings)  # the configured run kept inside, written with the answer
+        return settings, (
+            f"neither a faster, more precise navigation, the current and the box together, nor a change of the "
+            f"mission certifies alone: every declared effect together at {summary.everything:.3g} of the declared "
+            f"does ({toml_line(settings)})"
+        )
     if summary.mission_binds:
         frame = " and the path-frame slots' speed changes" if problem.speed[1] > problem.speed[0] * (1.0 + 1e-9) else ""
         if problem.turn_rate > 0.0 or frame:
@@ -1043,7 +1138,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
     heading}`` (m, m, rad), ``certified_peak{force_x, rudder}`` (N, rad), ``limits``, ``states``
     (the whole certified box), ``sample_time`` (s), ``start`` (the certified start's bounds),
     ``cells`` (the cells of the box certified one by one, 1 for the whole box at once),
-    ``largest_certifiable{current_speed, box_scale, gains, together, navigation_scale, sample_time,
+    ``largest_certifiable{current_speed, box_scale, gains, together, everything, navigation_scale, sample_time,
     start_on_slots, mission, envelope, supported}`` and ``reason``.
 
     Parameters
@@ -1079,11 +1174,12 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
             if summary.gains is None
             else {"heading_bandwidth": summary.gains.heading_bandwidth, "lookahead": summary.gains.lookahead},
             "together": summary.together,
+            "everything": summary.everything,
             "navigation_scale": summary.lag_scale,
             "sample_time": summary.sample_time,
             "start_on_slots": None if summary.start_bound is None else {"position_bound": summary.start_bound},
             "mission": None if summary.mission is None else summary.mission.to_dict(),
-            "envelope": [x.to_dict() for x in summary.envelope] or None,
+            "envelope": [x.to_dict() for x in summary.envelope or summary.world_envelope] or None,
             "supported": None
             if summary.supported_bound is None
             else {
