@@ -59,6 +59,17 @@ def _refused(tables: dict, name: str) -> tuple[object, dict, dict]:
     return cfg, data, data["parts"]["guidance"]["reasons"][0]
 
 
+def _keys(why: dict) -> set[tuple[str, str]]:
+    """The ``(table, key)`` of every setting a reason writes."""
+    return {(x["table"], x["key"]) for x in why["settings"]}
+
+
+def _certifies_when_rerun(cfg: object, why: dict) -> None:
+    """Re-running ``cfg`` with the reason's settings certifies the cascade and the fleet."""
+    again = _rerun(cfg, why)
+    assert again["guidance"]["certified"] is True and again["certified"] is True
+
+
 def _rerun(cfg: object, why: dict) -> dict:
     """``certify --json`` of ``cfg`` rewritten with the reason's settings."""
     return certify(with_settings(cfg, [(x["table"], x["key"], x["value"]) for x in why["settings"]])).to_dict()
@@ -250,15 +261,13 @@ def test_a_turning_fleet_that_only_a_weak_current_certifies_is_told_the_turns_th
     from auv_hinf.certificate.parts.guidance import WEAK_WORLD
 
     cfg, _, why = _refused(WEAK_CURRENT, "weak-current")
-    keys = {(x["table"], x["key"]) for x in why["settings"]}
-    assert keys == {("reference", "turn_radius"), ("reference", "spacing")}, why
+    assert _keys(why) == {("reference", "turn_radius"), ("reference", "spacing")}, why
     # the current alone would have to shrink below WEAK_WORLD of the declared: it is named as the alternative
     assert "on the declared mission only a smaller current certifies" in why["message"]
     named = float(why["message"].split("current_speed = ", 1)[1].split(" ")[0])
     assert 0.0 < named < WEAK_WORLD * 0.1
     # re-run with the answer (the declared current and box untouched): certified
-    again = _rerun(cfg, why)
-    assert again["guidance"]["certified"] is True and again["certified"] is True
+    _certifies_when_rerun(cfg, why)
 
 
 #: Four torpedo vehicles (a REMUS 100 within 3 %) on a line at 1.5 m/s in a current up to 0.15 m/s,
@@ -297,20 +306,17 @@ def test_a_fleet_that_needs_its_navigation_and_its_world_shrunk_together_is_told
     cfg, data, why = _refused(EVERYTHING, "everything")
     scale = data["guidance"]["largest_certifiable"]["everything"]
     assert scale is not None and 0.0 < scale < 1.0
-    keys = {(x["table"], x["key"]) for x in why["settings"]}
+    keys = _keys(why)
     assert {("implementation", "delay"), ("implementation.noise", "position"), ("disturbance", "current_speed")} <= keys
     assert any(t == "uncertainty" for t, _ in keys) and "every declared effect together" in why["message"]
-    again = _rerun(cfg, why)
-    assert again["guidance"]["certified"] is True and again["certified"] is True
+    _certifies_when_rerun(cfg, why)
 
 
 #: A slow REMUS mission (0.3 m/s) in a current up to 0.5 m/s, its envelope's surge range from 0.5 m/s:
 #: the current hides that the mission itself runs below the envelope until a smaller current is tried.
 SLOW_IN_CURRENT = {
-    **{k: WEAK_CURRENT[k] for k in ("vehicle", "envelope", "actuators", "uncertainty")},
-    "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 15.0], [0.0, 0.0], [0.0, -15.0]]},
+    **WEAK_CURRENT,
     "reference": {"kind": "line", "speed": 0.3, "heading": 0.0},
-    "guidance": {"kind": "ilos", "lookahead": 16.0, "heading_bandwidth": 2.4},
     "disturbance": {"current_speed": 0.5},
 }
 
@@ -319,8 +325,6 @@ SLOW_IN_CURRENT = {
 def test_a_smaller_current_whose_motion_leaves_the_envelope_is_answered_with_the_envelope_it_needs():
     """Regression: "a smaller current certifies" was refused on the envelope when re-run."""
     cfg, data, why = _refused(SLOW_IN_CURRENT, "slow")
-    keys = {(x["table"], x["key"]) for x in why["settings"]}
-    assert keys == {("disturbance", "current_speed"), ("envelope", "u")}, why
+    assert _keys(why) == {("disturbance", "current_speed"), ("envelope", "u")}, why
     assert data["guidance"]["largest_certifiable"]["envelope"] is not None
-    again = _rerun(cfg, why)
-    assert again["guidance"]["certified"] is True and again["certified"] is True
+    _certifies_when_rerun(cfg, why)
