@@ -328,3 +328,23 @@ def test_a_smaller_current_whose_motion_leaves_the_envelope_is_answered_with_the
     assert _keys(why) == {("disturbance", "current_speed"), ("envelope", "u")}, why
     assert data["guidance"]["largest_certifiable"]["envelope"] is not None
     _certifies_when_rerun(cfg, why)
+
+
+@pytest.mark.slow
+def test_a_varying_delay_whose_fixed_version_is_refused_too_is_answered_with_both_changes():
+    """Regression: "set varying_delay = false" was printed without values, and its re-run got none either."""
+    varying = {**EVERYTHING, "implementation": {**EVERYTHING["implementation"], "varying_delay": True}}
+    cfg, data, why = _refused(varying, "varying")
+    assert ("implementation", "varying_delay") in _keys(why) and ("disturbance", "current_speed") in _keys(why)
+    assert data["guidance"]["largest_certifiable"]["supported"]["position_bound"] > 0.0
+    _certifies_when_rerun(cfg, why)
+
+
+def test_a_delay_varying_within_zero_is_the_fixed_zero_delay():
+    """A varying delay of at most 0 s is no delay: certified as the fixed one, not refused as unsupported."""
+    base = preset_config("remus-transit-ilos")
+    timing = [("implementation", "sample_time", 0.1), ("implementation", "delay", 0.0)]
+    fixed, varying = (with_settings(base, [*timing, ("implementation", "varying_delay", v)]) for v in (False, True))
+    a, b = certify(fixed).to_dict(), certify(varying).to_dict()
+    assert a["guidance"]["certified"] is True and b["guidance"]["certified"] is True
+    assert a["guidance"]["error_bounds"] == b["guidance"]["error_bounds"]

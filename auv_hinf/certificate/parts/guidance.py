@@ -286,6 +286,9 @@ class GuidanceSummary:
         ``[envelope]`` (a mission slower than the envelope's surge range, once the current no longer
         hides it): the envelope's ranges widened to hold it, written with the answer
         (:func:`_world_envelope`); empty otherwise.
+    supported_then : str
+        When the change to what this version certifies does not certify alone: the answer of the
+        changed configuration, in words (:attr:`supported` then holds both; :func:`_then`).
     everything : float or None
         When a delay or noise is declared and neither the answers above nor a change of the mission
         certify: the largest scale of every declared effect together (delay, noise, current, box)
@@ -310,6 +313,7 @@ class GuidanceSummary:
     spread: tuple[Setting, ...] = ()
     world_envelope: tuple[Setting, ...] = ()
     everything: float | None = None
+    supported_then: str = ""
 
     @property
     def holds(self) -> bool:
@@ -420,7 +424,9 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             return replace(base, mission=mission_answer(cfg))
         switch = supported_settings(cfg)
         bound = _confirmed(cfg, switch) if switch else None
-        return base if bound is None else replace(base, supported=switch, supported_bound=bound)
+        if bound is not None:
+            return replace(base, supported=switch, supported_bound=bound)
+        return _then(cfg, base, switch)
     if cert.holds and not base.envelope:
         return replace(base, spread=_spread(cfg, cert))
     if base.envelope:
@@ -532,6 +538,25 @@ def _everything_scale(cfg: FormationConfig, problem: CascadeProblem) -> float:
     if scale <= 0.0 or _confirmed(cfg, _everything_settings(cfg, problem, scale)) is None:
         return 0.0
     return scale
+
+
+def _then(cfg: FormationConfig, base: GuidanceSummary, switch: tuple[Setting, ...]) -> GuidanceSummary:
+    """``base`` with the answer of ``cfg`` changed to what this version certifies, when that alone does not certify.
+
+    The changed configuration is answered as a re-run answers it (:func:`_summary`, :func:`_advice`);
+    the switch and that answer together, confirmed by a re-run as written, are the answer
+    (:attr:`GuidanceSummary.supported`, with the answer's words in :attr:`GuidanceSummary.supported_then`).
+    ``base`` unchanged when there is no switch, or no answer of the changed configuration certifies.
+    """
+    changed = _changed(cfg, switch) if switch else None
+    if changed is None:
+        return base
+    settings, words = _advice(changed[0], _summary(_reduced(changed[0])))
+    both = switch + tuple(x for x in settings if x.table != "simulation")
+    bound = _confirmed(cfg, both) if settings else None
+    if bound is None:
+        return base
+    return replace(base, supported=both, supported_bound=bound, supported_then=words)
 
 
 def _world_envelope(
@@ -766,7 +791,7 @@ def _unsupported(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]]]:
                 (Setting("guidance", "kind", "ilos"),),
             )
         )
-    if impl.varying_delay:
+    if impl.varying_delay and impl.delay > 0.0:  # a delay varying within [0, 0] is no delay
         out.append(
             (
                 "the cascade is certified with a fixed [implementation] delay in this version: "
@@ -988,6 +1013,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
     """
     problem = summary.problem
     if problem is None:
+        if summary.supported_bound is not None and summary.supported_then:
+            return summary.supported, (
+                f"changed to what this version certifies, it is still refused, and answered: {summary.supported_then}; "
+                f"both together ({toml_line(summary.supported)}) certify: every vehicle within "
+                f"{upper(summary.supported_bound, 3)} m of its slot"
+            )
         if summary.supported_bound is not None:
             return summary.supported, (
                 f"changed to what this version certifies ({toml_line(summary.supported)}), it is certified: every "
