@@ -31,7 +31,7 @@ from tqdm.auto import tqdm
 from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.deployed import ON_SLOT, deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint, design_point
-from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_advice, tried
+from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_advice, mission_changes, tried
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.parts.closed_loop import full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
@@ -1046,6 +1046,17 @@ def _no_advice(
             advice_settings(together),
             _advice_dict(together),
         )
+    mixed = _mission_together(point)
+    if mixed is not None and (mixed[3] or not exact):
+        what, both, bound, phys = mixed
+        lead = "" if phys else f"{EXACT_ONLY}, "
+        return (
+            f"no declared setting certifies when shrunk, even all together, and neither do {tried(point.config)}; "
+            f"{lead}{CHANGE_WORDS[what]} with the declared settings shrunk together certify: {toml_line(both)} "
+            f"(certified |e| <= {upper(bound, 3)} m)",
+            both,
+            _change_entry(what, both, bound),
+        )
     if exact:  # the last resort: exact measurements, said so
         first = exact[0]
         return (
@@ -1062,6 +1073,35 @@ def _no_advice(
         (),
         None,
     )
+
+
+def _mission_together(point: DesignPoint) -> tuple[str, tuple[Setting, ...], float, bool] | None:
+    """A change of the mission with the declared settings shrunk together, for when neither certifies alone.
+
+    The first kind of :func:`~auv_hinf.certificate.mission_advice.mission_changes` (wider turns,
+    or a slower mission on a line) at its gentlest: the changed configuration's declared noise,
+    delay, current and box are shrunk together as a re-run certifies them
+    (:func:`rerun_together`), and the change and those values together are confirmed by a re-run
+    of the declared configuration as written. Returns the kind, the settings, the certified
+    position bound (m) and whether the values are physical (:func:`physical`), or ``None``.
+    """
+    cfg = point.config
+    changes = mission_changes(cfg)
+    if not changes:
+        return None
+    kind = changes[0][0]
+    settings = [s for what, s in changes if what == kind][-1]
+    try:
+        changed = with_settings(cfg, [(x.table, x.key, x.value) for x in settings])
+        problem = composed_summary(design_point(changed), search=False).problem
+    except AuvHinfError:
+        return None
+    together = None if problem is None else rerun_together(changed, problem)
+    if together is None:
+        return None
+    both = settings + advice_settings(together)
+    bound = covered_position_bound(cfg, both)
+    return None if bound is None else (kind, both, bound, physical(together.scale, together.scaled))
 
 
 #: How an answer that needs exact measurements is introduced: it certifies on re-run, but no
