@@ -549,7 +549,7 @@ def _then(cfg: FormationConfig, base: GuidanceSummary, switch: tuple[Setting, ..
     ``base`` unchanged when there is no switch, or no answer of the changed configuration certifies.
     """
     changed = _changed(cfg, switch) if switch else None
-    if changed is None:
+    if changed is None or supported_settings(changed[0]):  # the switch must make it one this version evaluates
         return base
     settings, words = _advice(changed[0], _summary(_reduced(changed[0])))
     both = switch + tuple(x for x in settings if x.table != "simulation")
@@ -1065,34 +1065,25 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         kept = " with the declared delay and noise" if _navigates(problem) else ""
         return (period,), f"a shorter sample time certifies the declared box and current{kept}: {period.words()}"
     m = summary.mission
-    keeps_world = m is not None and m.scale >= 1.0 and (bool(summary.current_speed) or bool(summary.box_scale))
+    small: tuple[Setting, ...] = ()
     if summary.current_speed is not None and summary.current_speed > 0.0:
-        current = Setting("disturbance", "current_speed", _down(summary.current_speed))
-        if keeps_world and m is not None:
+        small, words = (Setting("disturbance", "current_speed", _down(summary.current_speed)),), "a smaller current"
+    elif summary.box_scale is not None and summary.box_scale > 0.0:
+        small = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
+        words = f"the [uncertainty] box scaled by {summary.box_scale:.3g}"
+    if small:
+        if m is not None and m.scale >= 1.0:  # a weak world: the mission change that keeps the declared one first
             return m.settings, (
-                f"on the declared mission only a smaller current certifies ({current.words()}); keeping the declared "
-                f"current and box, {_mission_sentence(m)}"
+                f"on the declared mission only {words} certifies ({toml_line(small)}); keeping the declared current "
+                f"and box, {_mission_sentence(m)}"
             )
         if summary.world_envelope:
-            return (current, *summary.world_envelope), (
-                f"a smaller current certifies, with the [envelope] widened to hold the motion it leaves "
-                f"(if the model holds there): {toml_line((current, *summary.world_envelope))}"
+            small += summary.world_envelope
+            return small, (
+                f"{words} certifies, with the [envelope] widened to hold the motion it leaves (if the model holds "
+                f"there): {toml_line(small)}"
             )
-        return (current,), f"a smaller current certifies: {current.words()}"
-    if summary.box_scale is not None and summary.box_scale > 0.0:
-        settings = tuple(x for x in _world(cfg, problem, summary.box_scale) if x.table == "uncertainty")
-        if keeps_world and m is not None:
-            return m.settings, (
-                f"on the declared mission only the [uncertainty] box scaled by {summary.box_scale:.3g} certifies "
-                f"({toml_line(settings)}); keeping the declared current and box, {_mission_sentence(m)}"
-            )
-        if summary.world_envelope:
-            settings += summary.world_envelope
-            return settings, (
-                f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies, with the [envelope] widened to "
-                f"hold the motion it leaves (if the model holds there): {toml_line(settings)}"
-            )
-        return settings, f"the [uncertainty] box scaled by {summary.box_scale:.3g} certifies: {toml_line(settings)}"
+        return small, f"{words} certifies: {toml_line(small)}"
     s0 = summary.together or 0.0
     if s0 > 0.0 and (m is None or (m.scale < 1.0 and m.scale <= MISSION_OVER_TOGETHER * s0)):
         world = _world(cfg, problem, s0)
