@@ -250,9 +250,9 @@ def check_run(
         worst = min(("u_hi", "u_lo", "v_hi", "v_lo", "r_hi", "r_lo"), key=lambda f: getattr(marg, f))
         unit = "rad/s" if worst.startswith("r") else "m/s"
         side = "upper" if worst.endswith("hi") else "lower"
-        channel = {"u": "surge", "v": "sway", "r": "yaw-rate"}[worst[0]]
+        channel = {"u": "surge speed", "v": "sway speed", "r": "yaw rate"}[worst[0]]
         reason = (
-            f"not covered: the {channel} speed would cross the envelope's {side} edge "
+            f"not covered: the {channel} would cross the envelope's {side} edge "
             f"(certified margin {getattr(marg, worst):.4g} {unit} < 0)"
         )
     elif actuators is not None and thrust is not None and not actuators.admits(thrust.as_tuple()):

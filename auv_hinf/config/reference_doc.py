@@ -85,6 +85,11 @@ speed as surge and its turn rate as yaw rate. That start has zero tracking error
 closed-loop certificate covers it at every fleet size without a blended start, and `certify`
 and `simulate` judge the same start. A declared `initial` is checked as given (with a blended
 start when it is off the slots).
+A `[guidance]` fleet (propeller and rudder) starts on its slots heading into the current it runs
+in (its crab), the ILOS state holding it. A declared `initial` is judged in *every* current up to
+`[disturbance] current_speed`: a heading that is the crab of one current is a heading error in
+the others, so even a start written on the slots for the configured current can be refused where
+the default start certifies; the refusal then answers with `[simulation] initial` removed.
 
 ## A minimal file
 

@@ -186,6 +186,9 @@ _RATE_TEXT = f"faster than these vehicles turn (|rate| > {MAX_RATE:g} rad/s = {m
 _SPEED_TEXT = f"faster than these vehicles go (|speed| > {MAX_SPEED:g} m/s)"
 
 
+_DISTANCE_TEXT = f"farther than any formation spans (|coordinate| > {MAX_COORDINATE:g} m)"
+
+
 def speed_misfit(speed: float, u: Sequence[float]) -> str | None:
     """Why a reference ``speed`` cannot be meant for the surge range ``u``, or ``None`` when it can.
 
@@ -706,9 +709,11 @@ _ENVELOPE_LIMITS = {
 }
 
 
-#: The columns of a ``simulation.initial`` row that carry an angle, a speed or a rate: column -> (name, unit,
-#: largest magnitude, words).
+#: The columns of a ``simulation.initial`` row, each with its range: column -> (name, unit, largest
+#: magnitude, words).
 _STATE_LIMITS = {
+    0: ("x", "m", MAX_COORDINATE, _DISTANCE_TEXT),
+    1: ("y", "m", MAX_COORDINATE, _DISTANCE_TEXT),
     2: ("psi", "rad", MAX_ANGLE, _ANGLE_TEXT),
     3: ("u", "m/s", MAX_SPEED, _SPEED_TEXT),
     4: ("v", "m/s", MAX_SPEED, _SPEED_TEXT),

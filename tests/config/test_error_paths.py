@@ -180,3 +180,32 @@ def test_every_config_error_names_the_toml_key_and_no_class(case, document, key,
     assert all(line.startswith(prefix) for line in lines), err
     assert any(key in line for line in lines), (key, err)
     assert _class_names_in(err) == [], err
+
+
+@pytest.mark.parametrize("column, name", [(0, "x"), (1, "y")])
+def test_a_start_position_beyond_any_formation_is_refused_with_its_row_and_unit(column, name, tmp_path: Path, capsys):
+    """Regression: x = 1e9 m in ``[simulation] initial`` was accepted, and ``simulate`` ran for minutes."""
+    from auv_hinf.config.schema import MAX_COORDINATE
+
+    rows = [list(r) for r in ROWS]
+    rows[1][column] = 10.0 * MAX_COORDINATE
+    path = tmp_path / "far.toml"
+    path.write_text(to_toml({"simulation": {"initial": rows}}))
+    assert main(["certify", "--config", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"simulation.initial: row 1 (vehicle 2), {name} = 1e+07 m" in err and "Traceback" not in err
+    rows[1][column] = MAX_COORDINATE  # the largest coordinate accepted
+    path.write_text(to_toml({"simulation": {"initial": rows}}))
+    assert "simulation.initial" not in _config_error(path)
+
+
+def _config_error(path: Path) -> str:
+    """The message of the error loading ``path`` raises (empty when it loads)."""
+    from auv_hinf.config.settings import load_config
+    from auv_hinf.exceptions import ConfigError
+
+    try:
+        load_config(path)
+    except ConfigError as exc:
+        return str(exc)
+    return ""
