@@ -68,7 +68,9 @@ def test_cli_keys_and_a_too_tight_turn_is_refused_before_simulating(tmp_path, ca
     loop = json.loads(out.out)["closed_loop"]
     assert loop["reference_inside_envelope"] == [False, True, True, False, False]
     assert set(loop["binding"]) >= {"vehicle", "time", "channel"} and loop["binding"]["vehicle"] in (0, 3, 4)
-    assert "smallest turn radius that fits: 30.06 m" in out.err
+    # the smallest radius that fits (30.06... m), printed rounded up so that the printed radius fits
+    smallest = loop["reference_fit"]["smallest_turn_radius"]
+    assert 30.06 <= smallest < 30.07 and "smallest turn radius that fits: 30.07 m" in out.err
     assert main(["simulate", "--config", str(path), "--json"]) == EXIT_NEGATIVE
     err = capsys.readouterr().err
     assert "refusing to simulate" in err and "smallest turn radius that fits" in err and "Traceback" not in err
