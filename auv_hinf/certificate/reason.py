@@ -10,11 +10,11 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from decimal import ROUND_CEILING, Decimal
 from typing import Any, Literal, get_args
 
 from auv_hinf.config.schema import key_unit
 from auv_hinf.exceptions import DesignError, SolverError
+from auv_hinf.numerics.digits import significant
 
 #: What a reason says, in one word (``Reason.kind``):
 #:
@@ -74,9 +74,7 @@ def upper(x: float, digits: int = 3) -> str:
     """
     if not math.isfinite(x) or x == 0.0:
         return f"{x:g}"
-    d = Decimal(repr(float(x)))
-    q = d.quantize(Decimal(1).scaleb(d.adjusted() - digits + 1), rounding=ROUND_CEILING)
-    return f"{float(q):.{digits}g}"
+    return f"{significant(x, digits, up=True):.{digits}g}"
 
 
 def apart(value: float, bound: float, digits: int = 4) -> tuple[str, str]:

@@ -17,7 +17,6 @@ and the largest formation scale that fit.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,6 +29,7 @@ from auv_hinf.mission.paths import MissionReference
 from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.numerics.bisection import largest_holding
+from auv_hinf.numerics.digits import significant
 
 #: Relative width at which the bisections on the turn radius and on the offsets' scale stop (the
 #: resolution of the start regions' bisections, far below any physical tolerance of a turn).
@@ -87,20 +87,10 @@ class Binding:
         }
 
 
-#: Significant digits of the turn radius and offset a refusal advises.
+#: Significant digits of the turn radius and offset a refusal advises, each rounded to the side
+#: that fits (:func:`~auv_hinf.numerics.digits.significant`): a smallest radius of 20.00015 m
+#: printed as "20 m" would be the declared radius that does not fit.
 ADVISED_DIGITS = 4
-
-
-def _rounded(x: float, towards: Callable[[float], int]) -> float:
-    """``x`` to :data:`ADVISED_DIGITS` significant digits, rounded by ``towards`` (``math.ceil`` or ``math.floor``).
-
-    An advised value is rounded to the side that fits: a smallest radius of 20.00015 m printed as
-    "20 m" would be the declared radius that does not, and a re-run would be refused again.
-    """
-    if not math.isfinite(x) or x <= 0.0:
-        return x
-    unit = 10.0 ** (math.floor(math.log10(x)) - ADVISED_DIGITS + 1)
-    return float(f"{towards(x / unit) * unit:.{ADVISED_DIGITS}g}")
 
 
 @dataclass(frozen=True)
@@ -158,9 +148,11 @@ class ReferenceFit:
             + ("" if math.isinf(self.turn_radius) else f" (turn radius {self.turn_radius:.4g} m)")
         ]
         if self.smallest_radius is not None:
-            out.append(f"smallest turn radius that fits: {_rounded(self.smallest_radius, math.ceil):.4g} m")
+            radius = significant(self.smallest_radius, ADVISED_DIGITS, up=True)
+            out.append(f"smallest turn radius that fits: {radius:.4g} m")
         if self.largest_offset is not None:
-            out.append(f"largest offset that fits (shape scaled): {_rounded(self.largest_offset, math.floor):.4g} m")
+            offset = significant(self.largest_offset, ADVISED_DIGITS, up=False)
+            out.append(f"largest offset that fits (shape scaled): {offset:.4g} m")
         return "; ".join(out)
 
     def to_dict(self) -> dict[str, Any]:

@@ -476,8 +476,9 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         and period is None
         and not certify_cascade(bare, cells=False).holds
     )
+    world_answer = gains is None and not lag_scale and period is None  # the answer is a smaller current or box
     world_env: tuple[Setting, ...] = ()
-    if gains is None and not lag_scale and period is None and (current or scale):
+    if world_answer and (current or scale):
         world_env = _world_envelope(cfg, problem, current, scale)
     if bool(current) or bool(scale) or gains is not None or bool(lag_scale) or period is not None or not bounded:
         return GuidanceSummary(
@@ -488,9 +489,7 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             scale,
             gains,
             binds,
-            _world_keeping_mission(cfg, problem, current, scale)
-            if gains is None and not lag_scale and period is None
-            else None,
+            _world_keeping_mission(cfg, problem, current, scale) if world_answer else None,
             lag_scale=lag_scale or None,
             sample_time=period,
             world_envelope=world_env,
