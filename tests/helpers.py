@@ -90,6 +90,23 @@ DEPLOYED_BOXED = {
 }
 
 
+#: A BlueROV2-sized vehicle written as a ``[vehicle]`` table (figures near the preset's, perturbed,
+#: no linear sway or yaw drag): a vehicle no preset names, as a user's own file gives it.
+ROV_LIKE_VEHICLE: dict[str, float] = {
+    "m11": 23.8,
+    "m22": 17.5,
+    "m33": 0.74,
+    "d11_lin": 10.96,
+    "d11_quad": 162.0,
+    "d22_lin": 0.0,
+    "d22_quad": 163.0,
+    "d33_lin": 0.0,
+    "d33_quad": 1.95,
+}
+#: Four of them in a line (the paper's Jacobi shape coordinates, m): neighbouring slots 4 m apart.
+ROV_LINE_SHAPE = [[0.0, -4.0], [0.0, -6.0], [0.0, -8.0]]
+
+
 def starts_from_errors(fleet: FleetReference, errors: np.ndarray) -> np.ndarray:
     """Initial states ``(..., n, 6)`` whose errors against ``fleet`` at ``t = 0`` are ``errors``."""
     m = fleet.motion(0.0)

@@ -398,25 +398,32 @@ def force_floor(vehicle: VehicleParams, gains: Gains, envelope: Envelope) -> dic
 def certified_thrust_of(plan: RunPlan) -> dict[str, float] | None:
     """The certified commanded-force bound of the run (N, N, N m), or ``None`` when none bounds it.
 
-    The deployed loop's composed certificate when it covers the run (its whole-run force bound;
-    with a sampled law no other certificate bounds the force), else the nominal closed-loop
-    certificate's over its start region; each channel with its
-    numerical floor (:func:`force_floor`), as the certified errors carry theirs, so that the
-    simulated run's ``commanded_peak`` is compared with what a computed trajectory can reach.
+    The bound of the certificate that covers the run: the deployed loop's composed certificate
+    (its whole-run force bound; with a sampled law no other certificate bounds the force), else the
+    nominal closed-loop certificate's over its start region when it covers the run (the controller's
+    model in still water), else the robust certificate's over its invariant set when it covers the
+    run (a plant of the box, a current within the bound); each channel with its numerical floor
+    (:func:`force_floor`), as the certified errors carry theirs, so that the simulated run's
+    ``commanded_peak`` is compared with what a computed trajectory can reach.
 
     Parameters
     ----------
     plan : RunPlan
         The planned run.
     """
-    composed = next((c for c in plan.checks if c.part == "composed" and c.covers and c.thrust is not None), None)
+    covering = {c.part: c for c in plan.checks if c.covers}
     cov, cfg = plan.coverage, plan.design.config
-    if composed is not None:
+    composed, robust = covering.get("composed"), covering.get("robust")
+    if composed is not None and composed.thrust is not None:
         bound = dict(composed.thrust.to_dict())
-    elif cfg.implementation.sampled or cov is None or cov.thrust is None:
-        return None  # the continuous law's start-region force does not bound the held, delayed, noisy law's
-    else:
+    elif cfg.implementation.sampled:
+        return None  # the continuous law's force bounds do not bound the held, delayed, noisy law's
+    elif "closed_loop" in covering and cov is not None and cov.thrust is not None:
         bound = dict(cov.thrust.to_dict())
+    elif robust is not None and robust.thrust is not None:
+        bound = dict(robust.thrust.to_dict())
+    else:
+        return None  # the nominal bound holds for the controller's model in still water only
     floor = force_floor(cfg.vehicle, plan.design.require_gains(), cfg.envelope)
     return {k: float(b) + floor[k] for k, b in bound.items()}
 
@@ -561,7 +568,9 @@ _NULL_REASONS = {
     "certified_decay_rate": "no closed-loop certificate",
     "certified_errors": "no certificate covers the run's start",
     "certified_errors_source": "no certified_errors",
-    "certified_thrust": "no certificate bounds the run's force (a sampled law's: only the composed certificate does)",
+    "certified_thrust": (
+        "no certificate that covers the run bounds its force (a sampled law's: only the composed certificate does)"
+    ),
     "robust_covers_run": "no [uncertainty] box or [disturbance] current declared",
     "robust_bounds": "no robust bound for this run (none declared, or not covered)",
     "robust_reason": "no [uncertainty] box or [disturbance] current declared",

@@ -83,8 +83,10 @@ presets, and as the default of `auv-hinf design --k1`. Only the robust design
 its desired position on the raw mission at t = 0, heading along the path, with the path's
 speed as surge and its turn rate as yaw rate. That start has zero tracking error, so the
 closed-loop certificate covers it at every fleet size without a blended start, and `certify`
-and `simulate` judge the same start. A declared `initial` is checked as given (with a blended
-start when it is off the slots).
+and `simulate` judge the same start. A declared `initial` is checked as given, in the
+`[simulation] start` mode that `simulate` runs: `"shaped"` (the default) blends the reference from
+it when it is off the slots, `"paper"` tracks the raw mission from it; a raw start that only the
+blend covers is refused with `start = "shaped"` as the answer.
 A `[guidance]` fleet (propeller and rudder) starts on its slots heading into the current it runs
 in (its crab), the ILOS state holding it. A declared `initial` is judged in *every* current up to
 `[disturbance] current_speed`: a heading that is the crab of one current is a heading error in

@@ -805,7 +805,8 @@ class SimulationTable(_Table):
     horizon: float = _field(300.0, "simulated time", "s", gt=0.0, le=MAX_HORIZON)
     start: StartKind = _field(
         "shaped",
-        "shaped: the reference blends from the actual start; paper: raw reference",
+        "shaped: the reference blends from the actual start; paper: raw reference "
+        "(certify judges the start in this mode, as simulate runs it)",
     )
     initial: list[StateRow] | None = _field(
         None,

@@ -44,6 +44,12 @@ CHANNELS = (
     ("yaw_rate", "upper"),
     ("yaw_rate", "lower"),
 )
+#: A desired motion at most this far outside an edge (m/s, rad/s) is on it up to the tube's outward
+#: rounding (:data:`~auv_hinf.mission.tubes.TUBE_RTOL` of the speeds, below 1e-7 in any valid envelope):
+#: a refusal says it reaches the edge, not that it leaves it by a number of rounding's size.
+EDGE_TOUCH = 1e-6
+#: The ``[envelope]`` key of each channel.
+ENVELOPE_KEYS = {"surge": "u", "sway": "v", "yaw_rate": "r"}
 #: Samples of the desired motion over one period of the mission when locating the binding turn.
 WITNESS_SAMPLES = 20_001
 #: Span (s) searched for the binding turn when the mission has no period (a line).
@@ -141,9 +147,22 @@ class ReferenceFit:
             if self.frame == "path"
             else "every vehicle (inertial frame: each moves as the centre path)"
         )
+        channel = b.channel.replace("_", " ")
+        if -b.margin <= EDGE_TOUCH:
+            # on the edge to the tube's rounding: no room is left for the tracking errors, whose bounds the
+            # certificate keeps inside the envelope with the desired motion
+            key = ENVELOPE_KEYS[b.channel]
+            head = (
+                f"the desired motion of {who} reaches the envelope's {b.edge} {channel} edge (within "
+                f"{-b.margin:.2g} {unit} of rounding), which leaves no room for the tracking errors: widen "
+                f"[envelope] {key} past it or change the mission to stay inside it"
+            )
+        else:
+            head = (
+                f"the desired motion of {who} leaves the envelope's {b.edge} {channel} edge by {-b.margin:.4g} {unit}"
+            )
         out = [
-            f"the desired motion of {who} leaves the envelope's {b.edge} "
-            f"{b.channel.replace('_', ' ')} edge by {-b.margin:.4g} {unit}"
+            head
             + ("" if b.time is None else f", first at t = {b.time:.4g} s")
             + ("" if math.isinf(self.turn_radius) else f" (turn radius {self.turn_radius:.4g} m)")
         ]

@@ -128,6 +128,10 @@ def test_every_recorded_number_is_reproduced(key: str, tmp_path: Path) -> None:
             # 0.2.0 gave the nominal certificate's refusal next to a run another certificate covers;
             # the reason now names the certificate that covers
             assert new == f"covered by the {' and '.join(now['covered_by'])} certificate", (key, new, old)
+        elif path == "/closed_loop/shaped_start/start":
+            # 0.2.0's certify judged every start shaped; it now judges the configured [simulation] start,
+            # the mode simulate runs (remus-line starts "paper": on its slots, no blend either way)
+            assert new == preset_config(preset).simulation.start, (key, new, old)
         elif isinstance(old, bool) or not isinstance(old, (int, float)):
             assert new == old, f"{key}{path}: {new!r} != recorded {old!r}"
         elif "/certified_errors/" in path and now.get("certified_errors_source") == "robust":
@@ -138,6 +142,11 @@ def test_every_recorded_number_is_reproduced(key: str, tmp_path: Path) -> None:
         elif "/certified_errors/" in path:
             # since the user's-path work the certified errors carry the integrator's numerical floor
             assert math.isclose(new, max(old, NUMERICAL_FLOOR), rel_tol=RTOL, abs_tol=ATOL), (key, path, new, old)
+        elif path.startswith("/certified_thrust/") and "closed_loop" not in now["covered_by"]:
+            # 0.2.0 gave the nominal certificate's force bound to a run only the robust one covers (its
+            # current is not the model's still water); the bound is now the covering certificate's
+            channel = path.rsplit("/", 1)[1]
+            assert now["commanded_peak"][channel] <= new, (key, path, new)
         elif any(t in path for t in TIGHTENED):
             assert new <= old * (1 + RTOL), f"{key}{path}: {new!r} looser than recorded {old!r}"
         elif path.startswith(ROBUST_TIGHTENED + ROBUST_SMALLER) or (

@@ -151,3 +151,43 @@ def test_several_refusals_say_which_parts_give_values(parts, says, not_says):
     assert says in line and not_says not in line, line
     if "every part" in says:
         assert "(robust gives none)" in line
+
+
+@pytest.mark.parametrize(
+    ("delay", "noise", "named"),
+    [
+        (0.0, {"heading": 0.01}, ["[implementation.noise] heading (0.01 rad)"]),
+        (0.1, {"position": 0.5, "yaw_rate": 0.002}, ["delay (0.1 s)", "position (0.5 m)", "yaw_rate (0.002 rad/s)"]),
+    ],
+)
+def test_no_covered_sample_time_names_each_declared_noise_bound_with_its_value(delay, noise, named):
+    from auv_hinf.certificate.parts.implementation import no_sample_time_covered
+    from auv_hinf.implementation.model import Implementation, MeasurementNoise
+
+    text = no_sample_time_covered(Implementation(0.1, delay, noise=MeasurementNoise(**noise)))
+    for words in named:
+        assert words in text
+    for key in {"position", "velocity", "heading", "yaw_rate"} - set(noise):
+        assert f"] {key} (" not in text  # nothing undeclared is asked to be reduced
+    if not delay:
+        assert "delay (" not in text
+
+
+def test_a_sampled_law_the_composed_certificate_refuses_gets_no_sample_time_from_the_stand_in():
+    """With a sampled formation law the composed certificate judges the deployed loop; the implementation
+    part's own covered sample time is not the deployed loop's (the composed part refuses at it too), so it
+    is reported, not advised: the values to write are the composed part's."""
+    tables = {
+        "vehicle": {"m11": 230.0, "m22": 212.0, "m33": 92.0, "d11_lin": 59.5, "d11_quad": 121.0}
+        | {"d22_lin": 83.0, "d22_quad": 236.0, "d33_lin": 61.0, "d33_quad": 74.0},
+        "formation": {"n": 2, "polygon_radius": 10.0},
+        "envelope": {"u": [0.0, 3.5], "v": [-1.5, 1.5], "r": [-0.5, 0.5]},
+        "reference": {"kind": "sine", "speed": 1.0, "amplitude": 30.0, "omega": 0.1},
+        "implementation": {"sample_time": 0.1},
+    }
+    cert = certify(config_from_dict(tables, "sampled sine"))
+    by_part = {r.part: r for r in cert.findings}
+    assert not cert.certified and {"composed", "implementation"} <= set(by_part)
+    assert by_part["composed"].settings
+    assert by_part["implementation"].settings == ()
+    assert "sample times up to" in by_part["implementation"].message  # still said, as what its own certificate covers

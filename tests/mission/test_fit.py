@@ -94,3 +94,20 @@ def test_an_advised_radius_is_rounded_to_the_side_that_fits():
     offset = float(words.split("largest offset that fits (shape scaled): ")[1].split(" m")[0])
     assert radius >= 20.00015 and radius == 20.01 and offset <= 20.3999 and offset == 20.39
     assert not math.isclose(radius, fit.turn_radius, rel_tol=1e-9)
+
+
+@pytest.mark.parametrize("edge", ["upper", "lower"])
+def test_a_mission_on_an_edge_is_told_it_reaches_it_and_one_past_it_by_how_much(edge):
+    from auv_hinf.mission.fit import EDGE_TOUCH
+    from auv_hinf.mission.paths import LineReference
+
+    line = LineReference(speed=SPEED)
+    on = Envelope(u=(0.5, SPEED) if edge == "upper" else (SPEED, 2.5), v=(-0.3, 0.3), r=(-0.3, 0.3))
+    fit = reference_fit(line, LINE_ABREAST, "inertial", on)
+    assert not fit.ok and fit.binding is not None and fit.binding.edge == edge
+    assert 0.0 < -fit.binding.margin <= EDGE_TOUCH  # outside by the tube's rounding only
+    assert f"reaches the envelope's {edge} surge edge" in fit.reason() and "widen [envelope] u" in fit.reason()
+    past = 1e-3 if edge == "upper" else -1e-3  # m/s: a real overshoot is given as a number
+    beyond = Envelope(u=(0.5, SPEED - past) if edge == "upper" else (SPEED - past, 2.5), v=on.v, r=on.r)
+    text = reference_fit(line, LINE_ABREAST, "inertial", beyond).reason()
+    assert f"leaves the envelope's {edge} surge edge by 0.001" in text and "reaches" not in text

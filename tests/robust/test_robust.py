@@ -219,7 +219,7 @@ def test_a_run_only_the_robust_certificate_covers_is_compared_with_its_bounds():
     simulated at the box's low corner, the nominal certificate does not cover the run and the robust
     one does, so the run's ``certified_errors`` are the robust bounds (not the nominal certificate's
     1e-5 floor), and the run is inside them."""
-    from auv_hinf.certificate.run_plan import plan_run, run_report
+    from auv_hinf.certificate.run_plan import force_floor, plan_run, run_report
     from auv_hinf.config.settings import config_from_dict
 
     box = {k: [0.95, 1.05] for k in ("m11", "m22", "m33")} | {
@@ -237,6 +237,13 @@ def test_a_run_only_the_robust_certificate_covers_is_compared_with_its_bounds():
     assert report["certified_errors"] == {f"{k}_error": v for k, v in report["robust_bounds"].items()}
     for k, v in report["measured_errors"].items():
         assert v <= report["certified_errors"][k], (k, v)
+    # its force bound is the robust certificate's too (the nominal one holds for the model in still water)
+    robust = next(c for c in plan.checks if c.part == "robust")
+    floor = force_floor(plan.design.config.vehicle, plan.design.require_gains(), plan.design.config.envelope)
+    expected = {k: b + floor[k] for k, b in robust.thrust.to_dict().items()}
+    assert report["certified_thrust"] == pytest.approx(expected, rel=1e-12)
+    for k, v in report["commanded_peak"].items():
+        assert v <= report["certified_thrust"][k], (k, v)
 
 
 def test_a_run_outside_the_box_names_every_multiplier_outside():

@@ -31,7 +31,7 @@ from auv_hinf.implementation.sampled_data import (
     lag_limits,
 )
 from auv_hinf.implementation.sampled_loop import control_period
-from auv_hinf.mission.margins import ErrorBounds
+from auv_hinf.mission.margins import ERROR_UNITS, ErrorBounds
 from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
@@ -257,8 +257,11 @@ def no_sample_time_covered(impl: Implementation) -> str:
     declared = []
     if impl.delay > 0.0:
         declared.append(f"[implementation] delay ({impl.delay:.4g} s)")
-    if not impl.noise.exact:
-        declared.append("[implementation.noise]")
+    noise = impl.noise
+    for key, unit in ERROR_UNITS.items():  # the bounds of [implementation.noise] share the errors' names
+        value = getattr(noise, key)
+        if value > 0.0:
+            declared.append(f"[implementation.noise] {key} ({value:.4g} {unit})")
     if declared:
         return f"no sample time is covered with this delay and noise on this mission: reduce {' or '.join(declared)}"
     return (
@@ -366,9 +369,10 @@ class ImplementationPart:
             return Verdict(
                 self.name, True, declared, (), impl.to_dict(), binding=binding, detail=impl, position_bound=bound
             )
-        covered = impl.covered_sample_time
         # a sampled formation law is judged by the composed certificate first: this one only stands in for it
-        # when it does not cover, and its own limits are not the deployed loop's
+        # when it does not cover, and its own limits are not the deployed loop's, so its covered sample time
+        # is no answer there (the composed part refuses at it too, and gives its own)
+        covered = None if run.sampled else impl.covered_sample_time
         own = " by its own certificate (the composed certificate judges the deployed loop)" if run.sampled else ""
         why = Reason(
             self.name,

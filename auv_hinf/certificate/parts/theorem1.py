@@ -13,7 +13,7 @@ holds unless the cross-check disagrees, and the robust part is the verdict on th
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
@@ -23,6 +23,7 @@ from auv_hinf.design.jacobi_sigma import jacobi_sigma_bounds
 from auv_hinf.design.sigma import SigmaBounds
 from auv_hinf.design.theorem1 import GainDesign, Theorem1Conditions, position_loop, theorem1_conditions
 from auv_hinf.law.gains import Gains
+from auv_hinf.numerics.digits import significant
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
 #: ``A_lam = lam I`` every 2x2 channel is identical, so a larger problem checks nothing
@@ -52,6 +53,37 @@ MARGIN_RTOL = 1e-9
 #: The ``[design] gamma`` suggested when the margin is marginal: this fraction of ``1/sigma_upper``
 #: (the small-gain margin is then ``(1/0.99 - 1) sigma_upper``, far above the tolerance).
 GAMMA_ADVICE_SHARE = 0.99
+#: Significant digits of the advised gamma, rounded down (:func:`advised_gamma`).
+ADVICE_DIGITS = 4
+
+
+def advised_gamma(sigma_upper: float) -> float:
+    """The ``[design] gamma`` (s) advised below ``1/sigma_upper``: :data:`GAMMA_ADVICE_SHARE` of it, rounded down.
+
+    It keeps :data:`ADVICE_DIGITS` significant digits, rounded further below, so its margin only grows.
+
+    Parameters
+    ----------
+    sigma_upper : float
+        The upper bound of sigma over the envelope (1/s).
+    """
+    return significant(GAMMA_ADVICE_SHARE / sigma_upper, ADVICE_DIGITS, up=False)
+
+
+def _minimal_answer(reason: Reason, gamma: float, sigma_upper: float) -> Reason:
+    """``reason`` (eq. (37) has no real root at ``gamma``) with the values that certify the small gain.
+
+    The minimal gain ``alpha = max(0, 1/gamma + lam)`` has no Theorem 1 bound on ``gamma``, and for
+    ``gamma < 1/sigma_upper`` its small-gain margin is positive: ``1/gamma - sigma_upper``, or
+    ``|lam| - sigma_upper >= 1/gamma - sigma_upper`` when the clamp is active. A ``gamma`` that is not
+    below :data:`GAMMA_ADVICE_SHARE` of ``1/sigma_upper`` is advised down to it (margin
+    ``(1/0.99 - 1) sigma_upper``, far above :data:`MARGIN_RTOL`).
+    """
+    fix: tuple[Setting, ...] = (Setting("design", "method", "minimal"),)
+    if gamma >= GAMMA_ADVICE_SHARE / sigma_upper:
+        fix += (Setting("design", "gamma", advised_gamma(sigma_upper)),)
+    words = ", ".join(f.toml() for f in fix)
+    return replace(reason, message=f"{reason.message} ({words} certifies the small gain)", settings=fix)
 
 
 @dataclass(frozen=True)
@@ -192,11 +224,13 @@ class Theorem1Part:
         used = point.designs.get(config.method)
         alpha = None if used is None else used.alpha
         reasons = [] if used is not None else [r for r in point.reasons if r.part == self.name]
+        if used is None and config.method != "minimal" and not cond.gamma_ok:
+            reasons = [_minimal_answer(r, gamma, sig.upper) if r.kind == "design" else r for r in reasons]
         margin = pos = None
         if alpha is not None:
             margin = (alpha - lam) - sig.upper
             margin_tol = MARGIN_RTOL * (abs(lam) + sig.upper)
-            advice = (Setting("design", "gamma", GAMMA_ADVICE_SHARE / sig.upper),)
+            advice = (Setting("design", "gamma", advised_gamma(sig.upper)),)
             if config.method == "minimal" and config.gamma is None and alpha > 0:
                 reasons.append(
                     Reason(
@@ -204,7 +238,7 @@ class Theorem1Part:
                         "marginal",
                         f"not certified (marginal): method 'minimal' with gamma = 1/sigma_upper has "
                         f"small-gain margin 0 by construction (computed {margin:.4g} 1/s); set "
-                        "design.gamma below 1/sigma",
+                        f"design.gamma below 1/sigma ({advice[0].toml()} certifies it)",
                         channel="small_gain_margin",
                         value=margin,
                         limit=margin_tol,
@@ -303,6 +337,7 @@ class Theorem1Part:
 
 
 __all__ = [
+    "ADVICE_DIGITS",
     "CROSSCHECK_MAX_N",
     "DEFAULT_JACOBI_SAMPLES",
     "GAMMA_ADVICE_SHARE",
@@ -312,5 +347,6 @@ __all__ = [
     "MARGIN_RTOL",
     "Theorem1Part",
     "Theorem1Result",
+    "advised_gamma",
     "figures",
 ]
