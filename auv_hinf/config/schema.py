@@ -446,7 +446,8 @@ class ImplementationTable(_Table):
 
     sample_time: float = _field(
         0.0,
-        "control period, forces held between samples (0: continuous; else at least 0.001 s, 1 kHz)",
+        "control period, forces held between samples (0: continuous, and a [guidance] fleet's autopilot at "
+        "10 Hz; else at least 0.001 s, 1 kHz)",
         "s",
         ge=0.0,
         le=60.0,

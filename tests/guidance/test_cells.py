@@ -277,3 +277,34 @@ def test_a_refusal_by_the_cells_names_only_what_was_cut(masses):
     assert not cert.holds
     assert "cells of the current do not certify either" in cert.reason
     assert "masses" not in cert.reason.split("cells of")[1].split(":")[0]
+
+
+#: Three REMUS 100 line abreast on a lawn-mower (150 m turns) with masses +-3 % and damping +-20 % in a
+#: 0.2 m/s current: refused; the whole box at once certifies only a current below 0.005 m/s, its cells
+#: certify several times more.
+TURNING = {
+    "vehicle": {"preset": "remus100"},
+    "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0]]},
+    "reference": {"kind": "lawnmower", "speed": 1.5, "leg_length": 400.0, "spacing": 600.0, "turn_radius": 150.0},
+    "actuators": {"preset": "remus100"},
+    "guidance": {"kind": "ilos", "heading_bandwidth": 2.4, "lookahead": 16.0},
+    "uncertainty": {k: [0.97, 1.03] for k in ("m11", "m22", "m33")}
+    | {k: [0.8, 1.2] for k in ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")},
+    "disturbance": {"current_speed": 0.2},
+}
+
+
+@pytest.mark.slow
+def test_the_advised_smaller_current_is_raised_by_cells_and_certifies_when_rerun():
+    from auv_hinf.certificate.assembly import certify
+    from auv_hinf.certificate.parts.guidance import _kept_apart, _with
+
+    cfg = config_from_dict(TURNING, "turning box")
+    summary = guidance_summary(cfg)
+    assert not summary.holds and summary.current_speed is not None
+    advised = summary.current_speed
+    # above what the whole box certifies at once: that test refuses the advised current
+    assert not _kept_apart(cfg, _with(cfg, summary.problem, current=advised))
+    rerun = config_from_dict(TURNING | {"disturbance": {"current_speed": advised}}, "turning box, advised")
+    cert = certify(rerun)
+    assert cert.verdict("guidance").ok, cert.reasons

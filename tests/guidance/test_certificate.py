@@ -258,6 +258,8 @@ def test_gains_that_certify_the_declared_world_are_advised_first_and_certify_on_
     assert settings and set(settings) <= {("guidance", "heading_bandwidth"), ("guidance", "lookahead")}
     declared = cfg.guidance
     assert all(v != getattr(declared, k) for (_, k), v in settings.items())
+    message = data["parts"]["guidance"]["reasons"][0]["message"]
+    assert "rad/s (rad/s" not in message and "m (m)" not in message  # each value once with its unit
     gains = {k: v for (t, k), v in settings.items()}
     again = certify(transit(disturbance={"current_speed": 0.2}, guidance={"kind": "ilos", **gains})).to_dict()
     assert again["certified"] is True

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -47,6 +47,7 @@ from auv_hinf.cascade.certificate import (
     CascadeCertificate,
     CascadeProblem,
     certify_cascade,
+    current_cells_apply,
     into_current_start,
     start_states,
 )
@@ -446,6 +447,14 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         scale = largest_holding(lambda s: _kept_apart(cfg, _with(cfg, problem, scale=s)), top, steps=ADVICE_STEPS)
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
     gains = _certifying_gains(problem) if bounded else None
+    if gains is None:  # the smaller world is the answer: raised where cells of the box certify more
+        if current is not None:
+            current = _by_cells(
+                cfg, problem, current, problem.plant.current, lambda c: _with(cfg, problem, current=c), _down
+            )
+        if scale is not None:
+            top = min(1.0, problem.plant.box.max_scale)
+            scale = _by_cells(cfg, problem, scale, top, lambda s: _with(cfg, problem, scale=s), rounded_down)
     lag_scale = None
     if gains is None and bounded and _navigates(problem):
         lag_scale = _lag_scale(problem)
@@ -914,6 +923,55 @@ def _spread(cfg: FormationConfig, cert: CascadeCertificate) -> tuple[Setting, ..
     return ()
 
 
+#: Larger values of an advised current or box scale tried with cells of the box (:func:`_by_cells`), each the
+#: geometric middle of the last one certified and the declared one.
+CELL_PROBES = 2
+
+
+def _by_cells(
+    cfg: FormationConfig,
+    problem: CascadeProblem,
+    found: float | None,
+    declared: float,
+    changed: Callable[[float], CascadeProblem],
+    written: Callable[[float], float],
+) -> float | None:
+    """``found`` (the largest value that certifies the whole box at once), raised where cells of the box certify.
+
+    The bisection of an advised current or box scale certifies the whole box at once, the cheap test;
+    the re-run certifies with cells (:func:`~auv_hinf.cascade.certificate.certify_cascade`), which holds
+    for more. Up to :data:`CELL_PROBES` values are tried, each the geometric middle of the last value that
+    certified and the declared one, as written (``written`` rounds it to the certified side), and the
+    last that certifies with cells and keeps ``[formation] min_separation`` is the answer; a probe that is
+    refused ends the search (each costs at most :data:`~auv_hinf.cascade.certificate.MAX_CELLS` cells).
+    Without cells to cut (no box, and a mission that turns) ``found`` is the answer.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration.
+    problem : CascadeProblem
+        Its cascade.
+    found : float or None
+        The bisection's answer (``None``: nothing certifies, then nothing is probed).
+    declared : float
+        The declared value (the top of the bisection).
+    changed : callable
+        The cascade with the value changed.
+    written : callable
+        The value as the answer writes it (rounded towards the certified side).
+    """
+    if not found or found >= declared or not (problem.plant.box.declared or current_cells_apply(problem)):
+        return found
+    best = found
+    for _ in range(CELL_PROBES):
+        value = written(math.sqrt(best * declared))
+        if value <= best or _apart(cfg, certify_cascade(changed(value))) is None:
+            break
+        best = value
+    return best
+
+
 def _kept_apart(cfg: FormationConfig, problem: CascadeProblem) -> bool:
     """``problem`` (``cfg``'s cascade with a smaller current or box) certifies, with a bound that keeps the
     vehicles ``[formation] min_separation`` apart (:func:`_separated`): both shrink with the current and the
@@ -1044,8 +1102,7 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         )
     if summary.gains is not None:
         settings: tuple[Setting, ...] = _gain_settings(summary.gains, problem.guidance)
-        units = ", ".join(GAIN_UNITS[x.key] for x in settings)
-        return settings, f"{toml_line(settings)} ({units}) certifies the declared box and current"
+        return settings, f"{toml_line(settings)} certifies the declared box and current"
     if summary.lag_scale is not None and summary.lag_scale > 0.0:
         settings = _navigation_settings(problem, summary.lag_scale)
         if summary.sample_time is not None:  # neither alone certifies: both together
@@ -1428,6 +1485,7 @@ def plant_multipliers(cfg: FormationConfig) -> np.ndarray:
 __all__ = [
     "ADVICE_DIGITS",
     "ADVICE_STEPS",
+    "CELL_PROBES",
     "CONSTANT_SPEED_PATHS",
     "GAIN_CANDIDATES",
     "GAIN_UNITS",
