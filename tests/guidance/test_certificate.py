@@ -408,3 +408,21 @@ def test_a_spread_of_a_path_frame_formation_is_answered_certified_as_written():
     again = certify(with_settings(cert.config, [(x.table, x.key, x.value) for x in why.settings]))
     assert again.certified, again.reasons
     assert again.to_dict()["formation"]["min_separation_certified"] >= 6.0 - bound
+
+
+def test_when_the_sample_time_allows_no_faster_heading_loop_a_longer_lookahead_alone_is_tried():
+    from auv_hinf.certificate.parts.guidance import GAIN_CANDIDATES, MAX_BANDWIDTH_STEP, _gain_variants
+
+    for bandwidth, lookahead in ((1.0, 8.0), (2.4, 8.0)):
+        cfg = transit(guidance={"kind": "ilos", "heading_bandwidth": bandwidth, "lookahead": lookahead})
+        problem = cascade_problem(cfg, design_point(cfg))
+        variants = [(g.heading_bandwidth, g.lookahead) for g in _gain_variants(problem)]
+        allowed = [
+            (bandwidth * w, lookahead * k)
+            for w, k in GAIN_CANDIDATES
+            if bandwidth * w * problem.sample_time <= MAX_BANDWIDTH_STEP
+        ]
+        np.testing.assert_allclose(variants, allowed, rtol=1e-12)
+        # the declared heading loop with twice the lookahead is always among them, last
+        np.testing.assert_allclose(variants[-1], (bandwidth, 2.0 * lookahead), rtol=1e-12)
+    assert len(variants) == 1  # at 2.4 rad/s and 10 Hz no faster heading loop is allowed
