@@ -351,3 +351,25 @@ def test_a_delay_varying_within_zero_is_the_fixed_zero_delay():
     a, b = certify(fixed).to_dict(), certify(varying).to_dict()
     assert a["guidance"]["certified"] is True and b["guidance"]["certified"] is True
     assert a["guidance"]["error_bounds"] == b["guidance"]["error_bounds"]
+
+
+@pytest.mark.slow
+def test_a_box_that_certifies_only_in_still_water_is_not_told_no_smaller_current_certifies():
+    # a REMUS-like vehicle with a wide box in a 0.4 m/s current: with the whole box only still water
+    # certifies, which the JSON gives as a largest current of 0; the words must say the same
+    tables = {
+        "vehicle": {"m11": 33.0, "m22": 70.0, "m33": 9.0, "d11_lin": 2.0, "d11_quad": 1.8}
+        | {"d22_lin": 45.0, "d22_quad": 1300.0, "d33_lin": 3.5, "d33_quad": 90.0},
+        "formation": {"n": 3, "frame": "inertial", "offsets": [[0.0, 0.0], [0.0, 15.0], [0.0, -15.0]]},
+        "reference": {"kind": "line", "speed": 1.5},
+        "actuators": {"preset": "remus100"},
+        "guidance": {"kind": "ilos", "heading_bandwidth": 2.4, "lookahead": 16.0},
+        "uncertainty": {k: [0.85, 1.15] for k in ("m11", "m22", "m33")}
+        | {k: [0.7, 1.3] for k in ("d11_quad", "d22_lin", "d33_quad")},
+        "disturbance": {"current_speed": 0.4},
+    }
+    data = certify(config_from_dict(tables, "wide box")).to_dict()
+    largest = data["guidance"]["largest_certifiable"]
+    (why,) = data["parts"]["guidance"]["reasons"]
+    assert largest["current_speed"] == 0.0 and largest["together"] > 0.0
+    assert "only still water certifies" in why["message"] and "no smaller current" not in why["message"]

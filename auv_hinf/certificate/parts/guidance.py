@@ -1151,8 +1151,13 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
             if m is None
             else f"; or, with a change of the mission, {toml_line(m.settings + run_settings(cfg, m.settings))}"
         )
+        alone = (
+            "with the declared box only still water certifies, and no smaller box alone does"
+            if summary.current_speed == 0.0  # the bisection's lower end, still water, holds: nothing above it
+            else "no smaller current or smaller box alone certifies"
+        )
         return world, (
-            f"no smaller current or smaller box alone certifies: the current and the box together at {s0:.3g} of "
+            f"{alone}: the current and the box together at {s0:.3g} of "
             f"the declared do, on the declared mission ({toml_line(world)}){other}"
         )
     if m is not None:

@@ -169,7 +169,8 @@ def figures(result: Theorem1Result, method: str, k1: float, jacobi: str, gamma_c
         },
         "alpha_flags": {m: [] if d is None else list(d.flags) for m, d in result.designs.items()},
         "paper_flags": [] if paper is None else list(paper.flags),
-        "theorem1": result.theorem1.to_dict(),
+        # the paper's hypotheses on gamma and lambda; the minimal gain solves no eq. (37) and needs none of them
+        "theorem1": {**result.theorem1.to_dict(), "required": method != "minimal"},
         "small_gain_margin": result.small_gain_margin,
         "k1": k1,
         "position_loop_hinf": result.position_loop_hinf,
@@ -305,7 +306,8 @@ class Theorem1Part:
             f"  sigma vehicle  [lo, up]   [{fmt(sig['lower'])}, {fmt(sig['upper'])}] 1/s  <- used",
             f"  sigma Jacobi   [lo, up]   [{fmt(sj['lower'])}, {fmt(sj['upper'])}] 1/s",
             f"  {'gamma (configured)' if f.get('gamma_configured') else 'gamma = 1/sigma':<26}"
-            f"{fmt(f['gamma'])} s  (Theorem 1 minimum {fmt(f['theorem1']['gamma_min'])} s)",
+            f"{fmt(f['gamma'])} s  (Theorem 1 minimum {fmt(f['theorem1']['gamma_min'])} s"
+            + ("; the minimal gain does not need it)" if f["method"] == "minimal" else ")"),
         ]
         flags = f.get("alpha_flags") or {"paper": f.get("paper_flags", [])}
         for m, a in f["alpha"].items():
