@@ -31,13 +31,11 @@ from tqdm.auto import tqdm
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.reason import Setting, toml_line, upper
 from auv_hinf.config.settings import FormationConfig
-from auv_hinf.numerics.digits import significant
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
 
 #: Multipliers of the turn radius (and of the legs' spacing, which must hold two turns) tried in
 #: turn: the turn rate falls as 1/radius, and the path frame's slot speeds spread as well.
 TURN_FACTORS = (2.0, 4.0, 8.0)
-#: Significant digits of an advised sine frequency (rad/s), rounded down: a lower frequency turns gentler.
-OMEGA_DIGITS = 4
 #: Multipliers of the mission speed tried in turn (the drag, the Munk moment and the turn rates
 #: fall with it).
 SPEED_FACTORS = (0.5, 0.25)
@@ -95,8 +93,9 @@ def mission_changes(cfg: FormationConfig) -> list[tuple[str, tuple[Setting, ...]
         elif kind == "circle":
             turns.append((Setting("reference", "radius", ref["radius"] * f),))
         elif kind == "sine":
-            # rounded down (gentler) to the digits a user writes: each change is certified as written
-            omega = significant(ref["omega"] / math.sqrt(f), OMEGA_DIGITS, up=False)
+            # rounded down (a lower frequency turns gentler) to the digits a user writes: each change is
+            # certified as written
+            omega = significant(ref["omega"] / math.sqrt(f), ADVISED_DIGITS, up=False)
             turns.append((Setting("reference", "omega", omega),))
     speeds = [] if kind == "sine" else [(Setting("reference", "speed", ref["speed"] * f),) for f in SPEED_FACTORS]
     out = [("turns", t) for t in turns] + [("speed", v) for v in speeds]
@@ -173,7 +172,6 @@ def mission_advice(
 
 __all__ = [
     "CHANGE_WORDS",
-    "OMEGA_DIGITS",
     "SPEED_FACTORS",
     "TRIED",
     "TURN_FACTORS",

@@ -14,7 +14,7 @@ from typing import Any, Literal, get_args
 
 from auv_hinf.config.schema import key_unit
 from auv_hinf.exceptions import DesignError, SolverError
-from auv_hinf.numerics.digits import significant
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
 
 #: What a reason says, in one word (``Reason.kind``):
 #:
@@ -47,7 +47,8 @@ REASON_KINDS: tuple[ReasonKind, ...] = get_args(ReasonKind)
 
 
 def _number(v: Any) -> str:
-    """``v`` (a number, or a nested list of them) with 4 significant digits when they give it back exactly.
+    """``v`` (a number, or a nested list of them) with :data:`~auv_hinf.numerics.digits.ADVISED_DIGITS`
+    significant digits when they give it back exactly.
 
     Else its shortest exact form; a list is written as a TOML array (a formation's ``shape``).
     """
@@ -55,7 +56,7 @@ def _number(v: Any) -> str:
         return "[" + ", ".join(_number(x) for x in v) + "]"
     if not isinstance(v, float):
         return str(v)
-    short = f"{v:.4g}"
+    short = f"{v:.{ADVISED_DIGITS}g}"
     return short if float(short) == v else repr(v)
 
 

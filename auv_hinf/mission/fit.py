@@ -29,7 +29,7 @@ from auv_hinf.mission.paths import MissionReference
 from auv_hinf.mission.tubes import PATH_FRAME_CELLS, path_frame_tube
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.numerics.bisection import largest_holding
-from auv_hinf.numerics.digits import significant
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
 
 #: Relative width at which the bisections on the turn radius and on the offsets' scale stop (the
 #: resolution of the start regions' bisections, far below any physical tolerance of a turn).
@@ -91,12 +91,6 @@ class Binding:
             "edge": self.edge,
             "margin": self.margin,
         }
-
-
-#: Significant digits of the turn radius and offset a refusal advises, each rounded to the side
-#: that fits (:func:`~auv_hinf.numerics.digits.significant`): a smallest radius of 20.00015 m
-#: printed as "20 m" would be the declared radius that does not fit.
-ADVISED_DIGITS = 4
 
 
 @dataclass(frozen=True)
@@ -167,6 +161,8 @@ class ReferenceFit:
             + ("" if math.isinf(self.turn_radius) else f" (turn radius {self.turn_radius:.4g} m)")
         ]
         if self.smallest_radius is not None:
+            # rounded to the side that fits: a smallest radius of 20.00015 m printed "20 m" is the declared
+            # radius that does not fit
             radius = significant(self.smallest_radius, ADVISED_DIGITS, up=True)
             out.append(f"smallest turn radius that fits: {radius:.4g} m")
         if self.largest_offset is not None:
@@ -297,7 +293,6 @@ def reference_fit(
 
 
 __all__ = [
-    "ADVISED_DIGITS",
     "CHANNELS",
     "FIT_RTOL",
     "STRAIGHT_FACTOR",

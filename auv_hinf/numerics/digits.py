@@ -11,6 +11,11 @@ from __future__ import annotations
 import math
 from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 
+#: Significant digits of a value advised to a user: a configuration value is printed with them when they
+#: give it back exactly (:meth:`~auv_hinf.certificate.reason.Setting.toml`), so an advised value rounded to
+#: them (towards its certified side, :func:`significant`) is printed as it was certified.
+ADVISED_DIGITS = 4
+
 
 def significant(x: float, digits: int, *, up: bool) -> float:
     """``x`` rounded to ``digits`` significant digits, towards ``+inf`` (``up``) or ``-inf``.
@@ -36,4 +41,4 @@ def significant(x: float, digits: int, *, up: bool) -> float:
     return float(q)
 
 
-__all__ = ["significant"]
+__all__ = ["ADVISED_DIGITS", "significant"]

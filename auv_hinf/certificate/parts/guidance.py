@@ -444,8 +444,8 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
             lambda c: _kept_apart(cfg, _with(cfg, problem, current=c)), problem.plant.current, steps=ADVICE_STEPS
         )
     scale = None
+    top = min(1.0, problem.plant.box.max_scale)  # the largest box scale an answer may advise
     if problem.plant.box.declared:
-        top = min(1.0, problem.plant.box.max_scale)
         scale = largest_holding(lambda s: _kept_apart(cfg, _with(cfg, problem, scale=s)), top, steps=ADVICE_STEPS)
     bounded = all(math.isfinite(x) for x in problem.start)  # no gains certify an unbounded start
     gains = _certifying_gains(problem) if bounded else None
@@ -455,7 +455,6 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
                 cfg, problem, current, problem.plant.current, lambda c: _with(cfg, problem, current=c), _down
             )
         if scale is not None:
-            top = min(1.0, problem.plant.box.max_scale)
             scale = _by_cells(cfg, problem, scale, top, lambda s: _with(cfg, problem, scale=s), rounded_down)
     lag_scale = None
     if gains is None and bounded and _navigates(problem):

@@ -23,7 +23,7 @@ from auv_hinf.design.jacobi_sigma import jacobi_sigma_bounds
 from auv_hinf.design.sigma import SigmaBounds
 from auv_hinf.design.theorem1 import GainDesign, Theorem1Conditions, position_loop, theorem1_conditions
 from auv_hinf.law.gains import Gains
-from auv_hinf.numerics.digits import significant
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
 
 #: Fleet size at which the certificate runs its full-size cross-check. With
 #: ``A_lam = lam I`` every 2x2 channel is identical, so a larger problem checks nothing
@@ -53,21 +53,20 @@ MARGIN_RTOL = 1e-9
 #: The ``[design] gamma`` suggested when the margin is marginal: this fraction of ``1/sigma_upper``
 #: (the small-gain margin is then ``(1/0.99 - 1) sigma_upper``, far above the tolerance).
 GAMMA_ADVICE_SHARE = 0.99
-#: Significant digits of the advised gamma, rounded down (:func:`advised_gamma`).
-ADVICE_DIGITS = 4
 
 
 def advised_gamma(sigma_upper: float) -> float:
     """The ``[design] gamma`` (s) advised below ``1/sigma_upper``: :data:`GAMMA_ADVICE_SHARE` of it, rounded down.
 
-    It keeps :data:`ADVICE_DIGITS` significant digits, rounded further below, so its margin only grows.
+    It keeps :data:`~auv_hinf.numerics.digits.ADVISED_DIGITS` significant digits, rounded further below, so its
+    margin only grows.
 
     Parameters
     ----------
     sigma_upper : float
         The upper bound of sigma over the envelope (1/s).
     """
-    return significant(GAMMA_ADVICE_SHARE / sigma_upper, ADVICE_DIGITS, up=False)
+    return significant(GAMMA_ADVICE_SHARE / sigma_upper, ADVISED_DIGITS, up=False)
 
 
 def _minimal_answer(reason: Reason, gamma: float, sigma_upper: float) -> Reason:
@@ -339,7 +338,6 @@ class Theorem1Part:
 
 
 __all__ = [
-    "ADVICE_DIGITS",
     "CROSSCHECK_MAX_N",
     "DEFAULT_JACOBI_SAMPLES",
     "GAMMA_ADVICE_SHARE",
