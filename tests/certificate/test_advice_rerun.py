@@ -240,11 +240,24 @@ def test_when_the_designs_gains_hold_no_noise_the_noise_is_shrunk_and_rerun(boxe
     assert got is not None and got.knob == "noise" and got.scaled == ("noise",)
     first = next(x for x in RERUN_NOISE if x <= 1.0 / 20.0)
     assert got.scale == pytest.approx(first, rel=1e-2) and got.scale <= first  # rounded down to 3 digits
-    assert [c[key] / declared for c in calls] == pytest.approx([x for x in RERUN_NOISE if x >= first], rel=1e-2)
+    # the smallest scale is re-run first (refused there, every larger one is), then the ladder from the top
+    tried = [RERUN_NOISE[-1], *(x for x in RERUN_NOISE if x >= first)]
+    assert [c[key] / declared for c in calls] == pytest.approx(tried, rel=1e-2)
     # the ladder's step above it was refused by a re-run: the climbs bisect below it
     assert got.ceiling == pytest.approx(next(x for x in reversed(RERUN_NOISE) if x > first), rel=1e-2)
     # every channel at the one scale: the confirmation puts back those a re-run does not need shrunk
     assert got.problem.implementation.noise.velocity == pytest.approx(got.scale * problem.implementation.noise.velocity)
+
+
+def test_when_only_the_smallest_noise_covers_it_is_the_answer(boxed, monkeypatch):
+    cfg, problem = boxed
+    key = ("implementation.noise", "position")
+    smallest = RERUN_NOISE[-1] * problem.implementation.noise.position
+    rerun, calls = _fake_rerun(lambda s: s[key] <= 1.01 * smallest, lambda s: _with_noise(problem, s))
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    got = rerun_noise(cfg, problem)
+    assert got is not None and got.problem.implementation.noise.position == pytest.approx(smallest, rel=1e-2)
+    assert len(calls) == len(RERUN_NOISE)  # the smallest first, then every larger one refused, once each
 
 
 def test_no_noise_rerun_covers_gives_no_answer(boxed, monkeypatch):
@@ -252,7 +265,10 @@ def test_no_noise_rerun_covers_gives_no_answer(boxed, monkeypatch):
     rerun, calls = _fake_rerun(lambda s: False, lambda s: problem)
     monkeypatch.setattr(composed_part, "rerun", rerun)
     assert rerun_noise(cfg, problem) is None
-    assert len(calls) == len(RERUN_NOISE)
+    # less noise never loses the cover: the smallest scale refused, no larger one is re-run
+    assert [c[("implementation.noise", "position")] for c in calls] == pytest.approx(
+        [RERUN_NOISE[-1] * problem.implementation.noise.position], rel=1e-2
+    )
 
 
 @pytest.mark.slow
