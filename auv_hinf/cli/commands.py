@@ -179,6 +179,10 @@ def _cmd_certify(args: argparse.Namespace) -> int:
         cert.save(args.out / "certificate.json")  # the file Certificate.load reads
         if cfg.guidance is None:  # the sigma sweep is of the fully actuated law's Theorem 1
             save_sigma_heatmap(cfg, cert, args.out / "sigma_heatmap.png")
+        else:  # the cascade's: actuator use, separation, and what certifies
+            from auv_hinf.figures.guidance import save_guidance_certificate_figure
+
+            save_guidance_certificate_figure(data, args.out)
     print(_dump(data) if args.json else cert.summary())
     return _verdict(cert.certified, "; ".join(cert.reasons) or "no reason given")
 

@@ -378,3 +378,54 @@ def test_the_default_snapshots_follow_the_run_length(horizon, every):
     got = plots.snapshot_interval(horizon)
     assert got == pytest.approx(every)
     assert plots.SNAPSHOTS / 2.5 <= horizon / got <= plots.SNAPSHOTS
+
+
+def _guidance_record(certified: bool) -> dict:
+    """A ``certify --json`` object of a guidance fleet, as much of it as its certificate figure reads."""
+    largest = {"current_speed": None if certified else 0.0293, "box_scale": None, "navigation_scale": None}
+    return {
+        "preset": "torpedoes",
+        "certified": certified,
+        "guidance": {
+            "kind": "ilos",
+            "certified": certified,
+            "current_speed": 0.2,
+            "error_bounds": {"along_track": 0.16, "cross_track": 0.17, "heading": 4e-4} if certified else None,
+            "certified_peak": {"force_x": 5.7, "rudder": 0.0069} if certified else None,
+            "limits": {"force_x": 67.0, "rudder": 0.2374},
+            "largest_certifiable": largest,
+        },
+        "formation": {
+            "certified": certified,
+            "min_separation": 2.0,
+            "min_separation_certified": 14.5 if certified else None,
+            "slot_distance": 15.0,
+        },
+    }
+
+
+def _bar_widths(ax) -> list[float]:
+    return [p.get_width() for p in ax.patches]
+
+
+def test_a_certified_guidance_fleet_is_drawn_against_its_limits_and_its_bounds():
+    from auv_hinf.figures.guidance import guidance_certificate_figure
+
+    use, apart, bounds = guidance_certificate_figure(_guidance_record(True)).axes
+    # the actuators as fractions of their limits (the limit is drawn at 1), the distances and the bounds in m
+    assert _bar_widths(use) == pytest.approx([5.7 / 67.0, 0.0069 / 0.2374])
+    assert [line.get_xdata()[0] for line in use.lines] == [1.0]
+    assert _bar_widths(apart) == pytest.approx([2.0, 14.5, 15.0])
+    assert _bar_widths(bounds) == pytest.approx([0.16, 0.17]) and "0.0229 deg" in bounds.get_title()
+
+
+def test_a_refused_guidance_fleet_is_drawn_with_the_value_that_certifies_against_the_declared():
+    from auv_hinf.figures.guidance import guidance_certificate_figure
+
+    fig = guidance_certificate_figure(_guidance_record(False))
+    use, apart, answer = fig.axes
+    assert not use.patches and "does not hold" in use.texts[0].get_text()
+    assert _bar_widths(apart) == pytest.approx([2.0, 15.0])  # no certified closest approach: said in words
+    assert any(t.get_text().strip() == "none certified" for t in apart.texts)
+    assert _bar_widths(answer) == pytest.approx([0.2, 0.0293])  # the declared current, and the answer's
+    assert "NOT certified" in fig.texts[0].get_text()

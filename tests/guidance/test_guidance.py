@@ -370,3 +370,12 @@ def test_simulate_out_draws_the_certified_bounds_of_a_covered_run(tmp_path, caps
     rep = json.loads(capsys.readouterr().out)
     assert code == 0 and rep["certificate_covers_run"] is True
     assert drawn == [rep["certified_errors"]] and (tmp_path / "errors.png").is_file()
+
+
+def test_certify_out_of_a_guidance_fleet_draws_its_certificate_and_names_the_current_it_holds_in(tmp_path, capsys):
+    cfg = preset_config("remus-transit-ilos")
+    capsys.readouterr()
+    assert main(["certify", "--preset", "remus-transit-ilos", "--json", "--out", str(tmp_path)]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["guidance"]["current_speed"] == pytest.approx(cfg.disturbance.current_speed)
+    assert {p.name for p in tmp_path.iterdir()} == {"certificate.json", "guidance_certificate.png"}

@@ -1220,7 +1220,8 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
 
     Keys: the ``[guidance]`` gains, ``certified``, ``error_bounds{along_track, cross_track,
     heading}`` (m, m, rad), ``certified_peak{force_x, rudder}`` (N, rad), ``limits``, ``states``
-    (the whole certified box), ``sample_time`` (s), ``start`` (the certified start's bounds),
+    (the whole certified box), ``current_speed`` (m/s, the current bound it is judged in),
+    ``sample_time`` (s), ``start`` (the certified start's bounds),
     ``cells`` (the cells of the box certified one by one, 1 for the whole box at once),
     ``largest_certifiable{current_speed, box_scale, gains, together, everything, navigation_scale, sample_time,
     start_on_slots, mission, envelope, supported}`` and ``reason``.
@@ -1245,6 +1246,7 @@ def guidance_figures(cfg: FormationConfig, summary: GuidanceSummary) -> dict[str
         "states": body.get("states"),
         "sway_speed": body.get("sway_speed"),
         "surge_speed": body.get("surge_speed"),
+        "current_speed": None if problem is None else problem.plant.current,
         "sample_time": None if problem is None else problem.sample_time,
         "delay": None if problem is None else problem.delay,
         "noise": None if problem is None else problem.noise.to_dict(),
