@@ -372,6 +372,7 @@ def test_simulate_out_draws_the_certified_bounds_of_a_covered_run(tmp_path, caps
     assert drawn == [rep["certified_errors"]] and (tmp_path / "errors.png").is_file()
 
 
+@pytest.mark.slow
 def test_certify_out_of_a_guidance_fleet_draws_its_certificate_and_names_the_current_it_holds_in(tmp_path, capsys):
     cfg = preset_config("remus-transit-ilos")
     capsys.readouterr()
