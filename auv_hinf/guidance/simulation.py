@@ -28,6 +28,7 @@ from auv_hinf.guidance.law import Commands, GuidanceConfig, SlotMotion, commands
 from auv_hinf.implementation.draws import ImplementationDraws
 from auv_hinf.implementation.model import Implementation
 from auv_hinf.mission.fleet import FleetReference, wrap_angle
+from auv_hinf.mission.separation import closest_approach
 from auv_hinf.models.envelope import Envelope
 from auv_hinf.models.vehicle import VehicleParams, rhs
 
@@ -162,14 +163,11 @@ class GuidanceRun:
 
     def min_separation(self) -> tuple[float, tuple[int, int]]:
         """The smallest distance between two vehicles over the run (m) and the pair (0-based)."""
-        n = self.states.shape[1]
-        if n < 2:
+        if self.states.shape[1] < 2:
             return float("inf"), (0, 0)
-        p = self.states[:, :, :2]
-        i, j = np.triu_indices(n, 1)
-        d = np.hypot(p[:, i, 0] - p[:, j, 0], p[:, i, 1] - p[:, j, 1])
-        k = int(np.argmin(d.min(axis=0)))
-        return float(d[:, k].min()), (int(i[k]), int(j[k]))
+        # blocks of samples for a small fleet, a k-d tree per sample for a large one: memory O(N), not O(T N^2)
+        closest = closest_approach(self.states[:, :, :2])
+        return closest.distance, closest.pair
 
     def _vertical_report(self) -> dict[str, Any]:
         """Depth range (m), peak roll and pitch (rad) of a 6-DOF run."""

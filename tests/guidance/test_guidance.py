@@ -126,6 +126,26 @@ def test_min_separation_is_the_closest_approach_of_the_pair():
     assert d == pytest.approx(brute) and pair in ((0, 1), (1, 2))
 
 
+def test_min_separation_of_a_large_fleet_holds_no_table_of_every_pair():
+    import dataclasses
+    import tracemalloc
+
+    run = simulate_guidance(GuidanceConfig(), REMUS, REMUS, RUDDER, line_fleet(2), 0.2, (0.0, 0.0))
+    rng = np.random.default_rng(3)
+    samples, n = 20, 600  # 180,000 pairs a sample: a table of them all is 29 MB per sample array
+    big = dataclasses.replace(run, states=rng.uniform(-500.0, 500.0, size=(samples, n, 6)))
+    tracemalloc.start()
+    d, (i, j) = big.min_separation()
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 20e6  # the positions' size times a few, not samples x pairs (a 2000-vehicle run was killed)
+    p = big.states[:, :, :2]
+    brute = min(
+        float(np.hypot(*(p[k, :, None] - p[k, None, :]).T)[np.triu_indices(n, 1)].min()) for k in range(samples)
+    )
+    assert d == pytest.approx(brute) and d == pytest.approx(float(np.hypot(*(p[:, i] - p[:, j]).T).min()))
+
+
 def test_bad_gains_are_refused_with_the_key():
     for kw in ({"lookahead": 0.0}, {"integral_gain": -1.0}, {"kind": "pure-pursuit"}, {"along_track_gain": -0.1}):
         with pytest.raises(ParameterError, match="guidance"):
