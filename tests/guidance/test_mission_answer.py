@@ -194,6 +194,53 @@ def test_a_declared_start_that_binds_is_answered_with_the_slots_and_the_world_ke
     assert again["guidance"]["error_bounds"]["cross_track"] <= bound
 
 
+#: A review's fleet: four REMUS-like vehicles on a line, a box and a 0.15 m/s current, which only cells
+#: of the box and of the current certify; declared to start on their slots heading along the track
+#: (not crabbed into the current, which a heading error in the other currents would be).
+CELLS_LINE = {
+    "vehicle": {
+        "m11": 34.0,
+        "m22": 72.0,
+        "m33": 9.1,
+        "d11_lin": 0.0,
+        "d11_quad": 1.8,
+        "d22_lin": 47.0,
+        "d22_quad": 1150.0,
+        "d33_lin": 3.4,
+        "d33_quad": 85.0,
+    },
+    "formation": {"n": 4, "frame": "inertial", "offsets": [[0.0, -22.5], [0.0, -7.5], [0.0, 7.5], [0.0, 22.5]]},
+    "envelope": {"u": [0.5, 2.5], "v": [-0.3, 0.3], "r": [-0.3, 0.3]},
+    "reference": {"kind": "line", "speed": 1.5, "heading": 0.3},
+    "actuators": {"kind": "underactuated", "tau_x": 60.0, "rudder_max": 0.26, "rudder_sway": 10.5, "rudder_yaw": -6.8},
+    "guidance": {"kind": "ilos", "lookahead": 16.0, "heading_bandwidth": 3.2},
+    "uncertainty": {
+        "m11": [0.95, 1.05],
+        "m22": [0.95, 1.05],
+        "m33": [0.95, 1.05],
+        "d11_quad": [0.8, 1.2],
+        "d22_lin": [0.8, 1.2],
+        "d22_quad": [0.8, 1.2],
+        "d33_lin": [0.8, 1.2],
+        "d33_quad": [0.8, 1.2],
+    },
+    "disturbance": {"current_speed": 0.15},
+    "simulation": {"initial": [[0.0, y, 0.3, 1.5, 0.0, 0.0] for y in (-22.5, -7.5, 7.5, 22.5)]},
+}
+
+
+@pytest.mark.slow
+def test_a_declared_start_of_a_fleet_only_cells_certify_is_answered_with_the_slots():
+    # the start from the slots was probed on the whole box at once, which refuses this fleet: the answer was
+    # a current of 0.0203 m/s, and 0.3 m off the slots "nothing certifies it, even from the slots"
+    cfg, data, why = _refused(CELLS_LINE, "cells line")
+    assert "the declared start binds" in why["message"] and _keys(why) == {("simulation", "initial")}
+    again = _rerun(cfg, why)
+    assert again["certified"] is True and again["guidance"]["cells"] > 1
+    bound = data["guidance"]["largest_certifiable"]["start_on_slots"]["position_bound"]
+    assert again["guidance"]["error_bounds"]["cross_track"] <= bound
+
+
 #: Three REMUS 100 on a 3 m polygon in the path frame, on a lawn-mower with 60 m turns: refused;
 #: the mission answer's distance to the slots must also keep the vehicles 2 m apart (the slots are
 #: 5.2 m apart, so every vehicle must stay within 1.6 m of its slot).

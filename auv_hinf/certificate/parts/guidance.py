@@ -434,8 +434,8 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         return replace(base, spread=_spread(cfg, cert))
     if base.envelope:
         return base  # a motion outside the envelope is answered by the envelope alone
-    if cfg.simulation.initial is not None:
-        start_bound = _confirmed(cfg, (RESTART,))
+    if cfg.simulation.initial is not None:  # with cells, as the re-run from the slots will certify it
+        start_bound = _confirmed(cfg, (RESTART,), cells=True)
         if start_bound is not None:
             return replace(base, start_bound=start_bound)
     current = None
@@ -844,25 +844,29 @@ def supported_settings(cfg: FormationConfig) -> tuple[Setting, ...]:
     return tuple(x for _, settings in _unsupported(cfg) for x in settings)
 
 
-def _rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[float, tuple[Setting, ...]] | None:
+def _rerun(
+    cfg: FormationConfig, settings: tuple[Setting, ...], cells: bool = False
+) -> tuple[float, tuple[Setting, ...]] | None:
     """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``, and the ``[envelope]``
     ranges widened to hold its certified motion (empty when it stays inside); ``None`` if refused (or if
-    that distance leaves the vehicles closer than ``[formation] min_separation``, :func:`_separated`)."""
+    that distance leaves the vehicles closer than ``[formation] min_separation``, :func:`_separated`).
+    The whole box is certified at once, or with ``cells`` as a re-run does (cells of the box and of the
+    current when the whole is refused: one certificate a cell, so only for a single answer)."""
     rerun = _changed(cfg, settings)
     if rerun is None:
         return None
-    cert = certify_cascade(rerun[1], cells=False)
+    cert = certify_cascade(rerun[1], cells=cells)
     bound = _apart(rerun[0], cert)
     if bound is None:
         return None
     return bound, envelope_gap(rerun[0].envelope, cert)[1]
 
 
-def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> float | None:
+def _confirmed(cfg: FormationConfig, settings: tuple[Setting, ...], cells: bool = False) -> float | None:
     """The certified distance to the slot (m) of ``cfg`` rewritten with ``settings``; ``None`` if refused, if
     that distance leaves the vehicles closer than ``[formation] min_separation``, or if the certified
-    motion leaves the declared ``[envelope]`` (:func:`_rerun`)."""
-    got = _rerun(cfg, settings)
+    motion leaves the declared ``[envelope]`` (:func:`_rerun`, with ``cells`` as there)."""
+    got = _rerun(cfg, settings, cells)
     return None if got is None or got[1] else got[0]
 
 
@@ -1181,7 +1185,8 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
                 f"no {_tried(problem, 'faster heading loop')} certifies it: the mission binds (its turns"
                 f"{frame}; a straight line in the inertial frame certifies more easily, docs/derivations/guidance.md)"
             )
-        return (), f"no {_tried(problem, 'faster heading loop')} certifies it, even from the slots"
+        start = "from the declared start" if cfg.simulation.initial is not None else "even from the slots"
+        return (), f"no {_tried(problem, 'faster heading loop')} certifies it, {start}"
     return (), ""
 
 
