@@ -241,6 +241,21 @@ def test_a_declared_start_of_a_fleet_only_cells_certify_is_answered_with_the_slo
     assert again["guidance"]["error_bounds"]["cross_track"] <= bound
 
 
+@pytest.mark.slow
+def test_plain_los_on_a_fleet_only_cells_certify_is_answered_with_ilos_in_the_json_too():
+    # the switch to ILOS was confirmed on the whole box at once: the text said "use kind = ilos" while
+    # guidance.largest_certifiable.supported was null
+    tables = {k: v for k, v in CELLS_LINE.items() if k != "simulation"}
+    cfg, data, why = _refused({**tables, "guidance": {**tables["guidance"], "kind": "los"}}, "los")
+    supported = data["guidance"]["largest_certifiable"]["supported"]
+    assert supported is not None and supported["settings"] == why["settings"]
+    assert _keys(why) == {("guidance", "kind")} and why["settings"][0]["value"] == "ilos"
+    again = _rerun(cfg, why)
+    assert (
+        again["certified"] is True and again["guidance"]["error_bounds"]["cross_track"] <= supported["position_bound"]
+    )
+
+
 #: Three REMUS 100 on a 3 m polygon in the path frame, on a lawn-mower with 60 m turns: refused;
 #: the mission answer's distance to the slots must also keep the vehicles 2 m apart (the slots are
 #: 5.2 m apart, so every vehicle must stay within 1.6 m of its slot).

@@ -426,7 +426,7 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
         if base.reason == SLOT_STOPS:
             return replace(base, mission=mission_answer(cfg))
         switch = supported_settings(cfg)
-        bound = _confirmed(cfg, switch) if switch else None
+        bound = _confirmed(cfg, switch, cells=True) if switch else None  # as its re-run certifies it
         if bound is not None:
             return replace(base, supported=switch, supported_bound=bound)
         return _then(cfg, base, switch)
