@@ -425,11 +425,7 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
     if problem is None or cert is None:
         if base.reason == SLOT_STOPS:
             return replace(base, mission=mission_answer(cfg))
-        switch = supported_settings(cfg)
-        bound = _confirmed(cfg, switch, cells=True) if switch else None  # as its re-run certifies it
-        if bound is not None:
-            return replace(base, supported=switch, supported_bound=bound)
-        return _then(cfg, base, switch)
+        return _then(cfg, base, supported_settings(cfg))
     if cert.holds and not base.envelope:
         return replace(base, spread=_spread(cfg, cert))
     if base.envelope:
@@ -550,19 +546,26 @@ def _everything_scale(cfg: FormationConfig, problem: CascadeProblem) -> float:
 
 
 def _then(cfg: FormationConfig, base: GuidanceSummary, switch: tuple[Setting, ...]) -> GuidanceSummary:
-    """``base`` with the answer of ``cfg`` changed to what this version certifies, when that alone does not certify.
+    """``base`` with the answer of ``cfg`` changed to what this version certifies.
 
-    The changed configuration is answered as a re-run answers it (:func:`_summary`, :func:`_advice`);
-    the switch and that answer together, confirmed by a re-run as written, are the answer
-    (:attr:`GuidanceSummary.supported`, with the answer's words in :attr:`GuidanceSummary.supported_then`).
-    ``base`` unchanged when there is no switch, or no answer of the changed configuration certifies.
+    The changed configuration is certified and answered as its re-run does it (:func:`_summary`, with
+    cells of the box and the current, :func:`_advice`). When it certifies, with a bound that keeps
+    the vehicles apart, the switch alone is the answer (:attr:`GuidanceSummary.supported`); else the
+    switch and that answer together, confirmed by a re-run as written (with the answer's words in
+    :attr:`GuidanceSummary.supported_then`). ``base`` unchanged when there is no switch, or no answer of
+    the changed configuration certifies.
     """
     changed = _changed(cfg, switch) if switch else None
     if changed is None or supported_settings(changed[0]):  # the switch must make it one this version evaluates
         return base
-    settings, words = _advice(changed[0], _summary(_reduced(changed[0])))
+    answer = _summary(_reduced(changed[0]))
+    cert = answer.certificate
+    alone = _apart(changed[0], cert) if cert is not None and cert.holds and not answer.envelope else None
+    if alone is not None:
+        return replace(base, supported=switch, supported_bound=alone)
+    settings, words = _advice(changed[0], answer)
     both = switch + tuple(x for x in settings if x.table != "simulation")
-    bound = _confirmed(cfg, both) if settings else None
+    bound = _confirmed(cfg, both, cells=True) if settings else None  # as its re-run certifies it
     if bound is None:
         return base
     return replace(base, supported=both, supported_bound=bound, supported_then=words)
