@@ -213,3 +213,38 @@ def package_class_names() -> frozenset[str]:
             if inspect.isclass(obj) and obj.__module__.startswith("auv_hinf"):
                 names.add(obj.__name__)
     return frozenset(names)
+
+
+#: A review's fleet: four REMUS-like vehicles on a line, a box and a 0.15 m/s current, which only cells
+#: of the box and of the current certify; declared to start on their slots heading along the track
+#: (not crabbed into the current, which a heading error in the other currents would be).
+CELLS_LINE = {
+    "vehicle": {
+        "m11": 34.0,
+        "m22": 72.0,
+        "m33": 9.1,
+        "d11_lin": 0.0,
+        "d11_quad": 1.8,
+        "d22_lin": 47.0,
+        "d22_quad": 1150.0,
+        "d33_lin": 3.4,
+        "d33_quad": 85.0,
+    },
+    "formation": {"n": 4, "frame": "inertial", "offsets": [[0.0, -22.5], [0.0, -7.5], [0.0, 7.5], [0.0, 22.5]]},
+    "envelope": {"u": [0.5, 2.5], "v": [-0.3, 0.3], "r": [-0.3, 0.3]},
+    "reference": {"kind": "line", "speed": 1.5, "heading": 0.3},
+    "actuators": {"kind": "underactuated", "tau_x": 60.0, "rudder_max": 0.26, "rudder_sway": 10.5, "rudder_yaw": -6.8},
+    "guidance": {"kind": "ilos", "lookahead": 16.0, "heading_bandwidth": 3.2},
+    "uncertainty": {
+        "m11": [0.95, 1.05],
+        "m22": [0.95, 1.05],
+        "m33": [0.95, 1.05],
+        "d11_quad": [0.8, 1.2],
+        "d22_lin": [0.8, 1.2],
+        "d22_quad": [0.8, 1.2],
+        "d33_lin": [0.8, 1.2],
+        "d33_quad": [0.8, 1.2],
+    },
+    "disturbance": {"current_speed": 0.15},
+    "simulation": {"initial": [[0.0, y, 0.3, 1.5, 0.0, 0.0] for y in (-22.5, -7.5, 7.5, 22.5)]},
+}

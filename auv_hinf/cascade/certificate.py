@@ -1214,14 +1214,16 @@ def _union(cover: list[tuple[tuple[float, float], CascadeCertificate]]) -> Casca
 
 
 @functools.lru_cache(maxsize=256)
-def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: bool = True) -> CascadeCertificate:
+def certify_cascade(
+    problem: CascadeProblem, cells: bool = True, mass_cells: bool = True, budget: int = MAX_CELLS
+) -> CascadeCertificate:
     """The cascade's certificate (see the module docstring), on the whole box or else on cells of it.
 
     When the whole box and current do not certify, they are covered by cells (:func:`_cover`), each
     certified with its own nominal loop: when the current's along-track component is a constant of
     each run (:func:`current_cells_apply`), cells of that component (halved at most
     :data:`MAX_CURRENT_DEPTH` times), and where they do not suffice cells of the masses (halved at
-    most :data:`MAX_CELL_DEPTH` times), at most :data:`MAX_CELLS` cells in all. The
+    most :data:`MAX_CELL_DEPTH` times), at most ``budget`` cells in all. The
     whole certifies when every cell does, with the largest of the cells' bounds. A corner of the
     masses refused alone refuses at once, and the search gives up when a cell's centre (one plant,
     one current along the track) is refused alone; with a declared delay or noise it is not started
@@ -1238,6 +1240,10 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
     mass_cells : bool
         With ``cells``, cut the masses too (else only the along-track current: a few cells, for the
         advice's search of gains; what certifies so certifies with every kind of cell too).
+    budget : int
+        Most cells certified (default :data:`MAX_CELLS`, a re-run's). The search is the same whatever
+        the budget, which only stops it sooner: what certifies within a smaller one certifies within
+        the default.
     """
     whole = _certify_one(problem)
     if whole.holds or not cells or problem.nominal is not None or problem.current_along is not None:
@@ -1252,7 +1258,7 @@ def certify_cascade(problem: CascadeProblem, cells: bool = True, mass_cells: boo
             reason=f"{whole.reason} (no cells tried: the nominal plant in still water is refused on this "
             "navigation, its delay and noise)",
         )
-    with tqdm(total=MAX_CELLS, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
+    with tqdm(total=budget, unit="cell", desc="cells of the box", leave=False, delay=PROGRESS_DELAY) as bar:
         # the search prefers the current's cells wherever they apply, so without the masses' cells it
         # takes the same halvings and stops where the masses' would start: whatever the advice's search
         # of gains certifies so (mass_cells=False), a re-run certifies with the same cells
@@ -1320,7 +1326,7 @@ def _cover(
     else along the masses; a half that fails is covered the same way, at most ``mass_depth`` and
     ``current_depth`` more halvings. It gives up when the cell's centre (one plant,
     one current along the track) is refused alone: no finer cell around it would certify.
-    ``bar`` counts the cells certified against :data:`MAX_CELLS`.
+    ``bar`` counts the cells certified against its total, the budget.
     """
     if not _certify_one(_current_centre(_centre_only(problem)), CELL_MAX_PERIODS).holds:
         return f"the plant at the centre of the cell with {_masses(problem)} is refused alone"
@@ -1345,8 +1351,8 @@ def _cover(
         return f"the cell {_masses(problem)} is refused, and halved as often as allowed"
     out: list[tuple[tuple[float, float], CascadeCertificate]] = []
     for part in parts:
-        if bar.n >= MAX_CELLS:
-            return f"{MAX_CELLS} cells were tried"
+        if bar.n >= bar.total:
+            return f"{bar.total} cells were tried"
         bar.update(1)
         cert = _certify_one(part, CELL_MAX_PERIODS)
         if cert.holds:

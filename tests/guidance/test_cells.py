@@ -41,6 +41,7 @@ from auv_hinf.config.settings import config_from_dict
 from auv_hinf.guidance.law import SlotMotion
 from auv_hinf.guidance.simulation import simulate_guidance, slot_motion
 from auv_hinf.robust.box import PARAMETERS, ParameterBox
+from tests.helpers import CELLS_LINE
 
 #: Three REMUS 100 on a transit with every mass +-10 % and the drag uncertain: the whole box is
 #: refused, its cells certify.
@@ -308,3 +309,16 @@ def test_the_advised_smaller_current_is_raised_by_cells_and_certifies_when_rerun
     rerun = config_from_dict(TURNING | {"disturbance": {"current_speed": advised}}, "turning box, advised")
     cert = certify(rerun)
     assert cert.verdict("guidance").ok, cert.reasons
+
+
+@pytest.mark.slow
+def test_a_budget_of_cells_stops_the_same_search_sooner():
+    tables = {k: v for k, v in CELLS_LINE.items() if k != "simulation"}
+    cfg = config_from_dict(tables, "cells line")
+    problem = cascade_problem(cfg, design_point(cfg))
+    full = certify_cascade(problem)
+    assert full.holds and full.cells > 1  # the whole box is refused: cells certify it
+    # the probes of an advice certify within a smaller budget: the same search, stopped sooner
+    assert certify_cascade(problem, budget=64).position_bound == full.position_bound
+    short = certify_cascade(problem, budget=1)
+    assert not short.holds and "1 cells were tried" in short.reason

@@ -934,6 +934,11 @@ def _spread(cfg: FormationConfig, cert: CascadeCertificate) -> tuple[Setting, ..
 #: Larger values of an advised current or box scale tried with cells of the box (:func:`_by_cells`), each the
 #: geometric middle of the last one certified and the declared one.
 CELL_PROBES = 2
+#: Most cells one probe of :func:`_by_cells` certifies (a re-run's budget is
+#: :data:`~auv_hinf.cascade.certificate.MAX_CELLS`, 80): a probe that certifies takes a few (a review's line
+#: of four REMUS-like vehicles: 2 of the current, 2 of the masses), one that is refused would spend the
+#: whole budget (a refusal took 119 s, 118 s of it in two probes).
+PROBE_CELLS = 16
 
 
 def _by_cells(
@@ -951,7 +956,8 @@ def _by_cells(
     for more. Up to :data:`CELL_PROBES` values are tried, each the geometric middle of the last value that
     certified and the declared one, as written (``written`` rounds it to the certified side), and the
     last that certifies with cells and keeps ``[formation] min_separation`` is the answer; a probe that is
-    refused ends the search (each costs at most :data:`~auv_hinf.cascade.certificate.MAX_CELLS` cells).
+    refused ends the search (each costs at most :data:`PROBE_CELLS` cells; what certifies within them
+    certifies within a re-run's larger budget, the search being the same).
     Without cells to cut (no box, and a mission that turns) ``found`` is the answer.
 
     Parameters
@@ -974,7 +980,7 @@ def _by_cells(
     best = found
     for _ in range(CELL_PROBES):
         value = written(math.sqrt(best * declared))
-        if value <= best or _apart(cfg, certify_cascade(changed(value))) is None:
+        if value <= best or _apart(cfg, certify_cascade(changed(value), budget=PROBE_CELLS)) is None:
             break
         best = value
     return best
