@@ -937,7 +937,7 @@ CELL_PROBES = 2
 #: Most cells one probe of :func:`_by_cells` certifies (a re-run's budget is
 #: :data:`~auv_hinf.cascade.certificate.MAX_CELLS`, 80): a probe that certifies takes a few (a review's line
 #: of four REMUS-like vehicles: 2 of the current, 2 of the masses), one that is refused would spend the
-#: whole budget (a refusal took 119 s, 118 s of it in two probes).
+#: whole budget (a review's refusal took 111 s, most of it in two refused probes).
 PROBE_CELLS = 16
 
 
