@@ -36,9 +36,24 @@ def significant(x: float, digits: int, *, up: bool) -> float:
     """
     if not math.isfinite(x) or x == 0.0:
         return x
-    d = Decimal(repr(float(x)))
-    q = d.quantize(Decimal(1).scaleb(d.adjusted() - digits + 1), rounding=ROUND_CEILING if up else ROUND_FLOOR)
-    return float(q)
+    return float(significant_decimal(Decimal(repr(float(x))), digits, up=up))
 
 
-__all__ = ["ADVISED_DIGITS", "significant"]
+def significant_decimal(d: Decimal, digits: int, *, up: bool) -> Decimal:
+    """:func:`significant` of a decimal number, exactly (for a value computed in decimal, such as an offset).
+
+    Parameters
+    ----------
+    d : decimal.Decimal
+        The number (any unit; finite); zero is returned as it is.
+    digits : int
+        Significant digits kept (>= 1).
+    up : bool
+        Round towards ``+inf`` (else towards ``-inf``).
+    """
+    if d == 0:
+        return d
+    return d.quantize(Decimal(1).scaleb(d.adjusted() - digits + 1), rounding=ROUND_CEILING if up else ROUND_FLOOR)
+
+
+__all__ = ["ADVISED_DIGITS", "significant", "significant_decimal"]

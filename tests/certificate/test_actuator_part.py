@@ -9,6 +9,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from auv_hinf.actuation.limits import Actuators, RudderActuation, actuator_shortfall, vehicle_actuators
 from auv_hinf.actuation.thrust import thrust_bounds
@@ -22,7 +24,12 @@ from auv_hinf.certificate.text import certificate_text
 from auv_hinf.cli.main import main
 from auv_hinf.closed_loop.actuator_fit import actuator_fraction, mission_thrust, within_actuators
 from auv_hinf.config.presets import preset_config
-from auv_hinf.config.settings import DisturbanceConfig, UncertaintyConfig, config_from_dict, load_config
+from auv_hinf.config.settings import (
+    UncertaintyConfig,
+    config_from_dict,
+    load_config,
+    with_settings,
+)
 from auv_hinf.exceptions import ConfigError, DesignError
 from auv_hinf.mission.margins import ErrorBounds, inflate_envelope
 from auv_hinf.models.vehicle import preset as vehicle_preset
@@ -222,11 +229,16 @@ def test_bluerov2_line_answers_and_the_answer_certifies():
     assert not cert.certified and act["certified"] is False and act["binding_ratio"] > 1.0
     best = act["largest_certifiable"]
     assert 0.0 < best["box_scale"] < 1.0 and 0.0 <= best["current_speed"] <= cfg.disturbance.current_speed
-    box = tuple((name, (lo, hi)) for name, (lo, hi) in best["uncertainty"].items())
-    again = replace(
-        cfg, uncertainty=UncertaintyConfig(box), disturbance=DisturbanceConfig(current_speed=best["current_speed"])
-    )
-    redo = certify(again)
+    # the refusal's own line names the values (short decimals, the box rounded inwards), and they are its settings
+    (why,) = cert.to_dict()["parts"]["actuators"]["reasons"]
+    written = [(x["table"], x["key"], x["value"]) for x in why["settings"]]
+    assert {k for _, k, _ in written} == {*best["uncertainty"], "current_speed"}
+    assert all(f"{k} = " in why["message"] for _, k, _ in written) and "within the limits:" in why["message"]
+    for _, key, value in written:
+        if key in best["uncertainty"]:
+            lo, hi = best["uncertainty"][key]
+            assert lo <= value[0] <= value[1] <= hi and all(len(repr(v)) <= 10 for v in value), (key, value)
+    redo = certify(with_settings(cfg, written))
     assert redo.certified, redo.reasons
     peak, limits = redo.to_dict()["actuators"]["certified_peak"], redo.to_dict()["actuators"]["limits"]
     assert all(peak[k] <= limits[k] for k in limits)
@@ -248,3 +260,19 @@ def test_the_thrusters_take_each_certificates_force_box_on_its_own():
     got = check_actuators(point, [surge, sway], answers=False)
     assert got.certified and got.certified_peak == (60.0, 60.0, 1.0)
     assert not check_actuators(point, [surge, sway, (60.0, 60.0, 1.0)], answers=False).certified
+
+
+@given(
+    st.floats(min_value=0.0, max_value=1.0, allow_nan=False),
+    st.floats(min_value=0.0, max_value=1.0, allow_nan=False),
+    st.floats(min_value=1e-6, max_value=1.0),
+)
+def test_an_advised_box_is_written_short_and_inside_the_certified_one(a, b, scale):
+    from auv_hinf.certificate.parts.actuators import _inwards
+
+    lo, hi = 1.0 - scale * a, 1.0 + scale * b  # a box scaled by a bisection, about the model (1)
+    got = _inwards([lo, hi])
+    assert lo <= got[0] <= 1.0 <= got[1] <= hi  # inside what was certified: a re-run covers it
+    # 4 significant digits of each offset from the model (an offset under 1e-9 is the model itself)
+    assert 1.0 - got[0] >= (1.0 - lo) * (1.0 - 1e-3) - 1e-9 and got[1] - 1.0 >= (hi - 1.0) * (1.0 - 1e-3) - 1e-9
+    assert all(len(repr(x)) <= 14 for x in got)  # a short decimal, not a bisection's 17 digits

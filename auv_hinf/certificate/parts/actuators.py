@@ -33,14 +33,16 @@ figures then say what the law would need against what the rudder gives at the en
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from decimal import Decimal
 from typing import Any
 
 from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actuator_shortfall
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.reason import Reason, Setting, upper
+from auv_hinf.certificate.reason import Reason, Setting, toml_line, upper
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant_decimal
 from auv_hinf.numerics.integrators import FORCE_FLOOR
 from auv_hinf.robust.margin import largest_certifiable
 
@@ -287,13 +289,37 @@ def rudder_check(
     return ActuatorCheck(act, peak, "force_y", None, False, why, rudder_authority=authority)
 
 
+#: Offset from the model (a fraction of its value) below which an advised box's range is written as the
+#: model itself: a spread of 1e-9 is no vehicle's uncertainty, and its 16-digit value no one's to type.
+OFFSET_FLOOR = Decimal("1e-9")
+
+
 def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
-    """The settings of ``largest_certifiable`` to re-run with: the scaled ``[uncertainty]`` table and the current."""
+    """The settings of ``largest_certifiable`` to re-run with: the scaled ``[uncertainty]`` table and the current.
+
+    Each range of the box is written with :data:`~auv_hinf.numerics.digits.ADVISED_DIGITS` significant
+    digits of its distance from the model (1), rounded inwards: the box written lies inside the one
+    certified (a bisection's ``[0.985101318359375, 1.014898681640625]`` is written ``[0.98511, 1.01489]``).
+    """
     if best is None or best.get("current_speed") is None:
         return ()
-    out = [Setting("uncertainty", name, list(pair)) for name, pair in (best.get("uncertainty") or {}).items()]
+    out = [Setting("uncertainty", name, _inwards(pair)) for name, pair in (best.get("uncertainty") or {}).items()]
     out.append(Setting("disturbance", "current_speed", best["current_speed"]))
     return tuple(out)
+
+
+def _inwards(pair: Sequence[float]) -> list[float]:
+    """A box's range ``[lo, hi]`` (multiples of the model's value) with short offsets from 1, rounded inwards.
+
+    The offsets are taken and rounded in decimal (0.9 is 1 - 0.1, and 1 - 0.3906 is written 0.6094); an
+    offset below :data:`OFFSET_FLOOR` is written 0, the model's value, also inside the box.
+    """
+    out = []
+    for x, up in zip(pair, (True, False), strict=True):
+        offset = Decimal(repr(float(x))) - 1
+        short = Decimal(0) if abs(offset) < OFFSET_FLOOR else significant_decimal(offset, ADVISED_DIGITS, up=up)
+        out.append(float(1 + short))
+    return out
 
 
 #: Why no force bound reaches the actuators when the law is sampled.
@@ -369,7 +395,7 @@ class ActuatorPart:
         limits = act.limits.limits()
         k = CHANNELS.index(act.binding) if act.binding in CHANNELS else None
         settings = advice(act.largest_certifiable)  # none for a sampled law: the composed part answers for it
-        text = f"actuators: {act.reason}"
+        text = f"actuators: {act.reason}" + (f"; within the limits: {toml_line(settings)}" if settings else "")
         why = Reason(
             self.name,
             "thrust" if peak is not None else "not_covered",
