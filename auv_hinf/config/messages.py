@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from auv_hinf.config.schema import TABLES, ConfigFile, suggest_key, table_keys, unit_slip
+from auv_hinf.config.schema import TABLES, ConfigFile, DesignTable, schema_default, suggest_key, table_keys, unit_slip
 from auv_hinf.exceptions import AuvHinfError, ConfigError
 
 _TYPE_NAMES = {
@@ -262,8 +262,17 @@ def input_warnings(data: Any) -> list[str]:
             f"force then acts {yaw / sway:.3g} m ahead of the centre of mass, a bow rudder; a stern rudder's have "
             "opposite signs (a REMUS 100's: 9.64 kg/(m rad) and -6.15 kg/rad)"
         )
+    guided = isinstance(data, dict) and isinstance(data.get("guidance"), dict)
+    design = data.get("design") if guided else None
+    if isinstance(design, dict):
+        for key, default in GUIDED_UNUSED_DESIGN.items():
+            if key in design and design[key] != default:
+                out.append(
+                    f"design.{key} is not used by a [guidance] fleet: its cascade (the [guidance] gains, the propeller "
+                    "and the rudder) replaces the formation law whose gains [design] designs"
+                )
     sim = data.get("simulation") if isinstance(data, dict) else None
-    if isinstance(data, dict) and isinstance(data.get("guidance"), dict) and isinstance(sim, dict):
+    if guided and isinstance(sim, dict):
         for key, default in GUIDED_UNUSED.items():
             if key in sim and sim[key] != default:
                 out.append(
@@ -276,10 +285,16 @@ def input_warnings(data: Any) -> list[str]:
 #: ``[simulation]`` keys of the formation law's shaped start, which a ``[guidance]`` fleet does not read,
 #: with the value ``auv-hinf init`` writes (not worth a warning).
 GUIDED_UNUSED: dict[str, object] = {"start": "shaped", "blend_time": None}
+#: ``[design]`` keys of the formation law's gain design, which a ``[guidance]`` fleet does not read, with
+#: their defaults (not worth a warning).
+GUIDED_UNUSED_DESIGN: dict[str, object] = {
+    key: schema_default(DesignTable, key) for key in ("robust", "synthesis", "integral")
+}
 
 
 __all__ = [
     "GUIDED_UNUSED",
+    "GUIDED_UNUSED_DESIGN",
     "as_dict",
     "format_errors",
     "input_warnings",

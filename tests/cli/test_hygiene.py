@@ -30,6 +30,18 @@ def test_a_rudder_whose_side_force_and_moment_share_a_sign_is_flagged_as_a_bow_r
         assert "actuators.rudder_yaw" in lines[0] and "0.638 m ahead" in lines[0] and "opposite signs" in lines[0]
 
 
+@pytest.mark.parametrize(
+    ("design", "flagged"),
+    [({"robust": True, "synthesis": "lmi"}, {"robust", "synthesis"}), ({"integral": True}, {"integral"}), ({}, set())],
+)
+def test_design_keys_a_guidance_fleet_does_not_read_are_flagged(design, flagged):
+    """A torpedo fleet declaring a robust or LMI design of the formation law was certified without a word."""
+    lines = input_warnings({"guidance": {"kind": "ilos"}, "design": {"robust": False, **design}})
+    assert {line.split(" ")[0].removeprefix("design.") for line in lines} == flagged
+    assert all("[guidance] fleet" in line for line in lines)
+    assert input_warnings({"design": {"robust": True, "synthesis": "lmi"}}) == []  # read by the formation law
+
+
 def test_cli_refuses_degrees_with_one_line_naming_the_key(tmp_path, capsys):
     path = tmp_path / "deg.toml"
     path.write_text('[reference]\nkind = "line"\nspeed = 1.0\nheading = 90.0\n', encoding="utf-8")
