@@ -574,9 +574,32 @@ class RobustCertificate:
         current : array_like, shape (2,)
             The current (m/s, inertial frame).
         """
+        levels = self.start_levels(e, de, epsi, depsi, current)
+        if levels is None:
+            return False
+        vp, vh, (top_p, top_h) = levels
+        return bool(np.all(vp <= top_p) and np.all(vh <= top_h))
+
+    def start_levels(
+        self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: ArrayLike
+    ) -> tuple[FloatArray, FloatArray, tuple[float, float]] | None:
+        """Every vehicle's levels in the two certified sets, and the sets' levels (``None``: no sets).
+
+        The start lies in the sets when each level is at most its set's: ``V(e - e_c, e') <= d^2``
+        (position, m and m/s) and ``W(e_psi, e_psi') <= h^2`` (heading, rad and rad/s).
+
+        Parameters
+        ----------
+        e, de : ndarray, shape (N, 2)
+            Position (m) and ground-velocity (m/s) errors, inertial frame.
+        epsi, depsi : ndarray, shape (N,)
+            Heading (rad) and yaw-rate (rad/s) errors.
+        current : array_like, shape (2,)
+            The current (m/s, inertial frame).
+        """
         pos, head, hp, d = self.position_ellipsoid, self.heading_ellipsoid, self.heading, self.position_disturbance
         if pos is None or head is None or hp is None or d is None:
-            return False
+            return None
         shift = self.equilibrium_shift(current)
         if self.gains.integral:  # (z~, e, e') with the integrator starting at z = 0
             x = np.stack(np.broadcast_arrays(-shift, np.asarray(e, dtype=float), np.asarray(de, dtype=float)), -1)
@@ -584,7 +607,7 @@ class RobustCertificate:
         else:
             vp = pair_level(pos.matrix, e - shift, de, planar=True)
         vh = pair_level(head.matrix, epsi, depsi)
-        return bool(np.all(vp <= d**2) and np.all(vh <= hp.disturbance**2))
+        return vp, vh, (d**2, hp.disturbance**2)
 
     def covering(
         self, e: FloatArray, de: FloatArray, epsi: FloatArray, depsi: FloatArray, current: ArrayLike

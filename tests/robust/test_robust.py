@@ -386,3 +386,36 @@ def test_certify_text_says_over_which_velocities_the_robust_bounds_hold():
     assert op is not None and details["declared_sigma"] > details["sigma"]
     (line,) = [x for x in certificate_text(record).splitlines() if "computed over the velocities" in x]
     assert f"u in [{op['u'][0]:.3g}, {op['u'][1]:.3g}] m/s" in line and f"{details['declared_sigma']:.3g} 1/s" in line
+
+
+@pytest.mark.slow
+def test_the_currents_the_configured_start_is_certified_in_are_said_and_hold_in_every_direction():
+    """A review's fleet was certified in a 0.1 m/s current while no run from its start in that current
+    was covered: the vehicles start at the mission's speed through the water, so a current is a velocity
+    error at t = 0. The certificate now says up to which current the configured start is inside its
+    start set: there in every direction (sampled), and as far as the bisection of a configured current."""
+    from auv_hinf.certificate.assembly import certify
+    from auv_hinf.certificate.design_point import design_point, initial_states
+    from auv_hinf.certificate.parts.closed_loop import closed_loop_for
+    from auv_hinf.certificate.parts.robust import robust_summary, start_current
+    from auv_hinf.closed_loop.coverage import initial_errors
+    from auv_hinf.config.settings import config_from_dict
+
+    box = {k: [0.95, 1.05] for k in ("m11", "m22", "m33")} | {
+        k: [0.9, 1.1] for k in ("d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad")
+    }
+    data = {"design": {"robust": True}, "uncertainty": box, "disturbance": {"current_speed": 0.15}}
+    cfg = config_from_dict(data, "robust triangle")
+    record = certify(cfg).to_dict()
+    limit = record["robust"]["start_current_limit"]
+    assert record["robust"]["covers"] and 0.0 < limit < 0.15
+    point = design_point(cfg)
+    rob = robust_summary(point, nominal=closed_loop_for(point))
+    fleet, initial = point.fleet(), initial_states(point)
+    for angle in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False):
+        c = limit * np.array([np.cos(angle), np.sin(angle)])
+        assert rob.certificate.covering(*initial_errors(fleet, initial, c), c) is not None, angle
+    # a configured current along x is answered by bisection: the same limit, within its resolution
+    along = config_from_dict({**data, "simulation": {"current": [0.15, 0.0]}}, "robust triangle")
+    answer = start_current(design_point(along), rob)
+    assert answer is not None and limit == pytest.approx(answer.value[0], abs=0.15 / 2**9)

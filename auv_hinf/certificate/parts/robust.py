@@ -429,6 +429,70 @@ def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReferenc
     return None if covering is None or covering.bounds is None else float(covering.bounds.position)
 
 
+def start_current_limit(point: DesignPoint, rob: RobustSummary) -> float | None:
+    """The largest current (m/s, in any direction) in which the configured start lies in a certified start set.
+
+    The configured vehicles' velocities through the water are fixed, so in a current ``c`` their
+    ground-velocity errors are those of still water plus ``c``, and the equilibrium the position set
+    is about moves linearly with ``c``: each vehicle's level in the position set is a convex
+    quadratic ``q(c) = c^T A c + 2 b.c + g``, its coefficients read exactly from its values at
+    ``c = 0``, ``+-h e_x``, ``+-h e_y`` and ``h (e_x + e_y)``. Over ``|c| <= C``, ``q <= lambda_max(A)
+    C^2 + 2 |b| C + g``, so the start lies in the set in every current up to the root of that bound
+    at the set's level (the heading set does not depend on the current). The larger of this and the
+    declared envelope's certificate's (:meth:`~auv_hinf.robust.invariant_set.RobustCertificate.covering`)
+    is returned, at most the declared ``[disturbance] current_speed``; ``None`` when the certificate does
+    not cover or the start is outside its sets even in still water.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured start and declared current).
+    rob : RobustSummary
+        Its robust summary.
+    """
+    c = rob.certificate
+    bound = float(point.config.disturbance.current_speed or 0.0)
+    if c is None or not c.covers or rob.reasons or bound <= 0.0:
+        return None
+    fleet, initial = point.fleet(), initial_states(point)
+    if fleet.shaping is not None:
+        return None
+    step = bound  # m/s: the levels are read at the size of the currents they are judged in
+    probes = [(0.0, 0.0), (step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step), (step, step)]
+    best: float | None = None
+    for cert in (c, c.wider):
+        if cert is None or not cert.covers:
+            continue
+        levels = []
+        for x in probes:
+            e, de, epsi, depsi = initial_errors(fleet, initial, np.array(x))
+            got = cert.start_levels(e, de, epsi, depsi, np.array(x))
+            if got is not None:
+                levels.append(got)
+        if len(levels) < len(probes):
+            continue
+        q0, vh, (top_p, top_h) = levels[0]
+        qx, qmx, qy, qmy, qxy = (lv[0] for lv in levels[1:])
+        if np.any(q0 > top_p) or np.any(vh > top_h):
+            continue
+        axx, ayy = (qx + qmx - 2.0 * q0) / (2.0 * step**2), (qy + qmy - 2.0 * q0) / (2.0 * step**2)
+        axy = (qxy - q0 - step * ((qx - qmx) + (qy - qmy)) / (2.0 * step) - step**2 * (axx + ayy)) / (2.0 * step**2)
+        b = np.hypot((qx - qmx) / (4.0 * step), (qy - qmy) / (4.0 * step))
+        lam = np.maximum(0.5 * (axx + ayy) + np.hypot(0.5 * (axx - ayy), axy), 0.0)
+        room = np.maximum(top_p - q0, 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            root = np.where(lam > 0.0, (np.sqrt(b * b + lam * room) - b) / lam, room / np.maximum(2.0 * b, 1e-300))
+        limit = min(bound, float(np.min(root)) * (1.0 - START_LIMIT_RTOL))
+        best = limit if best is None else max(best, limit)
+    return best
+
+
+#: Relative margin taken off :func:`start_current_limit`'s root: the quadratic's coefficients are read
+#: from six levels evaluated at currents of the declared size, each with a round-off of about 1e-15 of
+#: the largest level (at most about 100 times the set's); 1e-6 leaves a millionfold room for it.
+START_LIMIT_RTOL = 1e-6
+
+
 #: Bisection steps of the configured current at which an on-slot start lies in the certified start set.
 START_CURRENT_STEPS = 10
 
@@ -542,6 +606,7 @@ class RobustPart:
         margins = None if not rob.declared or c is None else c.margins
         binding = None if margins is None else f"operating envelope (smallest margin {margins.min:.3g})"
         figures = rob.to_dict()
+        figures["start_current_limit"] = start_current_limit(point, rob) if rob.declared else None
         applies = rob.declared or point.source == "robust"
         if design_failed:  # the robust design gave no gains: that is the verdict
             return Verdict(self.name, False, True, tuple(design_failed), figures, peaks, binding, rob)
@@ -622,6 +687,15 @@ class RobustPart:
             )
         if f["margin"] is not None and not model_only and f.get("details") is not None:
             out.append(f"    box scale certified up to {f['margin']['lower']:.4g} (1 = the declared box)")
+        limit = f.get("start_current_limit")
+        if limit is not None and current:
+            held = (
+                f"every current up to the declared {current:g} m/s"
+                if limit >= current
+                else f"currents up to {limit:.3g} m/s, not the declared {current:g} m/s: a run from it in a "
+                "stronger current is not covered"
+            )
+            out.append(f"    the configured start is in the certified start set in {held}")
         integral = f.get("integral")
         if integral is not None:
             without = integral["position_bound_without"]
@@ -667,4 +741,5 @@ __all__ = [
     "run_outside",
     "run_settings",
     "start_current",
+    "start_current_limit",
 ]
