@@ -262,6 +262,14 @@ def test_the_thrusters_take_each_certificates_force_box_on_its_own():
     assert not check_actuators(point, [surge, sway, (60.0, 60.0, 1.0)], answers=False).certified
 
 
+def test_an_advised_current_is_written_short_and_rounded_down():
+    from auv_hinf.certificate.parts.actuators import advice
+
+    for found in (0.009228515625, 0.0050634765625000005, 0.1):
+        (written,) = [x.value for x in advice({"current_speed": found, "uncertainty": {}}) if x.key == "current_speed"]
+        assert written <= found and written == pytest.approx(found, rel=1e-3) and len(repr(written)) <= 8, written
+
+
 @given(
     st.floats(min_value=0.0, max_value=1.0, allow_nan=False),
     st.floats(min_value=0.0, max_value=1.0, allow_nan=False),

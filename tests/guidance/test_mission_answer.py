@@ -220,6 +220,12 @@ def test_plain_los_on_a_fleet_only_cells_certify_is_answered_with_ilos_in_the_js
     assert (
         again["certified"] is True and again["guidance"]["error_bounds"]["cross_track"] <= supported["position_bound"]
     )
+    # declared off the slots too: both answers in one (the switched fleet's answer was dropped as a run setting)
+    start = {"initial": [[0.0, y + 0.3, 0.3, 1.5, 0.0, 0.0] for y in (-22.5, -7.5, 7.5, 22.5)]}
+    cfg, data, why = _refused({**tables, "guidance": {**tables["guidance"], "kind": "los"}, "simulation": start}, "l")
+    assert _keys(why) == {("guidance", "kind"), ("simulation", "initial")}
+    assert data["guidance"]["largest_certifiable"]["supported"]["settings"] == why["settings"]
+    assert _rerun(cfg, why)["certified"] is True
 
 
 #: Three REMUS 100 on a 3 m polygon in the path frame, on a lawn-mower with 60 m turns: refused;

@@ -415,6 +415,12 @@ def test_the_currents_the_configured_start_is_certified_in_are_said_and_hold_in_
     for angle in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False):
         c = limit * np.array([np.cos(angle), np.sin(angle)])
         assert rob.certificate.covering(*initial_errors(fleet, initial, c), c) is not None, angle
+    # the text says it rounded down: a run in the printed current is covered too
+    from auv_hinf.certificate.text import certificate_text
+
+    (line,) = [x for x in certificate_text(record).splitlines() if "configured start is in the certified" in x]
+    printed = float(line.split("currents up to ")[1].split(" m/s")[0])
+    assert printed <= limit and printed == pytest.approx(limit, rel=1e-3), line
     # a configured current along x is answered by bisection: the same limit, within its resolution
     along = config_from_dict({**data, "simulation": {"current": [0.15, 0.0]}}, "robust triangle")
     answer = start_current(design_point(along), rob)

@@ -42,7 +42,7 @@ from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actu
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting, toml_line, upper
-from auv_hinf.numerics.digits import ADVISED_DIGITS, significant_decimal
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant, significant_decimal
 from auv_hinf.numerics.integrators import FORCE_FLOOR
 from auv_hinf.robust.margin import largest_certifiable
 
@@ -298,13 +298,14 @@ def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
     """The settings of ``largest_certifiable`` to re-run with: the scaled ``[uncertainty]`` table and the current.
 
     Each range of the box is written with :data:`~auv_hinf.numerics.digits.ADVISED_DIGITS` significant
-    digits of its distance from the model (1), rounded inwards: the box written lies inside the one
-    certified (a bisection's ``[0.985101318359375, 1.014898681640625]`` is written ``[0.98511, 1.01489]``).
+    digits of its distance from the model (1), rounded inwards, and the current with as many, rounded
+    down: the world written lies inside the one certified (a bisection's ``[0.985101318359375,
+    1.014898681640625]`` is written ``[0.98511, 1.01489]``, its ``0.009228515625`` m/s ``0.009228``).
     """
     if best is None or best.get("current_speed") is None:
         return ()
     out = [Setting("uncertainty", name, _inwards(pair)) for name, pair in (best.get("uncertainty") or {}).items()]
-    out.append(Setting("disturbance", "current_speed", best["current_speed"]))
+    out.append(Setting("disturbance", "current_speed", significant(best["current_speed"], ADVISED_DIGITS, up=False)))
     return tuple(out)
 
 

@@ -564,7 +564,8 @@ def _then(cfg: FormationConfig, base: GuidanceSummary, switch: tuple[Setting, ..
     if alone is not None:
         return replace(base, supported=switch, supported_bound=alone)
     settings, words = _advice(changed[0], answer)
-    both = switch + tuple(x for x in settings if x.table != "simulation")
+    # the run's own settings are not an answer, but a start moved onto the slots is
+    both = switch + tuple(x for x in settings if x.table != "simulation" or x == RESTART)
     bound = _confirmed(cfg, both, cells=True) if settings else None  # as its re-run certifies it
     if bound is None:
         return base

@@ -39,6 +39,7 @@ from auv_hinf.mission.fleet import FleetReference, ReferenceTube
 from auv_hinf.mission.margins import ErrorBounds
 from auv_hinf.mission.tubes import fleet_tube
 from auv_hinf.numerics.bisection import bisect
+from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.bandwidth import RobustDesign
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
@@ -692,8 +693,8 @@ class RobustPart:
             held = (
                 f"every current up to the declared {current:g} m/s"
                 if limit >= current
-                else f"currents up to {limit:.3g} m/s, not the declared {current:g} m/s: a run from it in a "
-                "stronger current is not covered"
+                else f"currents up to {significant(limit, ADVISED_DIGITS, up=False):g} m/s (rounded down), not the "
+                f"declared {current:g} m/s: a run from it in a stronger current is not covered"
             )
             out.append(f"    the configured start is in the certified start set in {held}")
         integral = f.get("integral")
