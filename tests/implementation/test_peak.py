@@ -461,3 +461,109 @@ def test_the_signed_remaining_sum_bounds_the_tail_from_below_and_splits_it_into_
     assert np.all(0.5 * (total - signed + err) >= neg * (1 - 1e-9) - 1e-12 * scale)
     reached = total > 1e-6 * scale
     assert np.median(((np.abs(signed) - err) / total)[reached]) > 0.95
+
+
+def test_the_slow_modes_sums_are_the_exact_sums_of_two_geometric_sequences_and_of_their_signs():
+    """``sum_k |a lam^k + b mu^k|`` and its positive and negative parts, in closed form, against the terms
+    summed one by one: equal signs, opposite signs crossing early, late (thousands of periods) or never."""
+    rng = np.random.default_rng(23)
+    lam, mu = 0.995, 0.97
+    a = rng.normal(size=400) * 10.0 ** rng.uniform(-3, 3, 400)
+    b = rng.normal(size=400) * 10.0 ** rng.uniform(-3, 3, 400)
+    b[:40] = -a[:40] * (lam / mu) ** rng.uniform(0.0, 3000.0, 40)  # crossings at known indices
+    total, pos, neg = peak_module._slow_sums(a, b, lam, mu)
+    k = np.arange(20000)  # lam^20000 < 1e-43
+    terms = a[:, None] * lam ** k[None, :] + b[:, None] * mu ** k[None, :]
+    exact = np.abs(terms).sum(axis=1)
+    for got, want in (
+        (total, exact),
+        (pos, np.maximum(terms, 0.0).sum(axis=1)),
+        (neg, np.maximum(-terms, 0.0).sum(axis=1)),
+    ):
+        assert np.all(got >= want * (1 - 1e-12))  # the brute-force sum's own round-off
+        assert np.all(got <= want * (1 + 1e-9) + 1e-9 * exact)
+    assert (a * b < 0).sum() > 200  # most pairs cross: the split is what is tested
+
+
+def _map_with_spectrum(rng: np.random.Generator) -> np.ndarray:
+    """A period map with two slow real modes, a complex pair, a fast mode and a nilpotent Jordan block, in a
+    random basis (condition about 30)."""
+    core = np.zeros((9, 9))
+    core[0, 0], core[1, 1] = 0.998, 0.991
+    core[2:4, 2:4] = 0.93 * np.array([[math.cos(0.3), -math.sin(0.3)], [math.sin(0.3), math.cos(0.3)]])
+    core[4, 4] = -0.6
+    core[5, 6] = core[6, 7] = core[7, 8] = 1.0  # a Jordan block at 0
+    core[0, 1:] = rng.normal(size=8) * 0.3  # couplings the decoupling has to remove
+    core[2, 4:] = rng.normal(size=5) * 0.3
+    u, _ = np.linalg.qr(rng.normal(size=(9, 9)))
+    basis = u @ np.diag(np.geomspace(1.0, 30.0, 9)) @ np.linalg.qr(rng.normal(size=(9, 9)))[0]
+    return basis @ core @ np.linalg.inv(basis)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_deflated_tail_brackets_the_remaining_sum_and_its_signs_and_follows_it(seed):
+    """For every row and start of a map with two slow real modes, a complex pair, a negative mode and a
+    nilpotent block: lower <= sum_k |l Phi^k v| <= upper, the positive and negative parts bounded, the
+    block norms' sums bounded; after 64 periods the upper bound is within 1e-3 of the sum for most
+    pairs (where the contraction's and Gramians' tails are not)."""
+    rng = np.random.default_rng(seed)
+    phi = _map_with_spectrum(rng)
+    rows = rng.normal(size=(7, 9))
+    defl = peak_module._deflation(rows, phi)
+    assert defl is not None and defl.modes.shape == (2,)
+    starts = np.linalg.matrix_power(phi, 64) @ rng.normal(size=(9, 12))
+    tails = peak_module._deflated_tails(defl, starts)
+    total, pos, neg = (np.zeros((7, 12)) for _ in range(3))
+    block = np.zeros((7, 3))
+    x = starts.copy()
+    for _ in range(40000):  # 0.998^40000 < 1e-34
+        z = rows @ x
+        total += np.abs(z)
+        pos += np.maximum(z, 0.0)
+        neg += np.maximum(-z, 0.0)
+        block += np.sqrt((z.reshape(7, 3, 4) ** 2).sum(axis=-1))
+        x = phi @ x
+    slack = 1e-12 * total.max()  # the brute-force sum's own round-off
+    assert np.all(tails.upper >= total - slack) and np.all(tails.lower <= total + slack)
+    assert np.all(tails.positive >= pos - slack) and np.all(tails.negative >= neg - slack)
+    assert np.all(peak_module._deflated_norm_tails(defl, starts, 4) >= block - slack)
+    assert np.median(tails.upper / total) < 1.001
+    p, rho = peak_module._contraction(phi)
+    assert np.median(peak_module._tails([rows], starts, p, rho)[0] / total) > 10.0
+
+
+def test_a_map_whose_slowest_modes_are_not_real_or_not_separated_is_not_deflated():
+    """A complex slowest pair, or two slow modes closer than the gap: no deflation (the other tails stay)."""
+    rot = 0.995 * np.array([[math.cos(0.01), -math.sin(0.01)], [math.sin(0.01), math.cos(0.01)]])
+    phi = np.zeros((4, 4))
+    phi[:2, :2], phi[2, 2], phi[3, 3] = rot, 0.5, 0.2
+    assert peak_module._deflation(np.eye(4), phi) is None
+    close = np.diag([0.995, 0.995 - 0.1 * peak_module.DEFLATION_GAP, 0.5, 0.2])
+    deflated = peak_module._deflation(np.eye(4), close)
+    assert deflated is None  # neither the first nor the pair is separated from the next
+
+
+@pytest.mark.slow
+def test_a_slow_ilos_loop_is_summed_to_its_deflated_tail_and_agrees_with_the_long_exact_sum(monkeypatch):
+    """The ILOS cascade's loop (its slow integrator mode at 0.997 per period): the gains that stop at the
+    deflated tail are above, and within TAIL_RTOL of, the gains summed exactly over MAX_PERIODS periods."""
+    from auv_hinf.cascade.certificate import cascade_loop
+    from auv_hinf.certificate.design_point import design_point
+    from auv_hinf.certificate.parts.guidance import cascade_problem
+    from auv_hinf.config.presets import preset_config
+
+    cfg = preset_config("remus-transit-ilos")
+    problem = cascade_problem(cfg, design_point(cfg))
+    assert not isinstance(problem, str)
+    loop = cascade_loop(problem)
+    phi, rows = _period_rows(loop)
+    assert peak_module._deflation(rows, phi) is not None
+    fast = peak_gains(loop)
+    monkeypatch.setattr(peak_module, "GRAMIAN_AFTER", math.inf)
+    monkeypatch.setattr(peak_module, "TAIL_RTOL", 0.0)
+    peak_module._maps.cache_clear()
+    long = peak_gains(loop)
+    assert fast is not None and long is not None
+    for new, old in ((fast.continuous, long.continuous), (fast.one_signed, long.one_signed)):
+        assert np.all(new >= old * (1 - 1e-9) - 1e-12 * old.max())
+        assert np.all(new <= old * (1 + 2 * TAIL_RTOL) + 1e-9 * old.max())
