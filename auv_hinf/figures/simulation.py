@@ -33,6 +33,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.actuation.limits import RudderActuation
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.files import written
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
@@ -433,9 +434,16 @@ def forces(
     ParameterError
         If ``certified`` or ``limits`` is not three finite values >= 0.
     """
+    rudder_note = ""
     if limits is None:
         act = getattr(getattr(getattr(res, "scenario", None), "law", None), "actuators", None)
-        limits = None if act is None else act.limits()
+        if isinstance(act, RudderActuation):
+            # a rudder's sway force and yaw moment grow with u^2: its most, at the run's top surge speed
+            top = float(np.max(np.abs(np.asarray(res.states)[..., 3]))) if np.size(res.states) else 0.0
+            limits = (act.tau_x, *act.authority(top))
+            rudder_note = f", the rudder's at {top:.3g} m/s"
+        elif act is not None:
+            limits = act.limits()
     data = np.asarray(res.forces, dtype=float)
     fig, axes = per_vehicle_axes(res.t, data, ("tau_x [N]", "tau_y [N]", "tau_psi [N m]"))
     notes = []
@@ -448,7 +456,7 @@ def forces(
             ax.axhline(-level, label=f"_{label} (lower)", lw=1.2, **style)  # "_": not in the legend
             lo, hi = ax.get_ylim()  # the lines inside the view, not on its edge
             ax.set_ylim(min(lo, -LEVEL_MARGIN * level), max(hi, LEVEL_MARGIN * level))
-        notes += [f"{word}: {label}"] if levels else []
+        notes += [f"{word}: {label}" + (rudder_note if label == LIMIT_LABEL else "")] if levels else []
     if notes:
         _vehicle_legend(axes[0], data.shape[1])  # again, now with the bound and the limit
     note = f" ({'; '.join(notes)})" if notes else ""

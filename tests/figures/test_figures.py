@@ -17,7 +17,7 @@ from matplotlib.collections import QuadMesh
 from matplotlib.contour import ContourSet
 from matplotlib.quiver import Quiver
 
-from auv_hinf.actuation.limits import Actuators
+from auv_hinf.actuation.limits import Actuators, RudderActuation
 from auv_hinf.design.sigma import vehicle_sigma
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.figures import sigma as sigma_figure
@@ -97,6 +97,22 @@ def test_force_legend_and_units():
     res = synthetic_result()
     for i, line in enumerate(fig.axes[0].get_lines()):
         np.testing.assert_array_equal(line.get_ydata(), res.forces[:, i, 0])
+
+
+def test_a_rudder_vehicles_force_figure_draws_its_authority_at_the_runs_top_speed():
+    """A torpedo's law saturates in a propeller and a rudder (no force box): the figure draws the thrust
+    limit and the rudder's sway force and yaw moment at the largest surge speed of the run (they grow
+    as u^2), and says so, instead of failing on a force box it does not have."""
+    res = synthetic_result()
+    rudder = RudderActuation(tau_x=67.0, rudder_max=0.2374, rudder_sway=9.64, rudder_yaw=-6.15)
+    res.scenario.law = SimpleNamespace(actuators=rudder)
+    fig = plots.forces(res)
+    top = float(np.abs(res.states[..., 3]).max())
+    want = (67.0, *rudder.authority(top))
+    for ax, level in zip(fig.axes, want, strict=True):
+        drawn = [ln.get_ydata()[0] for ln in ax.get_lines() if ln.get_label().startswith(plots.LIMIT_LABEL)]
+        assert drawn == pytest.approx([level]), (ax.get_ylabel(), drawn, level)
+    assert f"the rudder's at {top:.3g} m/s" in fig.axes[0].get_title()
 
 
 def test_error_figure_units():
