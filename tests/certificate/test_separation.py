@@ -276,3 +276,31 @@ def test_a_start_in_a_current_outside_the_certified_set_is_answered_with_a_curre
     assert (setting.table, setting.key) == ("simulation", "current")
     assert 0.0 < np.hypot(*setting.value) < np.hypot(0.05, 0.05)
     assert certify(with_settings(cfg, [(setting.table, setting.key, setting.value)])).certified
+
+
+def test_a_shaped_start_that_brings_two_vehicles_too_close_is_refused_by_simulate_and_answered_with_the_slots(
+    capsys, tmp_path
+):
+    """paper-triangle's shaped start from the paper's initial positions passes vehicles 2 and 3 about 1.1 m
+    apart. With ``min_separation = 1.5`` certify refuses it, and so do simulate and campaign (not
+    "covered" with a measured 1.1 m); the answer is to start on the slots, not to spread the formation
+    (spreading moves the crossing paths little), and it certifies when re-run."""
+    cfg = with_settings(preset_config("paper-triangle"), [("formation", "min_separation", 1.5)])
+    cert = certify(cfg)
+    assert not cert.certified
+    (why,) = cert.verdict("separation").reasons
+    assert "shaped start" in why.message and "spread" not in why.message
+    (setting,) = why.settings
+    assert (setting.table, setting.key, setting.value) == ("simulation", "initial", None)
+    plan = plan_run(cfg)
+    assert plan.uncertified_gains() is not None and "1.5 m" in plan.uncertified_gains()
+    run = simulate(plan.scenario)
+    assert closest_approach(run.states[..., :2]).distance < 1.5  # the refusal is right: they do come closer
+    path = tmp_path / "close.toml"
+    assert main(["init", "--preset", "paper-triangle", "--out", str(path)]) == 0
+    path.write_text(path.read_text().replace("min_separation = 1.0", "min_separation = 1.5"))
+    capsys.readouterr()
+    assert main(["simulate", "--config", str(path)]) == 1
+    assert "refusing to simulate" in capsys.readouterr().err
+    again = certify(with_settings(cfg, [(setting.table, setting.key, setting.value)]))
+    assert again.certified, again.reasons

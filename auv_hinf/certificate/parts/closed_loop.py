@@ -462,6 +462,8 @@ class ClosedLoopPart:
             covers,
             "" if cov is None else cov.reason,
             tuple(notes),
+            # the run's own bounds, about its reference: what the separation condition holds the pairs to
+            bounds=cov.bounds.to_dict() if covers and cov is not None else None,
             thrust=None if cov is None else cov.thrust,
             reference=None if cov is None else cov.reference,
             refuses_gains=refuses,

@@ -162,7 +162,7 @@ def separation_bound(point: DesignPoint, verdicts: Mapping[str, Verdict]) -> Sep
     return SeparationBound(required, slots, bound, tuple(v.part for v in proving))
 
 
-def separation_with(point: DesignPoint, bound: float) -> SeparationBound:
+def separation_with(point: DesignPoint, bound: float, reference: FleetReference | None = None) -> SeparationBound:
     """The separation of ``point``'s slots with every vehicle within ``bound`` (m) of its own.
 
     The bound is raised to the numerical floor as :func:`separation_bound` raises it.
@@ -173,8 +173,11 @@ def separation_with(point: DesignPoint, bound: float) -> SeparationBound:
         The design point (its slots and required separation).
     bound : float
         The certified bound of every vehicle's distance to its slot (m).
+    reference : FleetReference, optional
+        The slots the bound is about, when not the mission's own (a shaped start's, which may bring
+        two slots closer than the formation holds them).
     """
-    slots = slot_separation(point.fleet())
+    slots = slot_separation(point.fleet() if reference is None else reference)
     return SeparationBound(point.config.min_separation, slots, max(NUMERICAL_FLOOR, bound), (PART,))
 
 
@@ -194,7 +197,7 @@ def keeps_separation(point: DesignPoint, bound: float) -> bool:
     return separation_with(point, bound).ok
 
 
-def separation_refusal(point: DesignPoint, bound: float) -> str | None:
+def separation_refusal(point: DesignPoint, bound: float, reference: FleetReference | None = None) -> str | None:
     """Why vehicles each within ``bound`` (m) of their slots break ``[formation] min_separation``, or ``None``.
 
     The refusal's words (:func:`refusal`) for a bound that a run or a campaign is checked against;
@@ -206,8 +209,10 @@ def separation_refusal(point: DesignPoint, bound: float) -> str | None:
         The design point.
     bound : float
         The certified bound of every vehicle's distance to its slot (m).
+    reference : FleetReference, optional
+        The slots the bound is about (:func:`separation_with`).
     """
-    sep = separation_with(point, bound)
+    sep = separation_with(point, bound, reference)
     return None if sep.ok else refusal(point, sep).message
 
 
@@ -338,6 +343,25 @@ def refusal(
         )
     b, certified = sep.position_bound, s.distance - 2.0 * sep.position_bound
     shaped = f" less {s.shaping:.4g} m for the shaped start" if s.shaping > 0.0 else ""
+    formation = slot_separation(point.fleet()).distance  # the slots' own closest approach, no shaped start
+    if s.shaping > 0.0 and point.config.simulation.initial is not None and formation - 2.0 * b >= sep.required:
+        # the shaped start from the declared positions is what brings them close: spreading the slots
+        # moves the start's paths little (they still cross), starting on the slots does not
+        return Reason(
+            PART,
+            "envelope",
+            f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below [formation] "
+            f"min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped} (the paths "
+            f"from the declared [simulation] initial positions to the slots pass that close), and each vehicle's "
+            f"position error is certified <= {upper(b, 4)} m; start the vehicles where their paths to the slots "
+            f"keep apart, e.g. on their slots (remove [simulation] initial: the slots are {formation:.4g} m apart "
+            f"at the closest, {formation - 2.0 * b:.4g} m with the bound)",
+            channel="separation",
+            vehicle=i,
+            value=certified,
+            limit=sep.required,
+            settings=(Setting("simulation", "initial", None),),
+        )
     factor = spread_factor(sep)
     settings = spread_settings(point, factor * (1.0 + ADVICE_MARGIN))
     confirmed = bool(spread)
@@ -445,14 +469,25 @@ class SeparationPart:
         ctx : RunContext
             The run, and the earlier parts' checks of it.
         """
-        bounds = [
-            float(c.bounds["position"])
+        covering = [
+            c
             for c in ctx.checks.values()
             if c.applies and c.role == "certificate" and c.covers and c.bounds and "position" in c.bounds
         ]
-        if not bounds:
+        if not covering:
             return None
-        why = separation_refusal(ctx.point, min(bounds))
+        # each covering certificate's bound is about the slots it tracks (a shaped start's slots may
+        # pass closer to each other than the formation's): the run keeps the separation when one of
+        # them shows it, and is refused with the tightest bound's words otherwise
+        whys = [
+            separation_refusal(
+                ctx.point,
+                float(c.bounds["position"]),
+                c.reference if isinstance(c.reference, FleetReference) else None,
+            )
+            for c in sorted(covering, key=lambda c: float(c.bounds["position"]))
+        ]
+        why = None if None in whys else whys[0]
         if why is None:
             return RunCheck(self.name, "condition", True, True, "the certified separation holds")
         return RunCheck(self.name, "condition", True, False, why, (f"separation: {why}",), refuses_gains=why)
