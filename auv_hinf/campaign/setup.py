@@ -219,7 +219,7 @@ def prepare(
         current_speed=float(cfg.disturbance.current_speed or 0.0),
         envelope=cfg.envelope,
         horizon=hor,
-        samples=round(hor / SAMPLE_INTERVAL) + 1,
+        samples=max(2, round(hor / SAMPLE_INTERVAL) + 1),  # a horizon shorter than one interval: its two ends
         seed=int(seed),
         certificate_applies=bool(fits) and separation is None,
         robust=rob,

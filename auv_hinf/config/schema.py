@@ -36,6 +36,7 @@ from auv_hinf.models.jacobi import (
     shape_from_offsets,
 )
 from auv_hinf.models.vehicle import VehicleParams
+from auv_hinf.numerics.digits import significant
 
 #: The nine model parameters: name -> (unit, lower-bound kind). Masses are > 0, damping >= 0.
 PARAMETERS: dict[str, tuple[str, str]] = {
@@ -75,6 +76,9 @@ MAX_VEHICLES = 100_000
 
 
 MAX_HORIZON = 1e5  # s
+#: Shortest reference blending time (s): the finest sample time an implementation may declare; a
+#: shorter blend asks for accelerations and jerks the shaped start's closed forms overflow on.
+MIN_BLEND_TIME = 1e-3
 
 
 MAX_COORDINATE = 1e6  # m: offsets, radii and path lengths beyond 1000 km are refused
@@ -308,9 +312,10 @@ class LawnmowerReference(_Reference):
         need = lawnmower_min_spacing(self.speed, self.turn_radius)
         if self.spacing < need:
             raise ValueError(
-                f"spacing must be >= {need:.6g} m to hold two 90-degree turns of turn_radius {self.turn_radius:g} m "
-                f"(2 D, about 3.97 turn_radius), got {self.spacing:g} m: widen spacing, or lower turn_radius to at "
-                f"most {self.spacing * self.turn_radius / need:.4g} m"
+                # rounded outwards: the values written certainly pass
+                f"spacing must be >= {significant(need, 6, up=True):g} m to hold two 90-degree turns of turn_radius "
+                f"{self.turn_radius:g} m (2 D, about 3.97 turn_radius), got {self.spacing:g} m: widen spacing, or "
+                f"lower turn_radius to at most {significant(self.spacing * self.turn_radius / need, 4, up=False):g} m"
             )
         return self
 
@@ -819,7 +824,8 @@ class SimulationTable(_Table):
         None,
         "reference blending time (default: chosen by the certificate)",
         "s",
-        gt=0.0,
+        ge=MIN_BLEND_TIME,
+        le=MAX_HORIZON,
     )
     seed: int = _field(0, "seed of the noise and delay draws of a sampled implementation", ge=0)
     noise_pattern: NoisePatternSetting = _field(

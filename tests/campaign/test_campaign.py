@@ -294,3 +294,10 @@ def test_sampled_campaign_draws_per_run_and_does_not_depend_on_the_chunk():
     assert seeds.nunique() == 3 and (seeds == single.table["implementation_seed"]).all()
     assert whole.table["diverged_at"].isna().all()
     assert summarize(whole)["implementation"]["sample_time"] == 0.1
+
+
+def test_a_horizon_shorter_than_one_output_interval_keeps_its_two_ends() -> None:
+    """``simulate`` takes any positive horizon; a campaign of 1 us used to stop on its own sample count
+    ("samples must be an integer >= 2, got 1"), naming no setting: it now samples the run's two ends."""
+    setup, _ = prepare(preset_config("paper-triangle"), horizon=1e-6)
+    assert setup.samples == 2 and setup.horizon == 1e-6

@@ -193,7 +193,22 @@ def test_reference_tables():
     assert ref.reference.kwargs() == {"speed": 1.0, "leg_length": 100.0, "spacing": 40.0, "turn_radius": 10.0}
     (line,) = problems({"reference": {"kind": "lawnmower", "leg_length": 100, "spacing": 20, "turn_radius": 10}})
     assert line.startswith("reference.spacing must be >= 39.7032 m") and "turn_radius to at most 5.037 m" in line
+    # the bounds are written outwards: the spacing and the radius printed pass as written (30 m turns need
+    # 119.10926... m, which 6 digits to nearest would print as 119.109, itself refused)
+    lawn = {"kind": "lawnmower", "leg_length": 100, "turn_radius": 30}
+    (line,) = problems({"reference": {**lawn, "spacing": 119.109}})
+    need = float(line.split(">= ")[1].split(" m")[0])
+    radius = float(line.split("at most ")[1].split(" m")[0])
+    assert config_from_dict({"reference": {**lawn, "spacing": need}}).reference.kwargs()["spacing"] == need
+    assert (
+        config_from_dict({"reference": {**lawn, "spacing": 119.109, "turn_radius": radius}}).reference.kind
+        == "lawnmower"
+    )
     assert problems({"reference": {"kind": "circle"}}) == ["reference.radius is required"]
+    # a blend shorter than the finest sample time, or longer than any run, names its key (1e300 s
+    # overflowed the shaped start's closed forms, "(34, 'Numerical result out of range')")
+    assert problems({"simulation": {"blend_time": 1e300}})[0].startswith("simulation.blend_time must be <=")
+    assert problems({"simulation": {"blend_time": 1e-300}})[0].startswith("simulation.blend_time must be >=")
     assert problems({"reference": {"kind": "spiral"}})[0].startswith("reference.kind must be one of")
     assert problems({"reference": {"speed": 0}}) == ["reference.speed must be >= 0.001 [m/s], got 0"]
     assert problems({"reference": {"speed": 1e-300}}) == ["reference.speed must be >= 0.001 [m/s], got 1e-300"]
