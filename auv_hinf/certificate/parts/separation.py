@@ -469,24 +469,20 @@ class SeparationPart:
         ctx : RunContext
             The run, and the earlier parts' checks of it.
         """
-        covering = [
-            c
-            for c in ctx.checks.values()
-            if c.applies and c.role == "certificate" and c.covers and c.bounds and "position" in c.bounds
-        ]
+        covering = sorted(
+            (
+                (float(c.bounds["position"]), c.reference if isinstance(c.reference, FleetReference) else None)
+                for c in ctx.checks.values()
+                if c.applies and c.role == "certificate" and c.covers and c.bounds and "position" in c.bounds
+            ),
+            key=lambda pair: pair[0],
+        )
         if not covering:
             return None
         # each covering certificate's bound is about the slots it tracks (a shaped start's slots may
         # pass closer to each other than the formation's): the run keeps the separation when one of
         # them shows it, and is refused with the tightest bound's words otherwise
-        whys = [
-            separation_refusal(
-                ctx.point,
-                float(c.bounds["position"]),
-                c.reference if isinstance(c.reference, FleetReference) else None,
-            )
-            for c in sorted(covering, key=lambda c: float(c.bounds["position"]))
-        ]
+        whys = [separation_refusal(ctx.point, bound, reference) for bound, reference in covering]
         why = None if None in whys else whys[0]
         if why is None:
             return RunCheck(self.name, "condition", True, True, "the certified separation holds")
