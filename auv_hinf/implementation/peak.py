@@ -1359,19 +1359,29 @@ def _deflated_norm_tails(defl: _Deflation, state: FloatArray, group: int) -> Flo
     # b = (l S)_2 w_2; with b's part along a, beta a, and the rest b_perp (orthogonal to a), its norm is
     # sqrt(|a|^2 (lam^k + beta mu^k)^2 + |b_perp|^2 mu^2k) exactly: summed term by term over NORM_TERMS
     # periods, and beyond them by |a| |lam^k + beta mu^k| + |b_perp| mu^k, whose sum is exact
+    # the block vectors are scaled by their largest entries first, so that no product underflows
     w1 = over(w[0])  # (blocks, group)
-    w1_sq = _sumsq(w1)
-    a_len = np.outer(np.abs(defl.rows[:, 0]), np.sqrt(w1_sq))  # |a| per row and block
+    s1 = np.abs(w1).max(axis=-1)
+    u1 = w1 / np.where(s1 > 0.0, s1, 1.0)[:, None]
+    u1_sq = _sumsq(u1)
+    a_len = np.outer(np.abs(defl.rows[:, 0]), s1 * np.sqrt(u1_sq))  # |a| per row and block
     if m == 2:
         w2 = over(w[1])
-        w2_sq = _sumsq(w2)
-        dot = (w1 * w2).sum(axis=-1)
-        flat = (defl.rows[:, 0] == 0.0)[:, None] | (w1_sq <= 1e-300)[None, :]  # a = 0: b is all perpendicular
-        along = np.where(flat, 0.0, np.outer(defl.rows[:, 1], dot / np.maximum(w1_sq, 1e-300)))
-        beta = along / np.where(defl.rows[:, 0] == 0.0, 1.0, defl.rows[:, 0])[:, None]
-        perp_sq = np.where(flat, w2_sq[None, :], np.maximum(w2_sq - dot**2 / np.maximum(w1_sq, 1e-300), 0.0)[None, :])
-        b_perp = np.abs(defl.rows[:, 1])[:, None] * np.sqrt(perp_sq + 1e-12 * w2_sq[None, :])
-        slow = _slow_norm_sum(a_len, beta, b_perp, defl.modes[0], defl.modes[1])
+        s2 = np.abs(w2).max(axis=-1)
+        u2 = w2 / np.where(s2 > 0.0, s2, 1.0)[:, None]
+        u2_sq, dot = _sumsq(u2), (u1 * u2).sum(axis=-1)
+        b_len = np.outer(np.abs(defl.rows[:, 1]), s2 * np.sqrt(u2_sq))
+        # a = 0 exactly (no first slow component, or none of w_1): the triangle inequality, term by term
+        flat = (defl.rows[:, 0] == 0.0)[:, None] | (s1 == 0.0)[None, :]
+        safe = np.where(s1 > 0.0, s1, 1.0) * np.where(u1_sq > 0.0, u1_sq, 1.0)
+        beta = np.outer(defl.rows[:, 1] / np.where(defl.rows[:, 0] == 0.0, 1.0, defl.rows[:, 0]), s2 * dot / safe)
+        perp = s2 * np.sqrt(np.maximum(u2_sq - dot**2 / np.where(u1_sq > 0.0, u1_sq, 1.0), 0.0) + 1e-12 * u2_sq)
+        b_perp = np.outer(np.abs(defl.rows[:, 1]), perp)
+        slow = np.where(
+            flat,
+            (a_len / (1.0 - defl.modes[0]) + b_len / (1.0 - defl.modes[1])) * (1.0 + 1e-12),
+            _slow_norm_sum(a_len, np.where(flat, 0.0, beta), b_perp, defl.modes[0], defl.modes[1]),
+        )
     else:
         slow = a_len / (1.0 - defl.modes[0]) * (1.0 + 1e-12)
     rest = np.minimum(np.outer(contraction[0], np.sqrt(_sumsq(over(contraction[1])))), np.sqrt(_sumsq(over(gramian))))
@@ -1388,7 +1398,8 @@ def _slow_norm_sum(a: FloatArray, beta: FloatArray, b: FloatArray, lam: float, m
 
     The first :data:`NORM_TERMS` terms are summed (each inflated by a relative ``4 eps`` for its
     round-off), the rest bounded by ``a sum |lam^k + beta mu^k| + b sum mu^k`` from ``k = NORM_TERMS``
-    on, in closed form (:func:`_slow_sums` of the shifted sequence).
+    on, in closed form (:func:`_slow_sums` of the shifted sequence); the cancellation in ``lam^k + beta
+    mu^k`` (``lam`` near ``mu``, ``beta`` near -1) is charged at a few eps of the terms' sizes.
     """
     eps = float(np.finfo(float).eps)
     total = np.zeros_like(a)
@@ -1400,7 +1411,10 @@ def _slow_norm_sum(a: FloatArray, beta: FloatArray, b: FloatArray, lam: float, m
     total *= 1.0 + 4.0 * eps * NORM_TERMS
     shift_l, shift_m = lam**NORM_TERMS, mu**NORM_TERMS
     rest = a * _slow_sums(np.full_like(a, shift_l), beta * shift_m, lam, mu)[0] + b * shift_m / (1.0 - mu)
-    out: FloatArray = total + rest * (1.0 + 1e-12)
+    # lam^k + beta mu^k cancels where lam is near mu and beta near -1: its rounding is a few eps of the
+    # terms' sizes, not of their difference (every k, the closed-form rest included)
+    cancel = 8.0 * eps * (a * (1.0 / (1.0 - lam) + np.abs(beta) / (1.0 - mu)) + b / (1.0 - mu))
+    out: FloatArray = total + rest * (1.0 + 1e-12) + cancel
     return out
 
 

@@ -567,3 +567,32 @@ def test_a_slow_ilos_loop_is_summed_to_its_deflated_tail_and_agrees_with_the_lon
     for new, old in ((fast.continuous, long.continuous), (fast.one_signed, long.one_signed)):
         assert np.all(new >= old * (1 - 1e-9) - 1e-12 * old.max())
         assert np.all(new <= old * (1 + 2 * TAIL_RTOL) + 1e-9 * old.max())
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-150, 1e-155])
+def test_the_block_norm_tail_holds_for_states_near_the_bottom_of_the_floating_range(scale):
+    """Two slow modes whose block vectors are parallel: the block form keeps their cross term at any scale
+    of the state (a state of 1e-152 lost it to an absolute threshold and came out 7 % short)."""
+    modal = np.array([[1.0, 0.3, 0.2], [0.1, 1.0, -0.4], [0.2, 0.5, 1.0]])
+    phi = modal @ np.diag([0.999, 0.99, 0.5]) @ np.linalg.inv(modal)
+    row = np.array([[1.0, 1.0, 1.0]]) @ np.linalg.inv(modal)
+    defl = peak_module._deflation(row, phi)
+    assert defl is not None and defl.modes.shape == (2,)
+    x = modal[:, 0] + modal[:, 1]
+    exact, y = 0.0, x.copy()
+    for _ in range(30000):  # 0.999^30000 < 1e-13
+        exact += abs(float(row[0] @ y))
+        y = phi @ y
+    exact *= math.sqrt(2.0) * scale  # two equal columns; the sum is linear in the state
+    got = float(peak_module._deflated_norm_tails(defl, scale * np.stack([x, x], axis=1), 2)[0, 0])
+    assert exact * (1 - 1e-9) <= got <= exact * (1 + 1e-6)
+
+
+def test_the_slow_norm_sum_charges_the_cancellation_of_nearly_equal_modes():
+    """``sum_k |a| |lam^k - mu^k|`` for lam within 1e-13 of mu: the terms' rounding is of their size, not of
+    their difference; the bound stays above the exact closed form ``a (1/(1 - lam) - 1/(1 - mu))``."""
+    a, lam, mu = 6.204706866556482, 0.6951698612675103, 0.6951698612674405
+    got = float(peak_module._slow_norm_sum(np.array([a]), np.array([-1.0]), np.array([0.0]), lam, mu)[0])
+    # exact: lam^k - mu^k >= 0, and 1/(1 - lam) - 1/(1 - mu) = (lam - mu)/((1 - lam)(1 - mu)) without cancellation
+    exact = a * (lam - mu) / ((1.0 - lam) * (1.0 - mu))
+    assert got >= exact
