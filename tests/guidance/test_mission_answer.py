@@ -407,3 +407,22 @@ def test_a_box_that_certifies_only_in_still_water_is_not_told_no_smaller_current
     (why,) = data["parts"]["guidance"]["reasons"]
     assert largest["current_speed"] == 0.0 and largest["together"] > 0.0
     assert "only still water certifies" in why["message"] and "no smaller current" not in why["message"]
+
+
+@pytest.mark.slow
+def test_a_declared_start_that_binds_with_the_world_is_answered_with_the_slots_and_the_world_together():
+    """``remus-line`` steered by ILOS, as its refusal advises, from its declared start off the slots: no
+    smaller current or box certifies from there, nor the slots alone. The answer was "no smaller current,
+    smaller box or faster heading loop certifies it, from the declared start", every value null; it is now
+    the start on the slots with what certifies from there, confirmed together, and it certifies when rerun."""
+    tables = preset_config("remus-line").to_toml_dict()
+    assert tables["simulation"].get("initial") is not None
+    cfg, data, why = _refused({**tables, "guidance": {"kind": "ilos"}}, "remus-line ilos")
+    assert "nothing certifies from the declared start" in why["message"]
+    keys = _keys(why)
+    assert ("simulation", "initial") in keys and ("disturbance", "current_speed") in keys
+    supported = data["guidance"]["largest_certifiable"]["supported"]
+    assert supported is not None and supported["settings"] == why["settings"]
+    again = _rerun(cfg, why)
+    assert again["certified"] is True
+    assert again["guidance"]["error_bounds"]["cross_track"] <= supported["position_bound"]

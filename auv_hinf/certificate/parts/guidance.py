@@ -509,9 +509,14 @@ def _summary(cfg: FormationConfig) -> GuidanceSummary:
     everything = None
     if not together and mission is None and bounded and _navigates(problem):
         everything = _everything_scale(cfg, problem)
-    return GuidanceSummary(
+    last = GuidanceSummary(
         problem, cert, cert.reason, current, scale, gains, binds, mission, together, everything=everything
     )
+    if cfg.simulation.initial is not None and not together and mission is None and not everything:
+        # nothing certifies from the declared start, and the slots alone do not either: the start on the
+        # slots with what certifies from there, confirmed together as written
+        return _then(cfg, last, (RESTART,))
+    return last
 
 
 def _everything(cfg: FormationConfig, problem: CascadeProblem, scale: float) -> CascadeProblem:
@@ -1114,6 +1119,12 @@ def _advice(cfg: FormationConfig, summary: GuidanceSummary) -> tuple[tuple[Setti
         return (RESTART,), (
             f"the declared start binds{disc}: every vehicle started on its slot, heading into the current, "
             f"certifies ({RESTART.toml()}; every vehicle within {upper(summary.start_bound, 3)} m of its slot)"
+        )
+    if summary.supported_bound is not None and summary.supported[:1] == (RESTART,):
+        return summary.supported, (
+            f"nothing certifies from the declared start, and the start on the slots alone does not either: from "
+            f"the slots it is answered: {summary.supported_then}; both together ({toml_line(summary.supported)}) "
+            f"certify: every vehicle within {upper(summary.supported_bound, 3)} m of its slot"
         )
     if summary.gains is not None:
         settings: tuple[Setting, ...] = _gain_settings(summary.gains, problem.guidance)
