@@ -1145,7 +1145,7 @@ class _Deflation:
     row_err: FloatArray  # bound of their round-off, shape (rows,) (2-norm)
     rest_p: FloatArray  # the rest's contraction
     rest_rho: float
-    rest_inv: FloatArray  # P^-1 of it
+    rest_rows: FloatArray  # |l_rest|_{P^-1} / (1 - rho) per row: the rest's contraction tail per unit |w_rest|_P
     rest_gram: _Gramians  # the rest's Gramians of the rows
     unit: FloatArray  # >= sup_{|x|_2 = 1} sum_k |l S N^k x| per row
     unit_any: float  # >= sup_{|y|_2 = |x|_2 = 1} sum_k |y N^k x|
@@ -1238,8 +1238,8 @@ def _deflation(rows: FloatArray, phi: FloatArray) -> _Deflation | None:
         return None
     rest_p, rest_rho = got
     w, v = np.linalg.eigh(rest_p)
-    rest_inv = v @ np.diag(1.0 / w) @ v.T
     srows = rows @ s
+    rest_rows = _row_quad(srows[:, m:], v @ np.diag(1.0 / w) @ v.T) / (1.0 - rest_rho)
     row_err = gamma * _row_norms(rows) * s_norm
     # sup over unit x of sum_k |l S N^k x|: each slow mode's 1/(1 - lambda), and the rest's sum, by the
     # smaller of its contraction's tail and its Gramian's, sqrt(lambda_max(W) / (1 - sigma))
@@ -1249,7 +1249,7 @@ def _deflation(rows: FloatArray, phi: FloatArray) -> _Deflation | None:
         rest_gram.ok, np.sqrt(np.linalg.eigvalsh(rest_gram.w)[:, -1].clip(0.0) / (1.0 - rest_gram.sigma)), np.inf
     )
     by_gram = by_gram * (1.0 + 1e-9) + np.sqrt(rest_gram.norms / (1.0 - rest_gram.sigma)) * 1e-9  # eigvalsh's round-off
-    unit = slow + np.minimum(_row_quad(srows[:, m:], rest_inv) * math.sqrt(float(w.max())) / (1.0 - rest_rho), by_gram)
+    unit = slow + np.minimum(rest_rows * math.sqrt(float(w.max())), by_gram)
     unit_any = float((1.0 / (1.0 - modes)).sum()) + math.sqrt(float(w.max() / w.min())) / (1.0 - rest_rho)
     return _Deflation(
         lu=lu,
@@ -1261,7 +1261,7 @@ def _deflation(rows: FloatArray, phi: FloatArray) -> _Deflation | None:
         row_err=row_err,
         rest_p=rest_p,
         rest_rho=rest_rho,
-        rest_inv=rest_inv,
+        rest_rows=rest_rows,
         rest_gram=rest_gram,
         unit=unit,
         unit_any=unit_any,
@@ -1434,8 +1434,7 @@ def _deflated_terms(
     res = defl.s @ w - state
     w_norm = _col_norms(w)
     dw = defl.s_inv * (_col_norms(res) + 4.0 * size * eps * (defl.s_norm * w_norm + _col_norms(state)))
-    rows = defl.rows
-    contraction = (_row_quad(rows[:, m:], defl.rest_inv) / (1.0 - defl.rest_rho), _col_quad(w[m:], defl.rest_p))
+    contraction = (defl.rest_rows, _col_quad(w[m:], defl.rest_p))
     gramian = _gramian_tails(defl.rest_gram, w[m:])
     unit = defl.unit + defl.unit_any * defl.row_err  # per row, for the exact l S
     rounding = np.outer(defl.unit, dw) + np.outer(defl.unit_any * defl.row_err, w_norm + dw)

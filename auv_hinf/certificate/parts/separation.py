@@ -343,50 +343,49 @@ def refusal(
         )
     b, certified = sep.position_bound, s.distance - 2.0 * sep.position_bound
     shaped = f" less {s.shaping:.4g} m for the shaped start" if s.shaping > 0.0 else ""
+    lead = (
+        f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below [formation] "
+        f"min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped}"
+    )
+    error = f"each vehicle's position error is certified <= {upper(b, 4)} m"
     formation = slot_separation(point.fleet()).distance  # the slots' own closest approach, no shaped start
     if s.shaping > 0.0 and point.config.simulation.initial is not None and formation - 2.0 * b >= sep.required:
         # the shaped start from the declared positions is what brings them close: spreading the slots
         # moves the start's paths little (they still cross), starting on the slots does not
-        return Reason(
-            PART,
-            "envelope",
-            f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below [formation] "
-            f"min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped} (the paths "
-            f"from the declared [simulation] initial positions to the slots pass that close), and each vehicle's "
-            f"position error is certified <= {upper(b, 4)} m; start the vehicles where their paths to the slots "
-            f"keep apart, e.g. on their slots (remove [simulation] initial: the slots are {formation:.4g} m apart "
-            f"at the closest, {formation - 2.0 * b:.4g} m with the bound)",
-            channel="separation",
-            vehicle=i,
-            value=certified,
-            limit=sep.required,
-            settings=(Setting("simulation", "initial", None),),
+        settings = (Setting("simulation", "initial", None),)
+        message = (
+            f"{lead} (the paths from the declared [simulation] initial positions to the slots pass that close), and "
+            f"{error}; start the vehicles where their paths to the slots keep apart, e.g. on their slots (remove "
+            f"[simulation] initial: the slots are {formation:.4g} m apart at the closest, {formation - 2.0 * b:.4g} m "
+            f"with the bound)"
         )
-    factor = spread_factor(sep)
-    settings = spread_settings(point, factor * (1.0 + ADVICE_MARGIN))
-    confirmed = bool(spread)
-    if spread:  # re-certified as written by the part that bounds the errors
-        settings, factor = spread, _written_factor(point, spread)
-    words = (
-        f"{settings[0].words()}, in place of " + " or ".join(x.key for x in settings[1:])
-        if settings
-        else "[formation] polygon_radius, offsets or shape"
-    )
+    else:
+        factor = spread_factor(sep)
+        settings = spread_settings(point, factor * (1.0 + ADVICE_MARGIN))
+        confirmed = bool(spread)
+        if spread:  # re-certified as written by the part that bounds the errors
+            settings, factor = spread, _written_factor(point, spread)
+        words = (
+            f"{settings[0].words()}, in place of " + " or ".join(x.key for x in settings[1:])
+            if settings
+            else "[formation] polygon_radius, offsets or shape"
+        )
+        message = (
+            f"{lead}, and {error} (certified = slot distance - 2 x bound); spread the formation about {factor:.3g} "
+            f"times ({words}), or reduce the certified error bound ({_bound_levers(point)})"
+            + (
+                " (re-run with it: the spread formation's bound is certified)"
+                if confirmed
+                else "; in the path frame wider slots are faster in the turns, which may raise the bound: re-run to "
+                "check"
+                if point.config.frame == "path"
+                else ""
+            )
+        )
     return Reason(
         PART,
         "envelope",
-        f"vehicles {i + 1} and {j + 1} are certified only {certified:.4g} m apart, below "
-        f"[formation] min_separation = {sep.required:g} m: their slots are {s.slot_distance:.4g} m apart{shaped}, "
-        f"and each vehicle's position error is certified <= {upper(b, 4)} m (certified = slot distance - 2 x bound); "
-        f"spread the formation about {factor:.3g} times ({words}), or reduce the certified error bound "
-        f"({_bound_levers(point)})"
-        + (
-            " (re-run with it: the spread formation's bound is certified)"
-            if confirmed
-            else "; in the path frame wider slots are faster in the turns, which may raise the bound: re-run to check"
-            if point.config.frame == "path"
-            else ""
-        ),
+        message,
         channel="separation",
         vehicle=i,
         value=certified,
