@@ -7,6 +7,8 @@ linearised simulator, and closed-loop simulations of sampled plants and currents
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -425,3 +427,91 @@ def test_the_currents_the_configured_start_is_certified_in_are_said_and_hold_in_
     along = config_from_dict({**data, "simulation": {"current": [0.15, 0.0]}}, "robust triangle")
     answer = start_current(design_point(along), rob)
     assert answer is not None and limit == pytest.approx(answer.value[0], abs=0.15 / 2**9)
+
+
+#: A review's fleet: a custom vehicle, a +-20 % box and a 0.16 m/s current; its vehicles start on their
+#: slots at the mission's speed through the water, a start the operating envelope's tighter sets miss.
+LOOSER_SET_FLEET = """
+[vehicle]
+m11 = 240.0
+m22 = 200.0
+m33 = 96.0
+d11_lin = 56.0
+d11_quad = 120.0
+d22_lin = 120.0
+d22_quad = 160.0
+d33_lin = 40.0
+d33_quad = 120.0
+[formation]
+n = 4
+polygon_radius = 12.0
+min_separation = 3.0
+[envelope]
+u = [0.0, 2.5]
+v = [-1.0, 1.0]
+r = [-0.4, 0.4]
+[design]
+robust = true
+synthesis = "lmi"
+[reference]
+kind = "line"
+speed = 1.2
+heading = 0.5
+[simulation]
+horizon = 150.0
+current = [0.12, -0.1]
+[simulation.plant]
+m11 = 1.2
+m22 = 0.8
+m33 = 1.2
+d11_lin = 0.8
+d11_quad = 0.8
+d22_lin = 1.2
+d22_quad = 0.8
+d33_lin = 1.2
+d33_quad = 0.8
+[uncertainty]
+m11 = [0.8, 1.2]
+m22 = [0.8, 1.2]
+m33 = [0.8, 1.2]
+d11_lin = [0.8, 1.2]
+d11_quad = [0.8, 1.2]
+d22_lin = [0.8, 1.2]
+d22_quad = [0.8, 1.2]
+d33_lin = [0.8, 1.2]
+d33_quad = [0.8, 1.2]
+[disturbance]
+current_speed = 0.16
+[actuators]
+tau_x = 900.0
+tau_y = 900.0
+tau_psi = 300.0
+"""
+
+
+@pytest.mark.slow
+def test_a_start_only_the_looser_set_holds_is_reported_with_that_sets_bounds_and_thrust(tmp_path, capsys):
+    """The review's run was covered by the declared envelope's certificate, yet certify reported the
+    tighter operating-envelope certificate's numbers (velocity 0.150 m/s, yaw moment 213 N m) and the run
+    measured 0.156 m/s. The robust bounds, its thrust and the certified peak are now those of the set that
+    holds the configured start, and the configured run stays within them."""
+    from auv_hinf.cli.main import main
+
+    path = tmp_path / "looser.toml"
+    path.write_text(LOOSER_SET_FLEET)
+    assert main(["certify", "--config", str(path), "--json"]) == 0
+    cert = json.loads(capsys.readouterr().out)
+    rob = cert["robust"]
+    assert cert["certified"] and rob["held_by"] == "declared"
+    tight = rob["details"]["ultimate_bounds"]  # the operating envelope's certificate, kept for reference
+    assert rob["ultimate_bounds"]["velocity"] > tight["velocity"]
+    peak = cert["actuators"]["certified_peak"]
+    assert all(peak[k] >= rob["thrust"][k] for k in rob["thrust"])
+    assert main(["simulate", "--config", str(path), "--json"]) == 0
+    run = json.loads(capsys.readouterr().out)
+    assert run["robust_covers_run"]
+    for k in ("position", "velocity", "heading", "yaw_rate"):
+        assert run["robust_bounds"][k] == pytest.approx(rob["ultimate_bounds"][k], rel=1e-9)
+        assert run["measured_errors"][f"{k}_error"] <= rob["ultimate_bounds"][k]
+    assert run["measured_errors"]["velocity_error"] > tight["velocity"]  # the tighter numbers did not hold
+    assert all(run["commanded_peak"][k] <= peak[k] for k in peak)

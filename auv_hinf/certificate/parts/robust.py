@@ -397,13 +397,44 @@ def figures_kept_inside(cfg: FormationConfig, figures: Any) -> Any:
     return out
 
 
-def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReference | None) -> float | None:
-    """The sup over all ``t`` of the position error (m) the robust certificate proves for the configured run.
+@dataclass(frozen=True)
+class ConfiguredRun:
+    """What the robust certificate proves for the configured run (:func:`configured_run`).
 
-    It holds when the certificate covers the declared box and current, the configured plant and
-    current are inside them, and the configured start lies in the certified invariant set against
-    ``reference``: then the errors stay within ``bounds`` for every ``t >= 0`` (not only
-    ultimately). A shaped ``reference`` is checked on its own tube (:func:`check_robust_run`).
+    Attributes
+    ----------
+    bounds : ErrorBounds
+        The errors' sup over every ``t >= 0`` of the run (m, m/s, rad, rad/s).
+    thrust : ThrustBounds or None
+        The commanded force's bound along the run (N, N, N m).
+    held_by : str
+        The certificate whose start set holds the run's start (:data:`HELD_BY`).
+    """
+
+    bounds: ErrorBounds
+    thrust: ThrustBounds | None
+    held_by: str
+
+
+#: The certificates that can hold the configured run's start, in words: the operating envelope's
+#: (the tightest bounds), the declared envelope's (``wider``: a larger start set, looser bounds), and
+#: a shaped start's own (the mission's tube joined by the run's).
+HELD_BY = {
+    "operating": "the certificate's own start set",
+    "declared": "the declared envelope's larger start set (looser bounds than the operating envelope's)",
+    "shaped": "the certificate of the shaped start's own reference",
+}
+
+
+def configured_run(point: DesignPoint, rob: RobustSummary, reference: FleetReference | None) -> ConfiguredRun | None:
+    """The bounds the robust certificate proves for the configured run, and which of its sets holds the start.
+
+    They hold when the certificate covers the declared box and current, the configured plant and
+    current are inside them, and the configured start lies in a certified invariant set against
+    ``reference``: then the errors stay within them for every ``t >= 0`` (not only ultimately). A
+    start only the declared envelope's certificate holds (:meth:`~auv_hinf.robust.invariant_set.
+    RobustCertificate.covering`) has its looser bounds and thrust; a shaped ``reference`` is checked
+    on its own tube (:func:`check_robust_run`). ``None`` when no set holds the run.
 
     Parameters
     ----------
@@ -421,13 +452,17 @@ def start_bound(point: DesignPoint, rob: RobustSummary, reference: FleetReferenc
     initial = initial_states(point)
     if fleet.shaping is not None:
         rc = check_robust_run(point, fleet, initial)
-        return None if not rc.covered or rc.bounds is None else float(rc.bounds["position"])
+        if not rc.covered or rc.bounds is None:
+            return None
+        return ConfiguredRun(ErrorBounds(**rc.bounds), rc.thrust, "shaped")
     if _run_outside(point) is not None:
         return None
     cur = np.asarray(point.config.simulation.current, dtype=float)
     e, de, epsi, depsi = initial_errors(fleet, initial, cur)
     covering = c.covering(e, de, epsi, depsi, cur)
-    return None if covering is None or covering.bounds is None else float(covering.bounds.position)
+    if covering is None or covering.bounds is None:
+        return None
+    return ConfiguredRun(covering.bounds, covering.thrust, "operating" if covering is c else "declared")
 
 
 def start_current_limit(point: DesignPoint, rob: RobustSummary) -> float | None:
@@ -638,7 +673,14 @@ class RobustPart:
         earlier = ctx.verdicts.get("closed_loop")
         reference = None if earlier is None else earlier.bound_reference  # the start the closed loop chose
         if rob.declared:
-            bound = start_bound(point, rob, reference)
+            run = configured_run(point, rob, reference)
+            bound = None if run is None else run.bounds.position
+            figures["held_by"] = None if run is None else run.held_by
+            if run is not None and run.held_by != "operating":  # the configured run has the looser set's numbers
+                figures["ultimate_bounds"] = run.bounds.to_dict()
+                if run.thrust is not None:
+                    figures["thrust"] = run.thrust.to_dict()
+                    peaks = (*peaks, run.thrust.as_tuple())
         else:  # nothing declared: the robust certificate is the nominal one, and so is its bound
             bound = None if earlier is None or not rob.covers else earlier.position_bound
         return Verdict(
@@ -670,11 +712,20 @@ class RobustPart:
                 f"|e'| <= {upper(b['velocity'], 4)} m/s, |e_psi| <= {upper(b['heading'], 4)} rad, "
                 f"|e_r| <= {upper(b['yaw_rate'], 4)} rad/s"
             )
+        held = f.get("held_by")
+        if held is not None and held != "operating":
+            out.append(f"    these bounds and the thrust are the configured start's: it lies in {HELD_BY[held]}")
         op = (f.get("details") or {}).get("operating_envelope")
         if op is not None:
             d = f["details"]
+            whose = (
+                "computed over the velocities these bounds allow"
+                if held in (None, "operating")
+                else "the tighter certificate (whose smaller set does not hold the start) is computed over the "
+                "velocities its bounds allow"
+            )
             out.append(
-                f"    computed over the velocities these bounds allow ({100 * OPERATING_WIDEN:g} % wider): "
+                f"    {whose} ({100 * OPERATING_WIDEN:g} % wider): "
                 f"u in [{op['u'][0]:.3g}, {op['u'][1]:.3g}] m/s, "
                 f"v in [{op['v'][0]:.3g}, {op['v'][1]:.3g}] m/s, r in [{op['r'][0]:.3g}, {op['r'][1]:.3g}] rad/s "
                 f"(drag spread sigma {d['sigma']:.3g} 1/s there, {d['declared_sigma']:.3g} 1/s over the declared "
@@ -730,11 +781,14 @@ class RobustPart:
 
 
 __all__ = [
+    "HELD_BY",
     "RUN_TUBE_MAX_N",
     "START_CURRENT_STEPS",
+    "ConfiguredRun",
     "RobustRunCheck",
     "RobustSummary",
     "check_robust_run",
+    "configured_run",
     "figures_kept_inside",
     "plant_outside_box",
     "robust_summary",
