@@ -184,7 +184,12 @@ def position_decay_certificate(lam: float, alpha: float, k1: float, sigma: float
         if res is not None:
             return DecayCertificate(beta, sup, res.matrix, res.multiplier, res.max_eig, res.margin)
         backoff *= 10.0
-    raise SolverError(f"position Lyapunov LMI did not verify below beta = {sup!r}")
+    spread = k1 / (alpha - lam) ** 2  # the loop's stiffness against its damping: the LMI's scales
+    raise SolverError(
+        f"position Lyapunov LMI did not verify below beta = {sup:.6g} 1/s: k1 = {k1:.6g} 1/s^2 against alpha - "
+        f"lambda = {alpha - lam:.6g} 1/s (k1/(alpha - lambda)^2 = {spread:.3g}) sets scales too far apart for the "
+        "strict eigenvalue check; a smaller [design] k1 (or a larger alpha) is verifiable"
+    )
 
 
 def lmi_position_decay_rate(lam: float, alpha: float, k1: float, sigma: float) -> float:

@@ -493,3 +493,16 @@ def test_block_bounds_equal_the_body_block_over_the_box_vertices() -> None:
         entries, norms = _block_bounds(params, (u[0], u[1]), (v[0], v[1]), (r[0], r[1]))
         np.testing.assert_array_equal(entries, np.abs(blocks).max(axis=1))
         np.testing.assert_array_equal(norms, np.linalg.norm(blocks, axis=-1).max(axis=1))
+
+
+def test_an_unverifiable_position_lmi_names_the_gain_and_the_setting():
+    """A review's k1 = 1e6 1/s^2 was refused with "did not verify below beta", naming no key: the refusal
+    now gives the loop's scale ratio and the setting to lower, and a k1 within reach verifies."""
+    from auv_hinf.closed_loop.nominal import position_decay_certificate
+    from auv_hinf.exceptions import SolverError
+
+    lam, alpha, sigma = -2.1, 0.26, 0.2
+    with pytest.raises(SolverError, match=r"\[design\] k1") as err:
+        position_decay_certificate(lam, alpha, 1e6, sigma)
+    assert "k1/(alpha - lambda)^2" in str(err.value)
+    assert position_decay_certificate(lam, alpha, 1e3, sigma).rate > 0.0
