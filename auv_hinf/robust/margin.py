@@ -381,7 +381,7 @@ def largest_certifiable(
     tube: ReferenceTube,
     gains: Gains,
     current: float,
-    act: Actuators,
+    act: Actuators | None,
     *,
     redesign: SynthesisKind | None = None,
     integral: bool = False,
@@ -411,8 +411,9 @@ def largest_certifiable(
         The design's gains.
     current : float
         Declared current speed (m/s).
-    act : Actuators
-        The force limits (N, N, N m).
+    act : Actuators or None
+        The force limits (N, N, N m); ``None``: none declared (the answer then certifies the box and
+        current alone).
     redesign : {"bandwidth", "lmi"}, optional
         The ``[design] synthesis`` of a robust design whose answers are confirmed by re-running it.
     integral : bool

@@ -463,3 +463,26 @@ def test_a_fleet_that_needs_a_mission_change_and_its_settings_shrunk_gets_both_a
     assert ("reference", "turn_radius") in keys and ("disturbance", "current_speed") in keys, why
     again = certify(with_settings(cfg, [(x["table"], x["key"], x["value"]) for x in why["settings"]])).to_dict()
     assert again["composed"]["covers"] is True and again["certified"] is True
+
+
+@pytest.mark.slow
+def test_a_robust_refusal_without_actuator_limits_is_answered_with_a_world_that_certifies():
+    """A fully actuated fleet with no ``[actuators]`` whose box and current the robust certificate refuses
+    (for the envelope, not for a force) was told no value: only the actuators part answered, and only a
+    force that does not fit. The robust part now answers it with the largest box and current that
+    certify, confirmed by re-running the robust design, and a re-run with them certifies."""
+    box = dict.fromkeys(("m11", "m22", "m33", "d11_lin", "d11_quad", "d22_lin", "d22_quad", "d33_lin", "d33_quad"))
+    data = {
+        "design": {"robust": True},
+        "uncertainty": {k: [0.7, 1.3] for k in box},
+        "disturbance": {"current_speed": 0.5},
+    }
+    cfg = config_from_dict(data, "wide box")
+    cert = certify(cfg).to_dict()
+    assert not cert["certified"] and cert["actuators"]["limits"] is None
+    (reason,) = cert["parts"]["robust"]["reasons"]
+    settings = [(s["table"], s["key"], s["value"]) for s in reason["settings"]]
+    current = [v for t, k, v in settings if (t, k) == ("disturbance", "current_speed")]
+    assert current and 0.0 < current[0] < 0.5 and "re-run with these" in reason["message"]
+    again = certify(with_settings(cfg, settings))
+    assert again.certified, again.reasons

@@ -28,8 +28,9 @@ from auv_hinf.certificate.part import (
     RunContext,
     Verdict,
 )
+from auv_hinf.certificate.parts.actuators import advice, floor_peak
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
-from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from, upper
+from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from, toml_line, upper
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
 from auv_hinf.config.settings import FormationConfig
@@ -44,7 +45,7 @@ from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.bandwidth import RobustDesign
 from auv_hinf.robust.box import PARAMETERS, ParameterBox, TubeSummary
 from auv_hinf.robust.invariant_set import OPERATING_WIDEN, RobustCertificate, robust_certificate
-from auv_hinf.robust.margin import RobustMargin, Witness, robust_margin, weakest_corner
+from auv_hinf.robust.margin import RobustMargin, Witness, largest_certifiable, robust_margin, weakest_corner
 
 #: The part's registry name and JSON key.
 PART = "robust"
@@ -618,6 +619,12 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
     return RobustRunCheck(True, bounds, why, design_covered=True, thrust=covering.thrust)
 
 
+def _actuators_answer(cfg: FormationConfig, cert: RobustCertificate) -> bool:
+    """The actuators part answers ``cert``'s refusal: limits are declared and its force bound does not fit them."""
+    act = cfg.force_limits
+    return act is not None and (cert.thrust is None or not act.admits(floor_peak(cert.thrust.as_tuple())))
+
+
 @dataclass(frozen=True)
 class RobustPart:
     """Every plant of the declared box, every current up to the declared bound (see the module docstring).
@@ -662,12 +669,30 @@ class RobustPart:
                 if not cfg.robust
                 else ""
             )
+            settings: tuple[Setting, ...] = ()
+            if not rob.reasons and c is not None and point.gains is not None and not _actuators_answer(cfg, c):
+                # the actuators part answers a refusal whose force does not fit; otherwise this part does
+                best = largest_certifiable(
+                    point.box,
+                    cfg.envelope,
+                    point.tube,
+                    point.gains,
+                    point.current,
+                    cfg.force_limits,
+                    redesign=cfg.synthesis if cfg.robust else None,
+                    integral=cfg.integral,
+                )
+                figures["largest_certifiable"] = best
+                settings = advice(best)
+            answer = f"; it certifies with {toml_line(settings)} (re-run with these)" if settings else ""
             why = Reason(
                 self.name,
                 "not_covered",
                 f"robust certificate does not cover the declared {declared or '[uncertainty] box and current'}: "
                 + ("; ".join(figures["reasons"]) or "see robust")
-                + hint,
+                + hint
+                + answer,
+                settings=settings,
             )
             return Verdict(self.name, False, True, (why,), figures, peaks, binding, rob)
         earlier = ctx.verdicts.get("closed_loop")
