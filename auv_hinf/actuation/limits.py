@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.thrusters import BENZON2022_THRUST, ThrusterAllocation, bluerov2_heavy_thrusters
 from auv_hinf.exceptions import ParameterError, require_finite
+from auv_hinf.numerics.integrators import FORCE_FLOOR
 
 #: Channel names in the order of ``tau = (tau_x, tau_y, tau_psi)``, as the JSON reports them.
 CHANNELS = ("force_x", "force_y", "moment")
@@ -403,6 +404,17 @@ def vehicle_actuators(name: str) -> Actuation:
         ) from None
 
 
+def floor_peak(bound: tuple[float, float, float]) -> tuple[float, float, float]:
+    """One certificate's thrust bound with each channel raised to :data:`~auv_hinf.numerics.integrators.FORCE_FLOOR`.
+
+    Parameters
+    ----------
+    bound : tuple of float
+        The thrust bound ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
+    """
+    return (max(FORCE_FLOOR, bound[0]), max(FORCE_FLOOR, bound[1]), max(FORCE_FLOOR, bound[2]))
+
+
 __all__ = [
     "ACTUATION_KINDS",
     "CHANNELS",
@@ -417,5 +429,6 @@ __all__ = [
     "Actuators",
     "RudderActuation",
     "actuator_shortfall",
+    "floor_peak",
     "vehicle_actuators",
 ]

@@ -263,7 +263,7 @@ def test_the_thrusters_take_each_certificates_force_box_on_its_own():
 
 
 def test_an_advised_current_is_written_short_and_rounded_down():
-    from auv_hinf.certificate.parts.actuators import advice
+    from auv_hinf.certificate.answers import advice
 
     for found in (0.009228515625, 0.0050634765625000005, 0.1):
         (written,) = [x.value for x in advice({"current_speed": found, "uncertainty": {}}) if x.key == "current_speed"]
@@ -276,7 +276,7 @@ def test_an_advised_current_is_written_short_and_rounded_down():
     st.floats(min_value=1e-6, max_value=1.0),
 )
 def test_an_advised_box_is_written_short_and_inside_the_certified_one(a, b, scale):
-    from auv_hinf.certificate.parts.actuators import _inwards
+    from auv_hinf.certificate.answers import inwards as _inwards
 
     lo, hi = 1.0 - scale * a, 1.0 + scale * b  # a box scaled by a bisection, about the model (1)
     got = _inwards([lo, hi])

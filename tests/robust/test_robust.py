@@ -515,3 +515,44 @@ def test_a_start_only_the_looser_set_holds_is_reported_with_that_sets_bounds_and
         assert run["measured_errors"][f"{k}_error"] <= rob["ultimate_bounds"][k]
     assert run["measured_errors"]["velocity_error"] > tight["velocity"]  # the tighter numbers did not hold
     assert all(run["commanded_peak"][k] <= peak[k] for k in peak)
+
+
+@pytest.mark.slow
+def test_a_start_held_only_in_a_weaker_current_than_declared_is_refused_and_answered():
+    """A review's fleet (the BlueROV2 line on its slots, the box its actuators answer gave, 0.1 m/s) was
+    certified while its start lay in the start set only in currents up to 0.0176 m/s: a run from it in
+    0.1 m/s at the box's corner commanded 147 N of surge against 86 N and was not covered. The vehicles
+    start at their water speed, so a current is a velocity error at t = 0; such a start is now refused
+    with the current in which it certifies, and runs in that current at the box's corners, in four
+    directions, are covered and stay within the certified bounds and force."""
+    from auv_hinf.certificate.assembly import certify
+    from auv_hinf.certificate.run_plan import plan_run, run_report
+    from auv_hinf.config.presets import preset_config
+    from auv_hinf.config.settings import with_settings
+
+    small = {"m11": 0.0015, "m22": 0.0015, "m33": 0.0015, "d11_lin": 0.003, "d11_quad": 0.003}
+    small |= {"d22_quad": 0.003, "d33_quad": 0.003}
+    settings = [("uncertainty", k, [1.0 - w, 1.0 + w]) for k, w in small.items()] + [("simulation", "initial", None)]
+    cfg = with_settings(preset_config("bluerov2-line"), settings)
+    record = certify(cfg).to_dict()
+    assert not record["certified"]
+    (reason,) = record["parts"]["robust"]["reasons"]
+    assert reason["kind"] == "start" and reason["limit"] < 0.1
+    answer = [(s["table"], s["key"], s["value"]) for s in reason["settings"]]
+    (current,) = [v for t, k, v in answer if k == "current_speed"]
+    assert 0.0 < current <= reason["limit"]
+    again = with_settings(cfg, answer)
+    cert = certify(again)
+    assert cert.certified, cert.reasons
+    low = {k: 1.0 - w for k, w in small.items()}
+    for angle in (0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi):
+        c = [0.999 * current * np.cos(angle), 0.999 * current * np.sin(angle)]
+        run = with_settings(again, [("simulation", "current", c), ("simulation", "horizon", 20.0)])
+        run = with_settings(run, [("simulation.plant", k, v) for k, v in low.items()])
+        plan = plan_run(run)
+        report = run_report(plan, simulate(plan.scenario))
+        assert report["certificate_covers_run"], (angle, report["coverage_reason"])
+        for k, v in report["measured_errors"].items():
+            assert v <= report["certified_errors"][k], (angle, k, v)
+        for k, v in report["commanded_peak"].items():
+            assert v <= report["certified_thrust"][k], (angle, k, v)

@@ -33,17 +33,16 @@ figures then say what the law would need against what the rudder gives at the en
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
-from decimal import Decimal
 from typing import Any
 
-from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actuator_shortfall
+from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actuator_shortfall, floor_peak
+from auv_hinf.certificate.answers import advice
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.reason import Reason, Setting, toml_line, upper
-from auv_hinf.numerics.digits import ADVISED_DIGITS, significant, significant_decimal
-from auv_hinf.numerics.integrators import FORCE_FLOOR
+from auv_hinf.certificate.parts.robust import start_confirmed
+from auv_hinf.certificate.reason import Reason, toml_line, upper
 from auv_hinf.robust.margin import largest_certifiable
 
 #: The part's registry name and JSON key.
@@ -138,17 +137,6 @@ def peak_of(bounds: list[Peak]) -> Peak | None:
     return tuple(max(b[k] for b in floored) for k in range(3))  # type: ignore[return-value]
 
 
-def floor_peak(bound: Peak) -> Peak:
-    """One certificate's thrust bound with each channel raised to :data:`~auv_hinf.numerics.integrators.FORCE_FLOOR`.
-
-    Parameters
-    ----------
-    bound : Peak
-        The thrust bound ``(|tau_x|, |tau_y|, |tau_psi|)`` (N, N, N m).
-    """
-    return (max(FORCE_FLOOR, bound[0]), max(FORCE_FLOOR, bound[1]), max(FORCE_FLOOR, bound[2]))
-
-
 #: Why no force bound reaches the actuators, by default.
 UNBOUNDED = "no certificate bounds the commanded force"
 
@@ -211,9 +199,27 @@ def check_actuators(
             redesign=cfg.synthesis if cfg.robust else None,
             integral=cfg.integral,
         )
+        best = _holding_the_start(point, best)
     elif answers and point.declared:
         best = {"box_scale": None, "current_speed": None}
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)
+
+
+def _holding_the_start(point: DesignPoint, best: dict[str, Any]) -> dict[str, Any]:
+    """``best`` with its current lowered until a re-run holds the configured start in every current up to it.
+
+    The search answers the box and the current the certificate covers; the configured start must also lie
+    in its start set in every current up to the one written (the robust part refuses otherwise,
+    :func:`~auv_hinf.certificate.parts.robust.current_start_refusal`), which a re-run confirms
+    (:func:`~auv_hinf.certificate.parts.robust.start_confirmed`). ``best`` is returned as it is when no
+    current is declared, the start is shaped, or no lower current holds it.
+    """
+    settings = advice(best)
+    if not settings or not point.current or point.fleet().shaping is not None:
+        return best
+    got = start_confirmed(point.config, settings)
+    current = next((float(s.value) for s in got or () if s.key == "current_speed"), None)
+    return best if current is None else {**best, "current_speed": current}
 
 
 def guided_check(
@@ -287,40 +293,6 @@ def rudder_check(
         "commands the propeller and the rudder, and certifies it (docs/guidance.md)"
     )
     return ActuatorCheck(act, peak, "force_y", None, False, why, rudder_authority=authority)
-
-
-#: Offset from the model (a fraction of its value) below which an advised box's range is written as the
-#: model itself: a spread of 1e-9 is no vehicle's uncertainty, and its 16-digit value no one's to type.
-OFFSET_FLOOR = Decimal("1e-9")
-
-
-def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
-    """The settings of ``largest_certifiable`` to re-run with: the scaled ``[uncertainty]`` table and the current.
-
-    Each range of the box is written with :data:`~auv_hinf.numerics.digits.ADVISED_DIGITS` significant
-    digits of its distance from the model (1), rounded inwards, and the current with as many, rounded
-    down: the world written lies inside the one certified (a bisection's ``[0.985101318359375,
-    1.014898681640625]`` is written ``[0.98511, 1.01489]``, its ``0.009228515625`` m/s ``0.009228``).
-    """
-    if best is None or best.get("current_speed") is None:
-        return ()
-    out = [Setting("uncertainty", name, _inwards(pair)) for name, pair in (best.get("uncertainty") or {}).items()]
-    out.append(Setting("disturbance", "current_speed", significant(best["current_speed"], ADVISED_DIGITS, up=False)))
-    return tuple(out)
-
-
-def _inwards(pair: Sequence[float]) -> list[float]:
-    """A box's range ``[lo, hi]`` (multiples of the model's value) with short offsets from 1, rounded inwards.
-
-    The offsets are taken and rounded in decimal (0.9 is 1 - 0.1, and 1 - 0.3906 is written 0.6094); an
-    offset below :data:`OFFSET_FLOOR` is written 0, the model's value, also inside the box.
-    """
-    out = []
-    for x, up in zip(pair, (True, False), strict=True):
-        offset = Decimal(repr(float(x))) - 1
-        short = Decimal(0) if abs(offset) < OFFSET_FLOOR else significant_decimal(offset, ADVISED_DIGITS, up=up)
-        out.append(float(1 + short))
-    return out
 
 
 #: Why no force bound reaches the actuators when the law is sampled.
@@ -460,4 +432,4 @@ class ActuatorPart:
         return RunCheck(self.name, "condition", True, False, why, refuses_gains=why)
 
 
-__all__ = ["ActuatorCheck", "Peak", "check_actuators", "floor_peak", "peak_of", "rudder_check"]
+__all__ = ["ActuatorCheck", "Peak", "check_actuators", "peak_of", "rudder_check"]

@@ -17,8 +17,10 @@ from typing import Any
 import numpy as np
 
 from auv_hinf._typing import FloatArray
+from auv_hinf.actuation.limits import floor_peak
 from auv_hinf.actuation.thrust import ThrustBounds
-from auv_hinf.certificate.design_point import DesignPoint, initial_states
+from auv_hinf.certificate.answers import advice
+from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
 from auv_hinf.certificate.part import (
     FORMATION_LAW,
     RUN_RTOL,
@@ -28,16 +30,16 @@ from auv_hinf.certificate.part import (
     RunContext,
     Verdict,
 )
-from auv_hinf.certificate.parts.actuators import advice, floor_peak
 from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
 from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from, toml_line, upper
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
-from auv_hinf.config.settings import FormationConfig
+from auv_hinf.config.settings import FormationConfig, with_settings
 from auv_hinf.exceptions import AuvHinfError
 from auv_hinf.law.gains import Gains
 from auv_hinf.mission.fleet import FleetReference, ReferenceTube
 from auv_hinf.mission.margins import ErrorBounds
+from auv_hinf.mission.separation import slot_separation
 from auv_hinf.mission.tubes import fleet_tube
 from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
@@ -458,16 +460,151 @@ def configured_run(point: DesignPoint, rob: RobustSummary, reference: FleetRefer
         return ConfiguredRun(ErrorBounds(**rc.bounds), rc.thrust, "shaped")
     if _run_outside(point) is not None:
         return None
+    bound = float(point.config.disturbance.current_speed or 0.0)
+    if bound > 0.0:  # the start must lie in the set in every current up to the bound, not only the configured one
+        for cert, limit in set_current_limits(point, rob):
+            if limit >= bound and cert.bounds is not None:
+                return ConfiguredRun(_floored(cert.bounds), cert.thrust, "operating" if cert is c else "declared")
+        return None
     cur = np.asarray(point.config.simulation.current, dtype=float)
     e, de, epsi, depsi = initial_errors(fleet, initial, cur)
     covering = c.covering(e, de, epsi, depsi, cur)
     if covering is None or covering.bounds is None:
         return None
-    return ConfiguredRun(covering.bounds, covering.thrust, "operating" if covering is c else "declared")
+    return ConfiguredRun(_floored(covering.bounds), covering.thrust, "operating" if covering is c else "declared")
+
+
+def _floored(bounds: ErrorBounds) -> ErrorBounds:
+    """``bounds`` raised to the integrator's floor, as a simulated run is judged against them (a plant known
+    exactly certifies a heading error of 0, which a run meets to about 1e-9)."""
+    return ErrorBounds(*(max(float(v), NUMERICAL_FLOOR) for v in bounds.to_dict().values()))
+
+
+#: Re-runs tried by :func:`current_start_refusal`: the largest current in which the configured start lies in
+#: a certified set is re-run; a robust design chooses its gains again for it, and their start set may hold
+#: the start only in a smaller current still, which is tried next (at most half the last).
+START_CURRENT_RERUNS = 2
+
+
+def current_start_refusal(point: DesignPoint, rob: RobustSummary) -> Reason | None:
+    """The refusal of a configured start that a certified set holds in the configured current but not in every
+    current up to ``[disturbance] current_speed``, with the largest current that certifies; ``None`` otherwise.
+
+    The vehicles start at their velocities through the water, so a current is a ground-velocity error at
+    ``t = 0``: a run from that start in a current the declaration allows, but the set does not hold, is
+    not covered (the composed and the guidance certificates judge the start the same way). The answer
+    is the largest current in which the start lies in a set (:func:`start_current_limit`), rounded down,
+    each confirmed by designing and certifying the rewritten configuration as a re-run does; when the
+    re-run's gains hold the start in a smaller current still, that one is tried next
+    (:data:`START_CURRENT_RERUNS`).
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured start, current bound).
+    rob : RobustSummary
+        Its robust summary (the certificate covers the declared box and current).
+    """
+    cfg = point.config
+    bound = float(cfg.disturbance.current_speed or 0.0)
+    if bound <= 0.0 or point.fleet().shaping is not None or _run_outside(point) is not None:
+        return None
+    if configured_run(point, rob, None) is not None:
+        return None
+    c = rob.certificate
+    cur = np.asarray(cfg.simulation.current, dtype=float)
+    e, de, epsi, depsi = initial_errors(point.fleet(), initial_states(point), cur)
+    if c is None or c.covering(e, de, epsi, depsi, cur) is None:
+        return None  # not even the configured current: the separation part says the start is outside
+    limit = start_current_limit(point, rob)
+    why = (
+        f"the configured start lies in the certified start set only in currents up to "
+        f"{significant(limit or 0.0, ADVISED_DIGITS, up=False):g} m/s, not in every current up to the declared "
+        f"{bound:g} m/s: the vehicles start at their speed through the water, so a current is a velocity error at "
+        "t = 0, and a run from this start in a stronger current is not covered"
+    )
+    written = significant(float(limit or 0.0), ADVISED_DIGITS, up=False)
+    got = start_confirmed(cfg, (Setting("disturbance", "current_speed", written),)) if written > 0.0 else None
+    settings = got or ()
+    if settings:
+        why += f"; it certifies with {toml_line(settings)} (re-run with it)"
+    return Reason(PART, "start", why, channel="current_speed", value=bound, limit=limit, settings=settings)
+
+
+def start_confirmed(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[Setting, ...] | None:
+    """``settings``, their ``[disturbance] current_speed`` lowered where needed, so that a re-run holds the start.
+
+    A re-run designs its gains again (a robust design), and their start set may hold the configured
+    start only in a smaller current than the one written: the re-run's own limit
+    (:func:`start_current_limit`) is then written, rounded down, at most half the last
+    (:data:`START_CURRENT_RERUNS` times). ``None`` when none holds; ``settings`` as given when a current
+    is not declared in the re-run (nothing to hold the start against) or the first re-run holds.
+
+    Parameters
+    ----------
+    cfg : FormationConfig
+        The configuration as declared.
+    settings : tuple of Setting
+        An answer to re-run with.
+    """
+    key = ("disturbance", "current_speed")
+    trial = settings
+    for attempt in range(START_CURRENT_RERUNS + 1):
+        holds, again = _start_holds(cfg, trial)
+        if holds:
+            return trial
+        if again is None or attempt == START_CURRENT_RERUNS:
+            return None
+        last = next(
+            (float(x.value) for x in trial if (x.table, x.key) == key), float(cfg.disturbance.current_speed or 0.0)
+        )
+        value = significant(min(again, 0.5 * last) if attempt else again, ADVISED_DIGITS, up=False)
+        if not value > 0.0:
+            return None
+        trial = (*(x for x in trial if (x.table, x.key) != key), Setting(*key, value))
+    return None
+
+
+def _start_holds(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[bool, float | None]:
+    """Whether a re-run of ``cfg`` with ``settings`` holds: designed, covering its box and current, the configured
+    start in its set in every current up to the bound, ``[formation] min_separation`` kept; and the re-run's own
+    :func:`start_current_limit` (``None``: none)."""
+    try:
+        point = design_point(with_settings(cfg, [(s.table, s.key, s.value) for s in settings]))
+        rob = robust_summary(point, margins=False)
+    except AuvHinfError:
+        return False, None
+    if not rob.covers or point.reasons:
+        return False, None
+    run = configured_run(point, rob, None)
+    # the separation part's test (it imports this module): the slots less twice the bound, floored as it floors
+    holds = run is not None and (
+        slot_separation(point.fleet()).distance - 2.0 * max(run.bounds.position, NUMERICAL_FLOOR)
+        >= point.config.min_separation
+    )
+    return holds, start_current_limit(point, rob)
 
 
 def start_current_limit(point: DesignPoint, rob: RobustSummary) -> float | None:
     """The largest current (m/s, in any direction) in which the configured start lies in a certified start set.
+
+    The larger of the two sets' limits (:func:`set_current_limits`), at most the declared
+    ``[disturbance] current_speed``; ``None`` when the certificate does not cover or the start is
+    outside its sets even in still water.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (configured start and declared current).
+    rob : RobustSummary
+        Its robust summary.
+    """
+    limits = [limit for _, limit in set_current_limits(point, rob)]
+    return max(limits) if limits else None
+
+
+def set_current_limits(point: DesignPoint, rob: RobustSummary) -> list[tuple[RobustCertificate, float]]:
+    """Each covering set's largest current (m/s, in any direction) in which the configured start lies in it.
 
     The configured vehicles' velocities through the water are fixed, so in a current ``c`` their
     ground-velocity errors are those of still water plus ``c``, and the equilibrium the position set
@@ -475,10 +612,11 @@ def start_current_limit(point: DesignPoint, rob: RobustSummary) -> float | None:
     quadratic ``q(c) = c^T A c + 2 b.c + g``, its coefficients read exactly from its values at
     ``c = 0``, ``+-h e_x``, ``+-h e_y`` and ``h (e_x + e_y)``. Over ``|c| <= C``, ``q <= lambda_max(A)
     C^2 + 2 |b| C + g``, so the start lies in the set in every current up to the root of that bound
-    at the set's level (the heading set does not depend on the current). The larger of this and the
-    declared envelope's certificate's (:meth:`~auv_hinf.robust.invariant_set.RobustCertificate.covering`)
-    is returned, at most the declared ``[disturbance] current_speed``; ``None`` when the certificate does
-    not cover or the start is outside its sets even in still water.
+    at the set's level (the heading set does not depend on the current). The certificate's own set
+    and the declared envelope's (:meth:`~auv_hinf.robust.invariant_set.RobustCertificate.covering`)
+    are judged, each limit at most the declared ``[disturbance] current_speed``; a set that does not
+    hold the start even in still water is left out, and so is every set of a shaped start (its
+    reference starts from the vehicles' own ground velocity) or of a certificate that does not cover.
 
     Parameters
     ----------
@@ -490,13 +628,13 @@ def start_current_limit(point: DesignPoint, rob: RobustSummary) -> float | None:
     c = rob.certificate
     bound = float(point.config.disturbance.current_speed or 0.0)
     if c is None or not c.covers or rob.reasons or bound <= 0.0:
-        return None
+        return []
     fleet, initial = point.fleet(), initial_states(point)
     if fleet.shaping is not None:
-        return None
+        return []
     step = bound  # m/s: the levels are read at the size of the currents they are judged in
     probes = [(0.0, 0.0), (step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step), (step, step)]
-    best: float | None = None
+    out: list[tuple[RobustCertificate, float]] = []
     for cert in (c, c.wider):
         if cert is None or not cert.covers:
             continue
@@ -519,9 +657,8 @@ def start_current_limit(point: DesignPoint, rob: RobustSummary) -> float | None:
         room = np.maximum(top_p - q0, 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             root = np.where(lam > 0.0, (np.sqrt(b * b + lam * room) - b) / lam, room / np.maximum(2.0 * b, 1e-300))
-        limit = min(bound, float(np.min(root)) * (1.0 - START_LIMIT_RTOL))
-        best = limit if best is None else max(best, limit)
-    return best
+        out.append((cert, min(bound, float(np.min(root)) * (1.0 - START_LIMIT_RTOL))))
+    return out
 
 
 #: Relative margin taken off :func:`start_current_limit`'s root: the quadratic's coefficients are read
@@ -701,8 +838,13 @@ class RobustPart:
             run = configured_run(point, rob, reference)
             bound = None if run is None else run.bounds.position
             figures["held_by"] = None if run is None else run.held_by
-            if run is not None and run.held_by != "operating":  # the configured run has the looser set's numbers
+            shaped = reference is not None and reference.shaping is not None
+            weak = None if run is not None or shaped else current_start_refusal(point, rob)
+            if weak is not None:  # held in the configured current, not in every current the declaration allows
+                return Verdict(self.name, False, True, (weak,), figures, peaks, binding, rob)
+            if run is not None:  # the bounds the configured run obeys, floored as a run is judged
                 figures["ultimate_bounds"] = run.bounds.to_dict()
+            if run is not None and run.held_by != "operating":  # the configured run has the looser set's numbers
                 if run.thrust is not None:
                     figures["thrust"] = run.thrust.to_dict()
                     peaks = (*peaks, run.thrust.as_tuple())
@@ -808,18 +950,22 @@ class RobustPart:
 __all__ = [
     "HELD_BY",
     "RUN_TUBE_MAX_N",
+    "START_CURRENT_RERUNS",
     "START_CURRENT_STEPS",
     "ConfiguredRun",
     "RobustRunCheck",
     "RobustSummary",
     "check_robust_run",
     "configured_run",
+    "current_start_refusal",
     "figures_kept_inside",
     "plant_outside_box",
     "robust_summary",
     "run_kept_inside",
     "run_outside",
     "run_settings",
+    "set_current_limits",
+    "start_confirmed",
     "start_current",
     "start_current_limit",
 ]
