@@ -239,8 +239,9 @@ def crosscheck(lam: float, gamma: float, n: int = 3, k1: float = DEFAULT_K1) -> 
     cond = theorem1_conditions(lam, gamma)
     if not cond.lam_negative:
         raise DesignError(
-            f"lambda = {lam:.4g} 1/s must be < 0: Theorem 1 needs a dissipative nominal block, and this vehicle "
-            "has no damping over the envelope (declare its linear or quadratic damping: d11_lin, d11_quad, ...)"
+            f"lambda = {abs(lam) if lam == 0.0 else lam:.4g} 1/s must be < 0: Theorem 1 needs a dissipative nominal "
+            "block, and this vehicle has no damping over the envelope (declare its [vehicle] linear or quadratic "
+            "damping: d11_lin, d11_quad, ...)"
         )
     n = require_fleet_size(n)
     if require_finite("k1", k1) <= 0:

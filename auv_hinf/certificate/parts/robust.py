@@ -30,7 +30,7 @@ from auv_hinf.certificate.part import (
     RunContext,
     Verdict,
 )
-from auv_hinf.certificate.parts.closed_loop import closed_loop_for, mission_checks
+from auv_hinf.certificate.parts.closed_loop import closed_loop_for, closed_loop_summary, mission_checks
 from auv_hinf.certificate.reason import Reason, Setting, apart, reason_from, toml_line, upper
 from auv_hinf.closed_loop.coverage import initial_errors
 from auv_hinf.closed_loop.nominal import ClosedLoopCertificate
@@ -576,7 +576,13 @@ def _start_holds(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[b
         return False, None
     if not rob.covers or point.reasons:
         return False, None
-    run = configured_run(point, rob, None)
+    reference = None  # a declared start judged shaped: the reference the closed loop's coverage search chose
+    if point.config.simulation.start == "shaped" and point.config.simulation.initial is not None:
+        try:
+            reference = closed_loop_summary(point).start_bound()[1]
+        except AuvHinfError:
+            return False, None
+    run = configured_run(point, rob, reference)
     # the separation part's test (it imports this module): the slots less twice the bound, floored as it floors
     holds = run is not None and (
         slot_separation(point.fleet()).distance - 2.0 * max(run.bounds.position, NUMERICAL_FLOOR)
@@ -820,7 +826,8 @@ class RobustPart:
                     integral=cfg.integral,
                 )
                 figures["largest_certifiable"] = best
-                settings = advice(best)
+                # confirmed with the configured start, held in every current up to the one written
+                settings = start_confirmed(cfg, advice(best)) or () if advice(best) else ()
             answer = f"; it certifies with {toml_line(settings)} (re-run with these)" if settings else ""
             why = Reason(
                 self.name,
