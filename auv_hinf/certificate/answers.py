@@ -25,6 +25,12 @@ def advice(best: Mapping[str, Any] | None) -> tuple[Setting, ...]:
     digits of its distance from the model (1), rounded inwards, and the current with as many, rounded
     down: the world written lies inside the one certified (a bisection's ``[0.985101318359375,
     1.014898681640625]`` is written ``[0.98511, 1.01489]``, its ``0.009228515625`` m/s ``0.009228``).
+
+    Parameters
+    ----------
+    best : mapping or None
+        A :func:`~auv_hinf.robust.margin.largest_certifiable` answer (its ``uncertainty`` table and
+        ``current_speed``, m/s); ``None``: no answer.
     """
     if best is None or best.get("current_speed") is None:
         return ()
@@ -38,6 +44,11 @@ def inwards(pair: Sequence[float]) -> list[float]:
 
     The offsets are taken and rounded in decimal (0.9 is 1 - 0.1, and 1 - 0.3906 is written 0.6094); an
     offset below :data:`OFFSET_FLOOR` is written 0, the model's value, also inside the box.
+
+    Parameters
+    ----------
+    pair : sequence of float
+        The range ``[lo, hi]`` (dimensionless multiples of the model's value).
     """
     out = []
     for x, up in zip(pair, (True, False), strict=True):

@@ -16,7 +16,7 @@ from typing import Any, cast
 
 from auv_hinf._typing import FloatArray
 from auv_hinf.actuation.limits import CHANNELS, actuator_shortfall
-from auv_hinf.certificate.design_point import DesignPoint, initial_states
+from auv_hinf.certificate.design_point import DesignPoint, initial_states, slot_states
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
 from auv_hinf.certificate.reason import Reason, Setting, reason_from, upper
 from auv_hinf.closed_loop.actuator_fit import mission_thrust, within_actuators
@@ -297,6 +297,18 @@ def _shaped_covers(point: DesignPoint, cert: ClosedLoopCertificate) -> bool:
         return False
 
 
+#: The answer that starts every vehicle on its slot, at zero error: the declared ``[simulation] initial`` removed.
+ON_SLOTS = Setting("simulation", "initial", None)
+
+
+def _slots_cover(point: DesignPoint, cert: ClosedLoopCertificate, mode: StartMode) -> bool:
+    """The fleet started on its slots (:func:`~auv_hinf.certificate.design_point.slot_states`) is covered."""
+    try:
+        return coverage_for(point, cert, slot_states(point.fleet()), mode).covered
+    except AuvHinfError:
+        return False
+
+
 def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
     """Certify the closed loop of the design point along its mission and check its configured start.
 
@@ -332,6 +344,9 @@ def closed_loop_summary(point: DesignPoint) -> ClosedLoopSummary:
         if mode == "paper" and _shaped_covers(point, cert):
             settings = (SHAPED,)
             message += f"; with the reference blended from the start it is covered ({SHAPED.toml()})"
+        elif _slots_cover(point, cert, mode):
+            settings = (ON_SLOTS,)
+            message += f"; the fleet started on its slots is covered ({ON_SLOTS.toml()})"
         reasons.append(Reason(PART, "start", message, settings=settings))
     return ClosedLoopSummary(cert, shaped, declared, tuple(reasons), point.fit, mode)
 

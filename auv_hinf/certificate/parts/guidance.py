@@ -55,6 +55,7 @@ from auv_hinf.certificate.deployed import deployed_plant, mission_jerks
 from auv_hinf.certificate.design_point import DesignPoint, design_point, raw_fleet
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_changes
 from auv_hinf.certificate.part import RUN_RTOL, PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.closed_loop import ON_SLOTS
 from auv_hinf.certificate.parts.robust import run_settings
 from auv_hinf.certificate.parts.separation import (
     ADVICE_MARGIN,
@@ -97,8 +98,8 @@ ADVICE_DIGITS = 4
 #: REMUS-like line at 2.4 rad/s and 10 Hz in a boxed 0.2 m/s current: 8 m refused, 16 m certified).
 GAIN_CANDIDATES = ((2.4, 1.0), (2.4, 2.0), (3.2, 2.0), (1.0, 2.0))
 #: The answer that starts every vehicle on its slot, heading into the current: the declared
-#: ``[simulation] initial`` removed.
-RESTART = Setting("simulation", "initial", None)
+#: ``[simulation] initial`` removed (the closed-loop part's own answer to a start it does not cover).
+RESTART = ON_SLOTS
 #: Why a mission on which a slot stops (a path-frame slot inside a turn) is not evaluated: the
 #: refusal then answers with a change of the mission (:func:`mission_answer`).
 SLOT_STOPS = "a slot stops (or runs backwards) on the mission: line-of-sight guidance needs a slot moving forwards"

@@ -41,7 +41,6 @@ from auv_hinf.mission.fleet import FleetReference, ReferenceTube
 from auv_hinf.mission.margins import ErrorBounds
 from auv_hinf.mission.separation import slot_separation
 from auv_hinf.mission.tubes import fleet_tube
-from auv_hinf.numerics.bisection import bisect
 from auv_hinf.numerics.digits import ADVISED_DIGITS, significant
 from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 from auv_hinf.robust.bandwidth import RobustDesign
@@ -461,7 +460,9 @@ def configured_run(point: DesignPoint, rob: RobustSummary, reference: FleetRefer
     if _run_outside(point) is not None:
         return None
     bound = float(point.config.disturbance.current_speed or 0.0)
-    if bound > 0.0:  # the start must lie in the set in every current up to the bound, not only the configured one
+    if bound > 0.0 and point.config.simulation.initial is None:
+        # on the slots at the mission's water speed: the start must lie in the set in every current up to the
+        # bound, not only the configured one (a declared start is judged in the configured current it was set for)
         for cert, limit in set_current_limits(point, rob):
             if limit >= bound and cert.bounds is not None:
                 return ConfiguredRun(_floored(cert.bounds), cert.thrust, "operating" if cert is c else "declared")
@@ -487,12 +488,13 @@ START_CURRENT_RERUNS = 2
 
 
 def current_start_refusal(point: DesignPoint, rob: RobustSummary) -> Reason | None:
-    """The refusal of a configured start that a certified set holds in the configured current but not in every
-    current up to ``[disturbance] current_speed``, with the largest current that certifies; ``None`` otherwise.
+    """The refusal of a start on the slots that no certified set holds in every current up to the declared bound.
 
-    The vehicles start at their velocities through the water, so a current is a ground-velocity error at
-    ``t = 0``: a run from that start in a current the declaration allows, but the set does not hold, is
-    not covered (the composed and the guidance certificates judge the start the same way). The answer
+    Without ``[simulation] initial`` the vehicles start on their slots at the mission's velocity through
+    the water, so a current is a ground-velocity error at ``t = 0``: a run from that start in a current
+    the declaration allows, but the set does not hold, is not covered (the composed and the guidance
+    certificates judge the start the same way). ``None`` when a start is declared (judged in the
+    configured current it was set for) or the start is held. The answer
     is the largest current in which the start lies in a set (:func:`start_current_limit`), rounded down,
     each confirmed by designing and certifying the rewritten configuration as a re-run does; when the
     re-run's gains hold the start in a smaller current still, that one is tried next
@@ -507,15 +509,10 @@ def current_start_refusal(point: DesignPoint, rob: RobustSummary) -> Reason | No
     """
     cfg = point.config
     bound = float(cfg.disturbance.current_speed or 0.0)
-    if bound <= 0.0 or point.fleet().shaping is not None or _run_outside(point) is not None:
+    if bound <= 0.0 or cfg.simulation.initial is not None or _run_outside(point) is not None:
         return None
     if configured_run(point, rob, None) is not None:
         return None
-    c = rob.certificate
-    cur = np.asarray(cfg.simulation.current, dtype=float)
-    e, de, epsi, depsi = initial_errors(point.fleet(), initial_states(point), cur)
-    if c is None or c.covering(e, de, epsi, depsi, cur) is None:
-        return None  # not even the configured current: the separation part says the start is outside
     limit = start_current_limit(point, rob)
     why = (
         f"the configured start lies in the certified start set only in currents up to "
@@ -528,6 +525,12 @@ def current_start_refusal(point: DesignPoint, rob: RobustSummary) -> Reason | No
     settings = got or ()
     if settings:
         why += f"; it certifies with {toml_line(settings)} (re-run with it)"
+    elif limit:
+        why += (
+            "; no smaller declared current tried certifies it (the design's start set shrinks with the current): "
+            "a fleet that starts at its ground velocity in the current, or a start declared for the configured "
+            "current ([simulation] initial), is judged instead"
+        )
     return Reason(PART, "start", why, channel="current_speed", value=bound, limit=limit, settings=settings)
 
 
@@ -569,8 +572,9 @@ def _start_holds(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[b
     """Whether a re-run of ``cfg`` with ``settings`` holds: designed, covering its box and current, the configured
     start in its set in every current up to the bound, ``[formation] min_separation`` kept; and the re-run's own
     :func:`start_current_limit` (``None``: none)."""
+    written = (*settings, *run_settings(cfg, settings))  # the configured run kept inside, as the answer says
     try:
-        point = design_point(with_settings(cfg, [(s.table, s.key, s.value) for s in settings]))
+        point = design_point(with_settings(cfg, [(s.table, s.key, s.value) for s in written]))
         rob = robust_summary(point, margins=False)
     except AuvHinfError:
         return False, None
@@ -671,46 +675,6 @@ def set_current_limits(point: DesignPoint, rob: RobustSummary) -> list[tuple[Rob
 #: from six levels evaluated at currents of the declared size, each with a round-off of about 1e-15 of
 #: the largest level (at most about 100 times the set's); 1e-6 leaves a millionfold room for it.
 START_LIMIT_RTOL = 1e-6
-
-
-#: Bisection steps of the configured current at which an on-slot start lies in the certified start set.
-START_CURRENT_STEPS = 10
-
-
-def start_current(point: DesignPoint, rob: RobustSummary) -> Setting | None:
-    """A smaller configured ``[simulation] current`` whose on-slot start lies in the certified start set.
-
-    Without ``[simulation] initial`` the vehicles start on their slots at the mission's velocity
-    through the water, so the configured current is their start's ground-velocity error. When that
-    error puts the start outside the robust certificate's start set while the certificate covers the
-    declared box and current, the largest fraction of the configured current (a bisection of
-    :data:`START_CURRENT_STEPS` steps, rounded towards zero) that starts inside is the answer;
-    ``None`` when a start is declared, nothing binds there, or not even still water starts inside.
-
-    Parameters
-    ----------
-    point : DesignPoint
-        The design point (configured start and current).
-    rob : RobustSummary
-        Its robust summary.
-    """
-    c = rob.certificate
-    cur = np.asarray(point.config.simulation.current, dtype=float)
-    speed = float(np.hypot(*cur))
-    if point.config.simulation.initial is not None or speed == 0.0 or c is None or not c.covers or rob.reasons:
-        return None
-    fleet, initial = point.fleet(), initial_states(point)
-
-    def inside(scale: float) -> bool:
-        now = cur * scale
-        e, de, epsi, depsi = initial_errors(fleet, initial, now)
-        return c.covering(e, de, epsi, depsi, now) is not None
-
-    if inside(1.0) or not inside(0.0):
-        return None
-    lo = bisect(inside, 0.0, 1.0, steps=START_CURRENT_STEPS)[0]
-    value = _current_within(cur, lo * speed)
-    return Setting("simulation", "current", value) if inside(math.hypot(*value) / speed) else None
 
 
 def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatArray) -> RobustRunCheck:
@@ -958,7 +922,6 @@ __all__ = [
     "HELD_BY",
     "RUN_TUBE_MAX_N",
     "START_CURRENT_RERUNS",
-    "START_CURRENT_STEPS",
     "ConfiguredRun",
     "RobustRunCheck",
     "RobustSummary",
@@ -973,6 +936,5 @@ __all__ = [
     "run_settings",
     "set_current_limits",
     "start_confirmed",
-    "start_current",
     "start_current_limit",
 ]

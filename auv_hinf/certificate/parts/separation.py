@@ -36,7 +36,7 @@ import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.parts.robust import RobustSummary, run_outside, start_current
+from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting, upper
 from auv_hinf.config.schema import MAX_COORDINATE
 from auv_hinf.mission.fleet import FleetReference
@@ -294,7 +294,6 @@ def _written_factor(point: DesignPoint, settings: tuple[Setting, ...]) -> float:
 def refusal(
     point: DesignPoint,
     sep: SeparationBound,
-    robust: RobustSummary | None = None,
     spread: tuple[Setting, ...] | None = None,
 ) -> Reason:
     """The reason of a separation that is not certified: the pair, the distances, the bound, what to change.
@@ -305,10 +304,6 @@ def refusal(
         The design point.
     sep : SeparationBound
         Its separation (not ``ok``).
-    robust : RobustSummary, optional
-        The robust part's summary: when the start on the slots in the configured current is what lies
-        outside its start set, the smaller configured current that starts inside is the answer
-        (:func:`~auv_hinf.certificate.parts.robust.start_current`).
     spread : tuple of Setting, optional
         A spread of the formation that the part bounding the errors has re-certified as written (the
         guidance part's, whose bound grows with the spread in the path frame); empty: none found.
@@ -323,15 +318,6 @@ def refusal(
             advice = "; start the fleet nearer its slots (without [simulation] initial it starts on them)"
             declared = point.config.simulation.initial is not None
             settings = (Setting("simulation", "initial", None),) if declared else ()
-            current = None if declared or robust is None else start_current(point, robust)
-            if current is not None:
-                speed = float(np.hypot(*point.config.simulation.current))
-                advice = (
-                    f"; the vehicles start on their slots at the mission's velocity through the water, so the "
-                    f"configured current ({speed:.4g} m/s) is their start's velocity error, outside the certified "
-                    f"start set: {current.words()} starts inside it"
-                )
-                settings = (current,)
         return Reason(
             PART,
             "not_covered",
@@ -425,7 +411,7 @@ class SeparationPart:
             return Verdict(self.name, True, False, (), sep.to_dict(), detail=sep)
         guided = ctx.detail("guidance")
         spread = getattr(guided, "spread", None)  # a guidance fleet's spread, re-certified as written
-        reasons = () if sep.ok else (refusal(ctx.point, sep, ctx.detail("robust"), spread),)
+        reasons = () if sep.ok else (refusal(ctx.point, sep, spread),)
         return Verdict(self.name, sep.ok, True, reasons, sep.to_dict(), detail=sep)
 
     def lines(self, figures: Any, record: Mapping[str, Any]) -> list[str]:
