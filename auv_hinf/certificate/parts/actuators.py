@@ -212,10 +212,11 @@ def _holding_the_start(point: DesignPoint, best: dict[str, Any]) -> dict[str, An
     in its start set in every current up to the one written (the robust part refuses otherwise,
     :func:`~auv_hinf.certificate.parts.robust.current_start_refusal`), which a re-run confirms
     (:func:`~auv_hinf.certificate.parts.robust.start_confirmed`). ``best`` is returned as it is when no
-    current is declared, the start is shaped, or no lower current holds it.
+    current is declared, a start is declared (judged in the configured current it is set for), or no lower
+    current holds it.
     """
     settings = advice(best)
-    if not settings or not point.current or point.fleet().shaping is not None:
+    if not settings or not point.current or point.config.simulation.initial is not None:
         return best
     got = start_confirmed(point.config, settings)
     current = next((float(s.value) for s in got or () if s.key == "current_speed"), None)

@@ -33,7 +33,7 @@ from auv_hinf.certificate.deployed import ON_SLOT, deployed_problem
 from auv_hinf.certificate.design_point import DesignPoint, design_point
 from auv_hinf.certificate.mission_advice import CHANGE_WORDS, mission_advice, mission_changes, tried
 from auv_hinf.certificate.part import FORMATION_LAW, ControlLaw, PartContext, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.parts.closed_loop import full_heading_range
+from auv_hinf.certificate.parts.closed_loop import ON_SLOTS, full_heading_range
 from auv_hinf.certificate.parts.implementation import ImplementationSummary, start_errors
 from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.parts.separation import keeps_separation
@@ -990,10 +990,6 @@ def rerun_together(cfg: FormationConfig, problem: DeployedProblem) -> Advice | N
     return _first_rerun(cfg, candidates, "advice re-runs")
 
 
-#: The answer that starts every vehicle on its slot: the declared ``[simulation] initial`` removed.
-START_ON_SLOTS = Setting("simulation", "initial", None)
-
-
 def _change_entry(what: str, settings: tuple[Setting, ...], bound: float) -> dict[str, Any]:
     """The ``composed.advice`` entry of a change that is not a declared value shrunk (``scale`` None)."""
     return {
@@ -1021,13 +1017,13 @@ def _no_advice(
     """
     if point.config.simulation.initial is not None:
         # a declared start off the slots may be all that binds: the hardware and the world stay as declared
-        bound = covered_position_bound(point.config, (START_ON_SLOTS,))
+        bound = covered_position_bound(point.config, (ON_SLOTS,))
         if bound is not None:
             return (
-                f"the declared start binds: every vehicle started on its slot certifies ({START_ON_SLOTS.toml()}; "
+                f"the declared start binds: every vehicle started on its slot certifies ({ON_SLOTS.toml()}; "
                 f"certified |e| <= {upper(bound, 3)} m)",
-                (START_ON_SLOTS,),
-                _change_entry("start", (START_ON_SLOTS,), bound),
+                (ON_SLOTS,),
+                _change_entry("start", (ON_SLOTS,), bound),
             )
     found = mission_advice(point, covered_position_bound)
     if found:

@@ -36,6 +36,7 @@ import numpy as np
 
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, RunCheck, RunContext, Verdict
+from auv_hinf.certificate.parts.closed_loop import ON_SLOTS
 from auv_hinf.certificate.parts.robust import run_outside
 from auv_hinf.certificate.reason import Reason, Setting, upper
 from auv_hinf.config.schema import MAX_COORDINATE
@@ -317,7 +318,7 @@ def refusal(
         else:
             advice = "; start the fleet nearer its slots (without [simulation] initial it starts on them)"
             declared = point.config.simulation.initial is not None
-            settings = (Setting("simulation", "initial", None),) if declared else ()
+            settings = (ON_SLOTS,) if declared else ()
         return Reason(
             PART,
             "not_covered",
@@ -338,7 +339,7 @@ def refusal(
     if s.shaping > 0.0 and point.config.simulation.initial is not None and formation - 2.0 * b >= sep.required:
         # the shaped start from the declared positions is what brings them close: spreading the slots
         # moves the start's paths little (they still cross), starting on the slots does not
-        settings = (Setting("simulation", "initial", None),)
+        settings = (ON_SLOTS,)
         message = (
             f"{lead} (the paths from the declared [simulation] initial positions to the slots pass that close), and "
             f"{error}; start the vehicles where their paths to the slots keep apart, e.g. on their slots (remove "
