@@ -841,7 +841,12 @@ class RobustPart:
             return []
         current = f.get("current_speed")
         model_only = current is not None and not f.get("box_declared", True) and not current > 0.0
-        what = "the controller's model (no box or current declared)" if model_only else "the declared box and current"
+        declared = [x for x, on in (("box", f.get("box_declared", True)), ("current", bool(current))) if on]
+        what = (
+            "the controller's model (no box or current declared)"
+            if model_only
+            else f"the declared {' and '.join(declared) or 'box and current'}"
+        )
         out = [f"  robust certificate        {'covers' if f['covers'] else 'does NOT cover'} {what}"]
         b = f["ultimate_bounds"]
         if b is not None and f["decay_rate"] is not None:
