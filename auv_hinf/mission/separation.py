@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 from auv_hinf._typing import FloatArray
 from auv_hinf.exceptions import ParameterError
 from auv_hinf.mission.fleet import H0_SUP, H1_SUP, FleetReference, Shaping
+from auv_hinf.numerics.integrators import NUMERICAL_FLOOR
 
 #: Fleets up to this size are measured by vectorised pairwise differences; larger ones by k-d trees.
 PAIRWISE_MAX_N = 64
@@ -75,6 +76,21 @@ class SlotSeparation:
     pair: tuple[int, int]
     slot_distance: float
     shaping: float
+
+    def keeps(self, bound: float, required: float) -> bool:
+        """Vehicles each within ``bound`` (m) of their desired positions stay at least ``required`` (m) apart.
+
+        ``distance - 2 bound >= required``, with the bound raised to the integrator's floor
+        (:data:`~auv_hinf.numerics.integrators.NUMERICAL_FLOOR`), as a simulated run is judged.
+
+        Parameters
+        ----------
+        bound : float
+            Bound of every vehicle's distance to its desired position (m).
+        required : float
+            The smallest distance between two vehicles that must be kept (m).
+        """
+        return self.distance - 2.0 * max(NUMERICAL_FLOOR, bound) >= required
 
     def to_dict(self) -> dict[str, object]:
         """JSON-safe dictionary (m, 0-based vehicle indices)."""

@@ -41,9 +41,8 @@ from auv_hinf.actuation.limits import CHANNELS, Actuation, RudderActuation, actu
 from auv_hinf.certificate.answers import advice
 from auv_hinf.certificate.design_point import DesignPoint
 from auv_hinf.certificate.part import PartContext, Peak, RunCheck, RunContext, Verdict
-from auv_hinf.certificate.parts.robust import start_confirmed
+from auv_hinf.certificate.parts.robust import design_answer, start_confirmed
 from auv_hinf.certificate.reason import Reason, toml_line, upper
-from auv_hinf.robust.margin import largest_certifiable
 
 #: The part's registry name and JSON key.
 PART = "actuators"
@@ -188,18 +187,7 @@ def check_actuators(
         why += f" ({act.note})"
     best = None
     if answers and point.declared and point.gains is not None:
-        cfg = point.config
-        best = largest_certifiable(
-            point.box,
-            cfg.envelope,
-            point.tube,
-            point.gains,
-            point.current,
-            act,
-            redesign=cfg.synthesis if cfg.robust else None,
-            integral=cfg.integral,
-        )
-        best = _holding_the_start(point, best)
+        best = _holding_the_start(point, design_answer(point, act))
     elif answers and point.declared:
         best = {"box_scale": None, "current_speed": None}
     return ActuatorCheck(act, peak, channel, ratio, False, why, best)

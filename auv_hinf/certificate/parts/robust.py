@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from auv_hinf._typing import FloatArray
-from auv_hinf.actuation.limits import floor_peak
+from auv_hinf.actuation.limits import Actuators, floor_peak
 from auv_hinf.actuation.thrust import ThrustBounds
 from auv_hinf.certificate.answers import advice
 from auv_hinf.certificate.design_point import DesignPoint, design_point, initial_states
@@ -587,11 +587,8 @@ def _start_holds(cfg: FormationConfig, settings: tuple[Setting, ...]) -> tuple[b
         except AuvHinfError:
             return False, None
     run = configured_run(point, rob, reference)
-    # the separation part's test (it imports this module): the slots less twice the bound, floored as it floors
-    holds = run is not None and (
-        slot_separation(point.fleet()).distance - 2.0 * max(run.bounds.position, NUMERICAL_FLOOR)
-        >= point.config.min_separation
-    )
+    # the separation part's test (:attr:`SeparationBound.ok <auv_hinf.certificate.parts.separation.SeparationBound.ok>`)
+    holds = run is not None and slot_separation(point.fleet()).keeps(run.bounds.position, point.config.min_separation)
     return holds, start_current_limit(point, rob)
 
 
@@ -726,6 +723,26 @@ def check_robust_run(point: DesignPoint, fleet: FleetReference, initial: FloatAr
     return RobustRunCheck(True, bounds, why, design_covered=True, thrust=covering.thrust)
 
 
+def design_answer(point: DesignPoint, act: Actuators | None) -> dict[str, Any]:
+    """The box scale and current that certify ``point``'s design within ``act`` (:func:`largest_certifiable`).
+
+    The design's box, envelope, tube, gains and current, each answer confirmed by re-running its
+    robust design (``[design] synthesis`` and ``integral``) when the gains are the robust design's.
+
+    Parameters
+    ----------
+    point : DesignPoint
+        The design point (its gains are set).
+    act : Actuators or None
+        The force limits (N, N, N m); ``None``: none declared.
+    """
+    cfg, gains = point.config, point.require_gains()
+    redesign = cfg.synthesis if cfg.robust else None
+    return largest_certifiable(
+        point.box, cfg.envelope, point.tube, gains, point.current, act, redesign=redesign, integral=cfg.integral
+    )
+
+
 def _actuators_answer(cfg: FormationConfig, cert: RobustCertificate) -> bool:
     """The actuators part answers ``cert``'s refusal: limits are declared and its force bound does not fit them."""
     act = cfg.force_limits
@@ -779,19 +796,11 @@ class RobustPart:
             settings: tuple[Setting, ...] = ()
             if not rob.reasons and c is not None and point.gains is not None and not _actuators_answer(cfg, c):
                 # the actuators part answers a refusal whose force does not fit; otherwise this part does
-                best = largest_certifiable(
-                    point.box,
-                    cfg.envelope,
-                    point.tube,
-                    point.gains,
-                    point.current,
-                    cfg.force_limits,
-                    redesign=cfg.synthesis if cfg.robust else None,
-                    integral=cfg.integral,
-                )
+                best = design_answer(point, cfg.force_limits)
                 figures["largest_certifiable"] = best
                 # confirmed with the configured start, held in every current up to the one written
-                settings = start_confirmed(cfg, advice(best)) or () if advice(best) else ()
+                found = advice(best)
+                settings = (start_confirmed(cfg, found) or ()) if found else ()
             answer = f"; it certifies with {toml_line(settings)} (re-run with these)" if settings else ""
             why = Reason(
                 self.name,
@@ -933,6 +942,7 @@ __all__ = [
     "check_robust_run",
     "configured_run",
     "current_start_refusal",
+    "design_answer",
     "figures_kept_inside",
     "plant_outside_box",
     "robust_summary",

@@ -104,8 +104,7 @@ class SeparationBound:
     @property
     def ok(self) -> bool:
         """A bound is proved and the certified separation reaches the required one."""
-        c = self.certified
-        return c is not None and c >= self.required
+        return self.position_bound is not None and self.slots.keeps(self.position_bound, self.required)
 
     def to_dict(self) -> dict[str, Any]:
         """The ``formation`` object of ``auv-hinf certify --json`` (m; vehicles 0-based)."""
