@@ -240,13 +240,19 @@ def slot_states(fleet: FleetReference, current: tuple[float, float] = (0.0, 0.0)
     return np.column_stack([m.p, m.psi, u, v, m.r])
 
 
-def design_point(cfg: FormationConfig) -> DesignPoint:
+def design_point(cfg: FormationConfig, *, fallback: bool = True) -> DesignPoint:
     """The design of ``cfg`` (see the module docstring); cached on what it depends on.
 
     Parameters
     ----------
     cfg : FormationConfig
         The configuration.
+    fallback : bool
+        When no candidate of a deployed synthesis covers the declared world, search the gains that
+        hold the implementation in still water (the gains that then run, from which the advice
+        starts). ``False`` skips that search: the design is the same whenever a candidate covers,
+        and otherwise runs the middle candidate; for a caller that only asks whether the design
+        covers (a re-run of advice).
 
     Raises
     ------
@@ -260,7 +266,7 @@ def design_point(cfg: FormationConfig) -> DesignPoint:
     require_config(cfg)
     if cfg.method not in GAIN_METHODS:
         raise DesignError(f"gain method must be one of {GAIN_METHODS}, got {cfg.method!r}")
-    core = _design(_design_key(cfg))
+    core = _design(_design_key(cfg), fallback)
     return replace(core, config=cfg)
 
 
@@ -300,7 +306,7 @@ def require_config(cfg: Any) -> FormationConfig:
 
 
 @lru_cache(maxsize=16)
-def _design(cfg: FormationConfig) -> DesignPoint:
+def _design(cfg: FormationConfig, fallback: bool = True) -> DesignPoint:
     lam = cfg.lam if cfg.lam is not None else envelope_lambda(cfg.vehicle, cfg.envelope)
     sigma = vehicle_sigma(cfg.vehicle, cfg.envelope, lam, cfg.n)
     gamma = cfg.gamma if cfg.gamma is not None else 1.0 / sigma.upper
@@ -323,7 +329,7 @@ def _design(cfg: FormationConfig) -> DesignPoint:
     if cfg.robust and cfg.synthesis == "deployed":
         limits = cfg.force_limits
         problem = deployed_problem(cfg, mission, tube, offsets, PLACEHOLDER_GAINS)
-        deployed = synthesise_deployed(problem, None if limits is None else limits.admits)
+        deployed = synthesise_deployed(problem, None if limits is None else limits.admits, fallback=fallback)
         gains = deployed.gains
     elif cfg.robust:
         designer = synthesise_robust if cfg.synthesis == "lmi" else design_robust

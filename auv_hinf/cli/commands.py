@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import tempfile
@@ -23,6 +24,7 @@ from auv_hinf.actuation.limits import Actuators
 from auv_hinf.certificate.document import json_safe
 from auv_hinf.cli.args import EXIT_NEGATIVE, EXIT_OK, PROG, BadInput, Negative, Stopped
 from auv_hinf.config.messages import input_warnings
+from auv_hinf.config.schema import DEFAULT_SYNTHESIS
 from auv_hinf.config.settings import FormationConfig
 from auv_hinf.exceptions import AuvHinfError, ConfigError, DesignError, Interrupted, ParameterError, SolverError
 from auv_hinf.files import write_text
@@ -161,16 +163,75 @@ def _verdict(ok: bool, reason: str) -> int:
     return EXIT_NEGATIVE
 
 
+def _with_design(cfg: FormationConfig, design: str | None) -> FormationConfig:
+    """``cfg`` with the ``--design`` override (``None``: as the file says).
+
+    ``--design nominal`` runs the nominal Theorem 1 gains: the file's ``[design] synthesis``, which
+    chooses the robust design's gains, is then moot and set back to its default. Integral action is
+    part of the robust design, so a file that declares it cannot run nominal gains.
+
+    Raises
+    ------
+    BadInput
+        If the file's ``[design] integral = true`` asks for the robust design.
+    """
+    if design is None:
+        return cfg
+    if design == "robust":
+        return replace(cfg, robust=True)
+    if cfg.integral:
+        raise BadInput(
+            "--design nominal runs the nominal Theorem 1 gains, and the file's [design] integral = true is part of "
+            "the robust design: leave out --design, or set integral = false"
+        )
+    return replace(cfg, robust=False, synthesis=DEFAULT_SYNTHESIS)
+
+
+def _law_options(args: argparse.Namespace, cfg: FormationConfig) -> None:
+    """Refuse ``certify``'s options of the fully actuated law on a fleet they do not apply to.
+
+    ``--method`` and ``--design`` choose the fully actuated law's gains and ``--refine-jacobi``
+    tightens its Theorem 1 sweep: a ``[guidance]`` fleet runs neither. The branch-and-bound of
+    ``--refine-jacobi`` exists for ``N <= 3`` on the full heading circle only; elsewhere the
+    certificate is the same without it, and a warning says so.
+
+    Raises
+    ------
+    BadInput
+        If one of them is given for a ``[guidance]`` fleet.
+    """
+    given = [flag for flag, value in (("--method", args.method), ("--design", args.design)) if value]
+    if args.refine_jacobi:
+        given.append("--refine-jacobi")
+    if cfg.guidance is not None and given:
+        raise BadInput(
+            f"{' and '.join(given)} {'is' if len(given) == 1 else 'are'} for the fully actuated formation law, which "
+            "this fleet does not run: [guidance] steers it (its gains are [guidance] heading_bandwidth, lookahead "
+            "and integral_gain)"
+        )
+    if args.refine_jacobi:
+        from auv_hinf.design.jacobi_sigma import BNB_MAX_N
+
+        full = cfg.envelope.psi[1] - cfg.envelope.psi[0] >= 2.0 * math.pi
+        if cfg.n > BNB_MAX_N or not full:
+            why = f"N = {cfg.n}" if cfg.n > BNB_MAX_N else "[envelope] psi is not the full circle"
+            print(
+                f"{PROG}: warning: --refine-jacobi runs a branch-and-bound for N <= {BNB_MAX_N} on the full heading "
+                f"circle; here {why}, so the closed-form Jacobi bound is used",
+                file=sys.stderr,
+            )
+
+
 def _cmd_certify(args: argparse.Namespace) -> int:
     _prepare_out(args.out)
     cfg = _with_actuators(_load(args), args.actuators)  # bad input is answered before the certificates load
 
     from auv_hinf.certificate.assembly import certify
 
+    _law_options(args, cfg)
     if args.method:
         cfg = cfg.with_method(args.method)
-    if args.design:
-        cfg = replace(cfg, robust=args.design == "robust")
+    cfg = _with_design(cfg, args.design)
     cert = certify(cfg, refine_jacobi=args.refine_jacobi)
     data = cert.to_dict()
     if args.out:
@@ -217,8 +278,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         return _simulate_guidance(args, cfg)
     if args.six_dof:
         raise BadInput("--six-dof runs the guidance cascade of a [guidance] fleet; this configuration has none")
-    if args.design:
-        cfg = replace(cfg, robust=args.design == "robust")
+    cfg = _with_design(cfg, args.design)
     try:
         plan = plan_run(cfg, start=args.start, horizon=args.horizon)
     except DesignError as exc:

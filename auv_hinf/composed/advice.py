@@ -59,6 +59,10 @@ ADVICE_HALVINGS = 6
 #: ``0.0136 rad``, not ``0.26108594541 m`` and ``0.013671875 rad``. A bisection's midpoint is rounded
 #: down before its certificate is computed, so the value answered is the one certified.
 ADVICE_DIGITS = 3
+#: Significant digits of a shrunk physical value (:func:`tidy`): 12 keep every digit a
+#: three-digit scale of a declared value of up to nine digits gives, and drop the binary
+#: product's noise in the 16th and 17th.
+TIDY_DIGITS = 12
 #: The sample time is shrunk down to this fraction of the declared one at most (a law 20 times
 #: faster than declared is not advice a deployment can follow).
 SAMPLE_TIME_FLOOR = 0.05
@@ -160,6 +164,22 @@ def physical(scale: float, scaled: tuple[Knob, ...]) -> bool:
     return scale > 0.0 or "noise" not in scaled
 
 
+def tidy(x: float) -> float:
+    """``x`` with the binary product's last digits dropped: ``0.1 * 0.7`` is ``0.07``, not ``0.06999999999999999``.
+
+    The advice's values are products of a declared value and a scale of three digits; rounded to
+    :data:`TIDY_DIGITS` significant digits they read as a person writes them, and the certificate
+    is computed at the rounded value itself (:func:`shrunk`), so what is answered is what was
+    certified.
+
+    Parameters
+    ----------
+    x : float
+        A physical value (s, m, m/s, rad, rad/s).
+    """
+    return float(f"{x:.{TIDY_DIGITS}g}")
+
+
 def shrunk(problem: DeployedProblem, knob: Knob, scale: float, channels: tuple[str, ...] = ()) -> DeployedProblem:
     """``problem`` with the setting ``knob`` at ``scale`` times its declared value.
 
@@ -182,18 +202,18 @@ def shrunk(problem: DeployedProblem, knob: Knob, scale: float, channels: tuple[s
         return problem
     if knob == "noise":
         n = impl.noise
-        noise = replace(n, **{c: getattr(n, c) * scale for c in channels}) if channels else n.scaled(scale)
+        names = channels or NOISE_CHANNELS
+        noise = replace(n, **{c: tidy(getattr(n, c) * scale) for c in names})
         return replace(problem, implementation=replace(impl, noise=noise))
     if knob == "delay":
-        return replace(problem, implementation=replace(impl, delay=impl.delay * scale))
+        return replace(problem, implementation=replace(impl, delay=tidy(impl.delay * scale)))
     if knob == "sample_time":  # not below the floor, nor (when the declared one is within it) the delay's
         h = impl.sample_time * max(scale, SAMPLE_TIME_FLOOR)
         h = max(h, min(impl.sample_time, impl.delay / MAX_DELAY_SAMPLES))
-        return replace(problem, implementation=replace(impl, sample_time=h))
+        return replace(problem, implementation=replace(impl, sample_time=tidy(h)))
     if knob == "current":
-        return replace(
-            problem, plant=replace(plant, current=plant.current * scale, current_rate=plant.current_rate * scale)
-        )
+        current, rate = tidy(plant.current * scale), tidy(plant.current_rate * scale)
+        return replace(problem, plant=replace(plant, current=current, current_rate=rate))
     return replace(problem, plant=replace(plant, box=plant.box.scaled(scale)))
 
 
@@ -321,6 +341,7 @@ __all__ = [
     "KNOBS",
     "NOISE_CHANNELS",
     "SAMPLE_TIME_FLOOR",
+    "TIDY_DIGITS",
     "TOGETHER",
     "WORLD",
     "Advice",
@@ -332,4 +353,5 @@ __all__ = [
     "refined_noise",
     "rounded_down",
     "shrunk",
+    "tidy",
 ]

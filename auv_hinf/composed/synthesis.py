@@ -89,6 +89,7 @@ def synthesise_deployed(
     certify: Callable[[DeployedProblem], DeployedCertificate] = certify_deployed,
     position_grid: Sequence[tuple[float, float]] = POSITION_GRID,
     heading_grid: Sequence[tuple[float, float]] = HEADING_GRID,
+    fallback: bool = True,
 ) -> DeployedDesign:
     """The grid's best gains for ``problem`` (see the module docstring).
 
@@ -105,6 +106,11 @@ def synthesise_deployed(
         The certificate (default :func:`~auv_hinf.composed.certificate.certify_deployed`).
     position_grid, heading_grid : sequence of (float, float)
         The candidates (default the module's grids).
+    fallback : bool
+        When no candidate covers, search the gains that hold the declared implementation in still
+        water on the model (they run, and the advice shrinks the box and current for them);
+        ``False``: the middle candidate runs (the answer of a caller that only asks whether some
+        candidate covers: the design is the same whenever one does).
     """
     accept = fits or (lambda _peak: True)
     tried = covered = 0
@@ -151,8 +157,8 @@ def synthesise_deployed(
 
     heading, best = search("declared")
     if best is None:
-        if "calm" in worlds:  # gains that hold the hardware, whose certificate then says how much of the box
-            # and current they cover (the advice shrinks only those, the hardware kept)
+        if fallback and "calm" in worlds:  # gains that hold the hardware, whose certificate then says how much of
+            # the box and current they cover (the advice shrinks only those, the hardware kept)
             _, held = search("calm")
             if held is not None:
                 g = held[0]

@@ -285,6 +285,52 @@ def test_the_force_limits_flag_on_a_guidance_fleet_is_bad_input_naming_the_rudde
     assert len(err) == 1 and "[guidance]" in err[0] and "rudder_max" in err[0], err
 
 
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["--preset", "remus-transit-ilos", "--method", "paper"], ("--method is for", "[guidance]")),
+        (["--preset", "remus-transit-ilos", "--design", "nominal"], ("--design is for", "[guidance]")),
+    ],
+)
+def test_certify_gain_options_on_a_guidance_fleet_are_bad_input(argv, words, capsys):
+    """A gain option on a fleet the fully actuated law does not steer is one line on stderr and exit 2, not a
+    certificate that silently ignored it."""
+    assert main(["certify", *argv]) == 2
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert captured.out == "" and len(err) == 1 and all(w in err[0] for w in words), err
+
+
+def test_refine_jacobi_where_no_branch_and_bound_runs_is_said_and_changes_nothing(capsys):
+    """``--refine-jacobi`` on six vehicles: a warning that the closed-form bound is used, and the same certificate."""
+    code = main(["certify", "--preset", "paper-hexagon", "--refine-jacobi", "--json"])
+    captured = capsys.readouterr()
+    assert "warning: --refine-jacobi" in captured.err and "N = 6" in captured.err
+    assert main(["certify", "--preset", "paper-hexagon", "--json"]) == code
+    plain = capsys.readouterr()
+    assert "--refine-jacobi" not in plain.err and json.loads(plain.out) == json.loads(captured.out)
+
+
+@pytest.mark.parametrize("command", ["certify", "simulate"])
+def test_design_nominal_on_a_file_of_the_robust_design_runs_nominal_gains_or_names_the_flag(command, tmp_path, capsys):
+    """``--design nominal`` on a file whose robust design is synthesised runs the Theorem 1 gains (the synthesis
+    only chooses robust gains); on a file with integral action, which only the robust design has, the one line
+    names the flag, not the file."""
+    lmi = tmp_path / "lmi.toml"
+    lmi.write_text('[design]\nrobust = true\nsynthesis = "lmi"\n[simulation]\nhorizon = 2.0\n')
+    code = main([command, "--config", str(lmi), "--design", "nominal", "--json"])
+    captured = capsys.readouterr()
+    assert code in (0, 1) and "Traceback" not in captured.err
+    data = json.loads(captured.out)
+    source = data["gain_source"] if command == "simulate" else data["design"]["method"]
+    assert source.startswith("theorem1"), source
+    integral = tmp_path / "integral.toml"
+    integral.write_text("[design]\nrobust = true\nintegral = true\n")
+    assert main([command, "--config", str(integral), "--design", "nominal"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--design nominal" in err[0] and "integral" in err[0], err
+
+
 def test_a_run_reports_its_closest_pair_as_certify_counts_vehicles():
     """The text names the closest pair counted from 1 (as ``certify`` does), the JSON keeps 0-based indices."""
     from auv_hinf.cli.commands import _report_line

@@ -258,3 +258,49 @@ def test_an_advised_scale_is_the_certified_one_with_three_significant_digits(box
     assert got is not None and got.scale <= edge
     assert any(s == pytest.approx(got.scale, rel=1e-12) for s in evaluated)  # the value the certificate saw
     assert all(f"{s:.12e}"[:4] + "0" * 9 == f"{s:.12e}"[:13] for s in evaluated if s > 0.0)  # 3 digits each
+
+
+@pytest.mark.parametrize("scale", [0.7, 0.3, 0.29, 0.0625, 0.123])
+@pytest.mark.parametrize("knob", ["noise", "delay", "sample_time", "current"])
+def test_a_shrunk_value_is_written_as_a_person_writes_it(boxed, knob, scale):
+    """0.1 s x 0.7 is answered as 0.07 s, not 0.06999999999999999 s: the certificate is computed at the
+    tidy value, which is within 1e-12 of the product."""
+    got = shrunk(boxed, knob, scale)
+    impl, plant = got.implementation, got.plant
+    values = {
+        "noise": [getattr(impl.noise, c) for c in NOISE_CHANNELS],
+        "delay": [impl.delay],
+        "sample_time": [impl.sample_time],
+        "current": [plant.current, plant.current_rate],
+    }[knob]
+    old = {
+        "noise": [getattr(boxed.implementation.noise, c) for c in NOISE_CHANNELS],
+        "delay": [boxed.implementation.delay],
+        "sample_time": [boxed.implementation.sample_time],
+        "current": [boxed.plant.current, boxed.plant.current_rate],
+    }[knob]
+    assert any(v > 0.0 for v in values)
+    for v, o in zip(values, old, strict=True):
+        assert float(f"{v:.6g}") == v, v  # a few significant digits, not seventeen
+        if knob != "sample_time":
+            assert v == pytest.approx(o * scale, rel=1e-11, abs=0.0)
+
+
+def test_a_design_asked_only_whether_it_covers_skips_the_still_water_search_and_is_the_same_when_it_covers():
+    """A re-run of advice asks only whether some candidate covers (:func:`rerun`): when none does, the search of
+    gains that hold the hardware in still water is skipped (fewer certificates, the middle candidate, not
+    covering); when one does, the design is the one ``certify`` computes."""
+    from auv_hinf.composed.synthesis import HEADING_STAGE_POSITION
+    from auv_hinf.config.presets import preset_config
+
+    wide = {"m11": [0.9, 1.1], "d11_quad": [0.8, 1.2]}  # ten times the fixture's box, in 0.1 m/s
+    refused = config_from_dict({**DEPLOYED_BOXED, "uncertainty": wide, "disturbance": {"current_speed": 0.1}}, "wide")
+    full, quick = design_point(refused).deployed_design, design_point(refused, fallback=False).deployed_design
+    assert full is not None and quick is not None
+    assert full.covered == quick.covered == 0 and not quick.certificate.covers
+    assert quick.tried == len(POSITION_GRID) * len(HEADING_GRID) < full.tried
+    assert (quick.gains.alpha, quick.gains.k1) == HEADING_STAGE_POSITION
+    covering = preset_config("bluerov2-deployed")
+    a, b = design_point(covering), design_point(covering, fallback=False)
+    assert a.deployed_design is not None and a.deployed_design.covered > 0
+    assert a.gains == b.gains and a.deployed_design.value == b.deployed_design.value

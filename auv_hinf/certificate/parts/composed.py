@@ -607,7 +607,8 @@ def rerun(cfg: FormationConfig, settings: tuple[Setting, ...]) -> ComposedSummar
         The values to write into it.
     """
     try:
-        point = design_point(with_settings(cfg, [(s.table, s.key, s.value) for s in settings]))
+        # a design none of whose candidates covers is not an answer, whatever gains would then run
+        point = design_point(with_settings(cfg, [(s.table, s.key, s.value) for s in settings]), fallback=False)
         summary = composed_summary(point, search=False)
     except AuvHinfError:  # an invalid combination, or a design that fails: not an answer
         return None
