@@ -302,7 +302,8 @@ class DeployedCertificate:
         Spectral radius of the accepted small-gain matrix (< 1).
     binding : tuple of (str, float)
         When the small gain fails: the couplings that close the loop and their shares of the
-        couplings' total (:func:`binding`), largest first; empty otherwise.
+        couplings' total (:func:`binding`), largest first; when the bounds grow instead, the
+        couplings that carry the small-gain radius at the start's errors; empty when it covers.
     """
 
     covers: bool
@@ -685,11 +686,17 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple
     return tuple((t, f / total) for t, f in top if f >= 0.005 * total)
 
 
-def _binding_words(binds: tuple[tuple[str, float], ...]) -> str:
-    """``binds`` as a clause of a refusal (empty when there is none)."""
+def _binding_words(binds: tuple[tuple[str, float], ...], what: str = "what closes the loop") -> str:
+    """``binds`` as a clause of a refusal (empty when there is none), introduced by ``what``."""
     if not binds:
         return ""
-    return "what closes the loop, by share of the couplings: " + "; ".join(f"{t} ({100.0 * f:.0f} %)" for t, f in binds)
+    return f"{what}, by share of the couplings: " + "; ".join(f"{t} ({100.0 * f:.0f} %)" for t, f in binds)
+
+
+def _radius_at(problem: DeployedProblem, rnd: Round, errors: Errors) -> float:
+    """Spectral radius of the round's small-gain matrix with the disturbances of ``errors`` (dimensionless)."""
+    _, m, _, _ = _system_at(problem, rnd, errors)
+    return float(np.abs(np.linalg.eigvals(m)).max())
 
 
 def _inside(op: OperatingBox, room: OperatingBox) -> bool:
@@ -789,6 +796,7 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
     errors = problem.initial
     why = ""
     binds: tuple[tuple[str, float], ...] = ()
+    first: Round | None = None
     for attempt in range(ROUNDS):
         op = OperatingBox.of(mission, plant.current, _widen(errors, 1.0 + BOX_ROOM))
         if op.slip >= MAX_SLIP:
@@ -805,6 +813,7 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
                 )
             why = rnd
             break
+        first = first or rnd
         got, reached, why = _fixed_point(problem, rnd)
         if got is not None:
             return _accepted(problem, rnd, got, reached)
@@ -829,6 +838,15 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
             # monotone in the operating box), so its bounds would leave the envelope too
             why = "envelope"
             break
+    amplified = ""
+    if why != "gain" and first is not None:  # the bounds grew: what amplifies them, at the start's errors
+        binds = binding(problem, first, problem.initial)
+        if binds:
+            radius = _radius_at(problem, first, problem.initial)
+            amplified = (
+                f"; the small-gain radius is {radius:.3g} at the start's errors (1 refuses) and grows with the "
+                f"bounds; {_binding_words(binds, 'what carries it')}"
+            )
     return DeployedCertificate(
         False,
         "envelope",
@@ -836,9 +854,9 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
             f"{_GROWTH[why]} (last |e| <= {errors.position:.3g} m, |e'| <= {errors.velocity:.3g} m/s, "
             f"|e_psi| <= {errors.heading:.3g} rad"
             + (f"; the mission's heading offset is {mission.offset:.3g} rad)" if why == "slip" else ")")
-            + (f"; {_binding_words(binds)}" if why == "gain" and binds else ""),
+            + (f"; {_binding_words(binds)}" if why == "gain" and binds else amplified),
         ),
-        binding=binds if why == "gain" else (),
+        binding=binds,
     )
 
 

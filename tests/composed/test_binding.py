@@ -94,3 +94,26 @@ def test_removing_the_first_named_coupling_lowers_the_radius_most(refused):
 
     first, last = without(texts[0]), without(texts[-1])
     assert first < _radius(m) and first < last
+
+
+def test_a_refusal_by_growing_bounds_names_what_carries_the_radius_at_the_start(refused):
+    """A tenth of the refused box and current is not refused at the start's errors (radius below 1) but by
+    bounds that grow round after round; the refusal still names the couplings that carry the radius there,
+    with the radius, so that it says what to change."""
+    problem = refused[0]
+    plant = replace(problem.plant, box=problem.plant.box.scaled(0.1), current=0.01)
+    smaller = replace(problem, plant=plant)
+    cert = composed.certify_deployed(smaller)
+    assert not cert.covers and "fails even at the start" not in cert.reasons[0]
+    op = composed.OperatingBox.of(
+        smaller.mission, plant.current, composed._widen(smaller.initial, 1.0 + composed.BOX_ROOM)
+    )
+    rnd = composed.make_round(smaller, op)
+    assert not isinstance(rnd, str)
+    _, m, _, _ = composed._system_at(smaller, rnd, smaller.initial)
+    radius = _radius(m)
+    assert radius < 1.0 and f"the small-gain radius is {radius:.3g} at the start's errors" in cert.reasons[0]
+    assert cert.binding and cert.binding == composed.binding(smaller, rnd, smaller.initial)
+    assert "what carries it, by share of the couplings:" in cert.reasons[0]
+    for text, share in cert.binding:
+        assert f"{text} ({100.0 * share:.0f} %)" in cert.reasons[0]
