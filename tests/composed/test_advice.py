@@ -19,6 +19,7 @@ from auv_hinf.certificate.parts.composed import JOINT_ENOUGH, composed_start
 from auv_hinf.composed.advice import (
     ADVICE_DIGITS,
     ADVICE_HALVINGS,
+    JOINT,
     NOISE_CHANNELS,
     WORLD,
     Advice,
@@ -304,3 +305,33 @@ def test_a_design_asked_only_whether_it_covers_skips_the_still_water_search_and_
     a, b = design_point(covering), design_point(covering, fallback=False)
     assert a.deployed_design is not None and a.deployed_design.covered > 0
     assert a.gains == b.gains and a.deployed_design.value == b.deployed_design.value
+
+
+@pytest.mark.slow
+def test_two_answers_give_the_first_as_the_settings_to_write_and_both_in_the_advice(monkeypatch):
+    """When any one of two answers certifies (the box and current alone, or everything together), the reason's
+    settings are the first answer whole, each key once, as a re-run writes them; the JSON's advice lists both.
+    Both used to be concatenated there, the same keys with two values (a file that cannot be written)."""
+    import auv_hinf.certificate.parts.composed as composed_part
+    from auv_hinf.certificate.assembly import certify
+
+    cfg = config_from_dict(DEPLOYED_BOXED, "boxed")
+
+    def fake_largest(problem, knob, certify):
+        scale = {"world": 0.01, "together": 0.125}.get(knob)
+        if scale is None:
+            return None
+        scaled = tuple(k for k in JOINT[knob] if k in declared_knobs(problem))
+        return Advice(knob, scale, shrunk(problem, knob, scale), DeployedCertificate(True, None, ()), scaled, problem)
+
+    monkeypatch.setattr(composed_part, "within_actuators", lambda p: lambda q: DeployedCertificate(False, None, ("x",)))
+    monkeypatch.setattr(composed_part, "largest_covered", fake_largest)
+    monkeypatch.setattr(composed_part, "confirmed", lambda c, p, advice, certify: advice)
+    data = certify(cfg).to_dict()
+    (reason,) = data["parts"]["composed"]["reasons"]
+    keys = [(s["table"], s["key"]) for s in reason["settings"]]
+    assert len(keys) == len(set(keys)) and ("disturbance", "current_speed") in keys
+    answers = data["composed"]["advice"]
+    assert len(answers) == 2 and "the settings given are the first" in reason["message"]
+    first = {(s["table"], s["key"]): s["value"] for s in answers[0]["settings"]}
+    assert {(s["table"], s["key"]): s["value"] for s in reason["settings"]} == first

@@ -395,7 +395,10 @@ class ComposedPart:
                 detail=summary,
                 position_bound=float(c.errors.position),
             )
-        settings = tuple(s for a in summary.advice for s in advice_settings(a))
+        # the reason's settings are one answer, written whole: the first (the advice's order puts what a
+        # deployment changes most easily first); the others are alternatives, listed in the JSON's advice,
+        # and writing two answers' values together would give one key two values
+        settings = advice_settings(summary.advice[0]) if summary.advice else ()
         together = any(a.knob in JOINT for a in summary.advice)
         # each piece of advice is one answer, written whole (a knob may be several keys: the four noise bounds)
         hint = "; or ".join(_advice_line(a) for a in summary.advice)
@@ -409,12 +412,15 @@ class ComposedPart:
             elif together:
                 lead = (
                     "at the design's gains no one setting alone certifies; each of these answers does, every value "
-                    "of it written (re-run)"
+                    "of it written (re-run; the settings given are the first)"
                 )
             elif len(summary.advice) == 1:
                 lead = "this certifies, every value written"
             else:
-                lead = "any one of these answers certifies on its own, every value of it written"
+                lead = (
+                    "any one of these answers certifies on its own, every value of it written (the settings given are "
+                    "the first)"
+                )
             message += f" ({lead}: {hint})"
         elif summary.applies and summary.problem is not None:
             text, settings, entry = _no_advice(ctx.point, summary.problem, summary.exact)
