@@ -57,7 +57,8 @@ GOVERNOR_WORDS = {
 #: What the implementation certificate does not yet cover, said when it would matter.
 BOX_NOT_COVERED = (
     "the implementation certificate covers the controller's own model as the plant: the declared "
-    "[uncertainty] box / [disturbance] current is certified for the continuous law only"
+    "[uncertainty] box / [disturbance] current is judged for the sampled law by the composed certificate "
+    "(and for the continuous law by the robust one)"
 )
 
 
