@@ -152,6 +152,7 @@ def test_a_part_is_evaluated_only_for_the_laws_it_declares():
     assert impl is not None and not impl.applies and "guidance part judges" in impl.note
 
 
+@pytest.mark.slow
 def test_a_box_the_nominal_design_does_not_cover_is_answered_with_the_robust_design():
     """Without ``robust = true`` the nominal Theorem 1 gains run: a box and a current they do not cover are
     refused naming what is declared (a current alone is not called a box) and the key that designs for them."""

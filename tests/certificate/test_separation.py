@@ -283,6 +283,7 @@ def test_a_start_in_a_current_outside_the_certified_set_is_refused_by_the_robust
         assert "no smaller declared current tried certifies it" in why.message
 
 
+@pytest.mark.slow
 def test_a_shaped_start_that_brings_two_vehicles_too_close_is_refused_by_simulate_and_answered_with_the_slots(
     capsys, tmp_path
 ):

@@ -301,6 +301,7 @@ def test_certify_gain_options_on_a_guidance_fleet_are_bad_input(argv, words, cap
     assert captured.out == "" and len(err) == 1 and all(w in err[0] for w in words), err
 
 
+@pytest.mark.slow
 def test_refine_jacobi_where_no_branch_and_bound_runs_is_said_and_changes_nothing(capsys):
     """``--refine-jacobi`` on six vehicles: a warning that the closed-form bound is used, and the same certificate."""
     code = main(["certify", "--preset", "paper-hexagon", "--refine-jacobi", "--json"])

@@ -287,6 +287,7 @@ def test_a_shrunk_value_is_written_as_a_person_writes_it(boxed, knob, scale):
             assert v == pytest.approx(o * scale, rel=1e-11, abs=0.0)
 
 
+@pytest.mark.slow
 def test_a_design_asked_only_whether_it_covers_skips_the_still_water_search_and_is_the_same_when_it_covers():
     """A re-run of advice asks only whether some candidate covers (:func:`rerun`): when none does, the search of
     gains that hold the hardware in still water is skipped (fewer certificates, the middle candidate, not

@@ -363,6 +363,7 @@ def test_gains_the_composed_certificate_refuses_from_the_slots_are_not_run_unles
     assert "refusing" not in json.dumps(run) and run["certificate_covers_run"] is False
 
 
+@pytest.mark.slow
 def test_a_run_whose_certified_bound_breaks_min_separation_is_not_covered_and_its_gains_are_refused():
     """Position noise of 0.4 m (the other channels the deployed preset's): the composed certificate covers
     the tracking errors, but its bound leaves the closest pair below ``[formation] min_separation``.
