@@ -373,6 +373,24 @@ def test_an_answer_shrinking_everything_together_puts_back_the_hardware_a_rerun_
     assert covers({(t, k): v for t, k, v in ((s.table, s.key, s.value) for s in advice_settings(got))})
 
 
+def test_a_hardware_setting_the_answers_gains_do_not_hold_is_not_re_run(boxed, monkeypatch):
+    """Putting the hardware back costs a re-run (a whole design) only where the covering answer's own gains still
+    cover the trial (one certificate): where they do not, the setting stays shrunk and nothing is re-run; where
+    they do, the re-run decides."""
+    cfg, problem = boxed
+    rerun, calls = _fake_rerun(lambda s: True, lambda s: _with_noise(problem, s))
+    monkeypatch.setattr(composed_part, "rerun", rerun)
+    scaled = ("noise", "delay", "current", "box")
+    together = Advice(
+        "together", 0.1, shrunk(problem, "together", 0.1), DeployedCertificate(True, None, ()), scaled, problem
+    )
+    monkeypatch.setattr(composed_part, "certify_deployed", lambda p: DeployedCertificate(False, None, ("x",)))
+    assert hardware_put_back(cfg, together, problem) is together and calls == []
+    monkeypatch.setattr(composed_part, "certify_deployed", lambda p: DeployedCertificate(True, None, ()))
+    got = hardware_put_back(cfg, together, problem)
+    assert calls and "delay" not in got.scaled  # held by the gains, then confirmed by the re-run
+
+
 def test_an_answer_whose_every_channel_binds_names_them_with_their_own_fractions(boxed, monkeypatch):
     cfg, problem = boxed
     declared = problem.implementation.noise

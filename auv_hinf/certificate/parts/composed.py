@@ -722,13 +722,27 @@ def confirmed(
     return tuple(out)
 
 
+def _held_rerun(cfg: FormationConfig, trial: Advice) -> Advice | None:
+    """:func:`_as_rerun` of ``trial``, tried only when the gains of the re-run it comes from still cover it.
+
+    ``trial`` is a covering re-run with one more hardware setting put back; its problem keeps that
+    re-run's gains. When they do not cover it (one certificate) the trial is not re-run (a full
+    design, 30 certificates when none of its candidates covers): a setting that only other gains
+    would hold is left shrunk. Nothing is claimed without the re-run itself.
+    """
+    if not certify_deployed(trial.problem).covers:
+        return None
+    return _as_rerun(cfg, trial)
+
+
 def hardware_put_back(cfg: FormationConfig, a: Advice, original: DeployedProblem) -> Advice:
     """``a`` (a covering re-run of settings shrunk ``together``) with the hardware put back where a re-run holds it.
 
     The delay, then each noise channel in :data:`~auv_hinf.composed.advice.NOISE_CHANNELS` order (the
     dearest first), is put back at its declared value, the rest as ``a`` has them, and kept there when
-    a re-run covers (one re-run each): the answer then shrinks the hardware only where it must, with
-    the current and the box. ``a`` is returned unchanged at scale 0 (nothing is left to keep).
+    a re-run covers (one re-run each, tried when the current gains still cover: :func:`_held_rerun`):
+    the answer then shrinks the hardware only where it must, with the current and the box. ``a`` is
+    returned unchanged at scale 0 (nothing is left to keep).
 
     Parameters
     ----------
@@ -750,7 +764,7 @@ def hardware_put_back(cfg: FormationConfig, a: Advice, original: DeployedProblem
             problem=replace(best.problem, implementation=impl),
             scaled=tuple(k for k in best.scaled if k != "delay"),
         )
-        best = _as_rerun(cfg, trial) or best
+        best = _held_rerun(cfg, trial) or best
     if "noise" not in best.scaled:
         return best
     shrinking = tuple(c for c in NOISE_CHANNELS if getattr(declared.noise, c) > 0.0)
@@ -761,7 +775,7 @@ def hardware_put_back(cfg: FormationConfig, a: Advice, original: DeployedProblem
         impl = replace(best.problem.implementation, noise=replace(best.problem.implementation.noise, **values))
         scaled = best.scaled if rest else tuple(k for k in best.scaled if k != "noise")
         trial = replace(best, problem=replace(best.problem, implementation=impl), scaled=scaled, channels=rest)
-        got = _as_rerun(cfg, trial)
+        got = _held_rerun(cfg, trial)
         if got is not None:
             best = got
         return got is not None
