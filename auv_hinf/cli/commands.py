@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 import tempfile
@@ -210,10 +209,9 @@ def _law_options(args: argparse.Namespace, cfg: FormationConfig) -> None:
             "and integral_gain)"
         )
     if args.refine_jacobi:
-        from auv_hinf.design.jacobi_sigma import BNB_MAX_N
+        from auv_hinf.design.jacobi_sigma import BNB_MAX_N, refinable
 
-        full = cfg.envelope.psi[1] - cfg.envelope.psi[0] >= 2.0 * math.pi
-        if cfg.n > BNB_MAX_N or not full:
+        if not refinable(cfg.n, cfg.envelope):
             why = f"N = {cfg.n}" if cfg.n > BNB_MAX_N else "[envelope] psi is not the full circle"
             print(
                 f"{PROG}: warning: --refine-jacobi runs a branch-and-bound for N <= {BNB_MAX_N} on the full heading "

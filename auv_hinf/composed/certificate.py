@@ -665,6 +665,11 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple
     errors : Errors
         The errors the disturbances are taken at.
     """
+    return _shares(problem, rnd, errors)[0]
+
+
+def _shares(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple[tuple[str, float], ...], float]:
+    """:func:`binding`'s couplings and the spectral radius they share (dimensionless), from one eigensolve."""
     _, m, ix, _ = _system_at(problem, rnd, errors)
     w, v = np.linalg.eig(m)
     k = int(np.argmax(np.abs(w)))
@@ -672,7 +677,7 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple
     wl, u = np.linalg.eig(m.T)
     x, y = np.abs(v[:, k].real), np.abs(u[:, int(np.argmax(np.abs(wl)))].real)
     if rho <= 0.0 or float(y @ x) <= 0.0:
-        return ()
+        return (), rho
     shares = m * np.outer(y, x) / (rho * float(y @ x))
     named: dict[str, float] = {}
     for i, j in zip(*np.nonzero(shares), strict=True):
@@ -681,9 +686,9 @@ def binding(problem: DeployedProblem, rnd: Round, errors: Errors) -> tuple[tuple
             named[text] = named.get(text, 0.0) + float(shares[i, j])
     total = sum(named.values())
     if total <= 0.0:
-        return ()
+        return (), rho
     top = sorted(named.items(), key=lambda kv: -kv[1])[:BINDING_COUPLINGS]
-    return tuple((t, f / total) for t, f in top if f >= 0.005 * total)
+    return tuple((t, f / total) for t, f in top if f >= 0.005 * total), rho
 
 
 def _binding_words(binds: tuple[tuple[str, float], ...], what: str = "what closes the loop") -> str:
@@ -691,12 +696,6 @@ def _binding_words(binds: tuple[tuple[str, float], ...], what: str = "what close
     if not binds:
         return ""
     return f"{what}, by share of the couplings: " + "; ".join(f"{t} ({100.0 * f:.0f} %)" for t, f in binds)
-
-
-def _radius_at(problem: DeployedProblem, rnd: Round, errors: Errors) -> float:
-    """Spectral radius of the round's small-gain matrix with the disturbances of ``errors`` (dimensionless)."""
-    _, m, _, _ = _system_at(problem, rnd, errors)
-    return float(np.abs(np.linalg.eigvals(m)).max())
 
 
 def _inside(op: OperatingBox, room: OperatingBox) -> bool:
@@ -840,9 +839,8 @@ def _certified(problem: DeployedProblem) -> DeployedCertificate:
             break
     amplified = ""
     if why != "gain" and first is not None:  # the bounds grew: what amplifies them, at the start's errors
-        binds = binding(problem, first, problem.initial)
+        binds, radius = _shares(problem, first, problem.initial)
         if binds:
-            radius = _radius_at(problem, first, problem.initial)
             amplified = (
                 f"; the small-gain radius is {radius:.3g} at the start's errors (1 refuses) and grows with the "
                 f"bounds; {_binding_words(binds, 'what carries it')}"

@@ -239,6 +239,19 @@ BNB_BUDGET = 6_000_000
 DENSE_SIGMA_MAX_N = 12
 
 
+def refinable(n: int, envelope: Envelope) -> bool:
+    """Whether :func:`jacobi_branch_and_bound` runs for ``n`` vehicles: ``n <= BNB_MAX_N`` on the full heading circle.
+
+    Parameters
+    ----------
+    n : int
+        Number of vehicles.
+    envelope : Envelope
+        The envelope (its heading range ``psi``, rad).
+    """
+    return n <= BNB_MAX_N and envelope.psi[1] - envelope.psi[0] >= 2.0 * np.pi
+
+
 def jacobi_sigma_bounds(
     params: VehicleParams,
     envelope: Envelope,
@@ -315,8 +328,7 @@ def jacobi_sigma_bounds(
         f"cond(Phi) * sigma_vehicle (cond = {transform.cond:.4g}, closed form); lower from {samples} "
         f"random vertex configurations ({how})"
     )
-    full_circle = envelope.psi[1] - envelope.psi[0] >= 2.0 * np.pi
-    if refine_jacobi and nv <= BNB_MAX_N and full_circle:
+    if refine_jacobi and refinable(nv, envelope):
         bnb = jacobi_branch_and_bound(
             params, envelope, float(lam), transform, veh.upper, progress=progress, budget=budget
         )
@@ -497,5 +509,6 @@ __all__ = [
     "jacobi_sigma",
     "jacobi_sigma_bounds",
     "jacobi_sigma_lower",
+    "refinable",
     "sigma_at_witness",
 ]

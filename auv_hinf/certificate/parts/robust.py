@@ -514,13 +514,13 @@ def current_start_refusal(point: DesignPoint, rob: RobustSummary) -> Reason | No
     if configured_run(point, rob, None) is not None:
         return None
     limit = start_current_limit(point, rob)
+    written = significant(float(limit or 0.0), ADVISED_DIGITS, up=False)
     why = (
         f"the configured start lies in the certified start set only in currents up to "
-        f"{significant(limit or 0.0, ADVISED_DIGITS, up=False):g} m/s, not in every current up to the declared "
+        f"{written:g} m/s, not in every current up to the declared "
         f"{bound:g} m/s: the vehicles start at their speed through the water, so a current is a velocity error at "
         "t = 0, and a run from this start in a stronger current is not covered"
     )
-    written = significant(float(limit or 0.0), ADVISED_DIGITS, up=False)
     got = start_confirmed(cfg, (Setting("disturbance", "current_speed", written),)) if written > 0.0 else None
     settings = got or ()
     if settings:
